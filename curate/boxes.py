@@ -1,0 +1,114 @@
+"""Pure box math. Every function takes and returns new float64 arrays and never modifies its input.
+
+Formats, always named in the function name:
+- ``xywh``: COCO, ``[x_min, y_min, width, height]`` in pixels.
+- ``xyxy``: ``[x_min, y_min, x_max, y_max]`` in pixels (x_max exclusive edge, as COCO's ``x + w``).
+- ``cxcywhn``: YOLO, ``[cx, cy, w, h]`` normalised by image width/height to [0, 1].
+- ``voc``: Pascal VOC, ``[xmin, ymin, xmax, ymax]`` 1-based inclusive pixel indices.
+
+Arrays are shaped (N, 4); a single box (4,) is accepted and returned as (4,).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+Boxes = NDArray[np.float64]
+
+
+def _as_boxes(boxes: ArrayLike) -> Boxes:
+    arr = np.array(boxes, dtype=np.float64, copy=True)
+    if arr.shape[-1:] != (4,) or arr.ndim not in (1, 2):
+        raise ValueError(f"boxes must be shaped (4,) or (N, 4), got {arr.shape}")
+    return arr
+
+
+def xywh_to_xyxy(boxes: ArrayLike) -> Boxes:
+    """(N, 4) xywh pixels -> (N, 4) xyxy pixels."""
+    b = _as_boxes(boxes)
+    b[..., 2:] += b[..., :2]
+    return b
+
+
+def xyxy_to_xywh(boxes: ArrayLike) -> Boxes:
+    """(N, 4) xyxy pixels -> (N, 4) xywh pixels."""
+    b = _as_boxes(boxes)
+    b[..., 2:] -= b[..., :2]
+    return b
+
+
+def cxcywhn_to_xywh(boxes: ArrayLike, width: float, height: float) -> Boxes:
+    """(N, 4) YOLO normalised centre boxes -> (N, 4) xywh pixels of a ``width`` x ``height`` image."""
+    b = _as_boxes(boxes)
+    scale = np.array([width, height, width, height], dtype=np.float64)
+    b = b * scale
+    b[..., :2] -= b[..., 2:] / 2.0
+    return b
+
+
+def xywh_to_cxcywhn(boxes: ArrayLike, width: float, height: float) -> Boxes:
+    """(N, 4) xywh pixels -> (N, 4) YOLO normalised centre boxes of a ``width`` x ``height`` image."""
+    b = _as_boxes(boxes)
+    b[..., :2] += b[..., 2:] / 2.0
+    return b / np.array([width, height, width, height], dtype=np.float64)
+
+
+def voc_to_xywh(boxes: ArrayLike) -> Boxes:
+    """(N, 4) VOC 1-based inclusive ``[xmin, ymin, xmax, ymax]`` -> (N, 4) xywh pixels.
+
+    VOC pixel ``i`` (1-based) covers the continuous interval ``[i - 1, i)``, so a box from pixel 1 to 10
+    is ``x = 0, w = 10``.
+    """
+    b = _as_boxes(boxes)
+    out = b.copy()
+    out[..., :2] = b[..., :2] - 1.0
+    out[..., 2:] = b[..., 2:] - b[..., :2] + 1.0
+    return out
+
+
+def xywh_to_voc(boxes: ArrayLike) -> Boxes:
+    """(N, 4) xywh pixels -> (N, 4) VOC 1-based inclusive boxes (inverse of :func:`voc_to_xywh`)."""
+    b = _as_boxes(boxes)
+    out = b.copy()
+    out[..., :2] = b[..., :2] + 1.0
+    out[..., 2:] = b[..., :2] + b[..., 2:]
+    return out
+
+
+def clip_xyxy(boxes: ArrayLike, width: float, height: float) -> Boxes:
+    """(N, 4) xyxy pixels clipped to the image ``[0, width] x [0, height]``."""
+    b = _as_boxes(boxes)
+    b[..., 0::2] = np.clip(b[..., 0::2], 0.0, width)
+    b[..., 1::2] = np.clip(b[..., 1::2], 0.0, height)
+    return b
+
+
+def clip_xywh(boxes: ArrayLike, width: float, height: float) -> Boxes:
+    """(N, 4) xywh pixels clipped to the image; boxes fully outside get zero width or height."""
+    return xyxy_to_xywh(clip_xyxy(xywh_to_xyxy(boxes), width, height))
+
+
+def area_xywh(boxes: ArrayLike) -> NDArray[np.float64]:
+    """(N, 4) xywh -> (N,) areas; negative extents count as zero."""
+    b = _as_boxes(boxes)
+    return np.clip(b[..., 2], 0.0, None) * np.clip(b[..., 3], 0.0, None)
+
+
+def inside_xywh(boxes: ArrayLike, width: float, height: float, tol: float = 1e-6) -> NDArray[np.bool_]:
+    """(N, 4) xywh -> (N,) True where the box lies within the image, up to ``tol`` pixels."""
+    b = xywh_to_xyxy(boxes)
+    return (b[..., 0] >= -tol) & (b[..., 1] >= -tol) & (b[..., 2] <= width + tol) & (b[..., 3] <= height + tol)
+
+
+def box_iou_xyxy(a: ArrayLike, b: ArrayLike) -> NDArray[np.float64]:
+    """IoU matrix (N, M) between (N, 4) and (M, 4) xyxy boxes; 0 where the union is empty."""
+    a2 = np.atleast_2d(_as_boxes(a))
+    b2 = np.atleast_2d(_as_boxes(b))
+    lt = np.maximum(a2[:, None, :2], b2[None, :, :2])
+    rb = np.minimum(a2[:, None, 2:], b2[None, :, 2:])
+    inter = np.prod(np.clip(rb - lt, 0.0, None), axis=-1)
+    area_a = np.prod(np.clip(a2[:, 2:] - a2[:, :2], 0.0, None), axis=-1)
+    area_b = np.prod(np.clip(b2[:, 2:] - b2[:, :2], 0.0, None), axis=-1)
+    union = area_a[:, None] + area_b[None, :] - inter
+    return np.divide(inter, union, out=np.zeros_like(inter), where=union > 0)

@@ -1,0 +1,1 @@
+"""Dataset formats: readers return ``ReadResult`` (dataset + problems), writers write self-describing folders."""

@@ -1,0 +1,112 @@
+"""Helpers shared by the readers: folder scans, header probing, box sanitising, class-name resolution."""
+
+from __future__ import annotations
+
+import math
+import os
+from collections.abc import Iterable, Mapping, Sequence
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from curate import boxes
+from curate.classes import canonical_class, is_known
+from curate.dataset import Dataset
+from curate.imageio import ImageError, image_size, is_image_file
+from curate.problems import Problem
+from curate.progress import progress
+
+
+@dataclass
+class ReadResult:
+    """What a reader found: the dataset it could build and every problem on the way."""
+
+    dataset: Dataset
+    problems: list[Problem] = field(default_factory=list)
+
+
+def list_images(folder: Path) -> list[Path]:
+    """Image files below ``folder`` (recursive, hidden entries skipped), sorted by POSIX path."""
+    found: list[Path] = []
+    for dirpath, dirnames, filenames in os.walk(folder):
+        dirnames[:] = sorted(d for d in dirnames if not d.startswith("."))
+        found.extend(Path(dirpath) / f for f in filenames if not f.startswith(".") and is_image_file(Path(f)))
+    return sorted(found, key=lambda p: p.as_posix())
+
+
+def probe_sizes(
+    paths: Sequence[Path], desc: str = "reading image headers", workers: int = 8
+) -> list[tuple[int, int] | ImageError]:
+    """``(width, height)`` after EXIF orientation for each path, or the :class:`ImageError` it raised."""
+
+    def one(path: Path) -> tuple[int, int] | ImageError:
+        try:
+            return image_size(path)
+        except ImageError as exc:
+            return exc
+
+    with ThreadPoolExecutor(max_workers=workers) as pool:
+        it = pool.map(one, paths)
+        return list(progress(it, total=len(paths), desc=desc))
+
+
+def sanitize_box(
+    xywh: Sequence[float], width: int, height: int, where: str, problems: list[Problem]
+) -> tuple[float, float, float, float] | None:
+    """The box clipped to the image, or ``None`` (with an error) when it is NaN/inf or has no area.
+
+    A box reaching outside the image is clipped and reported as a warning.
+    """
+    if not all(math.isfinite(float(v)) for v in xywh):
+        problems.append(Problem(where, f"box {list(xywh)} has NaN or infinite values (dropped)"))
+        return None
+    x, y, w, h = (float(v) for v in xywh)
+    if w <= 0 or h <= 0:
+        problems.append(Problem(where, f"box {_fmt(xywh)} has zero or negative area (dropped)"))
+        return None
+    clipped = boxes.clip_xywh([x, y, w, h], width, height)
+    if not bool(boxes.inside_xywh([x, y, w, h], width, height, tol=1e-3)):
+        if clipped[2] <= 0 or clipped[3] <= 0:
+            problems.append(Problem(where, f"box {_fmt(xywh)} lies outside the {width}x{height} image (dropped)"))
+            return None
+        problems.append(
+            Problem(where, f"box {_fmt(xywh)} reaches outside the {width}x{height} image (clipped)", "warning")
+        )
+        return (float(clipped[0]), float(clipped[1]), float(clipped[2]), float(clipped[3]))
+    return (x, y, w, h)
+
+
+def _fmt(xywh: Iterable[float]) -> str:
+    return "[" + ", ".join(f"{float(v):.6g}" for v in xywh) + "] (x, y, w, h px)"
+
+
+class ClassResolver:
+    """Maps a source's class names to canonical names; reports each class outside the known vocabulary once.
+
+    ``aliases`` adds user synonyms (source name -> canonical name). Unknown classes are kept under their
+    normalised name (never silently dropped) and reported as a warning naming the source file.
+    """
+
+    def __init__(self, where: str, aliases: Mapping[str, str] | None = None) -> None:
+        self.where = where
+        self.aliases = dict(aliases or {})
+        self._reported: set[str] = set()
+
+    def resolve(self, name: str, problems: list[Problem]) -> str:
+        canonical = canonical_class(name, self.aliases)
+        if not is_known(canonical) and canonical not in self._reported:
+            self._reported.add(canonical)
+            problems.append(
+                Problem(
+                    self.where,
+                    f"class {name!r} is not a known class (fire, smoke): kept as {canonical!r}; "
+                    "map it with --alias NAME=fire or drop it with --drop-class",
+                    "warning",
+                )
+            )
+        return canonical
+
+
+def source_tag(root: Path, source: str | None) -> str:
+    """The ``source`` tag of a real dataset: ``source`` as given, else ``real:<folder name>``."""
+    return source if source else f"real:{root.resolve().name}"

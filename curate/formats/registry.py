@@ -1,0 +1,57 @@
+"""Pick a reader by name or by looking at the folder; unknown names raise, nothing falls back silently."""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping, Sequence
+from pathlib import Path
+
+from curate.formats.coco import ANNOTATIONS_FILE, read_coco
+from curate.formats.common import ReadResult
+from curate.formats.voc import read_voc
+from curate.formats.yolo import read_dfire, read_yolo
+
+FORMATS: tuple[str, ...] = ("coco", "yolo", "voc", "dfire")
+
+
+def detect_format(path: Path | str) -> str:
+    """``coco`` for a .json file or a folder with ``annotations.json``; ``voc`` for XML annotations;
+    ``yolo`` for ``labels`` folders, ``data.yaml`` or ``.txt`` beside images. Raises ValueError otherwise."""
+    path = Path(path)
+    if not path.exists():
+        raise FileNotFoundError(f"{path}: no such file or folder")
+    if path.is_file():
+        if path.suffix.lower() == ".json":
+            return "coco"
+        raise ValueError(f"{path}: a single file must be a COCO .json")
+    if (path / ANNOTATIONS_FILE).is_file():
+        return "coco"
+    if (path / "Annotations").is_dir() or next(path.glob("*.xml"), None) is not None:
+        return "voc"
+    if (path / "data.yaml").is_file() or next(path.rglob("labels"), None) is not None:
+        return "yolo"
+    if next(path.rglob("*.txt"), None) is not None:
+        return "yolo"
+    if next(path.rglob("*.xml"), None) is not None:
+        return "voc"
+    raise ValueError(f"{path}: cannot tell the dataset format; pass --from coco|yolo|voc|dfire")
+
+
+def read_dataset(
+    path: Path | str,
+    fmt: str = "auto",
+    *,
+    names: Sequence[str] | None = None,
+    source: str | None = None,
+    aliases: Mapping[str, str] | None = None,
+) -> ReadResult:
+    """Read a dataset of format ``fmt`` (``auto`` detects it). ``names`` only applies to YOLO."""
+    fmt = detect_format(path) if fmt == "auto" else fmt
+    readers: dict[str, Callable[[], ReadResult]] = {
+        "coco": lambda: read_coco(path, source=source, aliases=aliases),
+        "yolo": lambda: read_yolo(path, names=names, source=source, aliases=aliases),
+        "voc": lambda: read_voc(path, source=source, aliases=aliases),
+        "dfire": lambda: read_dfire(path, source=source),
+    }
+    if fmt not in readers:
+        raise ValueError(f"unknown format {fmt!r}; choose one of {', '.join(FORMATS)}")
+    return readers[fmt]()

@@ -1,0 +1,237 @@
+"""YOLO txt datasets (ultralytics, Roboflow exports, D-Fire): read into a :class:`Dataset`, write back.
+
+Layouts read (label path = image path with the last ``images`` folder replaced by ``labels``, suffix ``.txt``):
+
+- ``<split>/images/*.jpg`` + ``<split>/labels/*.txt`` (Roboflow, D-Fire)
+- ``images/<split>/*.jpg`` + ``labels/<split>/*.txt`` (ultralytics)
+- ``images/`` + ``labels/`` (one split), or images and ``.txt`` side by side.
+
+A label row is ``class cx cy w h`` normalised to [0, 1] (a polygon ``class x1 y1 x2 y2 ...`` becomes its
+bounding box). Class names come from ``data.yaml`` (its relative paths are not trusted), ``classes.txt``,
+or the caller.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import yaml
+
+from curate import boxes
+from curate.classes import DFIRE_NAMES
+from curate.dataset import Dataset, DatasetBuilder
+from curate.formats.common import ClassResolver, ReadResult, list_images, probe_sizes, sanitize_box, source_tag
+from curate.imageio import ImageError
+from curate.problems import Problem
+
+_NOT_LABELS = frozenset({"classes.txt", "notes.txt", "readme.txt"})
+
+
+def read_yolo(
+    root: Path | str,
+    names: Sequence[str] | None = None,
+    source: str | None = None,
+    aliases: Mapping[str, str] | None = None,
+) -> ReadResult:
+    """Read a YOLO dataset folder (all splits). ``names`` overrides the class names found on disk."""
+    root = Path(root)
+    problems: list[Problem] = []
+    if not root.is_dir():
+        raise FileNotFoundError(f"{root}: not a folder")
+    if names is None:
+        names = find_class_names(root, problems)
+    resolver = ClassResolver(str(root), aliases)
+    class_names = [resolver.resolve(n, problems) for n in names] if names else None
+    pairs = _pair_images_with_labels(root, problems)
+    sizes = probe_sizes([img for img, _, _ in pairs])
+    builder = DatasetBuilder(root, class_names or ())
+    tag = source_tag(root, source)
+    for (img_path, label_path, split), size in zip(pairs, sizes):
+        if isinstance(size, ImageError):
+            problems.append(Problem(str(img_path), f"unreadable image: {size.reason} (skipped)"))
+            continue
+        width, height = size
+        image_id = builder.add_image(img_path.relative_to(root).as_posix(), width, height, tag, split)
+        if not label_path.exists():
+            problems.append(Problem(str(img_path), "image without label file (kept as a negative)", "info"))
+            continue
+        for category, xywh in _parse_label_file(label_path, width, height, class_names, problems):
+            builder.add_box(image_id, category, xywh)
+    return ReadResult(builder.build({"format": "yolo", "source_root": str(root.resolve())}), problems)
+
+
+def read_dfire(root: Path | str, source: str | None = None) -> ReadResult:
+    """Read D-Fire (YOLO layout, class 0 = smoke, 1 = fire)."""
+    return read_yolo(root, names=DFIRE_NAMES, source=source)
+
+
+def find_class_names(root: Path, problems: list[Problem]) -> list[str] | None:
+    """Class names from ``data.yaml`` (or another ``*.yaml`` with ``names``) or ``classes.txt`` in ``root``."""
+    candidates = [root / "data.yaml", *sorted(p for p in root.glob("*.yaml") if p.name != "data.yaml")]
+    for path in candidates:
+        if not path.is_file():
+            continue
+        try:
+            doc = yaml.safe_load(path.read_text(encoding="utf-8"))
+        except (yaml.YAMLError, UnicodeDecodeError) as exc:
+            problems.append(Problem(str(path), f"unreadable YAML ({exc.__class__.__name__})"))
+            continue
+        if isinstance(doc, dict) and "names" in doc:
+            return _names_from_yaml(doc, path, problems)
+    classes_txt = root / "classes.txt"
+    if classes_txt.is_file():
+        return [line.strip() for line in classes_txt.read_text(encoding="utf-8").splitlines() if line.strip()]
+    problems.append(
+        Problem(
+            str(root),
+            "no data.yaml or classes.txt: class ids are kept as names ('0', '1', ...); "
+            "pass --names fire,smoke or --from dfire",
+            "warning",
+        )
+    )
+    return None
+
+
+def _names_from_yaml(doc: dict[str, Any], path: Path, problems: list[Problem]) -> list[str]:
+    raw = doc["names"]
+    if isinstance(raw, dict):
+        names = [str(raw[k]) for k in sorted(raw, key=int)]
+    else:
+        names = [str(n) for n in raw]
+    nc = doc.get("nc")
+    if nc is not None and int(nc) != len(names):
+        problems.append(Problem(str(path), f"nc = {nc} but {len(names)} names are listed (names used)", "warning"))
+    return names
+
+
+def _label_path_for(root: Path, image: Path) -> tuple[Path, str]:
+    """The label file of ``image`` and its split name."""
+    parts = image.relative_to(root).parts
+    if "images" in parts[:-1]:
+        i = len(parts) - 2 - parts[:-1][::-1].index("images")
+        label = root.joinpath(*parts[:i], "labels", *parts[i + 1 :]).with_suffix(".txt")
+        split = parts[i - 1] if i > 0 else (parts[i + 1] if len(parts) > i + 2 else "")
+        return label, split
+    return image.with_suffix(".txt"), (parts[0] if len(parts) > 1 else "")
+
+
+def _pair_images_with_labels(root: Path, problems: list[Problem]) -> list[tuple[Path, Path, str]]:
+    pairs: list[tuple[Path, Path, str]] = []
+    owner: dict[Path, Path] = {}
+    for image in list_images(root):
+        label, split = _label_path_for(root, image)
+        if label in owner:
+            problems.append(
+                Problem(str(image), f"duplicate file stem: {owner[label].name} and {image.name} share {label.name}")
+            )
+            continue
+        owner[label] = image
+        pairs.append((image, label, split))
+    label_dirs = {lbl.parent for lbl in owner} | {p for p in root.rglob("labels") if p.is_dir()}
+    for folder in sorted(label_dirs):
+        for txt in sorted(folder.glob("*.txt")):
+            if txt not in owner and txt.name.lower() not in _NOT_LABELS and not txt.name.lower().startswith("readme"):
+                problems.append(Problem(str(txt), "label file without an image"))
+    return pairs
+
+
+def _parse_label_file(
+    path: Path, width: int, height: int, class_names: Sequence[str] | None, problems: list[Problem]
+) -> list[tuple[str, tuple[float, float, float, float]]]:
+    try:
+        text = path.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as exc:
+        problems.append(Problem(str(path), f"unreadable label file ({exc.__class__.__name__})"))
+        return []
+    out = []
+    for lineno, line in enumerate(text.splitlines(), start=1):
+        tokens = line.split()
+        if not tokens:
+            continue
+        where = f"{path}:{lineno}"
+        parsed = _parse_row(tokens, where, class_names, problems)
+        if parsed is None:
+            continue
+        category, cxcywhn = parsed
+        xywh = boxes.cxcywhn_to_xywh(cxcywhn, width, height)
+        box = sanitize_box(xywh, width, height, where, problems)
+        if box is not None:
+            out.append((category, box))
+    return out
+
+
+def _parse_row(
+    tokens: list[str], where: str, class_names: Sequence[str] | None, problems: list[Problem]
+) -> tuple[str, np.ndarray] | None:
+    try:
+        values = [float(t) for t in tokens]
+    except ValueError:
+        problems.append(Problem(where, f"malformed label row {' '.join(tokens)!r} (not numbers)"))
+        return None
+    cls = values[0]
+    if not cls.is_integer() or cls < 0 or (class_names is not None and cls >= len(class_names)):
+        bound = f" (classes 0..{len(class_names) - 1})" if class_names else ""
+        problems.append(Problem(where, f"class id {tokens[0]} out of range{bound} (box dropped)"))
+        return None
+    if len(values) == 5:
+        cxcywhn = np.array(values[1:], dtype=np.float64)
+    elif len(values) >= 7 and len(values) % 2 == 1:
+        xy = np.array(values[1:], dtype=np.float64).reshape(-1, 2)
+        lo, hi = xy.min(axis=0), xy.max(axis=0)
+        cxcywhn = np.concatenate([(lo + hi) / 2.0, hi - lo])
+    else:
+        problems.append(Problem(where, f"malformed label row: {len(values)} values, expected 5 (class cx cy w h)"))
+        return None
+    category = class_names[int(cls)] if class_names is not None else str(int(cls))
+    return category, cxcywhn
+
+
+def write_yolo_labels(ds: Dataset, out: Path) -> list[Problem]:
+    """Write ``labels/...`` beside ``images/...`` for every image of ``ds`` (file names relative to ``out``).
+
+    Negatives get an empty label file (ultralytics counts them as background). Crowd/ignore boxes have
+    no YOLO form: they are left out and reported.
+    """
+    problems: list[Problem] = []
+    by_image = ds.annotations_by_image()
+    for img in ds.images:
+        rel = Path(img.file_name)
+        parts = rel.parts
+        assert parts[0] == "images", f"image {img.file_name} must live under images/"
+        label = out.joinpath("labels", *parts[1:]).with_suffix(".txt")
+        label.parent.mkdir(parents=True, exist_ok=True)
+        rows = []
+        for ann in by_image[img.id]:
+            if ann.iscrowd:
+                problems.append(
+                    Problem(img.file_name, f"crowd/ignore box {list(ann.bbox)} has no YOLO form (left out)", "info")
+                )
+                continue
+            cx, cy, w, h = boxes.xywh_to_cxcywhn(ann.bbox, img.width, img.height)
+            rows.append(f"{ann.category_id - 1} {cx:.10g} {cy:.10g} {w:.10g} {h:.10g}\n")
+        label.write_text("".join(rows), encoding="utf-8")
+    return problems
+
+
+def write_data_yaml(ds: Dataset, out: Path) -> Path:
+    """An ultralytics ``data.yaml``: ``path`` is the folder itself, splits map to ``images/<split>``."""
+    splits = [s for s in ds.splits]
+    doc: dict[str, Any] = {"path": str(out.resolve())}
+    if splits == [""]:
+        doc["train"] = "images"
+        doc["val"] = "images"
+    else:
+        named = {s: f"images/{s}" for s in splits}
+        doc["train"] = named.get("train", next(iter(named.values())))
+        doc["val"] = named.get("val", named.get("valid", doc["train"]))
+        if "test" in named:
+            doc["test"] = named["test"]
+    doc["nc"] = len(ds.categories)
+    doc["names"] = {c.id - 1: c.name for c in ds.categories}
+    path = out / "data.yaml"
+    header = "# ultralytics dataset file written by fuzzyfire; class ids are 0-based.\n"
+    path.write_text(header + yaml.safe_dump(doc, sort_keys=False, allow_unicode=True), encoding="utf-8")
+    return path

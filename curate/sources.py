@@ -1,0 +1,59 @@
+"""Labelled sources to merge into one dataset (the first step of a FiIW-style curation).
+
+Schemas are plain frozen dataclasses; ``fuzzyfire.config`` builds them from commented YAML.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Literal, Optional
+
+from curate.dataset import Dataset, merge
+from curate.formats.registry import read_dataset
+from curate.problems import Problem
+
+
+@dataclass(frozen=True)
+class SourceConfig:
+    """One labelled dataset folder (or COCO file)."""
+
+    path: Path  # folder or COCO .json; relative paths resolve against the config file's folder
+    format: Literal["auto", "coco", "yolo", "voc", "dfire"] = "auto"
+    name: str = ""  # source tag becomes real:<name>; default: the folder name
+    names: Optional[tuple[str, ...]] = None  # YOLO class names when the folder has no data.yaml
+    aliases: dict[str, str] = field(default_factory=dict)  # source class name -> canonical name
+    drop_classes: tuple[str, ...] = ()  # canonical names whose boxes are removed (images kept)
+
+
+@dataclass(frozen=True)
+class MergeConfig:
+    """Several sources merged into one dataset with a fixed class list."""
+
+    sources: tuple[SourceConfig, ...]
+    classes: tuple[str, ...] = ("fire", "smoke")  # output classes in YOLO id order
+
+
+def read_source(src: SourceConfig, base: Path) -> tuple[Dataset, list[Problem]]:
+    """Read one source (paths relative to ``base``), drop its ``drop_classes``."""
+    path = src.path if src.path.is_absolute() else base / src.path
+    tag = f"real:{src.name}" if src.name else None
+    result = read_dataset(path, src.format, names=src.names, source=tag, aliases=src.aliases)
+    ds = result.dataset.drop_categories(src.drop_classes) if src.drop_classes else result.dataset
+    return ds, result.problems
+
+
+def merge_sources(cfg: MergeConfig, base: Path, out_root: Path) -> tuple[Dataset, list[Problem]]:
+    """Read every source and merge them; classes outside ``cfg.classes`` are an error, never dropped silently."""
+    datasets, problems = [], []
+    for src in cfg.sources:
+        ds, found = read_source(src, base)
+        problems += found
+        extra = [n for n in ds.category_names if n not in cfg.classes]
+        if extra:
+            raise ValueError(
+                f"{src.path}: classes {extra} are not in classes {list(cfg.classes)}; "
+                "add them, map them with aliases, or list them in drop_classes"
+            )
+        datasets.append(ds)
+    return merge(datasets, out_root, cfg.classes), problems

@@ -1,0 +1,46 @@
+"""Dataset validation: everything a reader reports, plus a full decode of every image (a truncated file
+can have a perfect header). Problems come back ordered errors -> warnings -> info."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
+
+from curate.dataset import Dataset
+from curate.formats.registry import read_dataset
+from curate.imageio import ImageError, read_image
+from curate.problems import LEVELS, Problem
+from curate.progress import progress
+
+
+def decode_problems(ds: Dataset, workers: int = 4) -> list[Problem]:
+    """An error for every image of ``ds`` that does not fully decode."""
+
+    def check(path: Path) -> Problem | None:
+        try:
+            read_image(path)
+        except ImageError as exc:
+            return Problem(str(path), f"unreadable image: {exc.reason}")
+        return None
+
+    paths = [ds.image_path(img) for img in ds.images]
+    with ThreadPoolExecutor(max_workers=workers) as pool:
+        found = list(progress(pool.map(check, paths), total=len(paths), desc="decoding images"))
+    return [p for p in found if p is not None]
+
+
+def validate(
+    path: Path | str,
+    fmt: str = "auto",
+    names: Sequence[str] | None = None,
+    aliases: Mapping[str, str] | None = None,
+    decode: bool = True,
+) -> tuple[Dataset, list[Problem]]:
+    """Read ``path`` and check it; returns the dataset that could be read and every problem, sorted."""
+    result = read_dataset(path, fmt, names=names, aliases=aliases)
+    problems = list(result.problems)
+    if decode:
+        problems += decode_problems(result.dataset)
+    order = {level: i for i, level in enumerate(LEVELS)}
+    return result.dataset, sorted(problems, key=lambda p: order[p.level])

@@ -1,0 +1,1 @@
+"""fuzzyfire.eval: ONNX scoring, COCO metrics, seed statistics and reports."""

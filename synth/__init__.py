@@ -1,0 +1,1 @@
+"""fuzzyfire.synth: procedural flames, 3D environments, Method 1 and Method 2 synthetic images."""

@@ -1,0 +1,1 @@
+"""fuzzyfire.train: the detector, its loss, augmentations, training loop and ONNX export."""
