@@ -3,11 +3,20 @@
 from __future__ import annotations
 
 import argparse
+import importlib
 import sys
 from collections.abc import Sequence
 from pathlib import Path
 
 from fuzzyfire import __version__
+
+#: Modules whose ``register(subparsers)`` adds commands, in help order (imported when the parser is built).
+COMMAND_MODULES: tuple[str, ...] = (
+    "curate.cli",
+    "synth.cli",
+    "train.cli",
+    "eval.cli",
+)
 
 
 def cmd_merge(args: argparse.Namespace) -> int:
@@ -60,7 +69,6 @@ def _register_merge(sub: argparse._SubParsersAction) -> None:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    from curate import cli as curate_cli
 
     parser = argparse.ArgumentParser(
         prog="fuzzyfire",
@@ -71,7 +79,8 @@ def build_parser() -> argparse.ArgumentParser:
     )
     parser.add_argument("--version", action="version", version=f"fuzzyfire {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
-    curate_cli.register(sub)
+    for name in COMMAND_MODULES:
+        importlib.import_module(name).register(sub)
     _register_merge(sub)
     return parser
 
