@@ -58,7 +58,7 @@ def sanitize_box(
     A box reaching outside the image is clipped and reported as a warning.
     """
     if not all(math.isfinite(float(v)) for v in xywh):
-        problems.append(Problem(where, f"box {list(xywh)} has NaN or infinite values (dropped)"))
+        problems.append(Problem(where, f"box {_fmt(xywh)} has NaN or infinite values (dropped)"))
         return None
     x, y, w, h = (float(v) for v in xywh)
     if w <= 0 or h <= 0:

@@ -59,7 +59,7 @@ def read_yolo(
             problems.append(Problem(str(img_path), "image without label file (kept as a negative)", "info"))
             continue
         for category, xywh in _parse_label_file(label_path, width, height, class_names, problems):
-            builder.add_box(image_id, category, xywh)
+            builder.add_box(image_id, category if class_names else resolver.resolve(category, problems), xywh)
     return ReadResult(builder.build({"format": "yolo", "source_root": str(root.resolve())}), problems)
 
 

@@ -1,0 +1,68 @@
+import numpy as np
+import pytest
+
+from curate import boxes
+
+
+def _random_xywh(n: int, seed: int = 0) -> np.ndarray:
+    rng = np.random.default_rng(seed)
+    xy = rng.uniform(0, 500, size=(n, 2))
+    wh = rng.uniform(1, 200, size=(n, 2))
+    return np.concatenate([xy, wh], axis=1)
+
+
+def test_xywh_xyxy_round_trip():
+    b = _random_xywh(100)
+    np.testing.assert_allclose(boxes.xyxy_to_xywh(boxes.xywh_to_xyxy(b)), b, atol=1e-9)
+
+
+def test_cxcywhn_round_trip():
+    b = _random_xywh(100, seed=1)
+    back = boxes.cxcywhn_to_xywh(boxes.xywh_to_cxcywhn(b, 640, 480), 640, 480)
+    np.testing.assert_allclose(back, b, atol=1e-9)
+
+
+def test_cxcywhn_known_value():
+    np.testing.assert_allclose(boxes.cxcywhn_to_xywh([0.5, 0.5, 0.25, 0.5], 64, 48), [24, 12, 16, 24])
+
+
+def test_voc_is_one_based_inclusive():
+    # VOC pixels 1..10 cover [0, 10) in continuous coordinates.
+    np.testing.assert_allclose(boxes.voc_to_xywh([1, 1, 10, 20]), [0, 0, 10, 20])
+    b = _random_xywh(50, seed=2)
+    np.testing.assert_allclose(boxes.voc_to_xywh(boxes.xywh_to_voc(b)), b, atol=1e-9)
+
+
+def test_functions_never_modify_input():
+    b = _random_xywh(5)
+    before = b.copy()
+    for fn in (boxes.xywh_to_xyxy, boxes.xyxy_to_xywh, boxes.voc_to_xywh, boxes.xywh_to_voc):
+        fn(b)
+    boxes.clip_xywh(b, 100, 100)
+    boxes.xywh_to_cxcywhn(b, 100, 100)
+    np.testing.assert_array_equal(b, before)
+
+
+def test_clip_and_inside():
+    b = np.array([[-10, -5, 30, 20], [90, 90, 20, 20], [10, 10, 5, 5]], dtype=float)
+    np.testing.assert_allclose(boxes.clip_xywh(b, 100, 100), [[0, 0, 20, 15], [90, 90, 10, 10], [10, 10, 5, 5]])
+    assert boxes.inside_xywh(b, 100, 100).tolist() == [False, False, True]
+
+
+def test_area_negative_counts_zero():
+    np.testing.assert_allclose(boxes.area_xywh([[0, 0, -1, 5], [0, 0, 2, 3]]), [0, 6])
+
+
+def test_iou_matches_hand_computed():
+    a = [[0, 0, 10, 10]]
+    b = [[5, 5, 15, 15], [20, 20, 30, 30], [0, 0, 10, 10]]
+    np.testing.assert_allclose(boxes.box_iou_xyxy(a, b), [[25 / 175, 0.0, 1.0]])
+
+
+def test_iou_degenerate_boxes_are_zero():
+    assert boxes.box_iou_xyxy([[0, 0, 0, 0]], [[0, 0, 0, 0]])[0, 0] == 0.0
+
+
+def test_bad_shape_raises():
+    with pytest.raises(ValueError, match="shaped"):
+        boxes.xywh_to_xyxy([1, 2, 3])
