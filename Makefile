@@ -23,7 +23,7 @@ test-fast: $(STAMP)
 
 lint: $(STAMP)
 	$(BIN)/ruff check .
-	$(BIN)/ruff format --check curate fuzzyfire synth train eval
+	$(BIN)/ruff format --check .
 
 bench: $(STAMP)
 	@for script in bench/*.py; do echo "# $$script"; $(BIN)/python $$script || exit 1; done

@@ -7,6 +7,7 @@ import json
 import sys
 from collections.abc import Sequence
 from pathlib import Path
+from typing import TextIO
 
 from curate.formats.registry import FORMATS, read_dataset
 from curate.problems import Problem, count_levels, has_errors
@@ -57,7 +58,9 @@ def command_args(args: argparse.Namespace) -> dict:
     return {k: v for k, v in vars(args).items() if k not in ("func", "command")}
 
 
-def print_problems(problems: Sequence[Problem], stream=sys.stdout, limit: int | None = None) -> None:
+def print_problems(problems: Sequence[Problem], stream: TextIO | None = None, limit: int | None = None) -> None:
+    """One ``path: reason`` line per problem on ``stream`` (stdout), then the counts on stderr."""
+    stream = stream or sys.stdout
     shown = problems if limit is None else problems[:limit]
     for p in shown:
         print(p, file=stream)

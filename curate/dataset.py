@@ -210,7 +210,8 @@ class DatasetBuilder:
 def merge(datasets: Sequence[Dataset], root: Path, category_names: Sequence[str] = ()) -> Dataset:
     """One dataset holding copies of all images and boxes, ids re-numbered, categories united by name.
 
-    File names become absolute (each input resolved against its own root). Inputs are not modified.
+    File names become absolute (each input resolved against its own root); ``info["source_roots"]`` lists
+    the inputs' roots (so writers can refuse to write into them). Inputs are not modified.
     """
     builder = DatasetBuilder(root, category_names)
     for ds in datasets:
@@ -224,4 +225,10 @@ def merge(datasets: Sequence[Dataset], root: Path, category_names: Sequence[str]
             )
             for a in anns[img.id]:
                 builder.add_box(new_id, names[a.category_id], a.bbox, a.iscrowd)
-    return builder.build()
+    roots = list(dict.fromkeys(r for ds in datasets for r in source_roots(ds)))
+    return builder.build({"source_roots": roots})
+
+
+def source_roots(ds: Dataset) -> list[str]:
+    """Folders the images of ``ds`` come from: its recorded ``source_roots``, else its own root."""
+    return list(ds.info.get("source_roots") or [str(ds.root.resolve())])

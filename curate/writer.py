@@ -11,7 +11,7 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
-from curate.dataset import Dataset
+from curate.dataset import Dataset, source_roots
 from curate.formats.coco import write_coco
 from curate.formats.yolo import write_data_yaml, write_yolo_labels
 from curate.manifest import build_manifest, write_manifest
@@ -53,9 +53,9 @@ def plan_image_names(ds: Dataset) -> dict[int, str]:
 def check_output_folder(out: Path, ds: Dataset, overwrite: bool) -> None:
     """Raise :class:`OutputError` when writing ``out`` could touch the source images or a user's files."""
     out_r = out.resolve()
-    src_root = ds.root.resolve()
-    if out_r == src_root or out_r.is_relative_to(src_root):
-        raise OutputError(f"{out}: the output must not be inside the source folder {ds.root}")
+    for root in source_roots(ds):
+        if out_r.is_relative_to(Path(root)):
+            raise OutputError(f"{out}: the output must not be inside the source folder {root}")
     for img in ds.images:
         if ds.image_path(img).resolve().is_relative_to(out_r):
             raise OutputError(f"{out}: source image {img.file_name} lies inside the output folder")

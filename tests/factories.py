@@ -46,6 +46,6 @@ def write_yolo_dataset(root: Path, names: tuple[str, ...] = ("fire", "smoke")) -
         label.write_text("".join(" ".join(f"{v:g}" for v in r) + "\n" for r in rows[stem]))
     write_image(root / "valid" / "images" / "d.png", 40, 30, seed=7)  # negative without a label file
     (root / "data.yaml").write_text(
-        "train: ../train/images\nval: ../valid/images\nnc: %d\nnames: [%s]\n" % (len(names), ", ".join(names))
+        f"train: ../train/images\nval: ../valid/images\nnc: {len(names)}\nnames: [{', '.join(names)}]\n"
     )
     return rows

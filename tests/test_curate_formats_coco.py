@@ -30,8 +30,10 @@ def test_pycocotools_gives_ap_1_on_ground_truth_with_negatives(tmp_path):
     doc = json.loads((tmp_path / "out" / "annotations.json").read_text())
     assert min(a["id"] for a in doc["annotations"]) == 1
     assert len(doc["images"]) == 4  # negatives kept
-    dets = [{"image_id": a["image_id"], "category_id": a["category_id"], "bbox": a["bbox"], "score": 1.0}
-            for a in doc["annotations"]]
+    dets = [
+        {"image_id": a["image_id"], "category_id": a["category_id"], "bbox": a["bbox"], "score": 1.0}
+        for a in doc["annotations"]
+    ]
     stats = _evaluate(tmp_path / "out" / "annotations.json", dets)
     assert stats[0] == pytest.approx(1.0) and stats[1] == pytest.approx(1.0)
 
@@ -41,8 +43,10 @@ def test_false_positive_on_a_negative_image_lowers_ap(tmp_path):
     write_dataset(read_yolo(tmp_path / "src").dataset, tmp_path / "out", ["coco"])
     doc = json.loads((tmp_path / "out" / "annotations.json").read_text())
     negative = next(i["id"] for i in doc["images"] if i["id"] not in {a["image_id"] for a in doc["annotations"]})
-    dets = [{"image_id": a["image_id"], "category_id": a["category_id"], "bbox": a["bbox"], "score": 0.5}
-            for a in doc["annotations"]]
+    dets = [
+        {"image_id": a["image_id"], "category_id": a["category_id"], "bbox": a["bbox"], "score": 0.5}
+        for a in doc["annotations"]
+    ]
     dets.append({"image_id": negative, "category_id": 1, "bbox": [0, 0, 10, 10], "score": 0.9})
     assert _evaluate(tmp_path / "out" / "annotations.json", dets)[1] < 1.0
 
@@ -104,5 +108,3 @@ def test_invalid_json(tmp_path):
     (tmp_path / "y.json").write_text("[1, 2]")
     with pytest.raises(ValueError, match="not a COCO"):
         read_coco(tmp_path / "y.json")
-
-

@@ -18,7 +18,11 @@ def test_reads_roboflow_layout_with_splits_and_negatives(tmp_path):
     ds = result.dataset
     assert ds.category_names == ["fire", "smoke"]
     assert sorted(img.file_name for img in ds.images) == [
-        "train/images/a.jpg", "train/images/b.jpg", "valid/images/c.jpg", "valid/images/d.png"]
+        "train/images/a.jpg",
+        "train/images/b.jpg",
+        "valid/images/c.jpg",
+        "valid/images/d.png",
+    ]
     assert {img.file_name: img.split for img in ds.images}["valid/images/d.png"] == "valid"
     assert len(ds.annotations) == 3 and ds.num_negatives() == 2
     a = next(img for img in ds.images if img.file_name.endswith("a.jpg"))
@@ -164,9 +168,7 @@ def test_not_a_folder():
 @pytest.mark.shared_data
 def test_fire_smoke_608_keeps_every_image_and_row(shared_data, tmp_path):
     src = shared_data / "fire-smoke-608"
-    rows = sum(
-        len([ln for ln in p.read_text().splitlines() if ln.strip()]) for p in src.glob("*/labels/*.txt")
-    )
+    rows = sum(len([ln for ln in p.read_text().splitlines() if ln.strip()]) for p in src.glob("*/labels/*.txt"))
     result = read_yolo(src)
     assert len(result.dataset.images) == 979
     assert len(result.dataset.annotations) == rows

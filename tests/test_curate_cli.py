@@ -1,0 +1,78 @@
+import json
+
+import pytest
+from factories import write_yolo_dataset
+
+from fuzzyfire.cli import build_parser, main
+
+
+def test_every_command_has_help_with_an_example(capsys):
+    parser = build_parser()
+    sub = next(a for a in parser._actions if a.__class__.__name__ == "_SubParsersAction")
+    assert set(sub.choices) >= {"convert", "validate", "stats", "merge"}
+    for name, p in sub.choices.items():
+        assert "example:" in p.format_help(), name
+
+
+def test_convert_yolo_to_coco(tmp_path, capsys):
+    write_yolo_dataset(tmp_path / "src")
+    assert main(["convert", str(tmp_path / "src"), "--to", "coco", "--out", str(tmp_path / "out")]) == 0
+    assert "4 images, 3 boxes, 2 negatives" in capsys.readouterr().out
+    doc = json.loads((tmp_path / "out" / "annotations.json").read_text())
+    assert len(doc["images"]) == 4
+    man = json.loads((tmp_path / "out" / "manifest.json").read_text())
+    assert "func" not in man["args"] and man["args"]["to"] == "coco"
+    assert main(["convert", str(tmp_path / "src"), "--to", "coco", "--out", str(tmp_path / "out")]) == 2
+    assert "--overwrite" in capsys.readouterr().err
+
+
+def test_convert_drop_class_and_alias(tmp_path, capsys):
+    write_yolo_dataset(tmp_path / "src", names=("flame_big", "default"))
+    code = main(
+        [
+            "convert",
+            str(tmp_path / "src"),
+            "--to",
+            "coco",
+            "--out",
+            str(tmp_path / "o"),
+            "--alias",
+            "flame_big=fire",
+            "--drop-class",
+            "default",
+        ]
+    )
+    assert code == 0
+    doc = json.loads((tmp_path / "o" / "annotations.json").read_text())
+    assert [c["name"] for c in doc["categories"]] == ["fire"] and len(doc["annotations"]) == 2
+    assert "'default' is not a known class" in capsys.readouterr().err
+
+
+def test_validate_exit_codes_and_json(tmp_path, capsys):
+    write_yolo_dataset(tmp_path / "ok")
+    assert main(["validate", str(tmp_path / "ok")]) == 0
+    out = capsys.readouterr().out
+    assert out.strip().endswith("d.png: image without label file (kept as a negative)")
+    (tmp_path / "ok" / "train" / "labels" / "b.txt").write_text("5 0.5 0.5 0.1 0.1\n")
+    assert main(["validate", str(tmp_path / "ok"), "--json"]) == 1
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["counts"]["error"] == 1 and "class id 5 out of range" in doc["problems"][0]["reason"]
+
+
+def test_stats_json_and_png(tmp_path, capsys):
+    write_yolo_dataset(tmp_path / "ds")
+    assert main(["stats", str(tmp_path / "ds"), "--json", "--png", str(tmp_path / "h.png")]) == 0
+    assert json.loads(capsys.readouterr().out)["boxes"] == 3 and (tmp_path / "h.png").is_file()
+
+
+def test_missing_source_is_a_clear_error(tmp_path, capsys):
+    assert main(["convert", str(tmp_path / "nope"), "--to", "coco", "--out", str(tmp_path / "o")]) == 2
+    assert "no such file or folder" in capsys.readouterr().err
+
+
+@pytest.mark.shared_data
+def test_convert_fire_cctv_416(shared_data, tmp_path, capsys):
+    assert main(["convert", str(shared_data / "fire-cctv-416"), "--to", "all", "--out", str(tmp_path / "c")]) == 0
+    doc = json.loads((tmp_path / "c" / "annotations.json").read_text())
+    assert len(doc["images"]) == 3996
+    assert len(list((tmp_path / "c" / "labels").rglob("*.txt"))) == 3996

@@ -1,0 +1,40 @@
+import json
+
+import pytest
+from factories import write_yolo_dataset
+
+from curate.sources import MergeConfig, SourceConfig, merge_sources
+from fuzzyfire.cli import main
+
+
+def test_merge_two_sources(tmp_path):
+    write_yolo_dataset(tmp_path / "a")
+    write_yolo_dataset(tmp_path / "b", names=("Flame", "default"))
+    cfg = MergeConfig(
+        sources=(
+            SourceConfig(path=tmp_path / "a", name="A"),
+            SourceConfig(path=tmp_path / "b", name="B", drop_classes=("default",)),
+        ),
+        classes=("fire", "smoke"),
+    )
+    ds, problems = merge_sources(cfg, tmp_path, tmp_path / "out")
+    assert len(ds.images) == 8 and ds.category_names == ["fire", "smoke"]
+    assert {i.source for i in ds.images} == {"real:A", "real:B"}
+    assert len(ds.annotations) == 3 + 2
+
+
+def test_unlisted_class_is_an_error(tmp_path):
+    write_yolo_dataset(tmp_path / "b", names=("fire", "default"))
+    cfg = MergeConfig(sources=(SourceConfig(path=tmp_path / "b"),), classes=("fire",))
+    with pytest.raises(ValueError, match=r"classes \['default'\] are not in classes"):
+        merge_sources(cfg, tmp_path, tmp_path / "out")
+
+
+def test_merge_command(tmp_path, capsys):
+    write_yolo_dataset(tmp_path / "data" / "a")
+    (tmp_path / "m.yaml").write_text("classes: [fire, smoke]\nsources:\n  - path: data/a\n    name: first\n")
+    assert main(["merge", str(tmp_path / "m.yaml"), "--out", str(tmp_path / "out")]) == 0
+    doc = json.loads((tmp_path / "out" / "annotations.json").read_text())
+    assert len(doc["images"]) == 4 and (tmp_path / "out" / "data.yaml").is_file()
+    assert main(["merge", str(tmp_path / "m.yaml"), "--out", str(tmp_path / "o2"), "--set", "classes=fire"]) == 2
+    assert "classes: expected a list" in capsys.readouterr().err

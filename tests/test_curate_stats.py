@@ -1,0 +1,25 @@
+from factories import write_yolo_dataset
+
+from curate.formats.yolo import read_yolo
+from curate.stats import dataset_stats, plot_box_sizes, relative_box_sizes
+
+
+def test_counts(tmp_path):
+    write_yolo_dataset(tmp_path / "ds")
+    stats = dataset_stats(read_yolo(tmp_path / "ds").dataset)
+    assert stats["images"] == 4 and stats["boxes"] == 3 and stats["negatives"] == 2
+    assert stats["boxes_per_class"] == {"fire": 2, "smoke": 1}
+    assert stats["per_split"] == {
+        "train": {"images": 2, "boxes": 3, "negatives": 0},
+        "valid": {"images": 2, "boxes": 0, "negatives": 2},
+    }
+    assert sum(stats["box_sizes"].values()) == 3
+
+
+def test_histogram_png(tmp_path):
+    write_yolo_dataset(tmp_path / "ds")
+    ds = read_yolo(tmp_path / "ds").dataset
+    sizes = relative_box_sizes(ds)
+    assert all(((v > 0) & (v <= 1)).all() for v in sizes.values())
+    png = plot_box_sizes(ds, tmp_path / "plots" / "sizes.png")
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
