@@ -40,9 +40,13 @@ def is_image_file(path: Path) -> bool:
 
 
 def image_size(path: Path | str) -> tuple[int, int]:
-    """``(width, height)`` as displayed (after EXIF orientation), read from the header without decoding."""
+    """``(width, height)`` as displayed (after EXIF orientation), read from the header without decoding.
+
+    Also rejects JPEG/PNG files whose end marker is missing (truncated), which costs nothing more.
+    """
     path = Path(path)
     data = _read_bytes(path)
+    _check_complete(data, path)
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")

@@ -2,20 +2,32 @@ from factories import write_yolo_dataset
 
 from curate.validate import validate
 
+ORDER = ["error", "warning", "info"]
 
-def test_truncated_image_found_only_by_full_decode(tmp_path):
+
+def test_truncated_image_found_when_reading(tmp_path):
     write_yolo_dataset(tmp_path / "ds")
     img = tmp_path / "ds" / "train" / "images" / "a.jpg"
     data = img.read_bytes()
     img.write_bytes(data[: len(data) * 2 // 3])  # header intact, tail gone
+    ds, problems = validate(tmp_path / "ds", decode=False)
+    expected = [f"{img}: unreadable image: truncated JPEG (no end-of-image marker) (skipped)"]
+    assert [str(p) for p in problems if p.level == "error"] == expected
+    assert [p.level for p in problems] == sorted((p.level for p in problems), key=ORDER.index)
+    assert len(ds.images) == 3
+
+
+def test_corrupt_body_found_only_by_full_decode(tmp_path):
+    write_yolo_dataset(tmp_path / "ds")
+    img = tmp_path / "ds" / "train" / "images" / "b.jpg"
+    data = bytearray(img.read_bytes())
+    start = data.index(b"\xff\xda")  # start of scan: wipe the entropy-coded data, keep the end marker
+    data[start + 4 : -2] = b"\xff" * (len(data) - start - 6)
+    img.write_bytes(bytes(data))
     _, header_only = validate(tmp_path / "ds", decode=False)
     assert not any(p.level == "error" for p in header_only)
-    ds, problems = validate(tmp_path / "ds")
-    assert [str(p) for p in problems if p.level == "error"] == [
-        f"{img}: unreadable image: truncated JPEG (no end-of-image marker)"
-    ]
-    assert [p.level for p in problems] == sorted((p.level for p in problems), key=["error", "warning", "info"].index)
-    assert len(ds.images) == 4
+    _, problems = validate(tmp_path / "ds")
+    assert [p.path for p in problems if p.level == "error"] == [str(img)]
 
 
 def test_clean_dataset_has_no_errors(tmp_path):
