@@ -13,6 +13,7 @@ from fuzzyfire import __version__
 #: Modules whose ``register(subparsers)`` adds commands, in help order (imported when the parser is built).
 COMMAND_MODULES: tuple[str, ...] = (
     "curate.cli",
+    "curate.cli_mix",
     "synth.cli",
     "train.cli",
     "eval.cli",

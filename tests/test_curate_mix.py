@@ -1,0 +1,128 @@
+"""R(m)_S(n) mixer: nested seeded draws, constant totals, clear errors, byte-identical outputs."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+from factories import write_image
+
+from curate.dataset import Dataset, DatasetBuilder
+from curate.formats.coco import read_coco
+from curate.mix import (
+    MixError,
+    Mixture,
+    build_mixture,
+    paper_grid,
+    parse_mixture,
+    parse_mixtures,
+    parse_seeds,
+    write_mixture,
+)
+from fuzzyfire.cli import main
+
+
+def _pool(root: Path, n: int, source: str, category: str = "fire") -> Dataset:
+    """``n`` tiny images on disk, each with one box, tagged ``source``."""
+    builder = DatasetBuilder(root, [category])
+    for i in range(n):
+        write_image(root / f"img{i:03d}.png", 16, 12, seed=i)
+        image_id = builder.add_image(f"img{i:03d}.png", 16, 12, source=source)
+        builder.add_box(image_id, category, (1, 1, 4 + i % 5, 3))
+    return builder.build()
+
+
+@pytest.fixture(scope="module")
+def pools(tmp_path_factory: pytest.TempPathFactory) -> tuple[Dataset, Dataset]:
+    base = tmp_path_factory.mktemp("pools")
+    return _pool(base / "real", 40, "real:cams"), _pool(base / "synth", 40, "synth:method2", "fire")
+
+
+def _files(ds: Dataset, role: str) -> set[str]:
+    return {img.file_name for img in ds.images if img.source.startswith(role)}
+
+
+def test_parse_names_and_seeds() -> None:
+    assert parse_mixture("R750_S250") == Mixture(750, 250)
+    assert [m.name for m in parse_mixtures("R10_S0, R5_S5,R10_S0")] == ["R10_S0", "R5_S5"]
+    assert parse_seeds("0-2,7") == [0, 1, 2, 7]
+    for bad in ("R750S250", "r1_s1", "R0_S0", ""):
+        with pytest.raises(MixError):
+            parse_mixtures(bad)
+    with pytest.raises(MixError):
+        parse_seeds("a-b")
+
+
+def test_paper_grid_has_the_three_strategies() -> None:
+    names = [m.name for m in paper_grid()]
+    assert names == [
+        "R250_S0", "R500_S0", "R750_S0", "R1000_S0",
+        "R750_S250", "R500_S500", "R250_S750",
+        "R0_S250", "R0_S500", "R0_S750", "R0_S1000",
+    ]  # fmt: skip
+
+
+def test_nested_draws_and_constant_totals(pools: tuple[Dataset, Dataset], tmp_path: Path) -> None:
+    real, synth = pools
+    grid = [Mixture(40 - k, k) for k in range(0, 41, 10)]
+    built = {m: build_mixture(real, synth, m, 3, tmp_path) for m in grid}
+    for m, ds in built.items():
+        assert len(ds.images) == 40 == m.total
+        assert len(_files(ds, "real:")) == m.real and len(_files(ds, "synth:")) == m.synth
+        assert {img.split for img in ds.images} == {"train"}
+    for small, large in zip(grid[1:], grid[:-1]):  # fewer real images: a subset of the larger draw
+        assert _files(built[small], "real:") <= _files(built[large], "real:")
+        assert _files(built[large], "synth:") <= _files(built[small], "synth:")
+    other_seed = build_mixture(real, synth, Mixture(20, 20), 4, tmp_path)
+    assert _files(other_seed, "real:") != _files(built[Mixture(20, 20)], "real:")
+
+
+def test_draw_ignores_reader_order(pools: tuple[Dataset, Dataset], tmp_path: Path) -> None:
+    real, synth = pools
+    from dataclasses import replace
+
+    shuffled = replace(real, images=tuple(reversed(real.images)))
+    a = build_mixture(real, synth, Mixture(10, 5), 0, tmp_path)
+    b = build_mixture(shuffled, synth, Mixture(10, 5), 0, tmp_path)
+    assert _files(a, "real:") == _files(b, "real:")
+
+
+def test_too_many_images_is_a_clear_error(pools: tuple[Dataset, Dataset], tmp_path: Path) -> None:
+    real, synth = pools
+    with pytest.raises(MixError, match=r"R41_S0: asks for 41 real images .* has only 40"):
+        build_mixture(real, synth, Mixture(41, 0), 0, tmp_path)
+    with pytest.raises(MixError, match="synthetic"):
+        build_mixture(real, synth, Mixture(0, 50), 0, tmp_path)
+
+
+def test_written_mixture_is_byte_identical_and_references_images(
+    pools: tuple[Dataset, Dataset], tmp_path: Path
+) -> None:
+    real, synth = pools
+    folders = [write_mixture(real, synth, Mixture(6, 4), 1, tmp_path / run) for run in ("a", "b")]
+    for name in ("annotations.json", "mixture.json"):
+        assert (folders[0] / name).read_bytes() == (folders[1] / name).read_bytes()
+    labels = [sorted(p.read_bytes() for p in (f / "labels").rglob("*.txt")) for f in folders]
+    assert labels[0] == labels[1] and len(labels[0]) == 10
+    images = sorted((folders[0] / "images" / "train").iterdir())
+    assert len(images) == 10 and all(p.is_symlink() for p in images)
+    record = json.loads((folders[0] / "mixture.json").read_text())
+    assert record["mixture"] == "R6_S4" and sum(e["source"].startswith("synth:") for e in record["images"]) == 4
+    assert all(Path(e["from"]).is_file() for e in record["images"])
+    back = read_coco(folders[0]).dataset
+    assert len(back.images) == 10 and len(back.annotations) == 10
+
+
+def test_cli_writes_grid_per_seed(pools: tuple[Dataset, Dataset], tmp_path: Path) -> None:
+    from curate.writer import write_dataset
+
+    real, synth = pools
+    write_dataset(real, tmp_path / "real", ("coco",), "copy")
+    write_dataset(synth, tmp_path / "synth", ("coco",), "copy")
+    args = ["mix", "--real", str(tmp_path / "real"), "--synth", str(tmp_path / "synth"), "--out", str(tmp_path / "o")]
+    assert main([*args, "--mixtures", "R20_S0,R10_S10", "--seeds", "0-1"]) == 0
+    made = sorted(p.relative_to(tmp_path / "o").as_posix() for p in (tmp_path / "o").glob("*/*"))
+    assert made == ["seed0/R10_S10", "seed0/R20_S0", "seed1/R10_S10", "seed1/R20_S0"]
+    assert main([*args, "--mixtures", "R5_S5,R99_S0", "--out", str(tmp_path / "o2")]) == 2
+    assert not (tmp_path / "o2").exists()  # checked before anything is written
