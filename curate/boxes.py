@@ -112,3 +112,16 @@ def box_iou_xyxy(a: ArrayLike, b: ArrayLike) -> NDArray[np.float64]:
     area_b = np.prod(np.clip(b2[:, 2:] - b2[:, :2], 0.0, None), axis=-1)
     union = area_a[:, None] + area_b[None, :] - inter
     return np.divide(inter, union, out=np.zeros_like(inter), where=union > 0)
+
+
+def mask_to_xywh(mask: ArrayLike) -> Boxes:
+    """(H, W) mask (non-zero = inside) -> (4,) xywh pixel box tightly enclosing it; pixel ``(row, col)`` covers
+    ``[col, col + 1) x [row, row + 1)``. An empty mask gives ``[0, 0, 0, 0]``."""
+    m = np.asarray(mask)
+    if m.ndim != 2:
+        raise ValueError(f"mask must be 2-D (H, W), got shape {m.shape}")
+    rows = np.flatnonzero(m.any(axis=1))
+    cols = np.flatnonzero(m.any(axis=0))
+    if rows.size == 0:
+        return np.zeros(4, dtype=np.float64)
+    return np.array([cols[0], rows[0], cols[-1] + 1 - cols[0], rows[-1] + 1 - rows[0]], dtype=np.float64)

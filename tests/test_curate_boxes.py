@@ -66,3 +66,17 @@ def test_iou_degenerate_boxes_are_zero():
 def test_bad_shape_raises():
     with pytest.raises(ValueError, match="shaped"):
         boxes.xywh_to_xyxy([1, 2, 3])
+
+
+def test_mask_to_xywh_encloses_the_mask_exactly():
+    from curate.boxes import mask_to_xywh
+
+    mask = np.zeros((6, 8), bool)
+    mask[2:5, 3] = True
+    mask[4, 6] = True
+    assert mask_to_xywh(mask).tolist() == [3.0, 2.0, 4.0, 3.0]
+    assert mask_to_xywh(np.zeros((4, 4), np.uint8)).tolist() == [0.0, 0.0, 0.0, 0.0]
+    full = np.ones((5, 7), np.uint8)
+    assert mask_to_xywh(full).tolist() == [0.0, 0.0, 7.0, 5.0]
+    with pytest.raises(ValueError):
+        mask_to_xywh(np.ones(3))

@@ -1,0 +1,147 @@
+"""Flame sprites: the layers a compositor needs, and sequences of them on disk.
+
+A :class:`Sprite` of size (h, w) holds
+- ``over``: (h, w, 4) uint8 straight-alpha RGBA laid *over* the background (smoke, or a user's RGBA render),
+- ``emission``: (h, w, 3) uint8 sRGB light *added* on top (the flame's glow),
+- ``mask``: (h, w) bool, the flame itself (the box comes from here, never from the smoke).
+
+Composite of one sprite: ``out = bg * (1 - a) + rgb * a``, then ``out = blend(out, emission)``.
+
+On disk a sequence is a folder: ``sequence.json`` (generator, parameters, frame indices) and per kept frame
+``NNNN_over.png``, ``NNNN_emission.png``, ``NNNN_mask.png`` (lossless, deterministic bytes).
+A user's own RGBA sequence (e.g. EmberGen renders) is a folder of RGBA PNGs: see :func:`sprite_from_rgba`.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import cv2
+import numpy as np
+from numpy.typing import NDArray
+
+from curate.imageio import ImageError
+
+
+@dataclass(frozen=True)
+class Sprite:
+    over: NDArray[np.uint8]
+    emission: NDArray[np.uint8]
+    mask: NDArray[np.bool_]
+
+    def __post_init__(self) -> None:
+        h, w = self.mask.shape
+        assert self.over.shape == (h, w, 4) and self.emission.shape == (h, w, 3), "sprite layers differ in size"
+
+    @property
+    def size(self) -> tuple[int, int]:
+        """(width, height) in pixels."""
+        return self.mask.shape[1], self.mask.shape[0]
+
+
+@dataclass(frozen=True)
+class SpriteSequence:
+    name: str
+    sprites: tuple[Sprite, ...]
+    meta: Mapping[str, Any]
+
+
+def crop_to_content(sprite: Sprite, threshold: int = 2, pad: int = 1) -> Sprite | None:
+    """The sprite cropped to pixels that show anything (alpha, emission or mask above ``threshold``), with
+    ``pad`` pixels margin; None when it shows nothing."""
+    visible = (sprite.over[..., 3] > threshold) | (sprite.emission.max(axis=-1) > threshold) | sprite.mask
+    rows, cols = np.nonzero(visible.any(axis=1))[0], np.nonzero(visible.any(axis=0))[0]
+    if rows.size == 0:
+        return None
+    h, w = sprite.mask.shape
+    y0, y1 = max(rows[0] - pad, 0), min(rows[-1] + 1 + pad, h)
+    x0, x1 = max(cols[0] - pad, 0), min(cols[-1] + 1 + pad, w)
+    cut = (slice(y0, y1), slice(x0, x1))
+    return Sprite(sprite.over[cut].copy(), sprite.emission[cut].copy(), sprite.mask[cut].copy())
+
+
+def sprite_from_rgba(rgba: NDArray[np.uint8], flame_threshold: float = 0.55) -> Sprite:
+    """A sprite from a user's (h, w, 4) straight-alpha RGBA render: laid over as is, no added emission; the flame
+    mask is where alpha >= 0.5 and the brightest channel >= ``flame_threshold`` (bright, not grey smoke)."""
+    if rgba.ndim != 3 or rgba.shape[2] != 4:
+        raise ValueError(f"expected an RGBA image, got shape {rgba.shape}")
+    rgb = rgba[..., :3].astype(np.float32) / 255.0
+    bright = rgb.max(axis=-1)
+    saturated = bright - rgb.min(axis=-1) > 0.15
+    mask = (rgba[..., 3] >= 128) & (bright >= flame_threshold) & (saturated | (bright > 0.9))
+    return Sprite(np.ascontiguousarray(rgba), np.zeros(rgba.shape[:2] + (3,), np.uint8), mask)
+
+
+def _write_png(path: Path, array: NDArray[np.uint8]) -> None:
+    if array.ndim == 3:
+        array = cv2.cvtColor(array, cv2.COLOR_RGBA2BGRA if array.shape[2] == 4 else cv2.COLOR_RGB2BGR)
+    if not cv2.imwrite(str(path), array, [cv2.IMWRITE_PNG_COMPRESSION, 3]):
+        raise OSError(f"{path}: could not write PNG")
+
+
+def _read_png(path: Path, flags: int = cv2.IMREAD_UNCHANGED) -> NDArray[np.uint8]:
+    data = cv2.imread(str(path), flags)
+    if data is None:
+        raise ImageError(path, "cannot be decoded as PNG")
+    if data.ndim == 3:
+        data = cv2.cvtColor(data, cv2.COLOR_BGRA2RGBA if data.shape[2] == 4 else cv2.COLOR_BGR2RGB)
+    return data
+
+
+def save_sequence(folder: Path, seq: SpriteSequence) -> Path:
+    """Write ``seq`` into ``folder`` (created); returns the folder."""
+    folder.mkdir(parents=True, exist_ok=True)
+    for i, sp in enumerate(seq.sprites):
+        _write_png(folder / f"{i:04d}_over.png", sp.over)
+        _write_png(folder / f"{i:04d}_emission.png", sp.emission)
+        _write_png(folder / f"{i:04d}_mask.png", sp.mask.astype(np.uint8) * 255)
+    meta = {"name": seq.name, "frames": len(seq.sprites), **dict(seq.meta)}
+    (folder / "sequence.json").write_text(json.dumps(meta, indent=1, sort_keys=True) + "\n", encoding="utf-8")
+    return folder
+
+
+def load_sequence(folder: Path) -> SpriteSequence:
+    """Read a folder written by :func:`save_sequence`, or a user's folder of RGBA PNGs (sorted by name)."""
+    meta_path = folder / "sequence.json"
+    if not meta_path.is_file():
+        return load_rgba_folder(folder)
+    meta = json.loads(meta_path.read_text(encoding="utf-8"))
+    sprites = []
+    for i in range(int(meta["frames"])):
+        over = _read_png(folder / f"{i:04d}_over.png")
+        emission = _read_png(folder / f"{i:04d}_emission.png")
+        mask = _read_png(folder / f"{i:04d}_mask.png", cv2.IMREAD_GRAYSCALE) > 127
+        sprites.append(Sprite(over, emission, mask))
+    return SpriteSequence(str(meta.get("name", folder.name)), tuple(sprites), meta)
+
+
+def load_rgba_folder(folder: Path) -> SpriteSequence:
+    """A user's RGBA sequence: every ``*.png`` in ``folder`` with an alpha channel, cropped to its content."""
+    paths = sorted(p for p in folder.glob("*.png") if p.is_file())
+    if not paths:
+        raise FileNotFoundError(f"{folder}: no sequence.json and no PNG frames")
+    sprites = []
+    for path in paths:
+        rgba = _read_png(path)
+        if rgba.ndim != 3 or rgba.shape[2] != 4:
+            raise ImageError(path, "has no alpha channel (RGBA PNG needed)")
+        cropped = crop_to_content(sprite_from_rgba(rgba))
+        if cropped is not None and cropped.mask.any():
+            sprites.append(cropped)
+    if not sprites:
+        raise ImageError(folder, "no frame shows a flame (bright, opaque pixels)")
+    return SpriteSequence(folder.name, tuple(sprites), {"generator": "user-rgba", "files": [p.name for p in paths]})
+
+
+def load_library(folders: Sequence[Path]) -> list[SpriteSequence]:
+    """Every sequence folder in ``folders`` (each either a sequence or a folder of sequence folders)."""
+    seqs: list[SpriteSequence] = []
+    for folder in folders:
+        subs = sorted(p for p in folder.iterdir() if p.is_dir()) if not (folder / "sequence.json").exists() else []
+        for sub in subs or [folder]:
+            seqs.append(load_sequence(sub))
+    return seqs

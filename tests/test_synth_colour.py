@@ -1,0 +1,47 @@
+import numpy as np
+import pytest
+
+from synth import colour as C
+
+
+def test_planck_hotter_is_bluer_and_whiter():
+    temps = np.array([1000.0, 1500.0, 2000.0, 3000.0, 4500.0, 6500.0])
+    rgb = C.blackbody_rgb(temps)
+    blue_over_red = rgb[:, 2] / rgb[:, 0]
+    assert np.all(np.diff(blue_over_red) >= 0) and np.all(np.diff(blue_over_red[2:]) > 0)
+    assert np.all(np.diff(rgb.min(axis=1)[2:]) > 0)  # whiter: the weakest channel rises
+    assert np.all(np.diff(rgb[:, 1]) > 0)  # red -> orange -> yellow -> white
+    assert rgb[0, 0] == 1.0 and rgb[0, 2] < 0.01  # 1000 K: deep red
+    assert np.allclose(rgb[-1], 1.0, atol=0.08)  # 6500 K ~ D65 white
+
+
+def test_planck_peak_follows_wien():
+    lam = np.arange(200.0, 5000.0, 1.0)
+    peak = lam[np.argmax(C.planck(lam, 2000.0))]
+    assert abs(peak - 2.897771955e6 / 2000.0) < 2.0
+
+
+@pytest.mark.parametrize(
+    "kind, dominant",
+    [("copper", 1), ("boron", 1), ("methane", 2), ("lithium", 0), ("strontium", 0), ("sodium", 0)],
+)
+def test_chemical_colours_have_their_hue(kind, dominant):
+    rgb = C.line_spectrum_rgb(C.CHEMICAL_LINES[kind])
+    assert int(np.argmax(rgb)) == dominant
+
+
+def test_potassium_is_violet_and_sodium_yellow_orange():
+    k = C.line_spectrum_rgb(C.CHEMICAL_LINES["potassium"])
+    assert k[2] > k[1] and k[0] > k[1]
+    na = C.line_spectrum_rgb(C.CHEMICAL_LINES["sodium"])
+    assert na[1] > 0.15 and na[2] < 0.05
+
+
+def test_flame_palette_is_dark_when_cold_and_brightens():
+    for kind in C.PALETTES:
+        pal = C.flame_palette(kind, n=64)
+        assert pal.shape == (64, 3) and pal.dtype == np.float32
+        assert pal[0].max() == 0.0 and pal[-1].max() > 0.9
+        assert np.all(np.diff(pal.max(axis=1)) >= 0)
+    with pytest.raises(ValueError, match="unknown flame palette"):
+        C.flame_palette("plasma")
