@@ -114,6 +114,44 @@ def box_iou_xyxy(a: ArrayLike, b: ArrayLike) -> NDArray[np.float64]:
     return np.divide(inter, union, out=np.zeros_like(inter), where=union > 0)
 
 
+def cxcywh_to_xyxy(boxes: ArrayLike) -> Boxes:
+    """(N, 4) centre boxes ``[cx, cy, w, h]`` in pixels -> (N, 4) xyxy pixels (detector heads emit these)."""
+    b = _as_boxes(boxes)
+    out = b.copy()
+    out[..., :2] = b[..., :2] - b[..., 2:] / 2.0
+    out[..., 2:] = b[..., :2] + b[..., 2:] / 2.0
+    return out
+
+
+def letterbox_params(width: int, height: int, out_width: int, out_height: int) -> tuple[int, int, int, int]:
+    """``(new_width, new_height, pad_left, pad_top)`` fitting a ``width`` x ``height`` image into
+    ``out_width`` x ``out_height`` at one aspect-preserving scale, centred, padding split evenly (left/top
+    get the smaller half). Per-axis scales are ``new_width / width`` and ``new_height / height``."""
+    if min(width, height, out_width, out_height) <= 0:
+        raise ValueError(f"letterbox sizes must be positive, got {width}x{height} -> {out_width}x{out_height}")
+    scale = min(out_width / width, out_height / height)
+    new_w = min(out_width, max(1, int(round(width * scale))))
+    new_h = min(out_height, max(1, int(round(height * scale))))
+    return new_w, new_h, (out_width - new_w) // 2, (out_height - new_h) // 2
+
+
+def image_to_letterbox_xyxy(boxes: ArrayLike, width: int, height: int, out_width: int, out_height: int) -> Boxes:
+    """(N, 4) xyxy pixels of a ``width`` x ``height`` image -> xyxy pixels of its letterboxed
+    ``out_width`` x ``out_height`` version (see :func:`letterbox_params`)."""
+    new_w, new_h, pad_x, pad_y = letterbox_params(width, height, out_width, out_height)
+    b = _as_boxes(boxes)
+    scale = np.array([new_w / width, new_h / height] * 2)
+    return b * scale + np.array([pad_x, pad_y, pad_x, pad_y], dtype=np.float64)
+
+
+def letterbox_to_image_xyxy(boxes: ArrayLike, width: int, height: int, out_width: int, out_height: int) -> Boxes:
+    """(N, 4) xyxy pixels of a letterboxed ``out_width`` x ``out_height`` input -> xyxy pixels of the original
+    ``width`` x ``height`` image (inverse of :func:`image_to_letterbox_xyxy`; not clipped)."""
+    new_w, new_h, pad_x, pad_y = letterbox_params(width, height, out_width, out_height)
+    b = _as_boxes(boxes) - np.array([pad_x, pad_y, pad_x, pad_y], dtype=np.float64)
+    return b / np.array([new_w / width, new_h / height] * 2)
+
+
 def mask_to_xywh(mask: ArrayLike) -> Boxes:
     """(H, W) mask (non-zero = inside) -> (4,) xywh pixel box tightly enclosing it; pixel ``(row, col)`` covers
     ``[col, col + 1) x [row, row + 1)``. An empty mask gives ``[0, 0, 0, 0]``."""

@@ -68,6 +68,25 @@ def test_bad_shape_raises():
         boxes.xywh_to_xyxy([1, 2, 3])
 
 
+def test_cxcywh_to_xyxy():
+    np.testing.assert_allclose(boxes.cxcywh_to_xyxy([[10, 20, 4, 6]]), [[8, 17, 12, 23]])
+
+
+def test_letterbox_params_centre_the_image():
+    assert boxes.letterbox_params(64, 32, 64, 64) == (64, 32, 0, 16)
+    assert boxes.letterbox_params(30, 60, 64, 64) == (32, 64, 16, 0)
+    assert boxes.letterbox_params(100, 100, 64, 64) == (64, 64, 0, 0)
+    with pytest.raises(ValueError, match="positive"):
+        boxes.letterbox_params(0, 10, 64, 64)
+
+
+def test_letterbox_box_mapping_round_trip_and_hand_values():
+    b = np.array([[0.0, 0.0, 64.0, 32.0], [10.0, 4.0, 20.0, 8.0]])
+    lb = boxes.image_to_letterbox_xyxy(b, 128, 64, 64, 64)  # scale 0.5, pad_top 16
+    np.testing.assert_allclose(lb, [[0, 16, 32, 32], [5, 18, 10, 20]])
+    np.testing.assert_allclose(boxes.letterbox_to_image_xyxy(lb, 128, 64, 64, 64), b, atol=1e-9)
+
+
 def test_mask_to_xywh_encloses_the_mask_exactly():
     from curate.boxes import mask_to_xywh
 

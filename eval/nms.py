@@ -1,0 +1,89 @@
+"""Non-maximum suppression in numpy, class-aware, and the detector post-processing built on it."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from curate.boxes import box_iou_xyxy, cxcywh_to_xyxy
+
+#: Scoring defaults (COCO-style evaluation keeps low-confidence boxes: they only add recall).
+CONF_THRESHOLD = 0.001
+IOU_THRESHOLD = 0.6
+MAX_DETECTIONS = 300
+#: Highest-scoring candidates passed to NMS per image (bounds the cost of an untrained model's noise).
+MAX_CANDIDATES = 30000
+
+
+@dataclass(frozen=True)
+class ImageDetections:
+    """Detections of one image: ``boxes`` (K, 4) xyxy pixels, ``scores`` (K,), ``labels`` (K,) class index
+    into the model's class names; sorted by descending score."""
+
+    boxes: NDArray[np.float64]
+    scores: NDArray[np.float64]
+    labels: NDArray[np.int64]
+
+    def __len__(self) -> int:
+        return len(self.scores)
+
+
+def nms_xyxy(boxes: NDArray, scores: NDArray, iou_threshold: float, max_keep: int | None = None) -> NDArray[np.int64]:
+    """Greedy NMS over (N, 4) xyxy boxes and (N,) scores: indices kept, best first. A box is dropped when
+    its IoU with a kept, higher-scoring box is above ``iou_threshold``. Ties keep the lower index first."""
+    order = np.argsort(-np.asarray(scores), kind="stable")
+    keep: list[int] = []
+    limit = len(order) if max_keep is None else max_keep
+    while order.size and len(keep) < limit:
+        best, rest = order[0], order[1:]
+        keep.append(int(best))
+        if rest.size:
+            overlap = box_iou_xyxy(boxes[best], boxes[rest])[0]
+            rest = rest[overlap <= iou_threshold]
+        order = rest
+    return np.asarray(keep, dtype=np.int64)
+
+
+def batched_nms_xyxy(
+    boxes: NDArray, scores: NDArray, labels: NDArray, iou_threshold: float, max_keep: int | None = None
+) -> NDArray[np.int64]:
+    """Class-aware NMS: boxes of different ``labels`` never suppress each other. Indices kept, best first."""
+    kept = [
+        np.flatnonzero(labels == c)[nms_xyxy(boxes[labels == c], scores[labels == c], iou_threshold, max_keep)]
+        for c in np.unique(labels)
+    ]
+    if not kept:
+        return np.zeros(0, dtype=np.int64)
+    idx = np.concatenate(kept)
+    idx = idx[np.argsort(-scores[idx], kind="stable")]
+    return idx if max_keep is None else idx[:max_keep]
+
+
+def postprocess(
+    boxes_cxcywh: NDArray,
+    scores: NDArray,
+    conf: float = CONF_THRESHOLD,
+    iou: float = IOU_THRESHOLD,
+    max_det: int = MAX_DETECTIONS,
+    multi_label: bool = True,
+) -> ImageDetections:
+    """One image's raw head output -> its detections in input pixels.
+
+    ``boxes_cxcywh`` (N, 4) centre boxes, ``scores`` (N, C). ``multi_label`` keeps every (box, class) pair
+    above ``conf`` (COCO-style evaluation), otherwise only each box's best class.
+    """
+    if multi_label:
+        rows, labels = np.nonzero(scores > conf)
+    else:
+        labels = np.argmax(scores, axis=1) if scores.size else np.zeros(0, dtype=np.int64)
+        rows = np.flatnonzero(scores[np.arange(len(labels)), labels] > conf) if scores.size else labels
+        labels = labels[rows]
+    picked = scores[rows, labels].astype(np.float64)
+    if len(picked) > MAX_CANDIDATES:
+        top = np.argsort(-picked, kind="stable")[:MAX_CANDIDATES]
+        rows, labels, picked = rows[top], labels[top], picked[top]
+    xyxy = cxcywh_to_xyxy(boxes_cxcywh[rows]) if len(rows) else np.zeros((0, 4))
+    keep = batched_nms_xyxy(xyxy, picked, labels, iou, max_det)
+    return ImageDetections(xyxy[keep], picked[keep], labels[keep].astype(np.int64))

@@ -1,0 +1,274 @@
+"""Load any YOLO-family detector exported to ONNX and run it with onnxruntime.
+
+Output layouts (auto-detected from the output shape and class count, or chosen with ``fmt``):
+
+- ``fuzzyfire`` / ``yolov5``: (B, N, 5 + C) rows ``[cx, cy, w, h, obj, p_1 .. p_C]``, score = obj * p_c.
+- ``yolov8`` (also YOLO11): (B, 4 + C, N) columns ``[cx, cy, w, h, p_1 .. p_C]``, score = p_c.
+
+Boxes are centre boxes in pixels of the letterboxed input; every value is already post-sigmoid.
+Input: ``images`` (B, 3, H, W) float RGB in [0, 1], letterboxed with grey 114. Class names and input size
+come from the model's metadata (ours, YOLOv5's ``names``/``stride``, ultralytics' ``names``/``imgsz``)
+or from the caller.
+"""
+
+from __future__ import annotations
+
+import ast
+import json
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import NDArray
+
+LAYOUTS: tuple[str, ...] = ("fuzzyfire", "yolov5", "yolov8")
+FORMATS: tuple[str, ...] = ("auto", *LAYOUTS)
+#: Metadata key under which our exporter stores a JSON object (class_names, image_size, layout, ...).
+FUZZYFIRE_KEY = "fuzzyfire"
+
+
+class ModelError(ValueError):
+    """A model that cannot be scored; ``str()`` is ``"<path>: <reason>"``."""
+
+    def __init__(self, path: Path | str, reason: str) -> None:
+        super().__init__(f"{path}: {reason}")
+        self.path = str(path)
+        self.reason = reason
+
+
+@dataclass(frozen=True)
+class ModelSpec:
+    """What a detector expects and emits. ``batch`` is None when the batch axis is dynamic."""
+
+    path: Path
+    input_name: str
+    input_width: int
+    input_height: int
+    batch: int | None
+    class_names: tuple[str, ...]
+    format: str
+    pad_value: int = 114
+    input_dtype: str = "float32"
+    metadata: Mapping[str, str] = field(default_factory=dict)
+
+
+def decode_yolov5(out: NDArray[np.floating]) -> tuple[NDArray[np.float32], NDArray[np.float32]]:
+    """(B, N, 5 + C) -> centre boxes (B, N, 4) and class scores obj * p_c (B, N, C)."""
+    out = out.astype(np.float32, copy=False)
+    return out[..., :4], out[..., 4:5] * out[..., 5:]
+
+
+def decode_yolov8(out: NDArray[np.floating]) -> tuple[NDArray[np.float32], NDArray[np.float32]]:
+    """(B, 4 + C, N) -> centre boxes (B, N, 4) and class scores (B, N, C)."""
+    rows = out.astype(np.float32, copy=False).transpose(0, 2, 1)
+    return rows[..., :4], rows[..., 4:]
+
+
+DECODERS: Mapping[str, Callable[[NDArray], tuple[NDArray[np.float32], NDArray[np.float32]]]] = {
+    "fuzzyfire": decode_yolov5,
+    "yolov5": decode_yolov5,
+    "yolov8": decode_yolov8,
+}
+
+
+def parse_names(text: str) -> list[str]:
+    """Class names from metadata text: a JSON/Python list, a ``{0: 'fire', ...}`` dict, or ``fire,smoke``."""
+    value: object
+    try:
+        value = json.loads(text)
+    except ValueError:
+        try:
+            value = ast.literal_eval(text)
+        except (ValueError, SyntaxError):
+            value = [n.strip() for n in text.split(",") if n.strip()]
+    if isinstance(value, dict):
+        return [str(value[k]) for k in sorted(value, key=lambda k: int(k))]
+    if isinstance(value, (list, tuple)):
+        return [str(v) for v in value]
+    raise ValueError(f"cannot read class names from {text!r}")
+
+
+def _parse_size(value: object) -> tuple[int, int] | None:
+    """``640`` or ``[h, w]`` (ultralytics order) or a text of those -> ``(width, height)``."""
+    if isinstance(value, str):
+        try:
+            value = ast.literal_eval(value)
+        except (ValueError, SyntaxError):
+            return None
+    if isinstance(value, int):
+        return value, value
+    if isinstance(value, (list, tuple)) and len(value) == 2 and all(isinstance(v, int) for v in value):
+        return int(value[1]), int(value[0])
+    return None
+
+
+def read_metadata(meta: Mapping[str, str]) -> dict[str, object]:
+    """Class names, input size, pad value and whether the model is ours, from ONNX metadata_props."""
+    ours: dict = {}
+    if FUZZYFIRE_KEY in meta:
+        try:
+            ours = json.loads(meta[FUZZYFIRE_KEY])
+        except ValueError:
+            ours = {}
+    names_text = ours.get("class_names") or ours.get("names") or meta.get("class_names") or meta.get("names")
+    names = names_text if isinstance(names_text, list) else (parse_names(names_text) if names_text else None)
+    size = _parse_size(ours.get("image_size") or meta.get("imgsz") or meta.get("image_size") or "")
+    return {
+        "ours": bool(ours),
+        "names": [str(n) for n in names] if names else None,
+        "size": size,
+        "pad_value": int(ours.get("pad_value", 114)),
+        "layout": ours.get("layout"),
+    }
+
+
+def infer_format(out_shape: Sequence[int], num_classes: int | None, path: Path | str = "<model>") -> str:
+    """``yolov5`` for (B, N, 5 + C), ``yolov8`` for (B, 4 + C, N); raises :class:`ModelError` when the shape
+    fits neither or both."""
+    if len(out_shape) != 3:
+        raise ModelError(path, f"output has shape {tuple(out_shape)}; expected (B, N, 5+C) or (B, 4+C, N)")
+    a, b = int(out_shape[1]), int(out_shape[2])
+    if num_classes is None:
+        return "yolov8" if a < b else "yolov5"
+    fits_v5, fits_v8 = b == 5 + num_classes, a == 4 + num_classes
+    if fits_v5 and fits_v8:
+        raise ModelError(path, f"output {tuple(out_shape)} fits both layouts; pass --format yolov5 or yolov8")
+    if not (fits_v5 or fits_v8):
+        raise ModelError(
+            path, f"output {tuple(out_shape)} fits neither (B, N, 5+{num_classes}) nor (B, 4+{num_classes}, N)"
+        )
+    return "yolov5" if fits_v5 else "yolov8"
+
+
+def _static(dim: object) -> int | None:
+    return dim if isinstance(dim, int) and dim > 0 else None
+
+
+class OnnxDetector:
+    """A detector ONNX file behind one call: letterboxed (B, 3, H, W) float batch -> boxes and scores.
+
+    ``fmt`` is ``auto`` or one of :data:`LAYOUTS`; ``names`` overrides the metadata's class names;
+    ``image_size`` ``(width, height)`` is needed only when the model's input size is dynamic and its
+    metadata does not say. ``threads`` = 0 lets onnxruntime use every core.
+    """
+
+    def __init__(
+        self,
+        path: Path | str,
+        fmt: str = "auto",
+        names: Sequence[str] | None = None,
+        image_size: tuple[int, int] | None = None,
+        threads: int = 0,
+        providers: Sequence[str] = ("CPUExecutionProvider",),
+    ) -> None:
+        if fmt not in FORMATS:
+            raise ValueError(f"unknown model format {fmt!r}; choose one of {', '.join(FORMATS)}")
+        self.path = Path(path)
+        self.session = _open_session(self.path, threads, providers)
+        self._output = _detection_output(self.session, self.path)
+        self.spec = self._build_spec(fmt, names, image_size)
+        self._decode = DECODERS[self.spec.format]
+
+    def _build_spec(self, fmt: str, names: Sequence[str] | None, image_size: tuple[int, int] | None) -> ModelSpec:
+        inp = self.session.get_inputs()[0]
+        meta = dict(self.session.get_modelmeta().custom_metadata_map)
+        info = read_metadata(meta)
+        if len(inp.shape) != 4:
+            raise ModelError(self.path, f"input {inp.name!r} has shape {inp.shape}; expected (B, 3, H, W)")
+        width, height = _input_size(self.path, inp.shape, image_size, info["size"])  # type: ignore[arg-type]
+        class_names = list(names) if names else info["names"]
+        out_shape = self._output_shape(inp.name, width, height)
+        chosen = fmt
+        if fmt == "auto":
+            detected = infer_format(out_shape, len(class_names) if class_names else None, self.path)
+            chosen = "fuzzyfire" if info["ours"] and detected == "yolov5" else detected
+        num_classes = out_shape[1] - 4 if chosen == "yolov8" else out_shape[2] - 5
+        if not class_names:
+            raise ModelError(self.path, "the model's metadata has no class names; pass --names fire,smoke")
+        if len(class_names) != num_classes:
+            raise ModelError(self.path, f"{len(class_names)} class names {class_names} for {num_classes} outputs")
+        return ModelSpec(
+            path=self.path,
+            input_name=inp.name,
+            input_width=width,
+            input_height=height,
+            batch=_static(inp.shape[0]),
+            class_names=tuple(class_names),
+            format=chosen,
+            pad_value=int(info["pad_value"]),  # type: ignore[arg-type]
+            input_dtype="float16" if inp.type == "tensor(float16)" else "float32",
+            metadata=meta,
+        )
+
+    def _output_shape(self, input_name: str, width: int, height: int) -> list[int]:
+        """The detection output's shape, from the graph when static, else by running one blank image."""
+        shape = self.session.get_outputs()[self._output].shape
+        if len(shape) == 3 and all(_static(d) for d in shape[1:]):
+            return [1, int(shape[1]), int(shape[2])]
+        dtype = np.float16 if self.session.get_inputs()[0].type == "tensor(float16)" else np.float32
+        batch = _static(self.session.get_inputs()[0].shape[0]) or 1
+        blank = np.zeros((batch, 3, height, width), dtype=dtype)
+        return list(self.session.run(None, {input_name: blank})[self._output].shape)
+
+    def raw(self, batch: NDArray[np.float32]) -> NDArray[np.floating]:
+        """Run the graph on (B, 3, H, W) float32 in [0, 1]; returns the raw detection output for B images.
+        A model with a fixed batch size is run in chunks of that size (the last one zero-padded)."""
+        spec = self.spec
+        if batch.shape[1:] != (3, spec.input_height, spec.input_width):
+            raise ValueError(
+                f"batch shape {batch.shape} does not match the model input 3x{spec.input_height}x{spec.input_width}"
+            )
+        x = batch.astype(np.float16) if spec.input_dtype == "float16" else batch
+        step = spec.batch or len(x)
+        outs = []
+        for start in range(0, len(x), step):
+            chunk = x[start : start + step]
+            if len(chunk) < step:
+                chunk = np.concatenate([chunk, np.zeros((step - len(chunk), *chunk.shape[1:]), chunk.dtype)])
+            out = self.session.run(None, {spec.input_name: chunk})[self._output]
+            outs.append(out[: len(x) - start])
+        return np.concatenate(outs)
+
+    def __call__(self, batch: NDArray[np.float32]) -> tuple[NDArray[np.float32], NDArray[np.float32]]:
+        """(B, 3, H, W) -> centre boxes (B, N, 4) in input pixels and class scores (B, N, C) in [0, 1]."""
+        return self._decode(self.raw(batch))
+
+
+def _open_session(path: Path, threads: int, providers: Sequence[str]):  # -> onnxruntime.InferenceSession
+    import onnxruntime as ort
+
+    if not path.is_file():
+        raise ModelError(path, "file not found")
+    opts = ort.SessionOptions()
+    opts.intra_op_num_threads = max(0, int(threads))
+    opts.inter_op_num_threads = 1
+    opts.log_severity_level = 3
+    try:
+        return ort.InferenceSession(str(path), opts, providers=list(providers))
+    except Exception as exc:  # noqa: BLE001 - onnxruntime raises its own exception types for bad files
+        raise ModelError(path, f"onnxruntime cannot load it ({exc.__class__.__name__}: {exc})") from None
+
+
+def _detection_output(session, path: Path) -> int:
+    """Index of the first rank-3 output (YOLOv5 exports may add per-level outputs after it)."""
+    for i, out in enumerate(session.get_outputs()):
+        if len(out.shape) == 3:
+            return i
+    shapes = [o.shape for o in session.get_outputs()]
+    raise ModelError(path, f"no output of rank 3 among {shapes}; models with NMS inside are not supported")
+
+
+def _input_size(
+    path: Path, shape: Sequence[object], given: tuple[int, int] | None, meta: tuple[int, int] | None
+) -> tuple[int, int]:
+    """``(width, height)`` of the model input: the graph's static size, else ``given``, else metadata."""
+    static = (_static(shape[3]), _static(shape[2]))
+    if static[0] and static[1]:
+        if given and tuple(given) != static:
+            raise ModelError(path, f"the model takes {static[0]}x{static[1]} inputs, not {given[0]}x{given[1]}")
+        return static  # type: ignore[return-value]
+    size = given or meta
+    if not size:
+        raise ModelError(path, "the input size is dynamic and not in the metadata; pass --imgsz")
+    return int(size[0]), int(size[1])

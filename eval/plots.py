@@ -1,0 +1,81 @@
+"""PNG figures: precision-recall curves of one evaluation and Figure-5-style bars with error bars.
+
+matplotlib's object API only (``Figure``), so plotting touches no global state.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import NDArray
+
+
+def plot_pr_curves(
+    recall: NDArray[np.float64], precision: Mapping[str, NDArray[np.float64]], path: Path, title: str = ""
+) -> Path:
+    """Write a PNG of precision (R,) against ``recall`` thresholds (R,), one line per label."""
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(5.5, 4.5), dpi=110)
+    ax = fig.add_subplot()
+    for label, prec in precision.items():
+        ax.plot(recall, prec, label=label)
+    ax.set_xlim(0, 1)
+    ax.set_ylim(0, 1.02)
+    ax.set_xlabel("recall")
+    ax.set_ylabel("precision")
+    ax.grid(alpha=0.3)
+    ax.set_title(title)
+    if precision:
+        ax.legend(loc="lower left", fontsize=8)
+    fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path)
+    return path
+
+
+def pr_curves_from_eval(precision: NDArray[np.float64], class_names: Sequence[str]) -> dict[str, NDArray]:
+    """COCOeval ``precision`` (T, R, K, A, M) -> ``{"<class> AP50 …": (R,)}`` at IoU 0.5, area all, 100 dets.
+
+    Classes without ground truth (precision -1) are left out."""
+    curves = {}
+    for k, name in enumerate(class_names):
+        prec = precision[0, :, k, 0, -1]
+        if np.all(prec > -1):
+            area = float(prec.mean())
+            curves[f"{name} (AP50 {area:.3f})"] = prec
+    return curves
+
+
+def plot_bars(
+    groups: Sequence[str],
+    series: Mapping[str, tuple[Sequence[float], Sequence[float]]],
+    path: Path,
+    ylabel: str = "AP",
+    title: str = "",
+) -> Path:
+    """Grouped bars with error bars (Figure 5 of the paper): one group per x label (e.g. a mixture),
+    one bar per series (e.g. a test set). ``series[name] = (means, stds)`` aligned with ``groups``;
+    NaN std draws no error bar."""
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(max(6.0, 0.6 * len(groups) * max(1, len(series))), 4.2), dpi=110)
+    ax = fig.add_subplot()
+    x = np.arange(len(groups), dtype=float)
+    width = 0.8 / max(1, len(series))
+    for i, (name, (means, stds)) in enumerate(series.items()):
+        offset = (i - (len(series) - 1) / 2) * width
+        err = np.nan_to_num(np.asarray(stds, dtype=float), nan=0.0)
+        ax.bar(x + offset, means, width, yerr=err, capsize=3, label=name)
+    ax.set_xticks(x, list(groups), rotation=30, ha="right")
+    ax.set_ylabel(ylabel)
+    ax.set_title(title)
+    ax.grid(axis="y", alpha=0.3)
+    if series:
+        ax.legend(fontsize=8)
+    fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path)
+    return path

@@ -1,0 +1,110 @@
+"""Batched inference over a dataset: decode + letterbox in a thread pool, onnxruntime, NMS, boxes mapped
+back to original image pixels."""
+
+from __future__ import annotations
+
+from collections import deque
+from collections.abc import Callable, Iterator, Sequence
+from concurrent.futures import Future, ThreadPoolExecutor
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from curate.boxes import clip_xyxy, letterbox_to_image_xyxy
+from curate.dataset import Dataset, ImageRecord
+from curate.imageio import ImageError, read_image
+from curate.problems import Problem
+from curate.progress import progress
+from eval.letterbox import letterbox_image, to_nchw_float
+from eval.nms import CONF_THRESHOLD, IOU_THRESHOLD, MAX_DETECTIONS, ImageDetections, postprocess
+from eval.onnx_model import OnnxDetector
+
+Loaded = tuple[NDArray[np.uint8], tuple[int, int]] | ImageError
+
+
+@dataclass(frozen=True)
+class PredictOptions:
+    """Post-processing and batching: ``conf`` and ``iou`` thresholds, ``max_det`` per image, ``batch`` images
+    per onnxruntime call, ``workers`` decoding threads."""
+
+    conf: float = CONF_THRESHOLD
+    iou: float = IOU_THRESHOLD
+    max_det: int = MAX_DETECTIONS
+    batch: int = 16
+    workers: int = 2
+    multi_label: bool = True
+
+
+@dataclass
+class Predictions:
+    """Detections per image id (xyxy in original pixels, labels index the model's ``class_names``) and the
+    images that could not be scored."""
+
+    class_names: tuple[str, ...]
+    by_image: dict[int, ImageDetections]
+    problems: list[Problem]
+
+
+def _loader(width: int, height: int, pad: int) -> Callable[[str], Loaded]:
+    def load(path: str) -> Loaded:
+        try:
+            image = read_image(path)
+        except ImageError as exc:
+            return exc
+        return letterbox_image(image, width, height, pad), (image.shape[1], image.shape[0])
+
+    return load
+
+
+def _prefetched(
+    paths: Sequence[str], size: int, pool: ThreadPoolExecutor, load: Callable[[str], Loaded]
+) -> Iterator[list[Loaded]]:
+    """Batches of loaded images in order; the next batch decodes while the caller runs the current one."""
+    chunks = [paths[i : i + size] for i in range(0, len(paths), size)]
+    pending: deque[list[Future]] = deque()
+    for chunk in chunks[:2]:
+        pending.append([pool.submit(load, p) for p in chunk])
+    for nxt in range(2, len(chunks) + 2):
+        futures = pending.popleft()
+        if nxt < len(chunks):
+            pending.append([pool.submit(load, p) for p in chunks[nxt]])
+        yield [f.result() for f in futures]
+
+
+def _to_original(det: ImageDetections, size: tuple[int, int], input_size: tuple[int, int]) -> ImageDetections:
+    width, height = size
+    boxes = letterbox_to_image_xyxy(det.boxes, width, height, *input_size) if len(det) else det.boxes
+    return ImageDetections(clip_xyxy(boxes, width, height), det.scores, det.labels)
+
+
+def predict_dataset(detector: OnnxDetector, dataset: Dataset, options: PredictOptions | None = None) -> Predictions:
+    """Run ``detector`` on every image of ``dataset``. Unreadable images are skipped and reported;
+    an image whose decoded size differs from its record is scored and reported as a warning."""
+    opt = options or PredictOptions()
+    spec = detector.spec
+    input_size = (spec.input_width, spec.input_height)
+    images: list[ImageRecord] = list(dataset.images)
+    paths = [str(dataset.image_path(img)) for img in images]
+    out = Predictions(spec.class_names, {}, [])
+    load = _loader(spec.input_width, spec.input_height, spec.pad_value)
+    done = 0
+    with ThreadPoolExecutor(max_workers=max(1, opt.workers)) as pool:
+        batches = _prefetched(paths, max(1, opt.batch), pool, load)
+        for loaded in progress(batches, total=-(-len(paths) // max(1, opt.batch)), desc="scoring", unit="batch"):
+            records = images[done : done + len(loaded)]
+            done += len(loaded)
+            good = [(rec, item) for rec, item in zip(records, loaded) if not isinstance(item, ImageError)]
+            for rec, item in zip(records, loaded):
+                if isinstance(item, ImageError):
+                    out.problems.append(Problem(item.path, f"not scored: {item.reason}"))
+                elif item[1] != (rec.width, rec.height):
+                    msg = f"decoded size {item[1][0]}x{item[1][1]} differs from the dataset's {rec.width}x{rec.height}"
+                    out.problems.append(Problem(str(dataset.image_path(rec)), msg, "warning"))
+            if not good:
+                continue
+            boxes, scores = detector(to_nchw_float([item[0] for _, item in good]))
+            for (rec, (_, size)), b, s in zip(good, boxes, scores):
+                det = postprocess(b, s, opt.conf, opt.iou, opt.max_det, opt.multi_label)
+                out.by_image[rec.id] = _to_original(det, size, input_size)
+    return out

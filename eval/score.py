@@ -1,0 +1,74 @@
+"""Score one detector ONNX on one test set: the function behind ``fuzzyfire score``."""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from pycocotools.cocoeval import COCOeval
+
+from curate.dataset import Dataset
+from curate.formats.registry import read_dataset
+from curate.problems import Problem
+from eval.coco import CocoMetrics, evaluate_predictions
+from eval.onnx_model import ModelSpec, OnnxDetector
+from eval.plots import plot_pr_curves, pr_curves_from_eval
+from eval.predict import Predictions, PredictOptions, predict_dataset
+
+
+class ScoreError(ValueError):
+    """Nothing could be scored (no readable image, empty split)."""
+
+
+@dataclass
+class ScoreResult:
+    """Metrics of one (model, test set) pair, with what produced them."""
+
+    metrics: CocoMetrics
+    evaluation: COCOeval
+    records: list[dict[str, Any]]
+    predictions: Predictions
+    spec: ModelSpec
+    dataset: Dataset
+    problems: list[Problem]
+
+
+def load_test_set(path: Path | str, fmt: str = "auto", split: str | None = None) -> tuple[Dataset, list[Problem]]:
+    """Read any dataset :func:`curate.formats.registry.read_dataset` reads, optionally one split of it."""
+    result = read_dataset(path, fmt)
+    ds = result.dataset
+    if split:
+        if split not in ds.splits:
+            raise ScoreError(f"{path}: no split {split!r} (splits: {', '.join(s or '(none)' for s in ds.splits)})")
+        ds = ds.select_split(split)
+    if not ds.images:
+        raise ScoreError(f"{path}: no images to score")
+    return ds, list(result.problems)
+
+
+def score(
+    detector: OnnxDetector, dataset: Dataset, options: PredictOptions | None = None, problems: Sequence[Problem] = ()
+) -> ScoreResult:
+    """Run ``detector`` over ``dataset`` and compute COCO metrics over every readable image."""
+    preds = predict_dataset(detector, dataset, options)
+    if not preds.by_image:
+        raise ScoreError(f"{dataset.root}: none of the {len(dataset.images)} images could be read")
+    metrics, ev, records = evaluate_predictions(dataset, preds)
+    return ScoreResult(metrics, ev, records, preds, detector.spec, dataset, [*problems, *preds.problems])
+
+
+def write_outputs(result: ScoreResult, out: Path) -> dict[str, Path]:
+    """Write ``predictions.json`` (COCO results), ``metrics.json`` and ``pr_curve.png`` into ``out``."""
+    out.mkdir(parents=True, exist_ok=True)
+    files = {"predictions": out / "predictions.json", "metrics": out / "metrics.json", "pr_curve": out / "pr_curve.png"}
+    files["predictions"].write_text(json.dumps(result.records))
+    doc = {**result.metrics.to_dict(), "model": str(result.spec.path), "format": result.spec.format}
+    files["metrics"].write_text(json.dumps(doc, indent=1) + "\n")
+    names = [c.name for c in result.dataset.categories if c.id in result.evaluation.params.catIds]
+    curves = pr_curves_from_eval(result.evaluation.eval["precision"], names)
+    title = f"{result.spec.path.name}: AP50 {result.metrics.summary['AP50'] or 0:.3f}"
+    plot_pr_curves(result.evaluation.params.recThrs, curves, files["pr_curve"], title=title + " (IoU 0.5)")
+    return files

@@ -1,0 +1,117 @@
+"""``fuzzyfire score`` end to end on real ONNX models: letterbox, decode, NMS, back-mapping, pycocotools."""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import json
+
+import pytest
+from detector_factories import IMAGES, NAMES, oracle_model, rows_for, write_test_set
+from pycocotools.coco import COCO
+from pycocotools.cocoeval import COCOeval
+
+from fuzzyfire.cli import main
+
+
+@pytest.fixture(scope="module")
+def work(tmp_path_factory):
+    root = tmp_path_factory.mktemp("score")
+    return {"root": root, "test": write_test_set(root / "test")}
+
+
+def run_json(*argv: str) -> dict:
+    out = io.StringIO()
+    with contextlib.redirect_stdout(out):
+        assert main(["score", *map(str, argv), "--json"]) == 0
+    return json.loads(out.getvalue())
+
+
+@pytest.mark.parametrize(
+    "kwargs",
+    [
+        {"layout": "yolov5"},
+        {"layout": "yolov8", "metadata": {"names": "{0: 'fire', 1: 'smoke'}", "imgsz": "[64, 64]"}},
+        {"layout": "yolov5", "batch": 1},
+        {"layout": "yolov8", "dynamic_size": True, "metadata": {"names": "['Fire', 'Smoke']", "imgsz": "64"}},
+    ],
+    ids=["yolov5", "yolov8", "fixed-batch-1", "dynamic-size"],
+)
+def test_ground_truth_model_scores_ap_1_with_negatives(work, kwargs):
+    model = oracle_model(work["root"] / f"m{len(list(work['root'].glob('*.onnx')))}.onnx", **kwargs)
+    doc = run_json(model, "--data", work["test"], "--batch", 3)
+    assert doc["AP"] == pytest.approx(1.0) and doc["AP50"] == pytest.approx(1.0)
+    assert doc["images"] == len(IMAGES) == 6
+    assert doc["boxes"] == sum(len(i.boxes) for i in IMAGES)
+    assert doc["detections"] == doc["boxes"]  # NMS removed every duplicate, negatives got nothing
+    assert {k: v["AP"] for k, v in doc["per_class"].items()} == {
+        "fire": pytest.approx(1.0),
+        "smoke": pytest.approx(1.0),
+    }
+    assert [doc[k] for k in ("AP_small", "AP_medium", "AP_large")] == pytest.approx([1.0, 1.0, 1.0])
+
+
+def test_without_nms_the_duplicates_cost_ap(work):
+    model = oracle_model(work["root"] / "dups.onnx")
+    doc = run_json(model, "--data", work["test"], "--iou", 1.0)
+    assert doc["detections"] > doc["boxes"]
+    assert doc["AP"] < 0.95
+
+
+def test_shifted_boxes_give_the_ap_pycocotools_computes(work, tmp_path):
+    shift = 3.0  # letterboxed pixels to the right
+    model = oracle_model(work["root"] / "shifted.onnx", rows=rows_for(shift=shift, duplicates=False))
+    doc = run_json(model, "--data", work["test"], "--format", "yolov5")  # (1, 6, 7) fits both layouts
+    gt = COCO(str(work["test"] / "annotations.json"))
+    ids = {img["file_name"].split("/")[-1][:-4]: img["id"] for img in gt.dataset["images"]}
+    score, results = 0.95, []
+    for img in IMAGES:
+        for cls, (x, y, w, h) in img.boxes:  # shift mapped to original pixels by hand
+            box = [x + shift / img.scale[0], y, w, h]
+            results.append(
+                {"image_id": ids[img.name], "category_id": NAMES.index(cls) + 1, "bbox": box, "score": score}
+            )
+            score -= 0.05
+    ev = COCOeval(gt, gt.loadRes(results), "bbox")
+    ev.evaluate(), ev.accumulate(), ev.summarize()
+    assert 0.0 < ev.stats[0] < 1.0
+    assert doc["AP"] == pytest.approx(ev.stats[0], abs=1e-9)
+    assert doc["AP50"] == pytest.approx(ev.stats[1], abs=1e-9)
+
+
+def test_out_writes_predictions_metrics_and_pr_curve(work, tmp_path):
+    model = oracle_model(work["root"] / "out.onnx")
+    assert main(["score", str(model), "--data", str(work["test"]), "--out", str(tmp_path / "o")]) == 0
+    preds = json.loads((tmp_path / "o" / "predictions.json").read_text())
+    assert len(preds) == 6 and {"image_id", "category_id", "bbox", "score"} <= set(preds[0])
+    assert json.loads((tmp_path / "o" / "metrics.json").read_text())["AP"] == pytest.approx(1.0)
+    assert (tmp_path / "o" / "pr_curve.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_text_output_lists_classes(work, capsys):
+    model = oracle_model(work["root"] / "text.onnx")
+    assert main(["score", str(model), "--data", str(work["test"])]) == 0
+    out = capsys.readouterr().out
+    assert "AP 1.000" in out and "smoke" in out and "2 negatives" in out
+
+
+def test_bad_model_is_a_clear_error(work, tmp_path, capsys):
+    bad = tmp_path / "broken.onnx"
+    bad.write_bytes(b"not a model")
+    assert main(["score", str(bad), "--data", str(work["test"])]) == 2
+    assert "broken.onnx: onnxruntime cannot load it" in capsys.readouterr().err
+    assert main(["score", str(tmp_path / "missing.onnx"), "--data", str(work["test"])]) == 2
+    assert "missing.onnx: file not found" in capsys.readouterr().err
+
+
+def test_model_without_names_asks_for_them(work, capsys):
+    model = oracle_model(work["root"] / "nonames.onnx", metadata={})
+    assert main(["score", str(model), "--data", str(work["test"])]) == 2
+    assert "--names" in capsys.readouterr().err
+    assert run_json(model, "--data", work["test"], "--names", "fire,smoke")["AP"] == pytest.approx(1.0)
+
+
+def test_help_shows_an_example(capsys):
+    with pytest.raises(SystemExit):
+        main(["score", "--help"])
+    assert "example:" in capsys.readouterr().out
