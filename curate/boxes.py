@@ -163,3 +163,33 @@ def mask_to_xywh(mask: ArrayLike) -> Boxes:
     if rows.size == 0:
         return np.zeros(4, dtype=np.float64)
     return np.array([cols[0], rows[0], cols[-1] + 1 - cols[0], rows[-1] + 1 - rows[0]], dtype=np.float64)
+
+
+def affine_xyxy(boxes: ArrayLike, matrix: ArrayLike) -> Boxes:
+    """(N, 4) xyxy pixels -> (N, 4) xyxy pixels: the box enclosing the four corners moved by ``matrix``,
+    a 2x3 or 3x3 affine map of pixel coordinates (the same matrix ``cv2.warpAffine`` applies to pixels)."""
+    b = np.atleast_2d(_as_boxes(boxes))
+    m = np.asarray(matrix, dtype=np.float64)
+    if m.shape not in ((2, 3), (3, 3)):
+        raise ValueError(f"matrix must be 2x3 or 3x3, got {m.shape}")
+    corners = b[:, [0, 1, 2, 1, 2, 3, 0, 3]].reshape(-1, 4, 2)  # (N, 4 corners, xy)
+    moved = corners @ m[:2, :2].T + m[:2, 2]
+    return np.concatenate((moved.min(axis=1), moved.max(axis=1)), axis=1)
+
+
+def nms_xyxy(
+    boxes: ArrayLike, scores: ArrayLike, iou_threshold: float, max_keep: int | None = None
+) -> NDArray[np.int64]:
+    """Greedy NMS over (N, 4) xyxy boxes and (N,) scores: indices kept, best first. A box is dropped when its
+    IoU with a kept, higher-scoring box is above ``iou_threshold``; ties keep the lower index first."""
+    b = np.asarray(boxes, dtype=np.float64).reshape(-1, 4)
+    order = np.argsort(-np.asarray(scores, dtype=np.float64), kind="stable")
+    keep: list[int] = []
+    limit = len(order) if max_keep is None else max_keep
+    while order.size and len(keep) < limit:
+        best, rest = order[0], order[1:]
+        keep.append(int(best))
+        if rest.size:
+            rest = rest[box_iou_xyxy(b[best], b[rest])[0] <= iou_threshold]
+        order = rest
+    return np.asarray(keep, dtype=np.int64)

@@ -99,3 +99,25 @@ def test_mask_to_xywh_encloses_the_mask_exactly():
     assert mask_to_xywh(full).tolist() == [0.0, 0.0, 7.0, 5.0]
     with pytest.raises(ValueError):
         mask_to_xywh(np.ones(3))
+
+
+def test_affine_xyxy_moves_corners_and_encloses():
+    b = np.array([[10.0, 20.0, 30.0, 60.0]])
+    shift_scale = np.array([[2.0, 0, 5], [0, 0.5, -10]])
+    np.testing.assert_allclose(boxes.affine_xyxy(b, shift_scale), [[25, 0, 65, 20]])
+    mirror = np.array([[-1.0, 0, 100], [0, 1, 0], [0, 0, 1]])  # x -> 100 - x keeps x_min < x_max
+    np.testing.assert_allclose(boxes.affine_xyxy(b, mirror), [[70, 20, 90, 60]])
+    rot90 = np.array([[0.0, -1, 0], [1, 0, 0]])  # (x, y) -> (-y, x)
+    np.testing.assert_allclose(boxes.affine_xyxy(b, rot90), [[-60, 10, -20, 30]])
+    assert boxes.affine_xyxy(np.zeros((0, 4)), mirror).shape == (0, 4)
+    with pytest.raises(ValueError, match="2x3"):
+        boxes.affine_xyxy(b, np.eye(2))
+
+
+def test_nms_xyxy_keeps_best_and_disjoint():
+    b = np.array([[0, 0, 10, 10], [1, 1, 11, 11], [20, 20, 30, 30], [0, 0, 10, 10]], dtype=float)
+    s = np.array([0.5, 0.9, 0.3, 0.9])
+    assert boxes.nms_xyxy(b, s, 0.5).tolist() == [1, 2]  # 3 ties with 1 (lower index first), overlaps it
+    assert boxes.nms_xyxy(b, s, 0.99).tolist() == [1, 3, 2]  # 0 duplicates 3 exactly (IoU 1)
+    assert boxes.nms_xyxy(b, s, 0.5, max_keep=1).tolist() == [1]
+    assert boxes.nms_xyxy(np.zeros((0, 4)), np.zeros(0), 0.5).tolist() == []
