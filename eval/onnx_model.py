@@ -136,7 +136,9 @@ def infer_format(out_shape: Sequence[int], num_classes: int | None, path: Path |
         raise ModelError(path, f"output {tuple(out_shape)} fits both layouts; pass --format yolov5 or yolov8")
     if not (fits_v5 or fits_v8):
         raise ModelError(
-            path, f"output {tuple(out_shape)} fits neither (B, N, 5+{num_classes}) nor (B, 4+{num_classes}, N)"
+            path,
+            f"output {tuple(out_shape)} fits neither (B, N, 5+{num_classes}) nor (B, 4+{num_classes}, N) "
+            f"for {num_classes} class names; check --names",
         )
     return "yolov5" if fits_v5 else "yolov8"
 

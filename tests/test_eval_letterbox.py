@@ -1,0 +1,27 @@
+"""Inference letterbox: size, placement, padding and the float NCHW batch."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from eval.letterbox import letterbox_image, to_nchw_float
+
+
+def test_wide_image_is_centred_with_grey_bands():
+    img = np.full((32, 64, 3), 7, np.uint8)
+    out = letterbox_image(img, 64, 64)
+    assert out.shape == (64, 64, 3) and out.dtype == np.uint8
+    assert (out[16:48] == 7).all() and (out[:16] == 114).all() and (out[48:] == 114).all()
+
+
+def test_shrinks_and_keeps_channel_order():
+    img = np.zeros((100, 50, 3), np.uint8)
+    img[..., 0] = 200
+    out = letterbox_image(img, 32, 32, pad_value=0)
+    assert (out[:, 8:24, 0] == 200).all() and (out[:, 8:24, 1:] == 0).all() and (out[:, :8] == 0).all()
+
+
+def test_to_nchw_float():
+    batch = to_nchw_float([np.full((4, 5, 3), 255, np.uint8), np.zeros((4, 5, 3), np.uint8)])
+    assert batch.shape == (2, 3, 4, 5) and batch.dtype == np.float32
+    assert batch[0].min() == 1.0 and batch[1].max() == 0.0 and batch.flags["C_CONTIGUOUS"]

@@ -1,0 +1,53 @@
+"""Batched inference over a dataset: boxes back in original pixels, batching invariance, bad images."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+from detector_factories import IMAGES, oracle_model, write_test_set
+
+from curate.boxes import xyxy_to_xywh
+from curate.formats.registry import read_dataset
+from eval.onnx_model import OnnxDetector
+from eval.predict import PredictOptions, predict_dataset
+
+
+@pytest.fixture(scope="module")
+def setup(tmp_path_factory):
+    root = tmp_path_factory.mktemp("predict")
+    ds = read_dataset(write_test_set(root / "test")).dataset
+    return ds, OnnxDetector(oracle_model(root / "m.onnx"))
+
+
+@pytest.mark.parametrize("batch", [1, 2, 4, 16])
+def test_boxes_come_back_in_original_pixels(setup, batch):
+    ds, det = setup
+    preds = predict_dataset(det, ds, PredictOptions(batch=batch))
+    assert preds.problems == [] and set(preds.by_image) == {img.id for img in ds.images}
+    by_name = {img.file_name.split("/")[-1][:-4]: img.id for img in ds.images}
+    for img in IMAGES:
+        got = preds.by_image[by_name[img.name]]
+        want = sorted((("fire", "smoke").index(c), *b) for c, b in img.boxes)
+        have = sorted((int(lab), *box) for lab, box in zip(got.labels, xyxy_to_xywh(got.boxes)))
+        assert len(have) == len(want)
+        np.testing.assert_allclose(np.array(have), np.array(want, float), atol=1e-3)
+
+
+def test_unreadable_image_is_reported_and_skipped(setup, tmp_path):
+    ds, det = setup
+    bad = tmp_path / "broken.png"
+    bad.write_bytes(b"\x89PNG\r\n\x1a\n garbage")
+    first = ds.images[0]
+    images = (dataclasses.replace(first, file_name=str(bad)), *ds.images[1:])
+    preds = predict_dataset(det, dataclasses.replace(ds, images=images))
+    assert first.id not in preds.by_image and len(preds.by_image) == len(ds.images) - 1
+    assert len(preds.problems) == 1 and "broken.png" in str(preds.problems[0])
+
+
+def test_size_mismatch_is_a_warning(setup):
+    ds, det = setup
+    images = (dataclasses.replace(ds.images[0], width=999), *ds.images[1:])
+    preds = predict_dataset(det, dataclasses.replace(ds, images=images))
+    assert [p.level for p in preds.problems] == ["warning"] and "999x" in preds.problems[0].reason

@@ -1,0 +1,40 @@
+"""score(): test-set loading (splits, errors) and unreadable images left out of the metrics."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import pytest
+from detector_factories import oracle_model, write_test_set
+
+from eval.onnx_model import OnnxDetector
+from eval.score import ScoreError, load_test_set, score, write_outputs
+
+
+@pytest.fixture(scope="module")
+def work(tmp_path_factory):
+    root = tmp_path_factory.mktemp("scorefn")
+    return root, write_test_set(root / "test"), OnnxDetector(oracle_model(root / "m.onnx"))
+
+
+def test_split_selection(work):
+    _, test, _ = work
+    ds, problems = load_test_set(test, split="test")
+    assert len(ds.images) == 6 and problems == []
+    with pytest.raises(ScoreError, match="no split 'valid'"):
+        load_test_set(test, split="valid")
+
+
+def test_unreadable_image_is_left_out_and_reported(work, tmp_path):
+    root, test, det = work
+    ds, _ = load_test_set(test)
+    (tmp_path / "images").mkdir()
+    for img in ds.images:
+        src = ds.image_path(img)
+        data = src.read_bytes()
+        (tmp_path / img.file_name).write_bytes(data[: len(data) // 2] if img.id == 1 else data)
+    result = score(det, dataclasses.replace(ds, root=tmp_path))
+    assert result.metrics.images == 5 and result.metrics.summary["AP"] == pytest.approx(1.0)
+    assert [p.level for p in result.problems] == ["error"] and "wide.png" in result.problems[0].path
+    files = write_outputs(result, tmp_path / "out")
+    assert all(p.is_file() for p in files.values())
