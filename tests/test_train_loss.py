@@ -41,7 +41,7 @@ def test_loss_falls_on_a_tiny_overfit() -> None:
         opt.zero_grad()
         loss.backward()
         opt.step()
-        history.append(float(loss))
+        history.append(float(loss.detach()))
         assert set(parts) == {"box", "obj", "cls"}
     assert history[-1] < 0.5 * history[0]
 
