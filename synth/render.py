@@ -262,3 +262,19 @@ def project(points: NDArray[np.float64], pose: NDArray[np.float64], k: NDArray[n
     u = k[0, 0] * pc[:, 0] / safe + k[0, 2]
     v = -k[1, 1] * pc[:, 1] / safe + k[1, 2]
     return np.stack([u, v, depth], axis=1)
+
+
+def render_view(
+    renderer: Renderer, scene: Any, pose: NDArray[np.float64], yfov: float, depth_only: bool = False
+) -> tuple[NDArray[np.uint8] | None, NDArray[np.float32]]:
+    """Render ``scene`` from a camera at ``pose`` (4, 4) with vertical field of view ``yfov`` (radians); the
+    camera node is removed again. Returns (RGB or None when ``depth_only``, depth)."""
+    pr = renderer.pyrender
+    cam = pr.PerspectiveCamera(yfov=yfov, aspectRatio=renderer.width / renderer.height, znear=0.05, zfar=200.0)
+    node = scene.add(cam, pose=pose)
+    try:
+        if depth_only:
+            return None, renderer.depth(scene)
+        return renderer.color_depth(scene)
+    finally:
+        scene.remove_node(node)
