@@ -1,0 +1,80 @@
+"""Decode-once cache, batches and targets, seeded determinism."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+import torch
+from factories_train import painted_dataset
+
+from curate.dataset import DatasetBuilder
+from train.augment import Sample
+from train.config import AugmentConfig
+from train.data import TrainBatches, cache_images, collate, val_batches
+
+
+@pytest.fixture(scope="module")
+def dataset(tmp_path_factory: pytest.TempPathFactory):
+    return painted_dataset(tmp_path_factory.mktemp("painted"), 10, seed=0)
+
+
+def test_cache_resizes_once_and_keeps_labels(dataset) -> None:
+    cache = cache_images(dataset, 40)
+    assert len(cache) == 10
+    first = cache[0]
+    assert first.sample.image.shape == (32, 40, 3)  # 80 x 64 -> longest side 40
+    anns = dataset.annotations_by_image()[first.record.id]
+    assert len(first.sample.boxes) == len(anns)
+    x, y, w, h = anns[0].bbox
+    np.testing.assert_allclose(first.sample.boxes[0], [x / 2, y / 2, (x + w) / 2, (y + h) / 2])
+
+
+def test_unreadable_image_is_reported_and_left_out(dataset, tmp_path: Path, capsys) -> None:
+    (tmp_path / "bad.png").write_bytes(b"not an image")
+    b = DatasetBuilder(tmp_path, ["fire"])
+    b.add_image("bad.png", 10, 10)
+    b.add_image(str(dataset.image_path(dataset.images[0])), 80, 64)
+    cache = cache_images(b.build(), 40)
+    assert len(cache) == 1
+    assert "bad.png" in capsys.readouterr().err
+    with pytest.raises(ValueError, match="no readable images"):
+        cache_images(b.build().filter_images(lambda img: img.file_name == "bad.png"), 40)
+
+
+def test_collate_targets_in_input_pixels() -> None:
+    image = np.zeros((8, 8, 3), dtype=np.uint8)
+    samples = [
+        Sample(image, np.array([[0.0, 0.0, 4.0, 2.0]]), np.array([1])),
+        Sample(image + 255, np.zeros((0, 4)), np.zeros(0, dtype=np.int64)),
+    ]
+    images, targets = collate(samples)
+    assert images.shape == (2, 3, 8, 8) and images.dtype == torch.float32 and float(images[1].min()) == 1.0
+    assert targets.tolist() == [[0.0, 1.0, 2.0, 1.0, 4.0, 2.0]]
+
+
+def test_batches_are_seeded_and_resumable(dataset) -> None:
+    cache = cache_images(dataset, 64)
+    batches = TrainBatches(cache, 64, 4, AugmentConfig(), seed=3)
+    assert len(batches) == 3
+    first = list(batches.epoch(0))
+    again = list(batches.epoch(0))
+    assert [b[0].shape[0] for b in first] == [4, 4, 2]
+    for (xa, ta), (xb, tb) in zip(first, again):
+        assert torch.equal(xa, xb) and torch.equal(ta, tb)
+    resumed = list(batches.epoch(0, start=1))
+    assert torch.equal(resumed[0][0], first[1][0])
+    other = next(iter(batches.epoch(1)))
+    assert not torch.equal(other[0], first[0][0])
+    for images, targets in first:
+        assert images.shape[1:] == (3, 64, 64)
+        if len(targets):
+            assert float(targets[:, 2:].min()) >= 0 and float(targets[:, 2:4].max()) <= 64
+
+
+def test_val_batches_letterbox(dataset) -> None:
+    cache = cache_images(dataset, 64)
+    records, images = next(iter(val_batches(cache, 64, 8)))
+    assert len(records) == 8 and images.shape == (8, 3, 64, 64)
+    assert abs(float(images[0, 0, 0, 0]) - 114 / 255) < 1e-6  # 80 x 64 -> 64 x 51, grey bands
