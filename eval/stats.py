@@ -1,0 +1,214 @@
+"""Statistics over runs and test images: mean ± sample std over seeds, image-level bootstrap intervals of
+COCO AP, and paired bootstrap of the AP difference between two models scored on the same test images.
+
+The bootstrap re-uses one ``COCOeval.evaluate()``: the per-image matches are gathered once into a
+:class:`MatchTable`, and each resample only re-accumulates them with integer image weights (an image drawn
+k times counts k times), following pycocotools' accumulate (sort by score, cumulative TP/FP, precision made
+monotone, read at 101 recall thresholds). With all weights 1 this reproduces pycocotools exactly.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import NDArray
+from pycocotools.cocoeval import COCOeval
+
+
+@dataclass(frozen=True)
+class MeanStd:
+    """Mean and sample standard deviation (ddof = 1; None for fewer than two values) of ``n`` values."""
+
+    mean: float
+    std: float | None
+    n: int
+
+    def format(self, scale: float = 100.0, digits: int = 1) -> str:
+        """``"41.2 ± 1.3"`` (values times ``scale``); ``"41.2"`` when there is no std."""
+        text = f"{self.mean * scale:.{digits}f}"
+        return text if self.std is None else f"{text} ± {self.std * scale:.{digits}f}"
+
+
+def mean_std(values: Sequence[float]) -> MeanStd:
+    """Mean ± sample std of ``values`` (e.g. one metric over seeds); raises ValueError when empty."""
+    arr = np.asarray([v for v in values if v is not None], dtype=np.float64)
+    if arr.size == 0:
+        raise ValueError("mean_std of no values")
+    std = float(arr.std(ddof=1)) if arr.size > 1 else None
+    return MeanStd(float(arr.mean()), std, int(arr.size))
+
+
+@dataclass(frozen=True)
+class _ClassMatches:
+    """One class, detections sorted best first: image index (D,), TP and FP flags (T, D); ignored
+    detections are neither. ``npig``: (I,) non-ignored ground-truth boxes per image."""
+
+    image: NDArray[np.int64]
+    tp: NDArray[np.bool_]
+    fp: NDArray[np.bool_]
+    npig: NDArray[np.int64]
+
+
+def _class_matches(ev: COCOeval, k: int, max_det: int) -> _ClassMatches:
+    num_images, num_areas = len(ev.params.imgIds), len(ev.params.areaRng)
+    npig = np.zeros(num_images, dtype=np.int64)
+    scores, images, matched, ignored = [], [], [], []
+    for i in range(num_images):
+        e = ev.evalImgs[k * num_areas * num_images + i]  # area index 0 = "all"
+        if e is None:
+            continue
+        npig[i] = int(np.count_nonzero(np.asarray(e["gtIgnore"]) == 0))
+        d = len(e["dtScores"][:max_det])
+        scores.append(np.asarray(e["dtScores"][:max_det], dtype=np.float64))
+        images.append(np.full(d, i, dtype=np.int64))
+        matched.append(np.asarray(e["dtMatches"])[:, :max_det])  # (T, d)
+        ignored.append(np.asarray(e["dtIgnore"])[:, :max_det])
+    num_t = len(ev.params.iouThrs)
+    if not scores:
+        empty = np.zeros((num_t, 0), dtype=bool)
+        return _ClassMatches(np.zeros(0, dtype=np.int64), empty, empty, npig)
+    order = np.argsort(-np.concatenate(scores), kind="mergesort")  # pycocotools' order
+    dtm = np.concatenate(matched, axis=1)[:, order] != 0
+    dtig = np.concatenate(ignored, axis=1)[:, order].astype(bool)
+    return _ClassMatches(np.concatenate(images)[order], dtm & ~dtig, ~dtm & ~dtig, npig)
+
+
+class MatchTable:
+    """Per-image matches of one evaluated ``COCOeval`` (area "all", the last ``maxDets``), re-accumulated
+    for any image weighting. ``image_ids`` (I,) is the image order weights refer to."""
+
+    def __init__(self, ev: COCOeval) -> None:
+        if not ev.evalImgs:
+            raise ValueError("run COCOeval.evaluate() first")
+        max_det = ev.params.maxDets[-1]
+        self.image_ids = np.asarray(ev.params.imgIds, dtype=np.int64)
+        self.cat_ids = list(ev.params.catIds)
+        self.rec_thrs = np.asarray(ev.params.recThrs, dtype=np.float64)
+        self.classes = [_class_matches(ev, k, max_det) for k in range(len(self.cat_ids))]
+
+    def precision(self, weights: NDArray | None = None) -> NDArray[np.float64]:
+        """(T, R, K) interpolated precision for image ``weights`` (I,) (default: each image once); -1 for a
+        class without ground truth under these weights, as in ``COCOeval.eval["precision"]``."""
+        w = np.ones(len(self.image_ids)) if weights is None else np.asarray(weights, dtype=np.float64)
+        num_t = self.classes[0].tp.shape[0] if self.classes else 0
+        out = -np.ones((num_t, len(self.rec_thrs), len(self.classes)))
+        for k, cm in enumerate(self.classes):
+            npig = float(w @ cm.npig)
+            if npig == 0:
+                continue
+            wd = w[cm.image]
+            tp = np.cumsum(cm.tp * wd, axis=1)
+            fp = np.cumsum(cm.fp * wd, axis=1)
+            rc = tp / npig
+            pr = np.maximum.accumulate((tp / (tp + fp + np.spacing(1)))[:, ::-1], axis=1)[:, ::-1]
+            for t in range(num_t):
+                idx = np.searchsorted(rc[t], self.rec_thrs, side="left")
+                out[t, :, k] = np.where(idx < len(wd), pr[t, np.minimum(idx, max(len(wd) - 1, 0))], 0.0)
+        return out
+
+    def ap(self, weights: NDArray | None = None) -> dict[str, float]:
+        """``{"AP", "AP50"}`` over classes with ground truth (NaN when none has any)."""
+        prec = self.precision(weights)
+        return {"AP": _mean_valid(prec), "AP50": _mean_valid(prec[:1])}
+
+    def save(self, path: Path) -> Path:
+        """Store the table (a few arrays per class) so a report can bootstrap without re-running a model."""
+        arrays: dict[str, NDArray] = {"image_ids": self.image_ids, "cat_ids": np.asarray(self.cat_ids)}
+        arrays["rec_thrs"] = self.rec_thrs
+        for k, cm in enumerate(self.classes):
+            arrays.update({f"image{k}": cm.image, f"tp{k}": cm.tp, f"fp{k}": cm.fp, f"npig{k}": cm.npig})
+        np.savez_compressed(path, **arrays)
+        return path
+
+    @classmethod
+    def load(cls, path: Path) -> MatchTable:
+        with np.load(path) as z:
+            table = cls.__new__(cls)
+            table.image_ids, table.cat_ids, table.rec_thrs = z["image_ids"], z["cat_ids"].tolist(), z["rec_thrs"]
+            table.classes = [
+                _ClassMatches(z[f"image{k}"], z[f"tp{k}"], z[f"fp{k}"], z[f"npig{k}"])
+                for k in range(len(table.cat_ids))
+            ]
+        return table
+
+
+def _mean_valid(prec: NDArray[np.float64]) -> float:
+    valid = prec[prec > -1]
+    return float(valid.mean()) if valid.size else math.nan
+
+
+def resample_weights(num_images: int, num_samples: int, rng: np.random.Generator) -> NDArray[np.int64]:
+    """(num_samples, num_images) counts: how often each image is drawn in each bootstrap resample."""
+    draws = rng.integers(0, num_images, size=(num_samples, num_images))
+    return np.stack([np.bincount(row, minlength=num_images) for row in draws])
+
+
+@dataclass(frozen=True)
+class Interval:
+    """A point estimate with a percentile bootstrap interval at ``level``; ``samples`` (S,) the resamples."""
+
+    point: float
+    low: float
+    high: float
+    level: float
+    samples: NDArray[np.float64]
+
+    def to_dict(self) -> dict[str, float]:
+        return {"value": self.point, "low": self.low, "high": self.high, "level": self.level}
+
+
+def _interval(point: float, samples: NDArray[np.float64], level: float) -> Interval:
+    finite = samples[np.isfinite(samples)]
+    if finite.size == 0:
+        return Interval(point, math.nan, math.nan, level, samples)
+    low, high = np.quantile(finite, [(1 - level) / 2, 1 - (1 - level) / 2])
+    return Interval(point, float(low), float(high), level, samples)
+
+
+def bootstrap_ap(
+    table: MatchTable, rng: np.random.Generator, num_samples: int = 1000, level: float = 0.95
+) -> dict[str, Interval]:
+    """95% image-level bootstrap intervals of AP and AP50: test images drawn with replacement."""
+    weights = resample_weights(len(table.image_ids), num_samples, rng)
+    point = table.ap()
+    samples = [table.ap(w) for w in weights]
+    return {key: _interval(point[key], np.array([s[key] for s in samples]), level) for key in point}
+
+
+@dataclass(frozen=True)
+class PairedDelta:
+    """``AP(b) - AP(a)`` on the same images: point, bootstrap interval and a two-sided bootstrap p-value
+    (twice the smaller share of resamples on either side of zero, capped at 1)."""
+
+    interval: Interval
+    p_value: float
+
+    def to_dict(self) -> dict[str, float]:
+        return {**self.interval.to_dict(), "p_value": self.p_value}
+
+
+def paired_bootstrap(
+    a: MatchTable, b: MatchTable, rng: np.random.Generator, num_samples: int = 1000, level: float = 0.95
+) -> dict[str, PairedDelta]:
+    """Paired image-level bootstrap of the AP and AP50 differences ``b - a``: each resample draws one set of
+    test images and scores both models on it. Both tables must cover the same image ids."""
+    if not np.array_equal(a.image_ids, b.image_ids):
+        raise ValueError("paired bootstrap needs both models scored on the same test images")
+    weights = resample_weights(len(a.image_ids), num_samples, rng)
+    pa, pb = a.ap(), b.ap()
+    deltas = {key: [] for key in pa}
+    for w in weights:
+        sa, sb = a.ap(w), b.ap(w)
+        for key in deltas:
+            deltas[key].append(sb[key] - sa[key])
+    out = {}
+    for key, values in deltas.items():
+        arr = np.asarray(values)
+        finite = arr[np.isfinite(arr)]
+        p = min(1.0, 2 * min(np.mean(finite <= 0), np.mean(finite >= 0))) if finite.size else math.nan
+        out[key] = PairedDelta(_interval(pb[key] - pa[key], arr, level), float(p))
+    return out

@@ -1,0 +1,116 @@
+"""Seed statistics and the image-level bootstrap: parity with pycocotools, determinism, paired deltas."""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+import pytest
+
+from curate.dataset import DatasetBuilder
+from eval.coco import run_cocoeval
+from eval.stats import MatchTable, bootstrap_ap, mean_std, paired_bootstrap, resample_weights
+
+
+def test_mean_std_is_the_sample_std():
+    m = mean_std([0.40, 0.42, 0.44])
+    assert m.mean == pytest.approx(0.42) and m.std == pytest.approx(0.02) and m.n == 3
+    assert m.format() == "42.0 ± 2.0"
+    single = mean_std([0.5])
+    assert single.std is None and single.format() == "50.0"
+    with pytest.raises(ValueError):
+        mean_std([])
+
+
+def make_case(tmp_path, seed: int, images: int = 40, copies: np.ndarray | None = None):
+    """A random test set (2 classes, negatives, a crowd box) and noisy detections as COCO records.
+    ``copies[i]`` repeats image i that many times (new ids), as a bootstrap resample would."""
+    rng = np.random.default_rng(seed)
+    copies = np.ones(images, dtype=int) if copies is None else copies
+    scenes = []
+    for _ in range(images):
+        boxes = [(rng.integers(0, 2), rng.uniform(0, 60, 2), rng.uniform(8, 40, 2)) for _ in range(rng.integers(0, 4))]
+        dets = []
+        for cls, xy, wh in boxes:
+            if rng.random() < 0.8:
+                dets.append((cls, xy + rng.normal(0, 3, 2), wh * rng.uniform(0.8, 1.2, 2), rng.random()))
+        for _ in range(rng.integers(0, 3)):  # false positives
+            dets.append((rng.integers(0, 2), rng.uniform(0, 60, 2), rng.uniform(8, 40, 2), rng.random() * 0.7))
+        scenes.append((boxes, dets))
+    b = DatasetBuilder(tmp_path, ["fire", "smoke"])
+    records = []
+    for i, (boxes, dets) in enumerate(scenes):
+        for _ in range(copies[i]):
+            image_id = b.add_image(f"{i}.jpg", 100, 100)
+            for j, (cls, xy, wh) in enumerate(boxes):
+                b.add_box(image_id, ("fire", "smoke")[cls], (*xy, *wh), iscrowd=int(i == 3 and j == 0))
+            for cls, xy, wh, score in dets:
+                records.append({"image_id": image_id, "category_id": int(cls) + 1, "bbox": [*xy, *wh], "score": score})
+    return b.build(), records
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_unit_weights_reproduce_pycocotools_exactly(tmp_path, seed):
+    ds, records = make_case(tmp_path, seed)
+    ev = run_cocoeval(ds, records, [1, 2])
+    table = MatchTable(ev)
+    np.testing.assert_array_equal(table.precision(), ev.eval["precision"][:, :, :, 0, -1])
+    assert table.ap() == {"AP": ev.stats[0], "AP50": ev.stats[1]}
+
+
+def test_weights_equal_pycocotools_on_the_resampled_set(tmp_path):
+    copies = resample_weights(40, 1, np.random.default_rng(7))[0]
+    assert copies.max() >= 2 and copies.min() == 0
+    ds, records = make_case(tmp_path, seed=3)
+    table = MatchTable(run_cocoeval(ds, records, [1, 2]))
+    ds2, records2 = make_case(tmp_path, seed=3, copies=copies)
+    ev2 = run_cocoeval(ds2, records2, [1, 2])
+    got = table.ap(copies)
+    assert got["AP"] == pytest.approx(ev2.stats[0], abs=1e-12) and got["AP50"] == pytest.approx(ev2.stats[1], abs=1e-12)
+
+
+def test_bootstrap_is_deterministic_contains_the_point_and_is_fast(tmp_path):
+    ds, records = make_case(tmp_path, seed=5, images=200)
+    table = MatchTable(run_cocoeval(ds, records, [1, 2]))
+    start = time.perf_counter()
+    ci = bootstrap_ap(table, np.random.default_rng(0), num_samples=1000)
+    elapsed = time.perf_counter() - start
+    again = bootstrap_ap(table, np.random.default_rng(0), num_samples=1000)
+    other = bootstrap_ap(table, np.random.default_rng(1), num_samples=1000)
+    for key in ("AP", "AP50"):
+        assert ci[key].low < ci[key].point < ci[key].high
+        np.testing.assert_array_equal(ci[key].samples, again[key].samples)
+        assert not np.array_equal(ci[key].samples, other[key].samples)
+    assert ci["AP"].high - ci["AP"].low > 0.01
+    assert elapsed < 20.0  # ~1-3 s on an idle core; generous for a shared CI box
+
+
+def test_paired_bootstrap_of_a_model_with_itself_is_zero(tmp_path):
+    ds, records = make_case(tmp_path, seed=2)
+    table = MatchTable(run_cocoeval(ds, records, [1, 2]))
+    same = paired_bootstrap(table, table, np.random.default_rng(0), num_samples=200)
+    for delta in same.values():
+        assert delta.interval.point == 0 and delta.interval.low == delta.interval.high == 0 and delta.p_value == 1.0
+
+
+def test_paired_bootstrap_sees_a_better_model(tmp_path):
+    ds, records = make_case(tmp_path, seed=4, images=80)
+    noisy = MatchTable(run_cocoeval(ds, records, [1, 2]))
+    gt = [
+        {"image_id": a.image_id, "category_id": a.category_id, "bbox": list(a.bbox), "score": 0.9}
+        for a in ds.annotations
+    ]
+    perfect = MatchTable(run_cocoeval(ds, gt, [1, 2]))
+    delta = paired_bootstrap(noisy, perfect, np.random.default_rng(0), num_samples=300)["AP"]
+    assert delta.interval.point > 0 and delta.interval.low > 0 and delta.p_value < 0.01
+    small, _ = make_case(tmp_path, seed=4, images=10)
+    with pytest.raises(ValueError, match="same test images"):
+        paired_bootstrap(noisy, MatchTable(run_cocoeval(small, [], [1, 2])), np.random.default_rng(0))
+
+
+def test_save_and_load_round_trip(tmp_path):
+    ds, records = make_case(tmp_path, seed=6)
+    table = MatchTable(run_cocoeval(ds, records, [1, 2]))
+    loaded = MatchTable.load(table.save(tmp_path / "m.npz"))
+    w = resample_weights(40, 1, np.random.default_rng(0))[0]
+    assert loaded.ap(w) == table.ap(w) and loaded.cat_ids == [1, 2]
