@@ -1,0 +1,193 @@
+"""The paper's tables from per-run results: Table 1 (Method 1 vs Method 2, synthetic only) and Table 2
+(three strategies x mixtures), each cell mean ± sample std over seeds, best per column in bold, second in
+italic; rendered as Markdown, CSV and LaTeX.
+
+A run result is a mapping with ``mixture`` (``R750_S250``), ``seed``, ``test_set`` and metric values
+(``AP``, ``AP50`` in [0, 1]); Table 1 results also carry ``method`` (``method1`` / ``method2``).
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+from collections import defaultdict
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+from curate.mix import Mixture, parse_mixture
+from eval.stats import MeanStd, mean_std
+
+Key = tuple[str, str]  # (row label, column label)
+STRATEGIES: tuple[str, ...] = ("Real only", "Real + synthetic", "Synthetic only")
+METHOD_LABELS: Mapping[str, str] = {"method1": "Method 1 (3D)", "method2": "Method 2 (2D)"}
+
+
+@dataclass(frozen=True)
+class Table:
+    """Rows in labelled groups; columns ``(group, metric)`` such as ``("common", "AP")``; cells by
+    ``(row, "group/metric")``. Higher values are better."""
+
+    title: str
+    row_groups: tuple[tuple[str, tuple[str, ...]], ...]
+    columns: tuple[tuple[str, str], ...]
+    cells: Mapping[Key, MeanStd]
+    row_labels: Mapping[str, str] = field(default_factory=dict)
+
+    def label(self, row: str) -> str:
+        return self.row_labels.get(row, row)
+
+    @property
+    def rows(self) -> list[str]:
+        return [row for _, rows in self.row_groups for row in rows]
+
+    def cell(self, row: str, column: tuple[str, str]) -> MeanStd | None:
+        return self.cells.get((row, "/".join(column)))
+
+
+def marks(table: Table, scale: float = 100.0, digits: int = 1) -> dict[Key, str]:
+    """``"best"`` / ``"second"`` per column by mean as displayed (``mean * scale`` rounded to ``digits``, so
+    cells that read the same share a mark); unmarked cells are not listed."""
+    out: dict[Key, str] = {}
+    for col in table.columns:
+        values = {row: round(c.mean * scale, digits) for row in table.rows if (c := table.cell(row, col)) is not None}
+        ranked = sorted(set(values.values()), reverse=True)
+        for row, v in values.items():
+            if v == ranked[0]:
+                out[(row, "/".join(col))] = "best"
+            elif len(ranked) > 1 and v == ranked[1]:
+                out[(row, "/".join(col))] = "second"
+    return out
+
+
+def _collect(results: Sequence[Mapping[str, Any]], row_of, metrics: Sequence[str]) -> dict[Key, MeanStd]:
+    values: dict[Key, list[float]] = defaultdict(list)
+    for r in results:
+        for metric in metrics:
+            if r.get(metric) is not None:
+                values[(row_of(r), f"{r['test_set']}/{metric}")].append(float(r[metric]))
+    return {key: mean_std(v) for key, v in values.items()}
+
+
+def strategy(mix: Mixture) -> str:
+    """The paper's strategy of a mixture: real only, real + synthetic, or synthetic only."""
+    return STRATEGIES[0] if mix.synth == 0 else STRATEGIES[2] if mix.real == 0 else STRATEGIES[1]
+
+
+def _columns(results: Sequence[Mapping[str, Any]], test_sets, metrics) -> tuple[tuple[str, str], ...]:
+    sets = list(test_sets) if test_sets else list(dict.fromkeys(r["test_set"] for r in results))
+    return tuple((s, m) for s in sets for m in metrics)
+
+
+def table2(
+    results: Sequence[Mapping[str, Any]], test_sets: Sequence[str] = (), metrics: Sequence[str] = ("AP", "AP50")
+) -> Table:
+    """Table 2: one row per mixture, grouped by strategy (real only by size, mixtures by synthetic share,
+    synthetic only by size); columns test set x metric."""
+    mixtures = sorted(
+        {parse_mixture(r["mixture"]) for r in results}, key=lambda m: (STRATEGIES.index(strategy(m)), m.synth, m.real)
+    )
+    groups = tuple(
+        (s, tuple(m.name for m in mixtures if strategy(m) == s))
+        for s in STRATEGIES
+        if any(strategy(m) == s for m in mixtures)
+    )
+    cells = _collect(results, lambda r: r["mixture"], metrics)
+    return Table(
+        "Table 2: AP by training mixture (mean ± std over seeds)", groups, _columns(results, test_sets, metrics), cells
+    )
+
+
+def table1(
+    results: Sequence[Mapping[str, Any]], test_sets: Sequence[str] = (), metrics: Sequence[str] = ("AP", "AP50")
+) -> Table:
+    """Table 1: synthetic-only training with Method 1 vs Method 2; one row per (method, mixture)."""
+
+    def row(r: Mapping[str, Any]) -> str:
+        return f"{METHOD_LABELS.get(r['method'], r['method'])} {r['mixture']}"
+
+    methods = list(dict.fromkeys(r["method"] for r in results))
+    groups = []
+    for method in sorted(methods):
+        mixes = sorted({parse_mixture(r["mixture"]) for r in results if r["method"] == method}, key=lambda m: m.synth)
+        label = METHOD_LABELS.get(method, method)
+        groups.append((label, tuple(f"{label} {m.name}" for m in mixes)))
+    cells = _collect(results, row, metrics)
+    labels = {key: key.split(" ")[-1] for _, rows in groups for key in rows}
+    title = "Table 1: synthetic-only training, Method 1 vs Method 2 (mean ± std over seeds)"
+    return Table(title, tuple(groups), _columns(results, test_sets, metrics), cells, labels)
+
+
+def _text(cell: MeanStd | None, mark: str | None, scale: float, digits: int, style: Mapping[str, str]) -> str:
+    if cell is None:
+        return "–"
+    text = cell.format(scale, digits)
+    return style[mark].format(text) if mark else text
+
+
+def to_markdown(table: Table, scale: float = 100.0, digits: int = 1) -> str:
+    """A GitHub Markdown table: a bold group row before each group, values in percent by default."""
+    mk = marks(table, scale, digits)
+    style = {"best": "**{}**", "second": "*{}*"}
+    head = ["", *[f"{g} {m}" for g, m in table.columns]]
+    lines = [f"**{table.title}**", "", "| " + " | ".join(head) + " |", "|" + "---|" + "---:|" * len(table.columns)]
+    for group, rows in table.row_groups:
+        lines.append(f"| *{group}* |" + " |" * len(table.columns))
+        for row in rows:
+            cells = [_text(table.cell(row, c), mk.get((row, "/".join(c))), scale, digits, style) for c in table.columns]
+            lines.append("| " + " | ".join([table.label(row), *cells]) + " |")
+    return "\n".join(lines) + "\n"
+
+
+def to_csv(table: Table) -> str:
+    """One line per row: group, row, then ``<set> <metric> mean``, ``std``, ``n``, ``rank`` per column
+    (raw values in [0, 1]; rank is best/second/empty)."""
+    buf = io.StringIO()
+    writer = csv.writer(buf, lineterminator="\n")
+    header = ["group", "row"]
+    for g, m in table.columns:
+        header += [f"{g} {m} mean", f"{g} {m} std", f"{g} {m} n", f"{g} {m} rank"]
+    writer.writerow(header)
+    mk = marks(table, 1.0, 6)
+    for group, rows in table.row_groups:
+        for row in rows:
+            line: list[Any] = [group, table.label(row)]
+            for col in table.columns:
+                c = table.cell(row, col)
+                std = "" if c is None or c.std is None else f"{c.std:.6f}"
+                line += [
+                    "" if c is None else f"{c.mean:.6f}",
+                    std,
+                    0 if c is None else c.n,
+                    mk.get((row, "/".join(col)), ""),
+                ]
+            writer.writerow(line)
+    return buf.getvalue()
+
+
+def _tex(text: str) -> str:
+    for a, b in (("\\", r"\textbackslash{}"), ("_", r"\_"), ("%", r"\%"), ("&", r"\&"), ("#", r"\#")):
+        text = text.replace(a, b)
+    return text
+
+
+def to_latex(table: Table, scale: float = 100.0, digits: int = 1) -> str:
+    """A booktabs ``tabular``: test sets as multicolumn headers, ``\\pm`` cells, groups between rules."""
+    mk = marks(table, scale, digits)
+    style = {"best": r"\textbf{{{}}}", "second": r"\textit{{{}}}"}
+    sets = list(dict.fromkeys(g for g, _ in table.columns))
+    per_set = [sum(1 for g, _ in table.columns if g == s) for s in sets]
+    lines = [r"\begin{tabular}{l" + "c" * len(table.columns) + "}", r"\toprule"]
+    lines.append(" & " + " & ".join(rf"\multicolumn{{{n}}}{{c}}{{{_tex(s)}}}" for s, n in zip(sets, per_set)) + r" \\")
+    lines.append(" & " + " & ".join(_tex(m) for _, m in table.columns) + r" \\")
+    for group, rows in table.row_groups:
+        lines += [r"\midrule", rf"\multicolumn{{{len(table.columns) + 1}}}{{l}}{{\emph{{{_tex(group)}}}}} \\"]
+        for row in rows:
+            cells = []
+            for col in table.columns:
+                text = _text(table.cell(row, col), None, scale, digits, style).replace("±", r"$\pm$")
+                mark = mk.get((row, "/".join(col)))
+                cells.append(style[mark].format(text) if mark else text)
+            lines.append(" & ".join([_tex(table.label(row)), *cells]) + r" \\")
+    lines += [r"\bottomrule", r"\end{tabular}"]
+    return "\n".join(lines) + "\n"

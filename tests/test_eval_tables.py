@@ -1,0 +1,64 @@
+"""Tables 1 and 2: grouping and order, mean ± std over seeds, best bold / second italic in every format."""
+
+from __future__ import annotations
+
+import csv
+import io
+
+import pytest
+
+from eval.tables import marks, table1, table2, to_csv, to_latex, to_markdown
+
+
+def results():
+    """AP per (mixture, seed, test set): common is best for R500_S500, second for R1000_S0."""
+    ap = {"R1000_S0": 0.50, "R500_S0": 0.40, "R750_S250": 0.45, "R500_S500": 0.55, "R0_S1000": 0.20}
+    rare = {"R1000_S0": 0.10, "R500_S0": 0.05, "R750_S250": 0.30, "R500_S500": 0.25, "R0_S1000": 0.30}
+    out = []
+    for mix in ap:
+        for seed, noise in ((0, -0.01), (1, 0.01)):
+            out.append({"mixture": mix, "seed": seed, "test_set": "common", "AP": ap[mix] + noise, "AP50": 0.9})
+            out.append({"mixture": mix, "seed": seed, "test_set": "rare", "AP": rare[mix] + noise, "AP50": None})
+    return out
+
+
+def test_table2_groups_strategies_in_the_papers_order():
+    t = table2(results())
+    assert [g for g, _ in t.row_groups] == ["Real only", "Real + synthetic", "Synthetic only"]
+    assert t.rows == ["R500_S0", "R1000_S0", "R750_S250", "R500_S500", "R0_S1000"]
+    cell = t.cell("R1000_S0", ("common", "AP"))
+    assert cell.mean == pytest.approx(0.50) and cell.std == pytest.approx(0.02 / 2**0.5) and cell.n == 2
+    assert t.cell("R1000_S0", ("rare", "AP50")) is None
+
+
+def test_best_and_second_per_column_with_ties():
+    mk = marks(table2(results()))
+    assert mk[("R500_S500", "common/AP")] == "best" and mk[("R1000_S0", "common/AP")] == "second"
+    assert mk[("R750_S250", "rare/AP")] == mk[("R0_S1000", "rare/AP")] == "best"  # a tie shares the mark
+    assert mk[("R500_S500", "rare/AP")] == "second"
+    assert all(mk[(row, "common/AP50")] == "best" for row in table2(results()).rows)
+    assert ("R500_S0", "common/AP") not in mk
+
+
+def test_markdown_latex_csv_mark_the_same_cells():
+    t = table2(results())
+    md = to_markdown(t)
+    assert "| R500_S500 | **55.0 ± 1.4** |" in md and "| R1000_S0 | *50.0 ± 1.4* |" in md
+    assert "| R500_S0 | 40.0 ± 1.4 |" in md and "–" in md
+    tex = to_latex(t)
+    assert r"R500\_S500 & \textbf{55.0 $\pm$ 1.4}" in tex and r"R1000\_S0 & \textit{50.0 $\pm$ 1.4}" in tex
+    assert tex.startswith(r"\begin{tabular}{lcccc}") and r"\multicolumn{2}{c}{common}" in tex
+    rows = list(csv.DictReader(io.StringIO(to_csv(t))))
+    best = next(r for r in rows if r["row"] == "R500_S500")
+    assert best["common AP rank"] == "best" and float(best["common AP mean"]) == pytest.approx(0.55)
+    assert next(r for r in rows if r["row"] == "R500_S0")["common AP rank"] == ""
+
+
+def test_table1_rows_per_method():
+    res = [dict(r, method=m) for r in results() if r["mixture"] == "R0_S1000" for m in ("method1", "method2")]
+    res = [dict(r, AP=r["AP"] + (0.1 if r["method"] == "method2" else 0.0)) for r in res]
+    t = table1(res)
+    assert [g for g, _ in t.row_groups] == ["Method 1 (3D)", "Method 2 (2D)"]
+    md = to_markdown(t)
+    assert "| *Method 2 (2D)* |" in md and "| R0_S1000 | **30.0 ± 1.4** |" in md
+    assert marks(t)[("Method 1 (3D) R0_S1000", "common/AP")] == "second"
