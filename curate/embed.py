@@ -1,0 +1,167 @@
+"""Image embeddings with onnxruntime: the built-in EfficientNet-Lite0 or a user's own ONNX CNN.
+
+The built-in model is built in torch (:mod:`curate.effnet`) and exported to ONNX once, into the user cache
+folder under a name holding its weights' hash; later runs load the ``.onnx`` file directly.
+
+A user model (``--model x.onnx``, e.g. a VGG16 export as the paper used) takes one float input of shape
+(N, 3, S, S) (or (N, S, S, 3) with ``layout="nhwc"``); the image is resized to S x S (stretched), converted
+to RGB (or BGR) and scaled as ``(pixel - mean) / std`` per channel, pixel in 0..255. The embedding is the
+output named ``output`` (default: the first one), flattened to (N, D).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import tempfile
+import warnings
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Literal
+
+import cv2
+import numpy as np
+from numpy.typing import NDArray
+
+DEFAULT_MODEL = "efficientnet-lite0"
+
+
+@dataclass(frozen=True)
+class Preprocess:
+    """How an (H, W, 3) uint8 RGB image becomes one model input (see the module docstring)."""
+
+    size: int = 224  # square input side S in pixels
+    mean: tuple[float, float, float] = (127.0, 127.0, 127.0)  # per channel, on 0..255 values
+    std: tuple[float, float, float] = (128.0, 128.0, 128.0)
+    bgr: bool = False  # channel order the model expects
+    layout: Literal["nchw", "nhwc"] = "nchw"
+
+    def __post_init__(self) -> None:
+        if self.size < 8:
+            raise ValueError(f"input size must be >= 8 pixels, got {self.size}")
+        if len(self.mean) != 3 or len(self.std) != 3 or min(self.std) <= 0:
+            raise ValueError(f"mean and std need 3 values each, std > 0; got {self.mean}, {self.std}")
+        if self.layout not in ("nchw", "nhwc"):
+            raise ValueError(f"layout must be nchw or nhwc, got {self.layout!r}")
+
+    def resize(self, image: NDArray[np.uint8]) -> NDArray[np.uint8]:
+        """(H, W, 3) uint8 RGB -> (S, S, 3) uint8 in the model's channel order."""
+        h, w = image.shape[:2]
+        interp = cv2.INTER_AREA if h > self.size or w > self.size else cv2.INTER_LINEAR
+        small = cv2.resize(image, (self.size, self.size), interpolation=interp)
+        return np.ascontiguousarray(small[:, :, ::-1]) if self.bgr else small
+
+    def normalize(self, batch: NDArray[np.uint8]) -> NDArray[np.float32]:
+        """(N, S, S, 3) uint8 from :meth:`resize` -> float32 model input (N, 3, S, S) or (N, S, S, 3)."""
+        mean = np.asarray(self.mean, np.float32)
+        inv_std = 1.0 / np.asarray(self.std, np.float32)
+        x = (batch.astype(np.float32) - mean) * inv_std
+        return np.ascontiguousarray(x.transpose(0, 3, 1, 2)) if self.layout == "nchw" else x
+
+    def key(self) -> str:
+        return f"s{self.size}-m{','.join(f'{v:g}' for v in self.mean)}-d{','.join(f'{v:g}' for v in self.std)}-{'bgr' if self.bgr else 'rgb'}-{self.layout}"
+
+
+LITE0_PREPROCESS = Preprocess()
+
+
+def cache_dir() -> Path:
+    """Per-user cache folder (``FUZZYFIRE_CACHE`` overrides), created on first use."""
+    from platformdirs import user_cache_dir
+
+    path = Path(os.environ.get("FUZZYFIRE_CACHE") or user_cache_dir("fuzzyfire"))
+    path.mkdir(parents=True, exist_ok=True)
+    return path
+
+
+def builtin_model_path(folder: Path | None = None) -> Path:
+    """The EfficientNet-Lite0 ONNX file, exported on first use (named by the weights' sha256)."""
+    from curate.effnet import weights_path, weights_sha256
+
+    folder = folder or cache_dir() / "models"
+    path = folder / f"efficientnet-lite0-{weights_sha256(weights_path())[:16]}.onnx"
+    if not path.is_file():
+        export_lite0(path)
+    return path
+
+
+def export_lite0(path: Path) -> Path:
+    """Export EfficientNet-Lite0 to ``path``: input ``input`` (N, 3, 224, 224), outputs ``embedding``
+    (N, 1280) and ``logits`` (N, 1000). Written atomically (a crash leaves no half file)."""
+    import torch
+
+    from curate.effnet import IMAGE_SIZE, efficientnet_lite0
+
+    net = efficientnet_lite0()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(suffix=".onnx", dir=path.parent)
+    os.close(fd)
+    try:
+        with warnings.catch_warnings(), torch.no_grad():
+            warnings.simplefilter("ignore")
+            torch.onnx.export(
+                net,
+                (torch.zeros(1, 3, IMAGE_SIZE, IMAGE_SIZE),),
+                tmp,
+                input_names=["input"],
+                output_names=["embedding", "logits"],
+                dynamic_axes={"input": {0: "batch"}, "embedding": {0: "batch"}, "logits": {0: "batch"}},
+                opset_version=17,
+                dynamo=False,
+            )
+        os.replace(tmp, path)
+    finally:
+        Path(tmp).unlink(missing_ok=True)
+    return path
+
+
+class OnnxEmbedder:
+    """Runs an ONNX CNN on batches: ``embed(batch uint8 (N, S, S, 3)) -> (N, D) float32``."""
+
+    def __init__(self, model: Path | str, preprocess: Preprocess, output: str | None = None, threads: int = 2) -> None:
+        import onnxruntime as ort
+
+        self.path = Path(model)
+        if not self.path.is_file():
+            raise FileNotFoundError(f"{self.path}: ONNX model not found")
+        opts = ort.SessionOptions()
+        opts.intra_op_num_threads = threads
+        opts.inter_op_num_threads = 1
+        self.session = ort.InferenceSession(str(self.path), opts, providers=["CPUExecutionProvider"])
+        self.preprocess = preprocess
+        self.input_name = self.session.get_inputs()[0].name
+        names = [o.name for o in self.session.get_outputs()]
+        if output is not None and output not in names:
+            raise ValueError(f"{self.path}: no output {output!r}; outputs are {names}")
+        self.output = output or names[0]
+        self.model_id = _model_id(self.path, preprocess, self.output)
+
+    def embed(self, batch: NDArray[np.uint8]) -> NDArray[np.float32]:
+        """(N, S, S, 3) uint8 images from ``preprocess.resize`` -> (N, D) float32 raw embeddings."""
+        x = self.preprocess.normalize(batch)
+        (out,) = self.session.run([self.output], {self.input_name: x})
+        return np.asarray(out, np.float32).reshape(len(batch), -1)
+
+
+def load_embedder(model: Path | str | None = None, preprocess: Preprocess | None = None, **kwargs) -> OnnxEmbedder:
+    """The built-in EfficientNet-Lite0 (``model`` None) or a user ONNX model with its ``preprocess``."""
+    if model is None or str(model) == DEFAULT_MODEL:
+        if preprocess not in (None, LITE0_PREPROCESS):
+            raise ValueError("the built-in model has a fixed preprocessing; preprocessing flags need --model")
+        return OnnxEmbedder(builtin_model_path(), LITE0_PREPROCESS, output="embedding", **kwargs)
+    return OnnxEmbedder(model, preprocess or Preprocess(), **kwargs)
+
+
+def l2_normalize(x: NDArray[np.floating]) -> NDArray[np.float32]:
+    """Rows scaled to unit length ((N, D) -> (N, D) float32); zero rows stay zero."""
+    x = np.asarray(x, np.float32)
+    norms = np.linalg.norm(x, axis=1, keepdims=True)
+    return x / np.maximum(norms, 1e-12)
+
+
+def _model_id(path: Path, preprocess: Preprocess, output: str) -> str:
+    digest = hashlib.sha256()
+    with open(path, "rb") as fh:
+        while block := fh.read(1 << 20):
+            digest.update(block)
+    return f"{path.stem}:{digest.hexdigest()[:16]}:{output}:{preprocess.key()}"

@@ -1,0 +1,173 @@
+"""Scan image files once: content hash, decoded-pixel hash, size, sharpness and embedding per file.
+
+Decoding and resizing run in a thread pool (OpenCV and hashlib release the GIL) while onnxruntime embeds
+the previous batch. Results are cached by content hash (:mod:`curate.embedcache`), so a rerun only reads
+and hashes the files and decodes the new ones. Unreadable files become :class:`Problem` records.
+"""
+
+from __future__ import annotations
+
+import hashlib
+from collections import deque
+from collections.abc import Callable, Iterable, Iterator, Sequence
+from concurrent.futures import Future, ThreadPoolExecutor
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TypeVar
+
+import cv2
+import numpy as np
+from numpy.typing import NDArray
+
+from curate.embed import OnnxEmbedder, Preprocess, l2_normalize
+from curate.embedcache import EmbeddingCache, FileFacts
+from curate.imageio import ImageError, decode_image, is_image_file
+from curate.problems import Problem
+from curate.progress import progress
+
+T = TypeVar("T")
+R = TypeVar("R")
+_SAVE_EVERY = 2048  # images embedded between cache commits (an interrupted run resumes from there)
+
+
+@dataclass(frozen=True)
+class ScannedImage:
+    path: str  # absolute POSIX path
+    facts: FileFacts
+
+
+@dataclass
+class ScanResult:
+    """Readable images in input order; ``vectors[i]`` (L2-normalised, (N, D) float32) belongs to ``images[i]``."""
+
+    images: list[ScannedImage]
+    vectors: NDArray[np.float32]
+    problems: list[Problem] = field(default_factory=list)
+    model_id: str = ""
+    cached: int = 0  # images whose facts and embedding came from the cache
+
+
+def list_image_files(inputs: Iterable[Path | str]) -> list[Path]:
+    """Image files under the given folders (recursive) or given directly; absolute, unique, sorted."""
+    found: set[Path] = set()
+    for item in inputs:
+        path = Path(item).resolve()
+        if path.is_dir():
+            found.update(p for p in path.rglob("*") if p.is_file() and is_image_file(p))
+        elif path.is_file():
+            found.add(path)
+        else:
+            raise FileNotFoundError(f"{item}: no such file or folder")
+    return sorted(found, key=lambda p: p.as_posix())
+
+
+def bounded_map(fn: Callable[[T], R], items: Sequence[T], pool: ThreadPoolExecutor, ahead: int) -> Iterator[R]:
+    """``map(fn, items)`` on ``pool`` in input order, at most ``ahead`` results pending (bounded memory)."""
+    pending: deque[Future[R]] = deque()
+    for item in items:
+        pending.append(pool.submit(fn, item))
+        if len(pending) >= ahead:
+            yield pending.popleft().result()
+    while pending:
+        yield pending.popleft().result()
+
+
+def file_sha256(path: Path) -> tuple[int, str] | Problem:
+    """``(bytes, sha256 hex)`` of a file, or a Problem when it cannot be read."""
+    try:
+        data = path.read_bytes()
+    except OSError as exc:
+        return Problem(path.as_posix(), f"cannot read ({exc.strerror or exc})")
+    if not data:
+        return Problem(path.as_posix(), "empty file (0 bytes)")
+    return len(data), hashlib.sha256(data).hexdigest()
+
+
+def pixel_hash(image: NDArray[np.uint8]) -> str:
+    """Hash of decoded pixels and shape: equal for the same picture saved losslessly in any format."""
+    digest = hashlib.blake2b(digest_size=16)
+    digest.update(np.asarray(image.shape, np.int64).tobytes())
+    digest.update(np.ascontiguousarray(image).data)
+    return digest.hexdigest()
+
+
+def sharpness(image: NDArray[np.uint8]) -> float:
+    """Variance of the Laplacian of the grey (H, W, 3) RGB image (a focus measure; higher = sharper)."""
+    grey = cv2.cvtColor(image, cv2.COLOR_RGB2GRAY)
+    return float(cv2.Laplacian(grey, cv2.CV_32F).var())
+
+
+def decode_facts(path: Path, preprocess: Preprocess | None) -> tuple[FileFacts, NDArray[np.uint8] | None] | Problem:
+    """Decode one file: its facts and the resized (S, S, 3) model input (None without ``preprocess``)."""
+    try:
+        data = path.read_bytes()
+        image = decode_image(data, path)
+    except ImageError as exc:
+        return Problem(path.as_posix(), exc.reason)
+    except OSError as exc:
+        return Problem(path.as_posix(), f"cannot read ({exc.strerror or exc})")
+    facts = FileFacts(
+        hashlib.sha256(data).hexdigest(),
+        len(data),
+        int(image.shape[1]),
+        int(image.shape[0]),
+        pixel_hash(image),
+        sharpness(image),
+    )
+    return facts, (preprocess.resize(image) if preprocess is not None else None)
+
+
+def scan_images(
+    paths: Sequence[Path],
+    embedder: OnnxEmbedder,
+    cache: EmbeddingCache | None = None,
+    workers: int = 3,
+    batch_size: int = 16,
+) -> ScanResult:
+    """Facts and normalised embeddings for ``paths`` (see :class:`ScanResult`); bad files become problems."""
+    problems: list[Problem] = []
+    with ThreadPoolExecutor(max_workers=workers) as pool:
+        hashed = list(progress(pool.map(file_sha256, paths), total=len(paths), desc="hashing"))
+        shas = {p: h[1] for p, h in zip(paths, hashed) if not isinstance(h, Problem)}
+        problems += [h for h in hashed if isinstance(h, Problem)]
+        facts = cache.get_facts(list(shas.values())) if cache else {}
+        vectors = cache.get_vectors(embedder.model_id, list(shas.values())) if cache else {}
+        cached = sum(1 for s in shas.values() if s in facts and s in vectors)
+        todo = [p for p, s in shas.items() if s not in facts or s not in vectors]
+        for path, item in _embed_misses(todo, embedder, cache, pool, batch_size):
+            if isinstance(item, Problem):
+                problems.append(item)
+            else:
+                shas[path] = item[0].sha256  # the file may have changed since hashing
+                facts[item[0].sha256], vectors[item[0].sha256] = item
+    images = [ScannedImage(p.as_posix(), facts[shas[p]]) for p in paths if p in shas and shas[p] in vectors]
+    dim = next(iter(vectors.values())).shape[0] if vectors else 0
+    matrix = np.stack([vectors[im.facts.sha256] for im in images]) if images else np.zeros((0, dim), np.float32)
+    return ScanResult(images, l2_normalize(matrix), problems, embedder.model_id, cached)
+
+
+def _embed_misses(
+    paths: Sequence[Path],
+    embedder: OnnxEmbedder,
+    cache: EmbeddingCache | None,
+    pool: ThreadPoolExecutor,
+    batch_size: int,
+) -> Iterator[tuple[Path, tuple[FileFacts, NDArray[np.float32]] | Problem]]:
+    """Decode in ``pool`` while embedding batches here; yields (path, (facts, raw vector) or Problem)."""
+    decoded = bounded_map(lambda p: (p, decode_facts(p, embedder.preprocess)), paths, pool, ahead=4 * batch_size)
+    batch: list[tuple[Path, FileFacts, NDArray[np.uint8]]] = []
+    unsaved: list[tuple[FileFacts, NDArray[np.float32]]] = []
+    for i, (path, item) in enumerate(progress(decoded, total=len(paths), desc="embedding")):
+        if isinstance(item, Problem):
+            yield path, item
+        else:
+            batch.append((path, item[0], item[1]))  # type: ignore[arg-type]
+        if batch and (len(batch) == batch_size or i == len(paths) - 1):
+            vecs = embedder.embed(np.stack([b[2] for b in batch]))
+            for (p, f, _), v in zip(batch, vecs):
+                unsaved.append((f, v))
+                yield p, (f, v)
+            batch = []
+        if cache is not None and (len(unsaved) >= _SAVE_EVERY or (i == len(paths) - 1 and unsaved)):
+            cache.put(embedder.model_id, [u[0] for u in unsaved], np.stack([u[1] for u in unsaved]))
+            unsaved = []

@@ -1,0 +1,83 @@
+"""Scanning files: hashes, facts, embeddings in input order, cache hits on rerun, bad files reported."""
+
+from __future__ import annotations
+
+import hashlib
+from pathlib import Path
+
+import numpy as np
+import pytest
+from curate_helpers import save, scene, use_session_cache
+
+from curate.embed import OnnxEmbedder, load_embedder
+from curate.embedcache import EmbeddingCache
+from curate.scan import bounded_map, list_image_files, pixel_hash, scan_images
+
+
+@pytest.fixture(scope="module")
+def embedder(tmp_path_factory: pytest.TempPathFactory) -> OnnxEmbedder:
+    use_session_cache(tmp_path_factory)
+    return load_embedder()
+
+
+@pytest.fixture()
+def folder(tmp_path: Path) -> Path:
+    root = tmp_path / "imgs"
+    for i in range(5):
+        save(scene(i), root / f"s{i}.jpg")
+    save(scene(1), root / "nested" / "s1.png")  # same scene as s1.jpg, other encoding
+    (root / "broken.jpg").write_bytes(b"\xff\xd8\xff\xe0 not really a jpeg")
+    (root / "empty.png").write_bytes(b"")
+    (root / "notes.txt").write_text("not an image")
+    return root
+
+
+def test_scan_reports_bad_files_and_keeps_going(folder: Path, embedder: OnnxEmbedder, tmp_path: Path) -> None:
+    paths = list_image_files([folder])
+    assert [p.name for p in paths] == [
+        "broken.jpg",
+        "empty.png",
+        "s1.png",
+        "s0.jpg",
+        "s1.jpg",
+        "s2.jpg",
+        "s3.jpg",
+        "s4.jpg",
+    ]
+    before = {p: p.read_bytes() for p in paths}
+    with EmbeddingCache(tmp_path / "c.sqlite") as cache:
+        result = scan_images(paths, embedder, cache, batch_size=4)
+    assert sorted(Path(p.path).name for p in result.problems) == ["broken.jpg", "empty.png"]
+    assert [Path(im.path).name for im in result.images] == ["s1.png", "s0.jpg", "s1.jpg", "s2.jpg", "s3.jpg", "s4.jpg"]
+    assert result.vectors.shape == (6, 1280)
+    np.testing.assert_allclose(np.linalg.norm(result.vectors, axis=1), 1.0, rtol=1e-5)
+    s0 = result.images[1]
+    assert s0.facts.sha256 == hashlib.sha256((folder / "s0.jpg").read_bytes()).hexdigest()
+    assert (s0.facts.width, s0.facts.height) == (160, 120) and s0.facts.sharpness > 0
+    assert before == {p: p.read_bytes() for p in paths}  # originals untouched
+
+
+def test_rerun_hits_cache_with_identical_vectors(folder: Path, embedder: OnnxEmbedder, tmp_path: Path) -> None:
+    paths = list_image_files([folder])
+    with EmbeddingCache(tmp_path / "c.sqlite") as cache:
+        first = scan_images(paths, embedder, cache)
+    with EmbeddingCache(tmp_path / "c.sqlite") as cache:
+        second = scan_images(list(reversed(paths)), embedder, cache)
+    assert first.cached == 0 and second.cached == 6
+    index = {im.path: i for i, im in enumerate(first.images)}
+    assert [im.path for im in second.images] == [im.path for im in reversed(first.images)]
+    np.testing.assert_array_equal(second.vectors, first.vectors[[index[im.path] for im in second.images]])
+
+
+def test_pixel_hash_sees_pixels_not_bytes(tmp_path: Path) -> None:
+    img = scene(3)
+    assert pixel_hash(img) == pixel_hash(img.copy())
+    assert pixel_hash(img) != pixel_hash(img[:, ::-1])
+    assert pixel_hash(img) != pixel_hash(img.reshape(img.shape[1], img.shape[0], 3))
+
+
+def test_bounded_map_keeps_order() -> None:
+    from concurrent.futures import ThreadPoolExecutor
+
+    with ThreadPoolExecutor(3) as pool:
+        assert list(bounded_map(lambda x: x * x, list(range(50)), pool, ahead=4)) == [x * x for x in range(50)]
