@@ -1,0 +1,60 @@
+"""Annotation audit: written boxes against the boxes of the pixel-truth flame masks kept beside the images.
+
+For an image ``images/<name>.<ext>`` the mask is ``masks/<name>.png``: value k marks the k-th fire box of that
+image (annotations in id order). ``masks/box_modes.json`` (Method 1) may hold alternative box sets per image,
+audited too.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+import cv2
+import numpy as np
+
+from curate.boxes import box_iou_xyxy, mask_to_xywh, xywh_to_xyxy
+
+
+def _summary(ious: list[float], images: int) -> dict[str, Any]:
+    return {
+        "images": images,
+        "boxes": len(ious),
+        "mean_iou": float(np.mean(ious)) if ious else 1.0,
+        "min_iou": float(np.min(ious)) if ious else 1.0,
+    }
+
+
+def _iou(box: list[float], truth: np.ndarray) -> float:
+    return float(box_iou_xyxy(xywh_to_xyxy(box), xywh_to_xyxy(truth))[0, 0])
+
+
+def audit_dataset(folder: Path) -> dict[str, Any]:
+    """``{"images", "boxes", "mean_iou", "min_iou"}`` of the written fire boxes vs their mask boxes, plus
+    ``"modes": {mode: {...}}`` when alternative box sets were kept."""
+    coco = json.loads((folder / "annotations.json").read_text(encoding="utf-8"))
+    fire = next((c["id"] for c in coco["categories"] if c["name"] == "fire"), None)
+    if fire is None:
+        raise ValueError(f"{folder}: no 'fire' category to audit")
+    anns: dict[int, list] = {img["id"]: [] for img in coco["images"]}
+    for a in sorted(coco["annotations"], key=lambda a: a["id"]):
+        if a["category_id"] == fire:
+            anns[a["image_id"]].append(a["bbox"])
+    modes_path = folder / "masks" / "box_modes.json"
+    modes = json.loads(modes_path.read_text(encoding="utf-8")) if modes_path.is_file() else {}
+    ious: list[float] = []
+    mode_ious: dict[str, list[float]] = {}
+    for img in coco["images"]:
+        mask_path = folder / "masks" / Path(img["file_name"]).relative_to("images").with_suffix(".png")
+        labels = cv2.imread(str(mask_path), cv2.IMREAD_UNCHANGED)
+        if labels is None:
+            raise FileNotFoundError(f"{mask_path}: pixel-truth mask missing")
+        truths = [mask_to_xywh(labels == k) for k in range(1, int(labels.max()) + 1)]
+        ious += [_iou(box, truths[k]) if k < len(truths) else 0.0 for k, box in enumerate(anns[img["id"]])]
+        for mode, boxes in modes.get(img["file_name"], {}).items():
+            mode_ious.setdefault(mode, []).extend(_iou(b, truths[k]) for k, b in enumerate(boxes))
+    result = _summary(ious, len(coco["images"]))
+    if mode_ious:
+        result["modes"] = {m: _summary(v, len(coco["images"])) for m, v in sorted(mode_ious.items())}
+    return result

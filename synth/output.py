@@ -1,0 +1,129 @@
+"""Staging, resume and final writing of a synthetic dataset (shared by Method 1 and Method 2).
+
+Each image ``i`` is staged in ``<out>/../.<out name>.parts/`` as ``images/NNNNNN.jpg``, ``masks/NNNNNN.png``
+(uint8 instance map: value k = the k-th fire box of the image, 0 = none) and ``records/NNNNNN.json`` (written
+last, so its presence marks the image complete: an interrupted run resumes there). :func:`finish` writes the
+dataset with ``curate.writer.write_dataset`` (COCO + YOLO + manifest with per-image metadata), copies the masks
+to ``<out>/masks/`` beside the image names and draws a contact sheet.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+from collections.abc import Mapping, Sequence
+from dataclasses import replace
+from pathlib import Path
+from typing import Any
+
+import cv2
+import numpy as np
+from numpy.typing import NDArray
+
+from curate.dataset import Dataset, DatasetBuilder
+from curate.writer import WriteResult, plan_image_names, write_dataset
+
+CATEGORIES: tuple[str, ...] = ("fire", "smoke")
+
+
+def staging_dir(out: Path) -> Path:
+    return out.resolve().parent / f".{out.resolve().name}.parts"
+
+
+class Staging:
+    def __init__(self, out: Path) -> None:
+        self.root = staging_dir(out)
+        for sub in ("images", "masks", "records"):
+            (self.root / sub).mkdir(parents=True, exist_ok=True)
+
+    def record_path(self, i: int) -> Path:
+        return self.root / "records" / f"{i:06d}.json"
+
+    def done(self, i: int) -> bool:
+        return self.record_path(i).is_file()
+
+    def save(self, i: int, image: NDArray[np.uint8], masks: Sequence[NDArray[np.bool_]], record: Mapping) -> None:
+        """Stage image ``i``: (H, W, 3) RGB, its fire masks in box order, and its record (boxes, metadata)."""
+        if len(masks) > 255:
+            raise ValueError("at most 255 flames per image")
+        labels = np.zeros(image.shape[:2], np.uint8)
+        for k, m in enumerate(masks, start=1):
+            labels[m] = k
+        name = f"{i:06d}"
+        bgr = cv2.cvtColor(image, cv2.COLOR_RGB2BGR)
+        if not cv2.imwrite(str(self.root / "images" / f"{name}.jpg"), bgr, [cv2.IMWRITE_JPEG_QUALITY, 95]):
+            raise OSError(f"{self.root}: cannot write image {name}")
+        cv2.imwrite(str(self.root / "masks" / f"{name}.png"), labels)
+        tmp = self.record_path(i).with_suffix(".tmp")
+        tmp.write_text(json.dumps(dict(record), sort_keys=True) + "\n", encoding="utf-8")
+        os.replace(tmp, self.record_path(i))
+
+    def load(self, i: int) -> dict[str, Any]:
+        return json.loads(self.record_path(i).read_text(encoding="utf-8"))
+
+
+def build_dataset(staging: Staging, n: int, source: str, smoke: bool) -> tuple[Dataset, list[dict]]:
+    """The staged images 0..n-1 as a Dataset (rooted at the staging folder) and their records."""
+    builder = DatasetBuilder(staging.root, CATEGORIES if smoke else CATEGORIES[:1])
+    records = []
+    for i in range(n):
+        rec = staging.load(i)
+        image_id = builder.add_image(f"images/{i:06d}.jpg", rec["width"], rec["height"], source=source)
+        for box in rec["boxes"]:
+            builder.add_box(image_id, "fire", box)
+        for box in rec.get("smoke_boxes", []) if smoke else []:
+            builder.add_box(image_id, "smoke", box)
+        records.append(rec)
+    return builder.build(info={"description": f"fuzzyfire {source}"}), records
+
+
+def contact_sheet(ds: Dataset, out: Path, count: int = 16, cols: int = 4, thumb: int = 320) -> Path:
+    """A PNG grid of the first ``count`` images with their boxes drawn (fire red, smoke grey)."""
+    tiles = []
+    by_image = ds.annotations_by_image()
+    for img in ds.images[:count]:
+        pic = cv2.imread(str(ds.image_path(img)))
+        scale = thumb / img.width
+        for ann in by_image[img.id]:
+            x, y, w, h = (int(round(v)) for v in ann.bbox)
+            colour = (0, 0, 255) if ann.category_id == 1 else (160, 160, 160)
+            cv2.rectangle(pic, (x, y), (x + w - 1, y + h - 1), colour, max(1, int(round(1.5 / scale))))
+        tiles.append(cv2.resize(pic, (thumb, int(round(img.height * scale))), interpolation=cv2.INTER_AREA))
+    while len(tiles) % cols:
+        tiles.append(np.zeros_like(tiles[0]))
+    sheet = np.vstack([np.hstack(tiles[r : r + cols]) for r in range(0, len(tiles), cols)])
+    path = out / "contact_sheet.png"
+    cv2.imwrite(str(path), sheet)
+    return path
+
+
+def finish(
+    staging: Staging,
+    out: Path,
+    n: int,
+    source: str,
+    command: str,
+    args: Mapping[str, Any],
+    smoke: bool,
+    overwrite: bool,
+) -> WriteResult:
+    """Write the dataset, its masks (``masks/<image stem>.png``) and a contact sheet; remove the staging."""
+    ds, records = build_dataset(staging, n, source, smoke)
+    per_image = [rec["meta"] for rec in records]
+    result = write_dataset(ds, out, ("coco", "yolo"), "copy", command, {**args, "per_image": per_image}, (), overwrite)
+    plan = plan_image_names(ds)
+    extra = {}
+    for img in ds.images:
+        dst = out / "masks" / Path(plan[img.id]).relative_to("images").with_suffix(".png")
+        dst.parent.mkdir(parents=True, exist_ok=True)
+        shutil.copyfile(staging.root / "masks" / f"{Path(img.file_name).stem}.png", dst)
+        rec = records[img.id - 1]
+        if rec.get("box_modes"):
+            extra[plan[img.id]] = rec["box_modes"]
+    if extra:
+        (out / "masks" / "box_modes.json").write_text(json.dumps(extra, sort_keys=True) + "\n", encoding="utf-8")
+    written = replace(ds, root=out, images=tuple(replace(img, file_name=plan[img.id]) for img in ds.images))
+    result.files["contact_sheet"] = contact_sheet(written, out).name
+    shutil.rmtree(staging.root)
+    return result
