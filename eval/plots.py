@@ -79,3 +79,19 @@ def plot_bars(
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path)
     return path
+
+
+def plot_figure5(results: Sequence[Mapping[str, object]], path: Path, metric: str = "AP", title: str = "") -> Path:
+    """Figure 5 of the paper: ``metric`` (mean ± std over seeds) per training mixture, one bar per test set,
+    mixtures in Table 2 order. ``results`` as for :func:`eval.tables.table2`."""
+    from eval.tables import table2
+
+    table = table2(results, metrics=(metric,))  # type: ignore[arg-type]
+    groups = table.rows
+    series = {}
+    for test_set, _ in table.columns:
+        cells = [table.cell(row, (test_set, metric)) for row in groups]
+        means = [c.mean * 100 if c else np.nan for c in cells]
+        stds = [c.std * 100 if c and c.std is not None else np.nan for c in cells]
+        series[test_set] = (means, stds)
+    return plot_bars(groups, series, path, ylabel=f"{metric} (%)", title=title or f"{metric} by training mixture")
