@@ -1,0 +1,108 @@
+"""Pieces of ``report.html``: tables with best/second marked, figures, sample images with their boxes,
+the run list, and the page that ties them together (one self-contained folder; images by relative link).
+"""
+
+from __future__ import annotations
+
+import html
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+import cv2
+import numpy as np
+
+from curate.boxes import xywh_to_xyxy
+from curate.dataset import Dataset
+from curate.imageio import ImageError, read_image
+from eval.tables import Table, marks
+
+_CSS = """body{font-family:system-ui,sans-serif;margin:2em auto;max-width:1100px;color:#222}
+table{border-collapse:collapse;margin:1em 0}td,th{padding:.3em .7em;border-bottom:1px solid #ddd;text-align:right}
+td:first-child,th:first-child{text-align:left}tr.group td{font-style:italic;background:#f4f4f4;text-align:left}
+.notice{background:#fff4d6;border:1px solid #e0b040;padding:.8em 1em;margin:1em 0}
+figure{display:inline-block;margin:.5em}figcaption{font-size:.85em;color:#555}img{max-width:100%}"""
+
+
+def table_html(table: Table, scale: float = 100.0, digits: int = 1) -> str:
+    """An HTML table of ``table``: best cells bold, second italic, a shaded row per group."""
+    mk = marks(table, scale, digits)
+    head = "".join(f"<th>{html.escape(f'{g} {m}')}</th>" for g, m in table.columns)
+    rows = [f"<caption>{html.escape(table.title)}</caption>", f"<tr><th></th>{head}</tr>"]
+    for group, members in table.row_groups:
+        rows.append(f'<tr class="group"><td colspan="{len(table.columns) + 1}">{html.escape(group)}</td></tr>')
+        for row in members:
+            cells = []
+            for col in table.columns:
+                cell = table.cell(row, col)
+                text = html.escape(cell.format(scale, digits)) if cell else "–"
+                tag = {"best": "b", "second": "i"}.get(mk.get((row, "/".join(col)), ""))
+                cells.append(f"<td><{tag}>{text}</{tag}></td>" if tag else f"<td>{text}</td>")
+            rows.append(f"<tr><td>{html.escape(table.label(row))}</td>{''.join(cells)}</tr>")
+    return "<table>" + "".join(rows) + "</table>"
+
+
+def figure_html(path: Path, base: Path, caption: str = "") -> str:
+    """An ``<img>`` linking ``path`` relative to the report folder ``base``."""
+    rel = Path(path).resolve().relative_to(base.resolve()).as_posix()
+    cap = f"<figcaption>{html.escape(caption)}</figcaption>" if caption else ""
+    return f'<figure><img src="{html.escape(rel)}" alt="{html.escape(caption or rel)}">{cap}</figure>'
+
+
+def runs_html(runs: Sequence[Mapping[str, Any]], columns: Sequence[str]) -> str:
+    """The run list: one row per run, the given ``columns`` (floats in [0, 1] shown as percent)."""
+
+    def show(v: Any) -> str:
+        return "–" if v is None else f"{100 * v:.1f}" if isinstance(v, float) else html.escape(str(v))
+
+    head = "".join(f"<th>{html.escape(c)}</th>" for c in columns)
+    body = "".join("<tr>" + "".join(f"<td>{show(r.get(c))}</td>" for c in columns) + "</tr>" for r in runs)
+    return f"<table><tr>{head}</tr>{body}</table>"
+
+
+def draw_boxes(image: np.ndarray, boxes_xywh: Sequence[Sequence[float]], colour=(255, 64, 0)) -> np.ndarray:
+    """A copy of (H, W, 3) RGB ``image`` with xywh pixel boxes outlined."""
+    out = image.copy()
+    thickness = max(1, round(max(image.shape[:2]) / 300))
+    for x0, y0, x1, y1 in xywh_to_xyxy(np.asarray(boxes_xywh, float).reshape(-1, 4)):
+        cv2.rectangle(out, (int(x0), int(y0)), (int(round(x1)) - 1, int(round(y1)) - 1), colour, thickness)
+    return out
+
+
+def samples_html(
+    dataset: Dataset, out_dir: Path, base: Path, rng: np.random.Generator, count: int = 8, height: int = 160
+) -> str:
+    """Write ``count`` randomly chosen images of ``dataset`` with their boxes as JPEG thumbnails into
+    ``out_dir`` and return their figures (unreadable images are skipped)."""
+    out_dir.mkdir(parents=True, exist_ok=True)
+    by_image = dataset.annotations_by_image()
+    names = {c.id: c.name for c in dataset.categories}
+    pick = rng.choice(len(dataset.images), size=min(count, len(dataset.images)), replace=False)
+    figures = []
+    for i in sorted(int(j) for j in pick):
+        img = dataset.images[i]
+        try:
+            pixels = read_image(dataset.image_path(img))
+        except ImageError:
+            continue
+        anns = by_image[img.id]
+        drawn = draw_boxes(pixels, [a.bbox for a in anns])
+        scale = height / drawn.shape[0]
+        thumb = cv2.resize(drawn, (max(1, round(drawn.shape[1] * scale)), height), interpolation=cv2.INTER_AREA)
+        path = out_dir / f"sample_{img.id}.jpg"
+        cv2.imwrite(str(path), thumb[:, :, ::-1], [cv2.IMWRITE_JPEG_QUALITY, 85])
+        label = ", ".join(sorted({names[a.category_id] for a in anns})) or "negative"
+        figures.append(figure_html(path, base, f"{Path(img.file_name).name} ({img.source or 'unknown'}): {label}"))
+    return "".join(figures)
+
+
+def render_page(title: str, sections: Sequence[tuple[str, str]], notice: str = "") -> str:
+    """A complete HTML page: ``sections`` are ``(heading, html body)``; ``notice`` is shown at the top
+    (e.g. that the demo's "real" data is a generated stand-in)."""
+    parts = [f"<!doctype html><html><head><meta charset='utf-8'><title>{html.escape(title)}</title>"]
+    parts.append(f"<style>{_CSS}</style></head><body><h1>{html.escape(title)}</h1>")
+    if notice:
+        parts.append(f'<div class="notice">{html.escape(notice)}</div>')
+    parts += [f"<h2>{html.escape(heading)}</h2>{body}" for heading, body in sections]
+    parts.append("</body></html>\n")
+    return "".join(parts)

@@ -1,0 +1,50 @@
+"""report.html pieces: marked tables, run list, sample thumbnails with boxes, the page and its notice."""
+
+from __future__ import annotations
+
+import numpy as np
+from detector_factories import write_test_set
+from PIL import Image
+
+from curate.formats.registry import read_dataset
+from eval.report import draw_boxes, figure_html, render_page, runs_html, samples_html, table_html
+from eval.tables import table2
+
+
+def test_table_html_marks_best_and_second():
+    res = [
+        {"mixture": m, "seed": s, "test_set": "common", "AP": ap}
+        for m, ap in (("R1000_S0", 0.5), ("R500_S500", 0.6), ("R0_S1000", 0.2))
+        for s in (0, 1)
+    ]
+    out = table_html(table2(res, metrics=("AP",)))
+    assert "<td>R500_S500</td><td><b>60.0 ± 0.0</b></td>" in out
+    assert "<td>R1000_S0</td><td><i>50.0 ± 0.0</i></td>" in out and "<td>20.0 ± 0.0</td>" in out
+    assert '<tr class="group"><td colspan="2">Real + synthetic</td></tr>' in out
+
+
+def test_runs_and_page_escape_text(tmp_path):
+    runs = runs_html(
+        [{"mixture": "R0_S1000", "seed": 0, "AP": 0.25, "status": "<done>"}], ["mixture", "seed", "AP", "status"]
+    )
+    assert "<td>25.0</td>" in runs and "&lt;done&gt;" in runs
+    page = render_page("Study <1>", [("Runs", runs)], notice="stand-in data, not real fire photos")
+    assert page.startswith("<!doctype html>") and "Study &lt;1&gt;" in page
+    assert '<div class="notice">stand-in data, not real fire photos</div>' in page
+    (tmp_path / "figures").mkdir()
+    assert 'src="figures/a.png"' in figure_html(tmp_path / "figures" / "a.png", tmp_path, "AP")
+
+
+def test_samples_are_thumbnails_with_boxes(tmp_path):
+    ds = read_dataset(write_test_set(tmp_path / "test")).dataset
+    body = samples_html(ds, tmp_path / "report" / "samples", tmp_path / "report", np.random.default_rng(0), count=3)
+    files = sorted((tmp_path / "report" / "samples").glob("*.jpg"))
+    assert len(files) == 3 and body.count("<figure>") == 3 and 'src="samples/' in body
+    assert all(Image.open(f).size[1] == 160 for f in files)
+
+
+def test_draw_boxes_outlines_without_touching_input():
+    img = np.zeros((20, 20, 3), np.uint8)
+    out = draw_boxes(img, [(2, 2, 10, 10)])
+    assert img.max() == 0 and tuple(out[2, 5]) == (255, 64, 0) and out[6, 6].max() == 0
+    assert draw_boxes(img, []).max() == 0
