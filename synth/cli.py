@@ -1,9 +1,178 @@
-"""``fuzzyfire`` subcommands of the synth package (registered by ``fuzzyfire.cli``)."""
+"""``fuzzyfire synth`` subcommands: flames, scenes, method2, audit (registered by ``fuzzyfire.cli``)."""
 
 from __future__ import annotations
 
 import argparse
+import json
+import sys
+from pathlib import Path
+
+FMT = argparse.RawDescriptionHelpFormatter
+
+
+def parse_size(text: str) -> tuple[int, int]:
+    """``"640x480"`` -> (640, 480)."""
+    try:
+        w, h = (int(v) for v in text.lower().split("x"))
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(f"size must look like 640x480, got {text!r}") from exc
+    return w, h
+
+
+def flame_library(n: int, seed: int, frames: int, keep_every: int, rare: float, generator: str = "fluid"):
+    """``n`` procedural flame sequences; sequence k is drawn from ``default_rng([seed, k])``."""
+    import numpy as np
+
+    from synth.flames import generate_sequence, sample_params
+
+    seqs = []
+    for k in range(n):
+        rng = np.random.default_rng([seed, k])
+        params = sample_params(rng, generator, rare=bool(rng.random() < rare), frames=frames, keep_every=keep_every)
+        seqs.append(generate_sequence(f"{generator}-{seed}-{k:03d}", params, rng))
+    return seqs
+
+
+def cmd_flames(args: argparse.Namespace) -> int:
+    from curate.progress import progress
+    from synth.sprites import save_sequence
+
+    seqs = flame_library(args.n, args.seed, args.frames, args.keep_every, args.rare, args.generator)
+    for seq in progress(seqs, total=len(seqs), desc="flames"):
+        save_sequence(args.out / seq.name, seq)
+    print(f"wrote {len(seqs)} sequences ({sum(len(s.sprites) for s in seqs)} sprites) to {args.out}")
+    return 0
+
+
+def cmd_scenes(args: argparse.Namespace) -> int:
+    import cv2
+    import numpy as np
+
+    from synth import camera, render, scenes
+
+    args.out.mkdir(parents=True, exist_ok=True)
+    w, h = args.size
+    with render.Renderer(w, h) as r:
+        for i in range(args.n):
+            env = scenes.build_environment(i, args.seed)
+            scene = scenes.to_pyrender(env, r.pyrender)
+            rng = np.random.default_rng([args.seed, 1, i])
+            view = camera.find_view(
+                env.camera, rng, lambda v, s=scene: render.render_view(r, s, v.pose, v.yfov, True)[1]
+            )
+            rgb, _ = render.render_view(r, scene, view.pose, view.yfov)
+            cv2.imwrite(str(args.out / f"{env.name}.png"), cv2.cvtColor(rgb, cv2.COLOR_RGB2BGR))
+    print(f"wrote {args.n} environment previews to {args.out}")
+    return 0
+
+
+def cmd_method2(args: argparse.Namespace) -> int:
+    from synth.method2 import Method2Config, run_method2
+    from synth.sprites import load_library
+
+    w, h = args.size
+    cfg = Method2Config(n=args.n, seed=args.seed, width=w, height=h, scenes=args.scenes, smoke_class=False)
+    if args.flames:
+        library = load_library(args.flames)
+    else:
+        library = flame_library(args.library, args.seed, 240, 12, 0.1)
+    result = run_method2(cfg, library, args.out, overwrite=args.overwrite)
+    print(f"wrote {args.out}: {args.n} images ({', '.join(result.files.values())})")
+    return 0
+
+
+def cmd_audit(args: argparse.Namespace) -> int:
+    from synth.audit import audit_dataset
+
+    report = audit_dataset(args.folder)
+    if args.json:
+        print(json.dumps(report))
+    else:
+        print(
+            f"{report['images']} images, {report['boxes']} boxes: mean IoU {report['mean_iou']:.4f}, "
+            f"min IoU {report['min_iou']:.4f}"
+        )
+        for mode, rep in report.get("modes", {}).items():
+            print(f"  {mode}: mean IoU {rep['mean_iou']:.4f}, min IoU {rep['min_iou']:.4f}", file=sys.stdout)
+    return 0
+
+
+def _register_flames(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "flames",
+        help="simulate procedural flame sprite sequences",
+        formatter_class=FMT,
+        description="Simulate flame sequences (stable fluids or noise), keep every K-th frame.\n\n"
+        "example:\n  fuzzyfire synth flames --out out/flames --n 12 --seed 0 --frames 1024 --keep-every 12",
+    )
+    p.add_argument("--out", required=True, type=Path)
+    p.add_argument("--n", type=int, default=12, help="number of sequences")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--generator", default="fluid", choices=("fluid", "noise"))
+    p.add_argument("--frames", type=int, default=1024, help="simulation steps per sequence")
+    p.add_argument("--keep-every", type=int, default=12, help="keep one frame every K steps")
+    p.add_argument("--rare", type=float, default=0.1, help="fraction of chemical-colour (rare) flames")
+    p.set_defaults(func=cmd_flames)
+
+
+def _register_scenes(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "scenes",
+        help="render one preview per procedural environment",
+        formatter_class=FMT,
+        description="Render a preview PNG of each of the first N environments.\n\n"
+        "example:\n  fuzzyfire synth scenes --out out/scenes --n 48 --size 320x240",
+    )
+    p.add_argument("--out", required=True, type=Path)
+    p.add_argument("--n", type=int, default=48)
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--size", type=parse_size, default=(320, 240))
+    p.set_defaults(func=cmd_scenes)
+
+
+def _register_method2(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "method2",
+        help="Method 2: composite flames on rendered views (exact boxes)",
+        formatter_class=FMT,
+        description="Render environment views once and composite flame sprites on them; boxes come\n"
+        "from each flame's final visible mask. Resumes an interrupted run.\n\n"
+        "example:\n  fuzzyfire synth method2 --n 1000 --seed 0 --out out/m2 --size 640x480 --scenes 48\n"
+        "  fuzzyfire synth audit out/m2 --json",
+    )
+    p.add_argument("--out", required=True, type=Path)
+    p.add_argument("--n", type=int, default=100)
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--size", type=parse_size, default=(640, 480))
+    p.add_argument("--scenes", type=int, default=48, help="number of environments")
+    p.add_argument("--flames", type=Path, nargs="*", help="sequence folders (synth flames output, or RGBA PNGs)")
+    p.add_argument("--library", type=int, default=12, help="procedural sequences to make when --flames is absent")
+    p.add_argument("--overwrite", action="store_true")
+    p.set_defaults(func=cmd_method2)
+
+
+def _register_audit(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "audit",
+        help="IoU of written boxes vs pixel-truth mask boxes",
+        formatter_class=FMT,
+        description="Compare a synthetic dataset's boxes with the boxes of its kept flame masks.\n\n"
+        "example:\n  fuzzyfire synth audit out/m2 --json",
+    )
+    p.add_argument("folder", type=Path)
+    p.add_argument("--json", action="store_true")
+    p.set_defaults(func=cmd_audit)
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    """Add this package's commands to the ``fuzzyfire`` parser (none yet)."""
+    """Add ``fuzzyfire synth ...`` to the ``fuzzyfire`` parser."""
+    synth = sub.add_parser(
+        "synth",
+        help="procedural flames, environments and synthetic datasets",
+        formatter_class=FMT,
+        description="Synthetic data: flames, scenes, Method 2, audit.\n\n"
+        "example:\n  fuzzyfire synth method2 --n 200 --out out/m2 --size 320x240",
+    )
+    inner = synth.add_subparsers(dest="synth_command", metavar="SUBCOMMAND")
+    for add in (_register_flames, _register_scenes, _register_method2, _register_audit):
+        add(inner)

@@ -1,0 +1,25 @@
+import json
+
+from fuzzyfire.cli import main
+
+
+def test_flames_method2_audit_commands(tmp_path, capsys):
+    assert (
+        main(["synth", "flames", "--out", str(tmp_path / "fl"), "--n", "1", "--frames", "60", "--keep-every", "30"])
+        == 0
+    )
+    out = tmp_path / "m2"
+    args = ["synth", "method2", "--n", "3", "--out", str(out), "--size", "64x48", "--scenes", "1"]
+    assert main([*args, "--flames", str(tmp_path / "fl")]) == 0
+    capsys.readouterr()
+    assert main(["synth", "audit", str(out), "--json"]) == 0
+    report = json.loads(capsys.readouterr().out)
+    assert report["images"] == 3 and report["mean_iou"] == 1.0
+
+
+def test_bad_size_is_rejected(capsys):
+    import pytest
+
+    with pytest.raises(SystemExit):
+        main(["synth", "method2", "--out", "x", "--size", "big"])
+    assert "640x480" in capsys.readouterr().err
