@@ -1,4 +1,5 @@
-"""Non-maximum suppression in numpy, class-aware, and the detector post-processing built on it."""
+"""Class-aware non-maximum suppression (on :func:`curate.boxes.nms_xyxy`) and the detector post-processing
+built on it."""
 
 from __future__ import annotations
 
@@ -7,7 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from curate.boxes import box_iou_xyxy, cxcywh_to_xyxy
+from curate.boxes import cxcywh_to_xyxy, nms_xyxy
 
 #: Scoring defaults (COCO-style evaluation keeps low-confidence boxes: they only add recall).
 CONF_THRESHOLD = 0.001
@@ -28,22 +29,6 @@ class ImageDetections:
 
     def __len__(self) -> int:
         return len(self.scores)
-
-
-def nms_xyxy(boxes: NDArray, scores: NDArray, iou_threshold: float, max_keep: int | None = None) -> NDArray[np.int64]:
-    """Greedy NMS over (N, 4) xyxy boxes and (N,) scores: indices kept, best first. A box is dropped when
-    its IoU with a kept, higher-scoring box is above ``iou_threshold``. Ties keep the lower index first."""
-    order = np.argsort(-np.asarray(scores), kind="stable")
-    keep: list[int] = []
-    limit = len(order) if max_keep is None else max_keep
-    while order.size and len(keep) < limit:
-        best, rest = order[0], order[1:]
-        keep.append(int(best))
-        if rest.size:
-            overlap = box_iou_xyxy(boxes[best], boxes[rest])[0]
-            rest = rest[overlap <= iou_threshold]
-        order = rest
-    return np.asarray(keep, dtype=np.int64)
 
 
 def batched_nms_xyxy(

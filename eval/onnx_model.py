@@ -6,9 +6,10 @@ Output layouts (auto-detected from the output shape and class count, or chosen w
 - ``yolov8`` (also YOLO11): (B, 4 + C, N) columns ``[cx, cy, w, h, p_1 .. p_C]``, score = p_c.
 
 Boxes are centre boxes in pixels of the letterboxed input; every value is already post-sigmoid.
-Input: ``images`` (B, 3, H, W) float RGB in [0, 1], letterboxed with grey 114. Class names and input size
-come from the model's metadata (ours, YOLOv5's ``names``/``stride``, ultralytics' ``names``/``imgsz``)
-or from the caller.
+Input: ``images`` (B, 3, H, W) float RGB in [0, 1], letterboxed with grey 114. Class names, input size and
+(for our models) the layout come from the model's metadata (ours as written by ``train/export.py``,
+YOLOv5's ``names``/``stride``, ultralytics' ``names``/``imgsz``) or from the caller. A layout named in the
+metadata (``output_format``) is trusted; otherwise it is inferred from the output shape.
 """
 
 from __future__ import annotations
@@ -24,8 +25,6 @@ from numpy.typing import NDArray
 
 LAYOUTS: tuple[str, ...] = ("fuzzyfire", "yolov5", "yolov8")
 FORMATS: tuple[str, ...] = ("auto", *LAYOUTS)
-#: Metadata key under which our exporter stores a JSON object (class_names, image_size, layout, ...).
-FUZZYFIRE_KEY = "fuzzyfire"
 
 
 class ModelError(ValueError):
@@ -103,23 +102,27 @@ def _parse_size(value: object) -> tuple[int, int] | None:
     return None
 
 
+def _json_object(text: str | None) -> dict:
+    try:
+        value = json.loads(text) if text else {}
+    except ValueError:
+        return {}
+    return value if isinstance(value, dict) else {}
+
+
 def read_metadata(meta: Mapping[str, str]) -> dict[str, object]:
-    """Class names, input size, pad value and whether the model is ours, from ONNX metadata_props."""
-    ours: dict = {}
-    if FUZZYFIRE_KEY in meta:
-        try:
-            ours = json.loads(meta[FUZZYFIRE_KEY])
-        except ValueError:
-            ours = {}
-    names_text = ours.get("class_names") or ours.get("names") or meta.get("class_names") or meta.get("names")
-    names = names_text if isinstance(names_text, list) else (parse_names(names_text) if names_text else None)
-    size = _parse_size(ours.get("image_size") or meta.get("imgsz") or meta.get("image_size") or "")
+    """Class names, input ``(width, height)``, pad value, output layout and whether the model is ours, from
+    ONNX ``metadata_props``: our exporter's keys (``producer``, ``names``, ``imgsz``, ``output_format``,
+    ``preprocessing``; see ``train/export.py``), YOLOv5's (``names``, ``stride``) or ultralytics'
+    (``names``, ``imgsz``)."""
+    names_text = meta.get("names") or meta.get("class_names")
+    layout = meta.get("output_format")
     return {
-        "ours": bool(ours),
-        "names": [str(n) for n in names] if names else None,
-        "size": size,
-        "pad_value": int(ours.get("pad_value", 114)),
-        "layout": ours.get("layout"),
+        "ours": meta.get("producer") == "fuzzyfire",
+        "names": parse_names(names_text) if names_text else None,
+        "size": _parse_size(meta.get("imgsz") or meta.get("image_size") or ""),
+        "pad_value": int(_json_object(meta.get("preprocessing")).get("pad_value", 114)),
+        "layout": layout if layout in ("yolov5", "yolov8") else None,
     }
 
 
@@ -183,7 +186,7 @@ class OnnxDetector:
         out_shape = self._output_shape(inp.name, width, height)
         chosen = fmt
         if fmt == "auto":
-            detected = infer_format(out_shape, len(class_names) if class_names else None, self.path)
+            detected = info["layout"] or infer_format(out_shape, len(class_names) if class_names else None, self.path)
             chosen = "fuzzyfire" if info["ours"] and detected == "yolov5" else detected
         num_classes = out_shape[1] - 4 if chosen == "yolov8" else out_shape[2] - 5
         if not class_names:

@@ -33,9 +33,10 @@ def run_json(*argv: str) -> dict:
         {"layout": "yolov5"},
         {"layout": "yolov8", "metadata": {"names": "{0: 'fire', 1: 'smoke'}", "imgsz": "[64, 64]"}},
         {"layout": "yolov5", "batch": 1},
+        {"layout": "yolov5", "metadata": {"names": '["fire", "smoke"]', "imgsz": "[64, 64]", "producer": "fuzzyfire"}},
         {"layout": "yolov8", "dynamic_size": True, "metadata": {"names": "['Fire', 'Smoke']", "imgsz": "64"}},
     ],
-    ids=["yolov5", "yolov8", "fixed-batch-1", "dynamic-size"],
+    ids=["yolov5", "yolov8", "fixed-batch-1", "fuzzyfire", "dynamic-size"],
 )
 def test_ground_truth_model_scores_ap_1_with_negatives(work, kwargs):
     model = oracle_model(work["root"] / f"m{len(list(work['root'].glob('*.onnx')))}.onnx", **kwargs)

@@ -5,7 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from eval.nms import batched_nms_xyxy, nms_xyxy, postprocess
+from curate.boxes import nms_xyxy
+from eval.nms import batched_nms_xyxy, postprocess
 
 
 def _iou(a, b) -> float:

@@ -17,11 +17,25 @@ def test_parse_names_variants():
     assert parse_names('["fire"]') == ["fire"] and parse_names("fire, smoke") == ["fire", "smoke"]
 
 
+#: Metadata as train/export.py writes it (the contract ``--format fuzzyfire`` follows).
+OURS = {
+    "names": json.dumps(["fire", "smoke"]),
+    "imgsz": json.dumps([SIZE, SIZE]),
+    "output_format": "yolov5",
+    "box_format": "cxcywh",
+    "scores": "obj*cls",
+    "preprocessing": json.dumps({"resize": "letterbox", "pad_value": 114, "color": "RGB", "scale": "1/255"}),
+    "stride": "32",
+    "producer": "fuzzyfire",
+}
+
+
 def test_read_metadata_ours_and_ultralytics():
-    ours = read_metadata({"fuzzyfire": json.dumps({"class_names": ["fire"], "image_size": [320, 320]})})
-    assert ours["ours"] and ours["names"] == ["fire"] and ours["size"] == (320, 320)
+    ours = read_metadata(OURS)
+    assert ours["ours"] and ours["names"] == ["fire", "smoke"] and ours["size"] == (SIZE, SIZE)
+    assert ours["layout"] == "yolov5" and ours["pad_value"] == 114
     ultra = read_metadata({"names": "{0: 'fire'}", "imgsz": "[480, 640]"})
-    assert not ultra["ours"] and ultra["size"] == (640, 480)  # ultralytics imgsz is [h, w]
+    assert not ultra["ours"] and ultra["size"] == (640, 480) and ultra["layout"] is None  # imgsz is [h, w]
 
 
 def test_infer_format():
@@ -50,10 +64,12 @@ def test_auto_detects_layout_and_decodes_scores(tmp_path, layout):
     assert scores[0, -1].max() == 0.0  # rows of other images are gated off
 
 
-def test_ours_metadata_selects_fuzzyfire(tmp_path):
-    meta = {"fuzzyfire": json.dumps({"class_names": ["fire", "smoke"], "image_size": [SIZE, SIZE]})}
-    det = OnnxDetector(oracle_model(tmp_path / "m.onnx", metadata=meta))
-    assert det.spec.format == "fuzzyfire"
+def test_ours_metadata_selects_fuzzyfire_even_when_the_shape_is_ambiguous(tmp_path):
+    rows = rows_for()[:6]  # output (1, 6, 7) fits both layouts; the metadata decides
+    det = OnnxDetector(oracle_model(tmp_path / "m.onnx", rows=rows, metadata=OURS))
+    assert det.spec.format == "fuzzyfire" and det.spec.class_names == ("fire", "smoke")
+    with pytest.raises(ModelError, match="fits both"):
+        OnnxDetector(oracle_model(tmp_path / "n.onnx", rows=rows))
 
 
 def test_overrides_and_errors(tmp_path):
