@@ -1,0 +1,236 @@
+"""The training loop: one epoch at a time, validation of the EMA model, fitness-based best checkpoint.
+
+A run folder holds ``last.pt`` (everything needed to resume, written after every epoch), ``best.pt`` (EMA
+weights of the epoch with the best fitness = 0.1 AP50 + 0.9 AP), ``metrics.jsonl`` (one JSON line per
+epoch), ``best.onnx`` (see :mod:`train.export`) and ``results.json`` (the resolved config, seed, versions,
+anchors, best epoch and its metrics). Calling :func:`fit` again on the same folder resumes after the last
+finished epoch and gives the same weights as an uninterrupted run.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import time
+from dataclasses import asdict, dataclass, replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import torch
+
+from curate.dataset import Dataset
+from curate.manifest import git_commit, versions
+from curate.progress import progress
+from train.anchors import check_anchors, label_sizes
+from train.config import DEFAULT_ANCHORS, ModelConfig, TrainConfig
+from train.data import TrainBatches, cache_images
+from train.ema import ModelEMA
+from train.export import export_onnx
+from train.loss import DetectionLoss
+from train.model import STRIDES, Detector, build_model
+from train.optim import Schedule, build_optimizer
+from train.validate import evaluate
+
+GRAD_CLIP = 10.0  # max gradient norm before each optimizer step
+
+
+class ResumeError(ValueError):
+    """A run folder whose checkpoint does not match the requested run."""
+
+
+@dataclass
+class Trainer:
+    """The live objects of a run (built by :func:`build_trainer`)."""
+
+    cfg: TrainConfig
+    model: Detector
+    ema: ModelEMA
+    optimizer: torch.optim.SGD
+    loss_fn: DetectionLoss
+    schedule: Schedule
+    batches: TrainBatches
+    class_names: list[str]
+    anchors: list
+
+
+def train_one_epoch(t: Trainer, epoch: int) -> dict[str, float]:
+    """One pass over the training batches; returns mean losses, learning rate and images/second."""
+    t.model.train()
+    nb = len(t.batches)
+    sums = {"box": 0.0, "obj": 0.0, "cls": 0.0}
+    seen, pending, start = 0, 0, time.perf_counter()
+    t.optimizer.zero_grad(set_to_none=True)
+    for i, (images, targets) in enumerate(progress(t.batches.epoch(epoch), total=nb, desc=f"epoch {epoch}")):
+        iteration = epoch * nb + i
+        t.schedule.apply(t.optimizer, iteration, epoch)
+        loss, parts = t.loss_fn(t.model(images), targets)
+        loss.backward()
+        pending += 1
+        if pending >= t.schedule.accumulate(iteration) or i == nb - 1:
+            _step(t)
+            pending = 0
+        for key in sums:
+            sums[key] += parts[key]
+        seen += images.shape[0]
+    elapsed = time.perf_counter() - start
+    return {
+        **{f"loss_{k}": v / nb for k, v in sums.items()},
+        "lr": float(t.optimizer.param_groups[0]["lr"]),
+        "train_images_per_s": seen / elapsed,
+    }
+
+
+def _step(t: Trainer) -> None:
+    torch.nn.utils.clip_grad_norm_(t.model.parameters(), max_norm=GRAD_CLIP)
+    t.optimizer.step()
+    t.optimizer.zero_grad(set_to_none=True)
+    t.ema.update(t.model)
+
+
+def build_trainer(cfg: TrainConfig, train_ds: Dataset) -> Trainer:
+    """Cache the training images, fit anchors, build model, EMA, optimizer, loss and schedule (seeded)."""
+    torch.manual_seed(cfg.seed)
+    cache = cache_images(train_ds, cfg.imgsz, desc="decoding training images")
+    anchors = np.asarray(cfg.model.anchors or DEFAULT_ANCHORS, dtype=np.float64)
+    report = {"refitted": 0.0}
+    if cfg.model.autoanchor:
+        wh = label_sizes(train_ds, cfg.imgsz)
+        anchors, report = check_anchors(wh, anchors, np.random.default_rng(cfg.seed), cfg.loss.anchor_t)
+    model_cfg = replace(cfg.model, anchors=_nested(anchors), autoanchor=False)
+    names = train_ds.category_names
+    model = build_model(len(names), model_cfg)
+    batches = TrainBatches(cache, cfg.imgsz, cfg.batch, cfg.augment, cfg.seed)
+    schedule = Schedule(cfg.optim, cfg.epochs, len(batches), cfg.batch)
+    loss_fn = DetectionLoss(model.head.anchors, STRIDES, len(names), cfg.imgsz, cfg.loss)
+    ema = ModelEMA(model, cfg.ema_decay, cfg.ema_tau)
+    if report.get("refitted"):
+        print(f"anchors re-fitted by k-means: best possible recall {report['bpr_before']:.3f} -> {report['bpr']:.3f}")
+    return Trainer(
+        cfg, model, ema, build_optimizer(model, cfg.optim, cfg.batch), loss_fn, schedule, batches, names,
+        _nested(anchors),
+    )  # fmt: skip
+
+
+def _nested(anchors: Any) -> tuple:
+    return tuple(tuple(tuple(float(v) for v in a) for a in level) for level in np.asarray(anchors))
+
+
+def _save(path: Path, state: dict[str, Any]) -> None:
+    tmp = path.with_suffix(".tmp")
+    torch.save(state, tmp)
+    os.replace(tmp, path)
+
+
+def _checkpoint(t: Trainer, epoch: int, best: dict[str, Any]) -> dict[str, Any]:
+    return {
+        "epoch": epoch,
+        "config": asdict(t.cfg),
+        "class_names": t.class_names,
+        "anchors": t.anchors,
+        "model": t.model.state_dict(),
+        "ema": t.ema.state_dict(),
+        "optimizer": t.optimizer.state_dict(),
+        "best": best,
+    }
+
+
+def _resume(t: Trainer, out: Path) -> tuple[int, dict[str, Any]]:
+    """Load ``out/last.pt`` when present: returns (first epoch to run, best-so-far record)."""
+    last = out / "last.pt"
+    if not last.is_file():
+        return 0, {"fitness": -1.0, "epoch": -1}
+    state = torch.load(last, map_location="cpu", weights_only=False)
+    if state["config"] != asdict(t.cfg) or state["class_names"] != t.class_names:
+        raise ResumeError(f"{last}: the run there used another config or classes; choose another --out")
+    t.model.load_state_dict(state["model"])
+    t.ema.load_state_dict(state["ema"])
+    t.optimizer.load_state_dict(state["optimizer"])
+    return int(state["epoch"]) + 1, state["best"]
+
+
+def _log_epoch(out: Path, record: dict[str, Any]) -> None:
+    with open(out / "metrics.jsonl", "a", encoding="utf-8") as fh:
+        fh.write(json.dumps(record, sort_keys=True) + "\n")
+
+
+def _truncate_metrics(out: Path, first_epoch: int) -> None:
+    path = out / "metrics.jsonl"
+    if path.is_file():
+        lines = [ln for ln in path.read_text(encoding="utf-8").splitlines() if ln.strip()]
+        kept = [ln for ln in lines if json.loads(ln)["epoch"] < first_epoch]
+        path.write_text("".join(ln + "\n" for ln in kept), encoding="utf-8")
+
+
+def fit(cfg: TrainConfig, train_ds: Dataset, val_ds: Dataset, out: Path | str) -> dict[str, Any]:
+    """Train ``cfg.epochs`` epochs on ``train_ds``, validate on ``val_ds`` each epoch, write the run folder.
+
+    ``val_ds`` classes must be a subset of ``train_ds`` classes (matched by name). Returns ``results.json``.
+    """
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    torch.set_flush_denormal(True)
+    if cfg.threads > 0:
+        torch.set_num_threads(cfg.threads)
+    val_ds = val_ds.with_categories(train_ds.category_names)
+    t = build_trainer(cfg, train_ds)
+    val_cache = cache_images(val_ds, cfg.imgsz, desc="decoding validation images")
+    first, best = _resume(t, out)
+    _truncate_metrics(out, first)
+    for epoch in range(first, cfg.epochs):
+        record = {"epoch": epoch, **train_one_epoch(t, epoch)}
+        start = time.perf_counter()
+        args = (cfg.imgsz, cfg.batch, cfg.val_conf, cfg.val_iou, cfg.max_det)
+        record.update(evaluate(t.ema.ema, val_cache, val_ds, *args))
+        record["val_seconds"] = time.perf_counter() - start
+        if record["fitness"] > best["fitness"]:
+            best = {k: record[k] for k in ("epoch", "fitness", "AP", "AP50")}
+            _save(out / "best.pt", _best_weights(t))
+        _log_epoch(out, record)
+        _save(out / "last.pt", _checkpoint(t, epoch, best))
+        print(_epoch_line(record, cfg.epochs))
+    return _finish(t, out, best)
+
+
+def _best_weights(t: Trainer) -> dict[str, Any]:
+    return {
+        "model": t.ema.ema.state_dict(),
+        "class_names": t.class_names,
+        "anchors": t.anchors,
+        "config": asdict(t.cfg),
+    }
+
+
+def load_detector(path: Path | str) -> tuple[Detector, list[str], int]:
+    """A ``best.pt``/``last.pt`` file -> (detector in eval mode with its EMA weights, class names, imgsz)."""
+    state = torch.load(path, map_location="cpu", weights_only=False)
+    model_cfg = ModelConfig(size=state["config"]["model"]["size"], anchors=state["anchors"], autoanchor=False)
+    model = build_model(len(state["class_names"]), model_cfg)
+    model.load_state_dict(state["model"] if "ema" not in state else state["ema"]["weights"])
+    return model.eval(), list(state["class_names"]), int(state["config"]["imgsz"])
+
+
+def _epoch_line(record: dict[str, Any], epochs: int) -> str:
+    return (
+        f"epoch {record['epoch'] + 1}/{epochs}  loss box {record['loss_box']:.4f} obj {record['loss_obj']:.4f} "
+        f"cls {record['loss_cls']:.4f}  AP50 {record['AP50']:.4f}  AP {record['AP']:.4f}  "
+        f"fitness {record['fitness']:.4f}  {record['train_images_per_s']:.1f} img/s"
+    )
+
+
+def _finish(t: Trainer, out: Path, best: dict[str, Any]) -> dict[str, Any]:
+    """Export ``best.onnx`` from the best EMA weights and write ``results.json``."""
+    if (out / "best.pt").is_file():
+        model, names, imgsz = load_detector(out / "best.pt")
+        export_onnx(model, out / "best.onnx", imgsz, names)
+    results = {
+        "best": best,
+        "config": asdict(t.cfg),
+        "class_names": t.class_names,
+        "anchors": t.anchors,
+        "onnx": "best.onnx" if (out / "best.onnx").is_file() else None,
+        "versions": versions(),
+        "git_commit": git_commit(),
+    }
+    (out / "results.json").write_text(json.dumps(results, indent=1) + "\n", encoding="utf-8")
+    return results
