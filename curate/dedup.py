@@ -1,0 +1,207 @@
+"""Exact and near duplicates among scanned images, with a documented keeper policy.
+
+- **Exact**: equal file bytes (sha256), then equal decoded pixels (same picture re-encoded losslessly or with
+  other metadata). Distance 0.
+- **Near**: Euclidean distance of L2-normalised embeddings below ``threshold`` (found by range search, never an
+  N x N matrix).
+
+**Keeper policy.** Images are ranked by: protected first (under a ``--protect`` folder), then largest
+resolution (width x height), then sharpness (variance of the Laplacian), then file size, then path (A..Z).
+Walking that order, an image is *kept* unless a duplicate of it was already kept; a removed image names the
+nearest kept duplicate (``duplicate_of``). Hence no two kept images are duplicates, every removed image is a
+true duplicate of a kept one (no chaining through intermediate frames), and protected images are never removed.
+
+**Groups** are the connected components of the duplicate pairs (union-find), reported keeper first. Results do
+not depend on input order: vectors are indexed in (sha256, path) order and all choices follow the total order
+above.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Literal
+
+import numpy as np
+from numpy.typing import NDArray
+
+from curate.scan import ScannedImage
+from curate.search import Pairs, build_index, self_pairs
+
+#: Default near-duplicate radius on unit EfficientNet-Lite0 embeddings (see ``bench/bench_dedup_quality.py``).
+DEFAULT_THRESHOLD = 0.45
+
+
+@dataclass(frozen=True)
+class Removal:
+    index: int  # into the images list
+    duplicate_of: int  # index of the kept image it duplicates
+    kind: Literal["exact", "near"]
+    distance: float
+
+
+@dataclass
+class DedupResult:
+    """``kept``: image indices (ascending); ``removed``: one :class:`Removal` each; ``groups``: lists of image
+    indices (keeper first, then in keeper order), groups ordered by their keeper's path."""
+
+    kept: list[int]
+    removed: list[Removal]
+    groups: list[list[int]] = field(default_factory=list)
+    pairs: Pairs | None = None  # near pairs among exact-unique images (indices into images)
+
+
+def keeper_order(images: Sequence[ScannedImage], protected: Sequence[bool]) -> list[int]:
+    """Indices of ``images`` in keeper-policy order (best keeper first)."""
+
+    def key(i: int) -> tuple:
+        f = images[i].facts
+        return (not protected[i], -f.width * f.height, -f.sharpness, -f.bytes, images[i].path)
+
+    return sorted(range(len(images)), key=key)
+
+
+def is_protected(images: Sequence[ScannedImage], folders: Sequence[Path | str]) -> list[bool]:
+    roots = [Path(f).resolve() for f in folders]
+    return [any(Path(im.path).is_relative_to(r) for r in roots) for im in images]
+
+
+def exact_duplicates(images: Sequence[ScannedImage], protected: Sequence[bool]) -> list[Removal]:
+    """Removals of byte-identical, then pixel-identical, copies (the best keeper of each set stays)."""
+    removed: list[Removal] = []
+    gone: set[int] = set()
+    for attr in ("sha256", "pixel_hash"):
+        first: dict[str, int] = {}
+        for i in keeper_order(images, protected):
+            if i in gone:
+                continue
+            value = getattr(images[i].facts, attr)
+            if value in first and not protected[i]:
+                removed.append(Removal(i, first[value], "exact", 0.0))
+                gone.add(i)
+            else:
+                first.setdefault(value, i)
+    return removed
+
+
+def near_pairs(
+    images: Sequence[ScannedImage],
+    vectors: NDArray[np.float32],
+    candidates: Sequence[int],
+    threshold: float,
+    backend: str,
+) -> Pairs:
+    """Pairs (indices into ``images``) of ``candidates`` whose unit ``vectors`` (N, D) are closer than
+    ``threshold``; the index is built in (sha256, path) order so the result ignores input order."""
+    order = sorted(candidates, key=lambda i: (images[i].facts.sha256, images[i].path))
+    if len(order) < 2:
+        return Pairs(np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros(0, np.float32))
+    local = self_pairs(build_index(vectors[order], backend), threshold)
+    ids = np.asarray(order, np.int64)
+    i, j = ids[local.i], ids[local.j]
+    return Pairs(np.minimum(i, j), np.maximum(i, j), local.dist)
+
+
+def greedy_keep(
+    n: int, pairs: Pairs, order: Sequence[int], allowed: Sequence[bool], protected: Sequence[bool]
+) -> list[Removal]:
+    """Walk ``order``; remove an allowed, unprotected image when a kept neighbour exists (nearest named)."""
+    ptr, nbr, dist = _adjacency(n, pairs)
+    kept = np.zeros(n, bool)
+    removed = []
+    for i in order:
+        if not allowed[i]:
+            continue
+        lo, hi = ptr[i], ptr[i + 1]
+        hit = kept[nbr[lo:hi]]
+        if hit.any() and not protected[i]:
+            k = int(np.argmin(np.where(hit, dist[lo:hi], np.inf)))
+            removed.append(Removal(i, int(nbr[lo + k]), "near", float(dist[lo + k])))
+        else:
+            kept[i] = True
+    return removed
+
+
+def find_duplicates(
+    images: Sequence[ScannedImage],
+    vectors: NDArray[np.float32] | None,
+    threshold: float = DEFAULT_THRESHOLD,
+    backend: str = "auto",
+    protect: Sequence[Path | str] = (),
+    near: bool = True,
+) -> DedupResult:
+    """Exact then (with ``vectors`` (N, D) unit rows and ``near``) near duplicates; see the module docstring."""
+    if threshold < 0 or threshold > 2:
+        raise ValueError(f"threshold is a Euclidean distance between unit vectors, 0..2; got {threshold}")
+    protected = is_protected(images, protect)
+    removed = exact_duplicates(images, protected)
+    gone = {r.index for r in removed}
+    survivors = [i for i in range(len(images)) if i not in gone]
+    pairs = None
+    if near and vectors is not None:
+        assert len(vectors) == len(images), "one vector per image"
+        pairs = near_pairs(images, vectors, survivors, threshold, backend)
+        allowed = [i not in gone for i in range(len(images))]
+        removed += greedy_keep(len(images), pairs, keeper_order(images, protected), allowed, protected)
+    gone = {r.index for r in removed}
+    kept = [i for i in range(len(images)) if i not in gone]
+    groups = duplicate_groups(images, removed, pairs, protected)
+    return DedupResult(kept, sorted(removed, key=lambda r: images[r.index].path), groups, pairs)
+
+
+def duplicate_groups(
+    images: Sequence[ScannedImage], removed: Sequence[Removal], pairs: Pairs | None, protected: Sequence[bool]
+) -> list[list[int]]:
+    """Connected components (size >= 2) of exact links and near pairs, keeper order inside each."""
+    uf = UnionFind(len(images))
+    for r in removed:
+        uf.union(r.index, r.duplicate_of)
+    if pairs is not None:
+        for a, b in zip(pairs.i.tolist(), pairs.j.tolist()):
+            uf.union(a, b)
+    rank = {i: k for k, i in enumerate(keeper_order(images, protected))}
+    groups = [sorted(g, key=rank.__getitem__) for g in uf.components() if len(g) > 1]
+    return sorted(groups, key=lambda g: images[g[0]].path)
+
+
+class UnionFind:
+    """Disjoint sets over 0..n-1 with path halving and union by size."""
+
+    def __init__(self, n: int) -> None:
+        self.parent = list(range(n))
+        self.size = [1] * n
+
+    def find(self, a: int) -> int:
+        parent = self.parent
+        while parent[a] != a:
+            parent[a] = parent[parent[a]]
+            a = parent[a]
+        return a
+
+    def union(self, a: int, b: int) -> None:
+        ra, rb = self.find(a), self.find(b)
+        if ra == rb:
+            return
+        if self.size[ra] < self.size[rb]:
+            ra, rb = rb, ra
+        self.parent[rb] = ra
+        self.size[ra] += self.size[rb]
+
+    def components(self) -> list[list[int]]:
+        """Every set as an ascending list, sets ordered by their smallest member."""
+        sets: dict[int, list[int]] = {}
+        for a in range(len(self.parent)):
+            sets.setdefault(self.find(a), []).append(a)
+        return sorted(sets.values(), key=lambda s: s[0])
+
+
+def _adjacency(n: int, pairs: Pairs) -> tuple[NDArray[np.int64], NDArray[np.int64], NDArray[np.float32]]:
+    """CSR adjacency of the undirected pairs: neighbours of i are ``nbr[ptr[i]:ptr[i+1]]``."""
+    src = np.concatenate([pairs.i, pairs.j])
+    dst = np.concatenate([pairs.j, pairs.i])
+    dist = np.concatenate([pairs.dist, pairs.dist])
+    order = np.argsort(src, kind="stable")
+    ptr = np.zeros(n + 1, np.int64)
+    np.cumsum(np.bincount(src, minlength=n), out=ptr[1:])
+    return ptr, dst[order], dist[order]
