@@ -1,9 +1,110 @@
-"""``fuzzyfire`` subcommands of the train package (registered by ``fuzzyfire.cli``)."""
+"""``fuzzyfire train``: train the detector on a dataset, validate every epoch, export ``RUN/best.onnx``."""
 
 from __future__ import annotations
 
 import argparse
+import sys
+from dataclasses import replace
+from pathlib import Path
+
+_EXAMPLE = """example:
+  fuzzyfire train --train out/mixtures/seed0/R500_S500 --val ../shared/data/fire-cctv-416 \\
+      --out runs/R500_S500-seed0 --epochs 30 --imgsz 320 --seed 0
+  fuzzyfire train --train ../shared/data/fire-smoke-608 --val ../shared/data/fire-smoke-608 \\
+      --drop-class default --out runs/fs608 --epochs 3 --imgsz 160
+
+A folder with splits trains on its 'train' split and validates on 'valid' (or 'val'); --train-split and
+--val-split choose others. The run folder gets last.pt (resumable: run the same command again), best.pt
+(EMA weights of the best epoch by fitness = 0.1 AP50 + 0.9 AP), metrics.jsonl (one line per epoch),
+results.json and best.onnx (input 'images' N x 3 x H x W RGB in [0, 1], letterboxed; output N x A x (5 + C):
+cx, cy, w, h in input pixels, objectness, class probabilities)."""
+
+TRAIN_SPLITS = ("train",)
+VAL_SPLITS = ("valid", "val", "validation")
+
+
+def pick_split(ds, wanted: str | None, defaults: tuple[str, ...], label: str):
+    """The split ``wanted``; by default the first of ``defaults`` present, else every image."""
+    if wanted is not None:
+        chosen = ds.select_split(wanted)
+        if not chosen.images:
+            raise ValueError(f"{label}: no images in split {wanted!r} (splits: {ds.splits})")
+        return chosen
+    for name in defaults:
+        if name in ds.splits:
+            return ds.select_split(name)
+    return ds
+
+
+def _read(path: str, fmt: str, split: str | None, defaults: tuple[str, ...], drop: list[str]):
+    from curate.cli import print_problems
+    from curate.formats.registry import read_dataset
+
+    result = read_dataset(path, fmt)
+    errors = [p for p in result.problems if p.level == "error"]
+    if errors:
+        print_problems(errors, sys.stderr, limit=20)
+    ds = result.dataset.drop_categories(drop) if drop else result.dataset
+    return pick_split(ds, split, defaults, path)
+
+
+def build_config(args: argparse.Namespace):
+    from train.config import ModelConfig, TrainConfig
+
+    cfg = TrainConfig(epochs=args.epochs, imgsz=args.imgsz, batch=args.batch, seed=args.seed, threads=args.threads)
+    if args.imgsz % 32:
+        raise ValueError(f"--imgsz must be a multiple of 32, got {args.imgsz}")
+    return replace(cfg, model=ModelConfig(size=args.size, autoanchor=not args.no_autoanchor))
+
+
+def cmd_train(args: argparse.Namespace) -> int:
+    from train.loop import ResumeError, fit
+
+    cfg = build_config(args)
+    train_ds = _read(args.train, args.train_format, args.train_split, TRAIN_SPLITS, args.drop_class)
+    val_ds = _read(args.val, args.val_format, args.val_split, VAL_SPLITS, args.drop_class)
+    if args.classes:
+        train_ds = train_ds.with_categories([c for c in args.classes.split(",") if c])
+    same = Path(args.train).resolve() == Path(args.val).resolve()
+    if same and {i.split for i in train_ds.images} & {i.split for i in val_ds.images}:
+        raise ValueError(f"{args.train}: training and validation images are the same split; pass --val-split")
+    print(f"train {len(train_ds.images)} images, val {len(val_ds.images)} images, classes {train_ds.category_names}")
+    try:
+        results = fit(cfg, train_ds, val_ds, args.out)
+    except ResumeError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    best = results["best"]
+    print(
+        f"best epoch {best['epoch'] + 1}: AP {best['AP']:.4f}  AP50 {best['AP50']:.4f}  "
+        f"fitness {best['fitness']:.4f}  -> {Path(args.out) / 'best.onnx'}"
+    )
+    return 0
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    """Add this package's commands to the ``fuzzyfire`` parser (none yet)."""
+    """Add ``train`` to the ``fuzzyfire`` parser."""
+    p = sub.add_parser(
+        "train",
+        help="train the YOLOv5-style detector (CPU-first), validate each epoch, export best.onnx",
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+        description="Train a detector with the YOLOv5 recipe (mosaic, affine, HSV, flip; SGD; EMA; best epoch by\n"
+        "fitness on the validation set).\n\n" + _EXAMPLE,
+    )
+    p.add_argument("--train", required=True, help="training dataset folder or COCO .json")
+    p.add_argument("--val", required=True, help="validation dataset folder or COCO .json")
+    p.add_argument("--out", required=True, type=Path, help="run folder (an existing run there is resumed)")
+    p.add_argument("--epochs", type=int, default=30, help="epochs (default 30)")
+    p.add_argument("--imgsz", type=int, default=320, help="square input size, multiple of 32 (default 320)")
+    p.add_argument("--batch", type=int, default=16, help="images per step; gradients accumulate to 64 (default 16)")
+    p.add_argument("--seed", type=int, default=0, help="seed of weights, shuffles and augmentations (default 0)")
+    p.add_argument("--size", choices=("n", "s", "m"), default="n", help="model width/depth (default n)")
+    p.add_argument("--threads", type=int, default=0, help="torch threads (default: torch's choice)")
+    p.add_argument("--train-split", help="split of --train to use (default: train when present, else all)")
+    p.add_argument("--val-split", help="split of --val to use (default: valid/val when present, else all)")
+    p.add_argument("--train-format", default="auto", help="format of --train (default: detect)")
+    p.add_argument("--val-format", default="auto", help="format of --val (default: detect)")
+    p.add_argument("--classes", help="training class names in output order, e.g. fire,smoke")
+    p.add_argument("--drop-class", action="append", default=[], metavar="NAME", help="drop a class in both sets")
+    p.add_argument("--no-autoanchor", action="store_true", help="keep the default anchors even when they fit badly")
+    p.set_defaults(func=cmd_train)

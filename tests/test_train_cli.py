@@ -1,0 +1,37 @@
+"""``fuzzyfire train`` end to end on a tiny painted dataset (COCO folders written by curate)."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+from factories_train import painted_dataset
+
+from curate.writer import write_dataset
+from fuzzyfire.cli import main
+
+
+@pytest.fixture(scope="module")
+def folders(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path]:
+    base = tmp_path_factory.mktemp("cli")
+    write_dataset(painted_dataset(base / "src_train", 8, seed=0), base / "train", ("coco",), "copy")
+    write_dataset(painted_dataset(base / "src_val", 4, seed=1), base / "val", ("coco",), "copy")
+    return base / "train", base / "val"
+
+
+def test_train_command_writes_a_run(folders, tmp_path: Path, capsys) -> None:
+    train, val = folders
+    args = ["train", "--train", str(train), "--val", str(val), "--out", str(tmp_path / "run")]
+    assert main([*args, "--epochs", "1", "--imgsz", "64", "--batch", "4", "--seed", "1"]) == 0
+    out = capsys.readouterr().out
+    assert "best epoch 1" in out and "best.onnx" in out
+    results = json.loads((tmp_path / "run" / "results.json").read_text())
+    assert results["config"]["imgsz"] == 64 and (tmp_path / "run" / "best.onnx").is_file()
+
+
+def test_bad_arguments_are_errors(folders, tmp_path: Path) -> None:
+    train, _ = folders
+    same = ["train", "--train", str(train), "--val", str(train), "--out", str(tmp_path / "r")]
+    assert main(same) == 2  # same images for training and validation
+    assert main([*same[:4], str(folders[1]), "--out", str(tmp_path / "r"), "--imgsz", "100"]) == 2
