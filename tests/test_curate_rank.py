@@ -1,0 +1,55 @@
+"""Diversity ranking: outliers score high, duplicates low; k-center covers every cluster first."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from curate.embed import l2_normalize
+from curate.rank import diversity_scores, k_center, rank_order
+
+
+def _clusters(seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
+    """4 tight clusters of 10 unit vectors (32-d) and 1 isolated vector (last row); labels per row."""
+    rng = np.random.default_rng(seed)
+    centers = rng.standard_normal((5, 32))
+    rows = [centers[c] + 0.05 * rng.standard_normal(32) for c in range(4) for _ in range(10)]
+    rows.append(centers[4])
+    return l2_normalize(np.array(rows)), np.array([c for c in range(4) for _ in range(10)] + [4])
+
+
+def test_isolated_vector_scores_highest() -> None:
+    x, _ = _clusters()
+    scores = diversity_scores(x, k=5)
+    assert scores.shape == (41,)
+    assert int(np.argmax(scores)) == 40
+    assert scores[:40].max() < 0.5 * scores[40]
+
+
+def test_scores_match_brute_force() -> None:
+    x, _ = _clusters(1)
+    d = np.linalg.norm(x[:, None] - x[None], axis=2)
+    np.fill_diagonal(d, np.inf)
+    expected = np.sort(d, axis=1)[:, :3].mean(axis=1)
+    np.testing.assert_allclose(diversity_scores(x, k=3), expected, atol=2e-3)
+    np.testing.assert_allclose(diversity_scores(x, k=3, backend="numpy"), expected, atol=2e-3)
+
+
+def test_k_center_visits_every_cluster_first() -> None:
+    x, labels = _clusters(2)
+    picked = k_center(x, 5, first=0)
+    assert len(set(picked)) == 5 and set(labels[picked]) == {0, 1, 2, 3, 4}
+
+
+def test_rank_order_methods_and_errors() -> None:
+    x, labels = _clusters(3)
+    keys = [f"{i:03d}" for i in range(len(x))]
+    order, scores = rank_order(x, keys, "score", k=5)
+    assert order[0] == 40 and sorted(order) == list(range(41))
+    order_kc, _ = rank_order(x, keys, "kcenter", k=5)
+    assert order_kc[0] == 40 and set(labels[order_kc[:5]]) == {0, 1, 2, 3, 4}
+    with pytest.raises(ValueError, match="unknown ranking"):
+        rank_order(x, keys, "random")
+    assert diversity_scores(x[:1]).tolist() == [0.0]
+    with pytest.raises(ValueError):
+        k_center(x, 3, first=99)
