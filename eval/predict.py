@@ -7,6 +7,7 @@ from collections import deque
 from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass
+from functools import partial
 
 import numpy as np
 from numpy.typing import NDArray
@@ -78,6 +79,13 @@ def _to_original(det: ImageDetections, size: tuple[int, int], input_size: tuple[
     return ImageDetections(clip_xyxy(boxes, width, height), det.scores, det.labels)
 
 
+def _postprocess_one(
+    boxes: NDArray, scores: NDArray, size: tuple[int, int], opt: PredictOptions, input_size: tuple[int, int]
+) -> ImageDetections:
+    det = postprocess(boxes, scores, opt.conf, opt.iou, opt.max_det, opt.multi_label)
+    return _to_original(det, size, input_size)
+
+
 def predict_dataset(detector: OnnxDetector, dataset: Dataset, options: PredictOptions | None = None) -> Predictions:
     """Run ``detector`` on every image of ``dataset``. Unreadable images are skipped and reported;
     an image whose decoded size differs from its record is scored and reported as a warning."""
@@ -104,7 +112,9 @@ def predict_dataset(detector: OnnxDetector, dataset: Dataset, options: PredictOp
             if not good:
                 continue
             boxes, scores = detector(to_nchw_float([item[0] for _, item in good]))
-            for (rec, (_, size)), b, s in zip(good, boxes, scores):
-                det = postprocess(b, s, opt.conf, opt.iou, opt.max_det, opt.multi_label)
-                out.by_image[rec.id] = _to_original(det, size, input_size)
+            sizes = [item[1] for _, item in good]
+            # NMS in the pool too: numpy releases the GIL on large arrays.
+            post = partial(_postprocess_one, opt=opt, input_size=input_size)
+            for (rec, _), det in zip(good, pool.map(post, boxes, scores, sizes)):
+                out.by_image[rec.id] = det
     return out

@@ -1,0 +1,121 @@
+"""Scoring speed at 320 px on CPU, and bootstrap speed.
+
+- ``score_*``: ``fuzzyfire score`` end to end (decode + letterbox in threads, onnxruntime, NMS, pycocotools)
+  on ../shared/data/fire-smoke-608 (test + valid, 102 images) or on generated 640x480 JPEGs, with our detector
+  (random weights: its many low-confidence boxes make NMS the worst case) exported by ``train/export.py``.
+- ``onnx_vs_torch``: the same model's forward pass, onnxruntime vs torch eager, batch 16 (target >= 4x).
+- ``bootstrap_*``: image-level bootstrap resamples of AP on 1,000 images (target: 1,000 in seconds).
+
+.venv/bin/python bench/bench_score.py
+"""
+
+from __future__ import annotations
+
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+from curate.dataset import DatasetBuilder
+from curate.formats.registry import read_dataset
+from eval.coco import run_cocoeval
+from eval.onnx_model import OnnxDetector
+from eval.predict import PredictOptions
+from eval.score import score
+from eval.stats import MatchTable, bootstrap_ap
+
+SIZE = 320
+SHARED = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "fire-smoke-608"
+
+
+def _dataset(tmp: Path):
+    if SHARED.is_dir():
+        ds = read_dataset(SHARED).dataset
+        return ds.filter_images(lambda img: img.split in ("test", "valid")), "fire-smoke-608 test+valid"
+    import cv2
+
+    rng = np.random.default_rng(0)
+    builder = DatasetBuilder(tmp, ["fire"])
+    for i in range(100):
+        pixels = cv2.GaussianBlur(rng.integers(0, 256, (480, 640, 3), dtype=np.uint8), (0, 0), 3)
+        cv2.imwrite(str(tmp / f"{i}.jpg"), pixels)
+        builder.add_box(builder.add_image(f"{i}.jpg", 640, 480), "fire", (100, 100, 200, 150))
+    return builder.build(), "100 generated 640x480 JPEGs"
+
+
+def bench_scoring(tmp: Path) -> None:
+    import torch
+
+    from train.export import export_onnx
+    from train.model import Detector
+
+    torch.manual_seed(0)
+    model = Detector(1).eval()
+    path = export_onnx(model, tmp / "det.onnx", SIZE, ["fire"])
+    det = OnnxDetector(path)
+    ds, what = _dataset(tmp)
+    score(det, ds.filter_images(lambda img: img.id <= ds.images[8].id))  # warm-up
+    start = time.perf_counter()
+    result = score(det, ds, PredictOptions(batch=16))
+    elapsed = time.perf_counter() - start
+    per_image = result.metrics.detections / result.metrics.images
+    print(f"score_throughput: {result.metrics.images / elapsed:.0f} img/s ({what}, {SIZE} px, target >= 100)")
+    print(f"score_detections: {per_image:.0f} per image after NMS (an untrained model: NMS's worst case)")
+    x = np.random.default_rng(0).random((16, 3, SIZE, SIZE), dtype=np.float32)
+    onnx_s = _best_of(lambda: det.raw(x))
+    with torch.inference_mode():
+        xt = torch.from_numpy(x)
+        torch_s = _best_of(lambda: model.predict(xt))
+    print(f"onnx_forward: {16 / onnx_s:.0f} img/s (batch 16, {SIZE} px)")
+    print(f"torch_forward: {16 / torch_s:.0f} img/s (eager, same model)")
+    print(f"onnx_vs_torch: {torch_s / onnx_s:.1f} x (target >= 4)")
+
+
+def _best_of(fn, repeats: int = 5) -> float:
+    fn()
+    times = []
+    for _ in range(repeats):
+        start = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - start)
+    return min(times)
+
+
+def bench_bootstrap(tmp: Path) -> None:
+    rng = np.random.default_rng(0)
+    builder = DatasetBuilder(tmp, ["fire", "smoke"])
+    records = []
+    for _ in range(1000):
+        image_id = builder.add_image("x.jpg", 640, 480)
+        for _ in range(rng.integers(0, 4)):
+            xy, wh, cls = rng.uniform(0, 400, 2), rng.uniform(10, 200, 2), ("fire", "smoke")[rng.integers(0, 2)]
+            builder.add_box(image_id, cls, (*xy, *wh))
+            for _ in range(3):
+                box = [*(xy + rng.normal(0, 10, 2)), *(wh * rng.uniform(0.7, 1.3, 2))]
+                records.append(
+                    {"image_id": image_id, "category_id": 1 + (cls == "smoke"), "bbox": box, "score": rng.random()}
+                )
+    start = time.perf_counter()
+    table = MatchTable(run_cocoeval(builder.build(), records, [1, 2]))
+    setup = time.perf_counter() - start
+    start = time.perf_counter()
+    bootstrap_ap(table, np.random.default_rng(0), num_samples=1000)
+    elapsed = time.perf_counter() - start
+    print(f"bootstrap_setup: {setup:.2f} s (one COCOeval.evaluate, 1000 images, {len(records)} detections)")
+    print(f"bootstrap_resamples: {1000 / elapsed:.0f} resamples/s ({elapsed:.2f} s for 1000)")
+
+
+def main() -> int:
+    with tempfile.TemporaryDirectory() as tmp:
+        try:
+            bench_scoring(Path(tmp))
+        except ImportError as exc:  # the train package builds the benchmark model
+            print(f"score_skipped: {exc}", file=sys.stderr)
+        bench_bootstrap(Path(tmp))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
