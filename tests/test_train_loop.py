@@ -59,7 +59,6 @@ def test_run_folder_is_complete(reference_run: Path) -> None:
     assert results["config"]["seed"] == 5 and results["onnx"] == "best.onnx"
 
 
-@pytest.mark.slow
 def test_same_seed_same_run(data, reference_run: Path, tmp_path: Path) -> None:
     loop.fit(CFG, *data, tmp_path / "again")
     a, b = _weights(reference_run), _weights(tmp_path / "again")
@@ -67,7 +66,6 @@ def test_same_seed_same_run(data, reference_run: Path, tmp_path: Path) -> None:
     assert _metrics(reference_run) == _metrics(tmp_path / "again")
 
 
-@pytest.mark.slow
 def test_resume_equals_uninterrupted(data, reference_run: Path, tmp_path: Path, monkeypatch) -> None:
     real_evaluate = loop.evaluate
     calls = {"n": 0}

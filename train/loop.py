@@ -2,7 +2,7 @@
 
 A run folder holds ``last.pt`` (everything needed to resume, written after every epoch), ``best.pt`` (EMA
 weights of the epoch with the best fitness = 0.1 AP50 + 0.9 AP), ``metrics.jsonl`` (one JSON line per
-epoch), ``best.onnx`` (see :mod:`train.export`) and ``results.json`` (the resolved config, seed, versions,
+epoch), ``best.onnx`` (see :mod:`train.export`), ``curves.png`` and ``results.json`` (the resolved config, seed, versions,
 anchors, best epoch and its metrics). Calling :func:`fit` again on the same folder resumes after the last
 finished epoch and gives the same weights as an uninterrupted run.
 """
@@ -30,6 +30,7 @@ from train.export import export_onnx
 from train.loss import DetectionLoss
 from train.model import STRIDES, Detector, build_model
 from train.optim import Schedule, build_optimizer
+from train.plots import plot_curves, read_metrics
 from train.validate import evaluate
 
 GRAD_CLIP = 10.0  # max gradient norm before each optimizer step
@@ -223,6 +224,7 @@ def _finish(t: Trainer, out: Path, best: dict[str, Any]) -> dict[str, Any]:
     if (out / "best.pt").is_file():
         model, names, imgsz = load_detector(out / "best.pt")
         export_onnx(model, out / "best.onnx", imgsz, names)
+    plot_curves(read_metrics(out / "metrics.jsonl"), out / "curves.png", title=out.name)
     results = {
         "best": best,
         "config": asdict(t.cfg),
