@@ -24,14 +24,15 @@ def _fmt(value: float | None) -> str:
     return "  -  " if value is None else f"{value:.3f}"
 
 
-def _print_text(result) -> None:  # result: eval.score.ScoreResult
+def _print_text(result, intervals: dict) -> None:  # result: eval.score.ScoreResult
     m, spec = result.metrics, result.spec
     print(
         f"model  {spec.path} ({spec.format}, {spec.input_width}x{spec.input_height}, classes {list(spec.class_names)})"
     )
-    negatives = result.dataset.filter_images(lambda img: img.id in result.predictions.by_image).num_negatives()
-    print(f"test   {m.images} images ({negatives} negatives), {m.boxes} boxes, {m.detections} detections")
+    print(f"test   {m.images} images ({m.negatives} negatives), {m.boxes} boxes, {m.detections} detections")
     print("       " + "  ".join(f"{k} {_fmt(v)}" for k, v in m.summary.items()))
+    for key, iv in intervals.items():
+        print(f"       {key[:-3]} 95% CI [{iv['low']:.3f}, {iv['high']:.3f}] ({iv['samples']} image resamples)")
     print(f"       {'class':<12} {'boxes':>6} {'AP':>6} {'AP50':>6}")
     for name, row in m.per_class.items():
         print(f"       {name:<12} {row['boxes']:>6} {_fmt(row['AP']):>6} {_fmt(row['AP50']):>6}")
@@ -49,7 +50,9 @@ def cmd_score(args: argparse.Namespace) -> int:
 
     try:
         detector = OnnxDetector(args.model, args.format, args.names, args.imgsz, threads=args.threads)
-        dataset, problems = load_test_set(args.data, args.data_format, args.split)
+        dataset, problems = load_test_set(
+            args.data, args.data_format, args.split, _aliases(args.alias), args.drop_class
+        )
         options = PredictOptions(args.conf, args.iou, args.max_det, args.batch, args.workers)
         result = score(detector, dataset, options, problems)
     except (ModelError, ScoreError, ClassMatchError) as exc:
@@ -58,14 +61,35 @@ def cmd_score(args: argparse.Namespace) -> int:
     shown = [p for p in result.problems if p.level != "info"]
     if shown:
         print_problems(shown, sys.stderr, limit=20)
+    intervals = _intervals(result, args.ci, args.seed) if args.ci else {}
     if args.out:
-        files = write_outputs(result, args.out)
+        files = write_outputs(result, args.out, intervals)
         print(f"wrote {', '.join(str(p) for p in files.values())}", file=sys.stderr)
     if args.json:
-        print(json.dumps(result.metrics.to_dict(), indent=1))
+        print(json.dumps({**result.metrics.to_dict(), **intervals}, indent=1))
     else:
-        _print_text(result)
+        _print_text(result, intervals)
     return 0
+
+
+def _intervals(result, samples: int, seed: int) -> dict[str, dict[str, float]]:
+    """``{"AP_ci": {...}, "AP50_ci": {...}}``: 95% image-level bootstrap intervals."""
+    import numpy as np
+
+    from eval.stats import MatchTable, bootstrap_ap
+
+    found = bootstrap_ap(MatchTable(result.evaluation), np.random.default_rng(seed), samples)
+    return {f"{key}_ci": {**iv.to_dict(), "samples": samples, "seed": seed} for key, iv in found.items()}
+
+
+def _aliases(items: list[str]) -> dict[str, str]:
+    out = {}
+    for item in items:
+        name, sep, target = item.partition("=")
+        if not sep or not name.strip() or not target.strip():
+            raise SystemExit(f"--alias {item!r}: expected NAME=CLASS, e.g. Flame=fire")
+        out[name.strip()] = target.strip()
+    return out
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -97,6 +121,14 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--batch", type=int, default=16, help="images per onnxruntime call (default 16)")
     p.add_argument("--workers", type=int, default=2, help="image decoding threads (default 2)")
     p.add_argument("--threads", type=int, default=0, help="onnxruntime threads (default 0 = all cores)")
+    p.add_argument(
+        "--alias", action="append", default=[], metavar="NAME=CLASS", help="map a test-set class, e.g. Flame=fire"
+    )
+    p.add_argument("--drop-class", action="append", default=[], metavar="NAME", help="ignore a test-set class")
+    p.add_argument(
+        "--ci", type=int, default=0, metavar="N", help="95%% bootstrap interval of AP from N image resamples"
+    )
+    p.add_argument("--seed", type=int, default=0, help="bootstrap seed (default 0)")
     p.add_argument("--json", action="store_true", help='print {"AP", "AP50", "images", "boxes", "per_class", ...}')
     p.add_argument("--out", type=Path, help="also write predictions.json, metrics.json and pr_curve.png here")
     p.set_defaults(func=cmd_score)

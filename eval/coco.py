@@ -121,13 +121,15 @@ def _mean_valid(values: np.ndarray) -> float | None:
 
 @dataclass
 class CocoMetrics:
-    """Headline numbers (None where undefined, e.g. no ground truth of that size), per class and counts."""
+    """Headline numbers (None where undefined, e.g. no ground truth of that size), per class and counts.
+    ``negatives``: scored images without a box of a scored class (they can only collect false positives)."""
 
     summary: dict[str, float | None]
     per_class: dict[str, dict[str, Any]]
     images: int
     boxes: int
     detections: int
+    negatives: int = 0
     extra: dict[str, Any] = field(default_factory=dict)
 
     def to_dict(self) -> dict[str, Any]:
@@ -135,6 +137,7 @@ class CocoMetrics:
             **self.summary,
             "images": self.images,
             "boxes": self.boxes,
+            "negatives": self.negatives,
             "detections": self.detections,
             "per_class": self.per_class,
             **self.extra,
@@ -158,7 +161,10 @@ def metrics_from_eval(ev: COCOeval, dataset: Dataset, detections: int) -> CocoMe
             "boxes": counts.get(cat_id, 0),
         }
     boxes = sum(counts.get(c, 0) for c in ev.params.catIds)
-    return CocoMetrics(summary, per_class, len(ev.params.imgIds), boxes, detections)
+    scored = set(ev.params.catIds)
+    with_boxes = {a.image_id for a in dataset.annotations if a.category_id in scored}
+    negatives = sum(1 for i in ev.params.imgIds if i not in with_boxes)
+    return CocoMetrics(summary, per_class, len(ev.params.imgIds), boxes, detections, negatives)
 
 
 def evaluate_predictions(dataset: Dataset, preds: Predictions) -> tuple[CocoMetrics, COCOeval, list[dict[str, Any]]]:

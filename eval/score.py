@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import json
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -17,6 +17,7 @@ from eval.coco import CocoMetrics, evaluate_predictions
 from eval.onnx_model import ModelSpec, OnnxDetector
 from eval.plots import plot_pr_curves, pr_curves_from_eval
 from eval.predict import Predictions, PredictOptions, predict_dataset
+from eval.stats import MatchTable
 
 
 class ScoreError(ValueError):
@@ -36,10 +37,17 @@ class ScoreResult:
     problems: list[Problem]
 
 
-def load_test_set(path: Path | str, fmt: str = "auto", split: str | None = None) -> tuple[Dataset, list[Problem]]:
-    """Read any dataset :func:`curate.formats.registry.read_dataset` reads, optionally one split of it."""
-    result = read_dataset(path, fmt)
-    ds = result.dataset
+def load_test_set(
+    path: Path | str,
+    fmt: str = "auto",
+    split: str | None = None,
+    aliases: Mapping[str, str] | None = None,
+    drop: Sequence[str] = (),
+) -> tuple[Dataset, list[Problem]]:
+    """Read any dataset :func:`curate.formats.registry.read_dataset` reads, optionally one split of it,
+    with class ``aliases`` (source name -> class) and the boxes of classes ``drop`` removed."""
+    result = read_dataset(path, fmt, aliases=aliases)
+    ds = result.dataset.drop_categories(drop) if drop else result.dataset
     if split:
         if split not in ds.splits:
             raise ScoreError(f"{path}: no split {split!r} (splits: {', '.join(s or '(none)' for s in ds.splits)})")
@@ -60,12 +68,19 @@ def score(
     return ScoreResult(metrics, ev, records, preds, detector.spec, dataset, [*problems, *preds.problems])
 
 
-def write_outputs(result: ScoreResult, out: Path) -> dict[str, Path]:
-    """Write ``predictions.json`` (COCO results), ``metrics.json`` and ``pr_curve.png`` into ``out``."""
+def write_outputs(result: ScoreResult, out: Path, extra: Mapping[str, Any] | None = None) -> dict[str, Path]:
+    """Write ``predictions.json`` (COCO results), ``metrics.json`` (plus ``extra`` keys), ``pr_curve.png``
+    and ``matches.npz`` (the per-image matches :class:`eval.stats.MatchTable` bootstraps) into ``out``."""
     out.mkdir(parents=True, exist_ok=True)
-    files = {"predictions": out / "predictions.json", "metrics": out / "metrics.json", "pr_curve": out / "pr_curve.png"}
+    files = {
+        "predictions": out / "predictions.json",
+        "metrics": out / "metrics.json",
+        "pr_curve": out / "pr_curve.png",
+        "matches": out / "matches.npz",
+    }
     files["predictions"].write_text(json.dumps(result.records))
-    doc = {**result.metrics.to_dict(), "model": str(result.spec.path), "format": result.spec.format}
+    MatchTable(result.evaluation).save(files["matches"])
+    doc = {**result.metrics.to_dict(), **(extra or {}), "model": str(result.spec.path), "format": result.spec.format}
     files["metrics"].write_text(json.dumps(doc, indent=1) + "\n")
     names = [c.name for c in result.dataset.categories if c.id in result.evaluation.params.catIds]
     curves = pr_curves_from_eval(result.evaluation.eval["precision"], names)

@@ -116,3 +116,23 @@ def test_help_shows_an_example(capsys):
     with pytest.raises(SystemExit):
         main(["score", "--help"])
     assert "example:" in capsys.readouterr().out
+
+
+def test_bootstrap_interval_is_deterministic_and_brackets_ap(work):
+    model = oracle_model(work["root"] / "ci.onnx", rows=rows_for(shift=3.0, duplicates=False))
+    args = (model, "--data", work["test"], "--format", "yolov5", "--ci", 200, "--seed", 3)
+    doc, again = run_json(*args), run_json(*args)
+    ci = doc["AP_ci"]
+    assert ci == again["AP_ci"] and ci["samples"] == 200 and ci["value"] == doc["AP"]
+    assert ci["low"] <= doc["AP"] <= ci["high"] and ci["low"] < ci["high"]
+
+
+def test_test_set_aliases_drops_and_matches_file(work, tmp_path):
+    from eval.stats import MatchTable
+
+    model = oracle_model(work["root"] / "alias.onnx")
+    doc = run_json(model, "--data", work["test"], "--drop-class", "smoke", "--out", tmp_path / "o")
+    assert list(doc["per_class"]) == ["fire"] and doc["negatives"] == 2  # "wide" keeps its fire box
+    assert MatchTable.load(tmp_path / "o" / "matches.npz").ap()["AP"] == pytest.approx(doc["AP"])
+    merged = run_json(model, "--data", work["test"], "--alias", "smoke=fire")
+    assert merged["per_class"]["fire"]["boxes"] == 6 and merged["classes"]["not_in_test"] == ["smoke"]
