@@ -15,7 +15,7 @@ import numpy as np
 from curate.boxes import xywh_to_xyxy
 from curate.dataset import Dataset
 from curate.imageio import ImageError, read_image
-from eval.tables import Table, marks
+from eval.tables import Table, marks, to_csv, to_latex, to_markdown
 
 _CSS = """body{font-family:system-ui,sans-serif;margin:2em auto;max-width:1100px;color:#222}
 table{border-collapse:collapse;margin:1em 0}td,th{padding:.3em .7em;border-bottom:1px solid #ddd;text-align:right}
@@ -106,3 +106,77 @@ def render_page(title: str, sections: Sequence[tuple[str, str]], notice: str = "
     parts += [f"<h2>{html.escape(heading)}</h2>{body}" for heading, body in sections]
     parts.append("</body></html>\n")
     return "".join(parts)
+
+
+def write_table_files(table: Table, out_dir: Path, stem: str) -> dict[str, Path]:
+    """``<stem>.md``, ``<stem>.csv`` and ``<stem>.tex`` of ``table`` in ``out_dir``."""
+    out_dir.mkdir(parents=True, exist_ok=True)
+    files = {"md": out_dir / f"{stem}.md", "csv": out_dir / f"{stem}.csv", "tex": out_dir / f"{stem}.tex"}
+    files["md"].write_text(to_markdown(table), encoding="utf-8")
+    files["csv"].write_text(to_csv(table), encoding="utf-8")
+    files["tex"].write_text(to_latex(table), encoding="utf-8")
+    return files
+
+
+def comparisons_html(rows: Sequence[Mapping[str, Any]]) -> str:
+    """Paired comparisons: rows with ``test_set``, ``mixture``, ``baseline``, ``metric`` and a
+    :meth:`eval.stats.PairedDelta.to_dict` (``value``, ``low``, ``high``, ``p_value``), in AP points."""
+    head = "<tr><th>test set</th><th>mixture</th><th>vs</th><th>metric</th><th>Δ</th><th>95% CI</th><th>p</th></tr>"
+    body = []
+    for r in rows:
+        d = r["delta"]
+        body.append(
+            f"<tr><td>{html.escape(str(r['test_set']))}</td><td>{html.escape(str(r['mixture']))}</td>"
+            f"<td>{html.escape(str(r['baseline']))}</td><td>{html.escape(str(r['metric']))}</td>"
+            f"<td>{100 * d['value']:+.1f}</td><td>[{100 * d['low']:+.1f}, {100 * d['high']:+.1f}]</td>"
+            f"<td>{d['p_value']:.3f}</td></tr>"
+        )
+    return f"<table>{head}{''.join(body)}</table>"
+
+
+def write_study_report(
+    out: Path,
+    results: Sequence[Mapping[str, Any]],
+    rng: np.random.Generator,
+    *,
+    method_results: Sequence[Mapping[str, Any]] = (),
+    comparisons: Sequence[Mapping[str, Any]] = (),
+    samples: Mapping[str, Dataset] | None = None,
+    run_columns: Sequence[str] = ("mixture", "seed", "test_set", "AP", "AP50"),
+    notice: str = "",
+    title: str = "fuzzyfire study",
+) -> Path:
+    """Write ``out/tables/table{1,2}.{md,csv,tex}``, ``out/figures/figure5_{AP,AP50}.png``, sample
+    thumbnails and ``out/report.html``; returns the page's path.
+
+    ``results``: one mapping per (run, test set) as :func:`eval.tables.table2` takes (also the run list);
+    ``method_results``: Table 1 rows (with ``method``); ``comparisons``: see :func:`comparisons_html`;
+    ``samples``: datasets to show a few images of, by label; ``notice``: shown at the top of the page."""
+    from eval.plots import plot_figure5
+    from eval.tables import table1, table2
+
+    sections: list[tuple[str, str]] = []
+    if method_results:
+        t1 = table1(method_results)
+        write_table_files(t1, out / "tables", "table1")
+        sections.append(("Table 1 — Method 1 vs Method 2", table_html(t1)))
+    if results:
+        t2 = table2(results)
+        write_table_files(t2, out / "tables", "table2")
+        figures = [plot_figure5(results, out / "figures" / f"figure5_{m}.png", m) for m in ("AP", "AP50")]
+        sections.append(("Table 2 — training mixtures", table_html(t2)))
+        sections.append(("Figure 5", "".join(figure_html(f, out, f.stem) for f in figures)))
+    if comparisons:
+        sections.append(("Paired comparisons (image-level bootstrap)", comparisons_html(comparisons)))
+    for label, ds in (samples or {}).items():
+        sections.append((f"Samples: {label}", samples_html(ds, out / "samples" / _slug(label), out, rng)))
+    if results:
+        sections.append(("Runs", runs_html(results, run_columns)))
+    page = out / "report.html"
+    out.mkdir(parents=True, exist_ok=True)
+    page.write_text(render_page(title, sections, notice), encoding="utf-8")
+    return page
+
+
+def _slug(label: str) -> str:
+    return "".join(ch if ch.isalnum() else "_" for ch in label).strip("_") or "samples"

@@ -191,18 +191,32 @@ class PairedDelta:
         return {**self.interval.to_dict(), "p_value": self.p_value}
 
 
+def _mean_ap(tables: Sequence[MatchTable], weights: NDArray | None) -> dict[str, float]:
+    scores = [t.ap(weights) for t in tables]
+    return {key: float(np.mean([sc[key] for sc in scores])) for key in scores[0]}
+
+
 def paired_bootstrap(
-    a: MatchTable, b: MatchTable, rng: np.random.Generator, num_samples: int = 1000, level: float = 0.95
+    a: MatchTable | Sequence[MatchTable],
+    b: MatchTable | Sequence[MatchTable],
+    rng: np.random.Generator,
+    num_samples: int = 1000,
+    level: float = 0.95,
 ) -> dict[str, PairedDelta]:
     """Paired image-level bootstrap of the AP and AP50 differences ``b - a``: each resample draws one set of
-    test images and scores both models on it. Both tables must cover the same image ids."""
-    if not np.array_equal(a.image_ids, b.image_ids):
+    test images and scores both on it. ``a`` and ``b`` may each be several runs (e.g. one per seed) whose
+    AP is averaged per resample. Every table must cover the same image ids."""
+    ta = [a] if isinstance(a, MatchTable) else list(a)
+    tb = [b] if isinstance(b, MatchTable) else list(b)
+    if not ta or not tb:
+        raise ValueError("paired bootstrap needs at least one table on each side")
+    if any(not np.array_equal(ta[0].image_ids, t.image_ids) for t in ta + tb):
         raise ValueError("paired bootstrap needs both models scored on the same test images")
-    weights = resample_weights(len(a.image_ids), num_samples, rng)
-    pa, pb = a.ap(), b.ap()
-    deltas = {key: [] for key in pa}
+    weights = resample_weights(len(ta[0].image_ids), num_samples, rng)
+    pa, pb = _mean_ap(ta, None), _mean_ap(tb, None)
+    deltas: dict[str, list[float]] = {key: [] for key in pa}
     for w in weights:
-        sa, sb = a.ap(w), b.ap(w)
+        sa, sb = _mean_ap(ta, w), _mean_ap(tb, w)
         for key in deltas:
             deltas[key].append(sb[key] - sa[key])
     out = {}

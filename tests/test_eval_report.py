@@ -7,7 +7,15 @@ from detector_factories import write_test_set
 from PIL import Image
 
 from curate.formats.registry import read_dataset
-from eval.report import draw_boxes, figure_html, render_page, runs_html, samples_html, table_html
+from eval.report import (
+    draw_boxes,
+    figure_html,
+    render_page,
+    runs_html,
+    samples_html,
+    table_html,
+    write_study_report,
+)
 from eval.tables import table2
 
 
@@ -48,3 +56,33 @@ def test_draw_boxes_outlines_without_touching_input():
     out = draw_boxes(img, [(2, 2, 10, 10)])
     assert img.max() == 0 and tuple(out[2, 5]) == (255, 64, 0) and out[6, 6].max() == 0
     assert draw_boxes(img, []).max() == 0
+
+
+def test_write_study_report_writes_tables_figures_and_page(tmp_path):
+    ds = read_dataset(write_test_set(tmp_path / "test")).dataset
+    results = [
+        {"mixture": m, "seed": s, "test_set": t, "AP": 0.3 + 0.1 * i + 0.01 * s, "AP50": 0.6 + 0.01 * s}
+        for i, m in enumerate(["R1000_S0", "R500_S500", "R0_S1000"])
+        for s in (0, 1)
+        for t in ("common", "rare")
+    ]
+    methods = [dict(r, method=m) for r in results if r["mixture"] == "R0_S1000" for m in ("method1", "method2")]
+    delta = {"value": 0.05, "low": 0.01, "high": 0.09, "p_value": 0.02}
+    comparisons = [{"test_set": "rare", "mixture": "R500_S500", "baseline": "R1000_S0", "metric": "AP", "delta": delta}]
+    out = tmp_path / "study"
+    page = write_study_report(
+        out,
+        results,
+        np.random.default_rng(0),
+        method_results=methods,
+        comparisons=comparisons,
+        samples={"common (stand-in)": ds},
+        notice="STAND-IN DATA",
+    )
+    for name in ("table1.md", "table1.csv", "table1.tex", "table2.md", "table2.csv", "table2.tex"):
+        assert (out / "tables" / name).stat().st_size > 0
+    assert "**50.5 ± 0.7**" in (out / "tables" / "table2.md").read_text()
+    assert {p.name for p in (out / "figures").iterdir()} == {"figure5_AP.png", "figure5_AP50.png"}
+    text = page.read_text()
+    assert "STAND-IN DATA" in text and 'src="figures/figure5_AP.png"' in text and "<td>+5.0</td>" in text
+    assert text.count('src="samples/common__stand_in/') == 6 and text.count("<td>R0_S1000</td>") >= 4

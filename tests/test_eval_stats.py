@@ -114,3 +114,14 @@ def test_save_and_load_round_trip(tmp_path):
     loaded = MatchTable.load(table.save(tmp_path / "m.npz"))
     w = resample_weights(40, 1, np.random.default_rng(0))[0]
     assert loaded.ap(w) == table.ap(w) and loaded.cat_ids == [1, 2]
+
+
+def test_paired_bootstrap_averages_several_seeds(tmp_path):
+    ds, records = make_case(tmp_path, seed=8, images=60)
+    rng = np.random.default_rng(1)
+    worse = [r | {"score": r["score"] * rng.uniform(0.5, 1.0)} for r in records]
+    a = [MatchTable(run_cocoeval(ds, records, [1, 2])), MatchTable(run_cocoeval(ds, worse, [1, 2]))]
+    both = paired_bootstrap(a, a[::-1], np.random.default_rng(0), num_samples=100)["AP"]
+    assert both.interval.point == pytest.approx(0.0, abs=1e-12) and both.p_value == 1.0
+    one = paired_bootstrap(a[0], a[1], np.random.default_rng(0), num_samples=100)["AP"]
+    assert one.interval.point == pytest.approx(a[1].ap()["AP"] - a[0].ap()["AP"])
