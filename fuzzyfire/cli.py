@@ -14,6 +14,7 @@ from fuzzyfire import __version__
 COMMAND_MODULES: tuple[str, ...] = (
     "curate.cli",
     "curate.cli_mix",
+    "curate.cli_curation",
     "synth.cli",
     "train.cli",
     "eval.cli",

@@ -7,8 +7,8 @@ import pytest
 import torch
 from curate_helpers import GRACE_HOPPER
 
-from curate.effnet import EMBED_DIM, EfficientNetLite0, SameConv, efficientnet_lite0, weights_path
-from curate.embed import LITE0_PREPROCESS
+from curate.effnet import EMBED_DIM, EfficientNetLite0, SameConv, efficientnet_lite0
+from curate.embed import LITE0_PREPROCESS, lite0_weights_path
 from curate.imageio import read_image
 
 
@@ -25,7 +25,7 @@ def _predict(net: EfficientNetLite0, image: np.ndarray) -> tuple[np.ndarray, np.
 
 
 def test_weights_ship_with_the_package() -> None:
-    assert weights_path().stat().st_size > 10_000_000
+    assert lite0_weights_path().stat().st_size > 10_000_000
 
 
 @pytest.mark.parametrize("view", ["full", "hflip", "crop"])

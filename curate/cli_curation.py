@@ -1,0 +1,140 @@
+"""``fuzzyfire dedup`` and ``fuzzyfire leakage``: duplicate finding on image folders. Each ``cmd_*``
+returns an exit code."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from curate.dedup import DEFAULT_THRESHOLD
+from curate.rank import RANK_METHODS
+from curate.search import BACKENDS
+
+
+def _floats3(text: str) -> tuple[float, float, float]:
+    values = tuple(float(v) for v in text.split(","))
+    if len(values) != 3:
+        raise argparse.ArgumentTypeError(f"expected three comma-separated numbers, got {text!r}")
+    return values  # type: ignore[return-value]
+
+
+def add_model_args(p: argparse.ArgumentParser) -> None:
+    """Embedding model, its preprocessing, and the embedding cache."""
+    g = p.add_argument_group(
+        "embedding model",
+        "default: the built-in ImageNet EfficientNet-Lite0. A user ONNX model gets the image resized to "
+        "SIZE x SIZE (stretched), RGB (or --bgr), scaled (pixel - mean) / std with pixel in 0..255, NCHW "
+        "(or --nhwc); VGG16/ResNet exports: --mean 123.675,116.28,103.53 --std 58.395,57.12,57.375",
+    )
+    g.add_argument("--model", type=Path, help="ONNX file of your own CNN (embedding = its first output)")
+    g.add_argument("--input-size", type=int, default=224, help="model input side S in pixels (default 224)")
+    g.add_argument("--mean", type=_floats3, default=(127.0, 127.0, 127.0), help="per-channel mean (0..255)")
+    g.add_argument("--std", type=_floats3, default=(128.0, 128.0, 128.0), help="per-channel std (0..255)")
+    g.add_argument("--bgr", action="store_true", help="the model expects BGR channel order")
+    g.add_argument("--nhwc", action="store_true", help="the model input is (N, S, S, 3)")
+    g.add_argument("--output", help="name of the model output to use as the embedding")
+    g.add_argument("--cache", type=Path, help="embedding cache file (default: user cache dir)")
+    g.add_argument("--no-cache", action="store_true", help="do not read or write the embedding cache")
+    g.add_argument("--workers", type=int, default=3, help="decode threads (default 3)")
+    g.add_argument("--batch-size", type=int, default=8, help="images per onnxruntime call (default 8)")
+
+
+def load_model_from_args(args: argparse.Namespace):  # noqa: ANN201 - (OnnxEmbedder, EmbeddingCache | None)
+    from curate.embed import Preprocess, cache_dir, load_embedder
+    from curate.embedcache import EmbeddingCache
+
+    if args.model is None:
+        custom = (args.input_size, args.mean, args.std, args.bgr, args.nhwc, args.output)
+        if custom != (224, (127.0, 127.0, 127.0), (128.0, 128.0, 128.0), False, False, None):
+            raise ValueError("preprocessing flags (--input-size --mean --std --bgr --nhwc --output) need --model")
+        embedder = load_embedder()
+    else:
+        pre = Preprocess(args.input_size, args.mean, args.std, args.bgr, "nhwc" if args.nhwc else "nchw")
+        embedder = load_embedder(args.model, pre, output=args.output)
+    cache = None if args.no_cache else EmbeddingCache(args.cache or cache_dir() / "embeddings.sqlite")
+    return embedder, cache
+
+
+def cmd_dedup(args: argparse.Namespace) -> int:
+    from curate.dedupjob import DedupOptions, apply_selection, dedup_document, run_dedup, write_outputs
+    from curate.scan import list_image_files
+
+    if args.apply and not args.to:
+        raise ValueError("--apply needs --to DIR")
+    paths = list_image_files(args.dirs)
+    embedder, cache = load_model_from_args(args)
+    threshold = args.threshold
+    if args.calibrate:
+        from curate.calibrate import calibrate_threshold
+
+        calib = calibrate_threshold(paths, embedder, precision=args.precision, seed=args.seed)
+        threshold = calib.threshold
+        print(calib.summary())
+    opts = DedupOptions(
+        threshold,
+        not args.exact_only,
+        args.backend,
+        tuple(args.protect),
+        args.rank,
+        args.k,
+        args.top,
+        args.workers,
+        args.batch_size,
+    )
+    try:
+        run = run_dedup(paths, embedder, cache, opts)
+    finally:
+        if cache is not None:
+            cache.close()
+    doc = dedup_document(run, opts, [str(Path(d).resolve()) for d in args.dirs])
+    files = write_outputs(run, doc, args.out)
+    for problem in run.scan.problems:
+        print(problem, file=sys.stderr)
+    c = doc["counts"]
+    print(
+        f"{c['images']} images: kept {c['kept']}, removed {c['removed_exact']} exact + {c['removed_near']} near "
+        f"({c['groups']} groups), {c['unreadable']} unreadable; threshold {threshold:.3f}"
+    )
+    print(f"wrote {files['json']}, {files['report']}, {files['histogram']}")
+    if args.apply:
+        n = apply_selection(doc["selected"], [Path(d) for d in args.dirs], args.to, args.apply)
+        print(f"{args.apply} {n} images to {args.to}")
+    return 0
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    """Add ``dedup`` and ``leakage`` to the ``fuzzyfire`` parser."""
+    p = sub.add_parser(
+        "dedup",
+        help="find exact and near-duplicate images in folders, rank the rest by diversity",
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+        description="Find exact duplicates (same bytes or same pixels) and near duplicates (CNN embeddings closer\n"
+        "than --threshold), keep the best copy of each (protected > resolution > sharpness > file size > path),\n"
+        "rank the kept images by diversity. Writes OUT/dedup.json, OUT/report.html, OUT/distances.png.\n"
+        "Originals are never moved or deleted; --apply copies or links the kept (or --top) images elsewhere.\n\n"
+        "example:\n  fuzzyfire dedup ../shared/data/fire-cctv-416 --out out/dedup-cctv\n"
+        "  fuzzyfire dedup photos/ web/ --protect photos/ --top 1400 --apply copy --to out/kept\n"
+        "  fuzzyfire dedup imgs/ --out out/d --model vgg16.onnx --mean 123.675,116.28,103.53 --std 58.395,57.12,57.375",
+    )
+    p.add_argument("dirs", nargs="+", type=Path, help="image folders (searched recursively) or files")
+    p.add_argument("--out", required=True, type=Path, help="folder for dedup.json, report.html, distances.png")
+    p.add_argument(
+        "--threshold",
+        type=float,
+        default=DEFAULT_THRESHOLD,
+        help=f"near-duplicate distance (default {DEFAULT_THRESHOLD})",
+    )
+    p.add_argument("--calibrate", action="store_true", help="pick the threshold from augmented copies of your images")
+    p.add_argument("--precision", type=float, default=0.99, help="target pair precision for --calibrate")
+    p.add_argument("--seed", type=int, default=0, help="seed for --calibrate")
+    p.add_argument("--exact-only", action="store_true", help="remove exact duplicates only")
+    p.add_argument("--protect", action="append", default=[], type=Path, metavar="DIR", help="never remove images here")
+    p.add_argument("--backend", default="auto", choices=("auto", *BACKENDS), help="search backend (default auto)")
+    p.add_argument("--rank", default="score", choices=RANK_METHODS, help="diversity ranking (default score)")
+    p.add_argument("--k", type=int, default=10, help="neighbours in the diversity score (default 10)")
+    p.add_argument("--top", type=int, help="select only the N most diverse kept images")
+    p.add_argument("--apply", choices=("copy", "link"), help="materialise the selected images in --to")
+    p.add_argument("--to", type=Path, help="target folder for --apply (new or empty)")
+    add_model_args(p)
+    p.set_defaults(func=cmd_dedup)

@@ -1,0 +1,116 @@
+"""What a person looks at after a dedup: an HTML gallery of duplicate groups (keeper marked) and of the
+top-ranked images, and a PNG histogram of nearest-neighbour distances with the threshold drawn in.
+
+Thumbnails (at most 160 px) go to ``OUT/thumbs/<sha256[:16]>.jpg`` and are reused by later runs.
+"""
+
+from __future__ import annotations
+
+import html
+from collections.abc import Sequence
+from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
+
+import cv2
+import numpy as np
+from numpy.typing import NDArray
+
+from curate.imageio import ImageError, read_image
+
+THUMB = 160
+_CSS = """body{font-family:sans-serif;margin:1em}figure{display:inline-block;margin:3px;text-align:center;
+font-size:11px;width:168px;vertical-align:top}img{max-width:160px;max-height:160px;border:3px solid #ccc}
+.keep img{border-color:#2a2}.group{border-bottom:1px solid #ddd;padding:4px 0}figcaption{word-break:break-all}"""
+
+
+def write_histogram(nn_dist: NDArray[np.float32], threshold: float, path: Path, title: str = "") -> Path:
+    """PNG histogram of each image's distance to its nearest other image (N,), threshold as a red line."""
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(7, 3.5), dpi=100)
+    ax = fig.add_subplot()
+    finite = nn_dist[np.isfinite(nn_dist)]
+    ax.hist(finite, bins=np.linspace(0, max(1.5, float(finite.max(initial=0))), 76), color="#48c")
+    ax.axvline(threshold, color="r", label=f"threshold {threshold:.3f}")
+    ax.set_xlabel("distance to nearest other image (unit embeddings)")
+    ax.set_ylabel("images")
+    ax.set_title(title or f"{len(finite)} images")
+    ax.legend()
+    fig.tight_layout()
+    fig.savefig(path)
+    return path
+
+
+def make_thumbs(items: Sequence[tuple[str, str]], folder: Path, workers: int = 3) -> dict[str, str]:
+    """``(path, sha256)`` -> thumbnail file name relative to ``folder.parent`` (missing on decode errors)."""
+    folder.mkdir(parents=True, exist_ok=True)
+
+    def one(item: tuple[str, str]) -> tuple[str, str | None]:
+        path, sha = item
+        out = folder / f"{sha[:16]}.jpg"
+        if not out.is_file():
+            try:
+                img = read_small(Path(path), THUMB)
+            except ImageError:
+                return path, None
+            scale = THUMB / max(img.shape[:2])
+            if scale < 1:
+                img = cv2.resize(img, None, fx=scale, fy=scale, interpolation=cv2.INTER_AREA)
+            cv2.imwrite(str(out), img[:, :, ::-1], [cv2.IMWRITE_JPEG_QUALITY, 80])
+        return path, f"{folder.name}/{out.name}"
+
+    with ThreadPoolExecutor(workers) as pool:
+        return {p: t for p, t in pool.map(one, list(dict.fromkeys(items))) if t is not None}
+
+
+def read_small(path: Path, side: int) -> NDArray[np.uint8]:
+    """(H, W, 3) uint8 RGB with its long side >= ``side`` when possible, decoded at 1/2, 1/4 or 1/8 scale
+    (JPEG DCT scaling, several times faster than a full decode); full decode as fallback."""
+    data = np.fromfile(path, np.uint8)
+    img = cv2.imdecode(data, cv2.IMREAD_REDUCED_COLOR_2)
+    for flag in (cv2.IMREAD_REDUCED_COLOR_4, cv2.IMREAD_REDUCED_COLOR_8):
+        if img is None or max(img.shape[:2]) < 2 * side:
+            break
+        smaller = cv2.imdecode(data, flag)
+        if smaller is None or max(smaller.shape[:2]) < side:
+            break
+        img = smaller
+    if img is None or img.ndim != 3:
+        return read_image(path)
+    return np.ascontiguousarray(img[:, :, ::-1])
+
+
+def _figure(path: str, thumb: str | None, caption: str, keep: bool) -> str:
+    img = f'<img src="{html.escape(thumb)}" loading="lazy">' if thumb else "<div>(no preview)</div>"
+    cls = ' class="keep"' if keep else ""
+    return (
+        f'<figure{cls}><a href="{html.escape(Path(path).as_uri())}">{img}</a>'
+        f"<figcaption>{html.escape(caption)}</figcaption></figure>"
+    )
+
+
+def write_html(
+    path: Path,
+    title: str,
+    summary: Sequence[str],
+    groups: Sequence[Sequence[tuple[str, str, bool]]],
+    top: Sequence[tuple[str, str]],
+    thumbs: dict[str, str],
+    histogram: str | None,
+) -> Path:
+    """The report page. ``groups``: per group ``(path, caption, is_keeper)`` keeper first; ``top``:
+    ``(path, caption)`` best first; ``thumbs``: path -> thumbnail (relative to the page)."""
+    parts = [f"<!doctype html><meta charset=utf-8><title>{html.escape(title)}</title><style>{_CSS}</style>"]
+    parts.append(
+        f"<h1>{html.escape(title)}</h1><ul>" + "".join(f"<li>{html.escape(s)}</li>" for s in summary) + "</ul>"
+    )
+    if histogram:
+        parts.append(f'<img src="{html.escape(histogram)}" style="max-width:700px;max-height:none;border:0">')
+    parts.append(f"<h2>Duplicate groups (green = kept), first {len(groups)}</h2>")
+    for group in groups:
+        figs = "".join(_figure(p, thumbs.get(p), c, k) for p, c, k in group)
+        parts.append(f'<div class="group">{figs}</div>')
+    parts.append(f"<h2>Most diverse kept images, top {len(top)}</h2><div>")
+    parts.append("".join(_figure(p, thumbs.get(p), c, True) for p, c in top) + "</div>")
+    path.write_text("\n".join(parts) + "\n", encoding="utf-8")
+    return path

@@ -1,0 +1,72 @@
+"""``fuzzyfire dedup`` / ``leakage`` end to end on generated images: outputs, bad files, untouched originals."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+from curate_helpers import save, scene, transformed, use_session_cache
+
+from fuzzyfire.cli import main
+
+
+@pytest.fixture(scope="module")
+def folder(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    use_session_cache(tmp_path_factory)
+    root = tmp_path_factory.mktemp("cli") / "imgs"
+    for i in range(6):
+        save(scene(10 + i), root / f"a{i}.jpg")
+    save(transformed(scene(10), "resize"), root / "sub" / "a0_small.jpg")
+    save(transformed(scene(11), "hflip"), root / "sub" / "a1_flip.png")
+    (root / "sub" / "a2_copy.jpg").write_bytes((root / "a2.jpg").read_bytes())
+    (root / "bad.jpg").write_bytes(b"\xff\xd8\xff\xe0 garbage")
+    return root
+
+
+def _snapshot(root: Path) -> dict[str, bytes]:
+    return {p.relative_to(root).as_posix(): p.read_bytes() for p in root.rglob("*") if p.is_file()}
+
+
+def test_dedup_writes_json_report_and_histogram(folder: Path, tmp_path: Path, capsys) -> None:
+    before = _snapshot(folder)
+    out = tmp_path / "out"
+    assert (
+        main(["dedup", str(folder), "--out", str(out), "--top", "3", "--apply", "copy", "--to", str(tmp_path / "kept")])
+        == 0
+    )
+    doc = json.loads((out / "dedup.json").read_text())
+    assert {"kept", "removed", "ranking", "threshold", "model", "groups", "problems"} <= set(doc)
+    removed = {(Path(r["path"]).name, Path(r["duplicate_of"]).name, r["kind"]) for r in doc["removed"]}
+    pairs = {(a, b) for a, b, _ in removed}
+    assert {("a0_small.jpg", "a0.jpg"), ("a2_copy.jpg", "a2.jpg")} <= pairs  # resolution; then path order
+    assert {frozenset(p) for p in pairs} == {
+        frozenset(("a0_small.jpg", "a0.jpg")),
+        frozenset(("a2.jpg", "a2_copy.jpg")),
+        frozenset(("a1_flip.png", "a1.jpg")),
+    }
+    assert {a: k for a, _, k in removed}["a2_copy.jpg"] == "exact"
+    assert all(Path(p).is_absolute() for p in doc["kept"]) and len(doc["kept"]) == 6
+    assert [Path(p["path"]).name for p in doc["problems"]] == ["bad.jpg"]
+    assert len(doc["ranking"]) == 6 and doc["ranking"][0]["score"] >= doc["ranking"][-1]["score"]
+    assert len(doc["selected"]) == 3
+    html = (out / "report.html").read_text()
+    assert "KEPT" in html and "distances.png" in html and (out / "distances.png").stat().st_size > 1000
+    assert len(list((tmp_path / "kept").rglob("*.*"))) == 3
+    assert _snapshot(folder) == before  # originals never modified
+    assert "bad.jpg" in capsys.readouterr().err
+
+
+def test_dedup_refuses_bad_arguments(folder: Path, tmp_path: Path, capsys) -> None:
+    assert main(["dedup", str(folder), "--out", str(tmp_path / "o"), "--apply", "copy"]) == 2
+    assert main(["dedup", str(folder), "--out", str(tmp_path / "o"), "--mean", "1,2,3"]) == 2
+    assert main(["dedup", str(tmp_path / "missing"), "--out", str(tmp_path / "o")]) == 2
+    assert main(["dedup", str(folder), "--out", str(tmp_path / "o"), "--apply", "copy", "--to", str(folder / "x")]) == 2
+    err = capsys.readouterr().err
+    assert "--to" in err and "need --model" in err and "no such file" in err
+
+
+def test_help_has_examples(capsys) -> None:
+    with pytest.raises(SystemExit):
+        main(["dedup", "--help"])
+    assert "example:" in capsys.readouterr().out
