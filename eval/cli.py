@@ -41,26 +41,38 @@ def _print_text(result, intervals: dict) -> None:  # result: eval.score.ScoreRes
         print(f"       not scored (the model has no such class): {', '.join(skipped['not_in_model'])}")
 
 
-def cmd_score(args: argparse.Namespace) -> int:
-    from curate.cli import print_problems
-    from eval.coco import ClassMatchError
-    from eval.onnx_model import ModelError, OnnxDetector
+def _score_model(model: Path, args: argparse.Namespace, dataset, problems):  # -> eval.score.ScoreResult
+    from eval.onnx_model import OnnxDetector
     from eval.predict import PredictOptions
-    from eval.score import ScoreError, load_test_set, score, write_outputs
+    from eval.score import score
 
-    try:
-        detector = OnnxDetector(args.model, args.format, args.names, args.imgsz, threads=args.threads)
-        dataset, problems = load_test_set(
-            args.data, args.data_format, args.split, _aliases(args.alias), args.drop_class
-        )
-        options = PredictOptions(args.conf, args.iou, args.max_det, args.batch, args.workers)
-        result = score(detector, dataset, options, problems)
-    except (ModelError, ScoreError, ClassMatchError) as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        return 2
+    detector = OnnxDetector(model, args.format, args.names, args.imgsz, threads=args.threads)
+    options = PredictOptions(args.conf, args.iou, args.max_det, args.batch, args.workers)
+    return score(detector, dataset, options, problems)
+
+
+def _report_problems(result) -> None:
+    from curate.cli import print_problems
+
     shown = [p for p in result.problems if p.level != "info"]
     if shown:
         print_problems(shown, sys.stderr, limit=20)
+
+
+def cmd_score(args: argparse.Namespace) -> int:
+    from eval.coco import ClassMatchError
+    from eval.onnx_model import ModelError
+    from eval.score import ScoreError, load_test_set, write_outputs
+
+    try:
+        dataset, problems = load_test_set(
+            args.data, args.data_format, args.split, _aliases(args.alias), args.drop_class
+        )
+        result = _score_model(args.model, args, dataset, problems)
+    except (ModelError, ScoreError, ClassMatchError) as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    _report_problems(result)
     intervals = _intervals(result, args.ci, args.seed) if args.ci else {}
     if args.out:
         files = write_outputs(result, args.out, intervals)
@@ -69,6 +81,50 @@ def cmd_score(args: argparse.Namespace) -> int:
         print(json.dumps({**result.metrics.to_dict(), **intervals}, indent=1))
     else:
         _print_text(result, intervals)
+    return 0
+
+
+def cmd_compare(args: argparse.Namespace) -> int:
+    import numpy as np
+
+    from eval.coco import ClassMatchError
+    from eval.onnx_model import ModelError
+    from eval.score import ScoreError, load_test_set
+    from eval.stats import MatchTable, paired_bootstrap
+
+    try:
+        dataset, problems = load_test_set(
+            args.data, args.data_format, args.split, _aliases(args.alias), args.drop_class
+        )
+        results = [_score_model(m, args, dataset, problems) for m in (args.model_a, args.model_b)]
+    except (ModelError, ScoreError, ClassMatchError) as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    _report_problems(results[0])
+    tables = [MatchTable(r.evaluation) for r in results]
+    if not np.array_equal(tables[0].image_ids, tables[1].image_ids):
+        print("error: the models could not both be scored on the same images", file=sys.stderr)
+        return 2
+    deltas = paired_bootstrap(tables[0], tables[1], np.random.default_rng(args.seed), args.samples)
+    doc = {
+        "A": {"model": str(args.model_a), **{k: results[0].metrics.summary[k] for k in ("AP", "AP50")}},
+        "B": {"model": str(args.model_b), **{k: results[1].metrics.summary[k] for k in ("AP", "AP50")}},
+        "images": results[0].metrics.images,
+        "delta": {k: d.to_dict() for k, d in deltas.items()},
+        "samples": args.samples,
+        "seed": args.seed,
+    }
+    if args.json:
+        print(json.dumps(doc, indent=1))
+        return 0
+    for side in ("A", "B"):
+        print(f"{side}      {doc[side]['model']}  AP {_fmt(doc[side]['AP'])}  AP50 {_fmt(doc[side]['AP50'])}")
+    for key, d in deltas.items():
+        iv = d.interval
+        print(
+            f"B - A  {key} {100 * iv.point:+.1f} points, 95% CI [{100 * iv.low:+.1f}, {100 * iv.high:+.1f}], "
+            f"p = {d.p_value:.3f} ({args.samples} paired resamples of {doc['images']} images)"
+        )
     return 0
 
 
@@ -92,22 +148,15 @@ def _aliases(items: list[str]) -> dict[str, str]:
     return out
 
 
-def register(sub: argparse._SubParsersAction) -> None:
-    """Add ``score`` to the ``fuzzyfire`` parser."""
-    p = sub.add_parser(
-        "score",
-        help="COCO AP of a detector ONNX (ours, YOLOv5, YOLOv8/11 exports) on a test set",
-        formatter_class=argparse.RawDescriptionHelpFormatter,
-        description="Run a detector ONNX with onnxruntime on every image of a test set (letterbox, NMS, boxes in\n"
-        "original pixels) and report COCO AP, AP50, AP75, small/medium/large and per class (pycocotools;\n"
-        "negative images count). Classes are matched by name between the model's metadata and the test set.\n\n"
-        "example:\n  fuzzyfire score runs/R500_S500/seed0/best.onnx --data ../shared/data/fire-smoke-608 --split test\n"
-        "  fuzzyfire score yolov8n.onnx --data out/test --format yolov8 --names fire --json --out out/score",
-    )
-    p.add_argument("model", type=Path, help="detector .onnx file")
+def _add_scoring_args(p: argparse.ArgumentParser) -> None:
+    """Test-set and model options shared by ``score`` and ``compare``."""
     p.add_argument("--data", required=True, help="test set: folder or COCO .json in any format fuzzyfire reads")
     p.add_argument("--split", help="score only this split of the test set (e.g. test); default: every image")
     p.add_argument("--from", dest="data_format", default="auto", help="test-set format (default: detect)")
+    p.add_argument(
+        "--alias", action="append", default=[], metavar="NAME=CLASS", help="map a test-set class, e.g. Flame=fire"
+    )
+    p.add_argument("--drop-class", action="append", default=[], metavar="NAME", help="ignore a test-set class")
     p.add_argument(
         "--format", default="auto", choices=("auto", "fuzzyfire", "yolov5", "yolov8"), help="model output layout"
     )
@@ -121,14 +170,42 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--batch", type=int, default=16, help="images per onnxruntime call (default 16)")
     p.add_argument("--workers", type=int, default=2, help="image decoding threads (default 2)")
     p.add_argument("--threads", type=int, default=0, help="onnxruntime threads (default 0 = all cores)")
-    p.add_argument(
-        "--alias", action="append", default=[], metavar="NAME=CLASS", help="map a test-set class, e.g. Flame=fire"
+    p.add_argument("--seed", type=int, default=0, help="bootstrap seed (default 0)")
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    """Add ``score`` and ``compare`` to the ``fuzzyfire`` parser."""
+    p = sub.add_parser(
+        "score",
+        help="COCO AP of a detector ONNX (ours, YOLOv5, YOLOv8/11 exports) on a test set",
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+        description="Run a detector ONNX with onnxruntime on every image of a test set (letterbox, NMS, boxes in\n"
+        "original pixels) and report COCO AP, AP50, AP75, small/medium/large and per class (pycocotools;\n"
+        "negative images count). Classes are matched by name between the model's metadata and the test set.\n\n"
+        "example:\n  fuzzyfire score runs/R500_S500/seed0/best.onnx --data ../shared/data/fire-smoke-608 --split test\n"
+        "  fuzzyfire score yolov8n.onnx --data out/test --format yolov8 --names fire --json --out out/score",
     )
-    p.add_argument("--drop-class", action="append", default=[], metavar="NAME", help="ignore a test-set class")
+    p.add_argument("model", type=Path, help="detector .onnx file")
+    _add_scoring_args(p)
     p.add_argument(
         "--ci", type=int, default=0, metavar="N", help="95%% bootstrap interval of AP from N image resamples"
     )
-    p.add_argument("--seed", type=int, default=0, help="bootstrap seed (default 0)")
     p.add_argument("--json", action="store_true", help='print {"AP", "AP50", "images", "boxes", "per_class", ...}')
-    p.add_argument("--out", type=Path, help="also write predictions.json, metrics.json and pr_curve.png here")
+    p.add_argument("--out", type=Path, help="also write predictions.json, metrics.json, pr_curve.png, matches.npz")
     p.set_defaults(func=cmd_score)
+
+    p = sub.add_parser(
+        "compare",
+        help="AP difference of two detectors on the same test images, with a paired bootstrap interval",
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+        description="Score two detector ONNX files on the same test set and report AP(B) - AP(A) with a 95%\n"
+        "interval and p-value from a paired image-level bootstrap (both models scored on each resample).\n\n"
+        "example:\n  fuzzyfire compare runs/R1000_S0/seed0/best.onnx runs/R750_S250/seed0/best.onnx \\\n"
+        "      --data ../shared/data/fire-smoke-608 --split test --drop-class default",
+    )
+    p.add_argument("model_a", type=Path, help="baseline detector .onnx (A)")
+    p.add_argument("model_b", type=Path, help="detector compared with it (B)")
+    _add_scoring_args(p)
+    p.add_argument("--samples", type=int, default=1000, help="bootstrap resamples (default 1000)")
+    p.add_argument("--json", action="store_true", help='print {"A", "B", "images", "delta": {"AP": ...}, ...}')
+    p.set_defaults(func=cmd_compare)

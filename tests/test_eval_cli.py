@@ -136,3 +136,18 @@ def test_test_set_aliases_drops_and_matches_file(work, tmp_path):
     assert MatchTable.load(tmp_path / "o" / "matches.npz").ap()["AP"] == pytest.approx(doc["AP"])
     merged = run_json(model, "--data", work["test"], "--alias", "smoke=fire")
     assert merged["per_class"]["fire"]["boxes"] == 6 and merged["classes"]["not_in_test"] == ["smoke"]
+
+
+def test_compare_gives_the_paired_delta(work, capsys):
+    good = oracle_model(work["root"] / "good.onnx")
+    shifted = oracle_model(work["root"] / "shift.onnx", rows=rows_for(shift=3.0, duplicates=True))
+    out = io.StringIO()
+    with contextlib.redirect_stdout(out):
+        argv = ["compare", str(good), str(shifted), "--data", str(work["test"]), "--samples", "200", "--json"]
+        assert main([*argv, "--format", "yolov5"]) == 0
+    doc = json.loads(out.getvalue())
+    assert doc["A"]["AP"] == pytest.approx(1.0) and doc["B"]["AP"] < 1.0 and doc["images"] == 6
+    assert doc["delta"]["AP"]["value"] == pytest.approx(doc["B"]["AP"] - doc["A"]["AP"])
+    assert doc["delta"]["AP"]["low"] <= doc["delta"]["AP"]["value"] <= doc["delta"]["AP"]["high"] < 0
+    assert main(["compare", str(good), str(good), "--data", str(work["test"]), "--samples", "50"]) == 0
+    assert "B - A  AP +0.0 points, 95% CI [+0.0, +0.0], p = 1.000" in capsys.readouterr().out
