@@ -4,6 +4,7 @@ SGD step, EMA) at 320 px, YOLOv5n-shaped model, batch 16, on the first 256 train
 forward/backward-only rates so a regression can be placed.
 
 .venv/bin/python bench/bench_train_throughput.py [DATASET] [--imgsz 320] [--images 256] [--batches 12]
+.venv/bin/python bench/bench_train_throughput.py --backbone efficientnet-lite0 --batches 4   # the GPU option
 """
 
 from __future__ import annotations
@@ -18,7 +19,7 @@ import torch
 
 from curate.formats.registry import read_dataset
 from train.config import TrainConfig
-from train.loop import build_trainer
+from train.loop import build_trainer, train_one_epoch
 
 DEFAULT = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "fire-cctv-416"
 
@@ -29,6 +30,7 @@ def main() -> int:
     parser.add_argument("--imgsz", type=int, default=320)
     parser.add_argument("--images", type=int, default=256)
     parser.add_argument("--batches", type=int, default=12)
+    parser.add_argument("--backbone", default="cspdarknet", help="cspdarknet or efficientnet-lite0")
     args = parser.parse_args()
     if not Path(args.dataset).is_dir():
         print(f"train_throughput_skipped: {args.dataset} not found", file=sys.stderr)
@@ -39,7 +41,7 @@ def main() -> int:
     ds = ds.filter_images(lambda img: img.id in keep)
     torch.set_flush_denormal(True)
     cfg = TrainConfig(epochs=10, imgsz=args.imgsz, batch=16, seed=0)
-    t = build_trainer(replace(cfg, model=replace(cfg.model, autoanchor=False)), ds)
+    t = build_trainer(replace(cfg, model=replace(cfg.model, autoanchor=False, backbone=args.backbone)), ds)
     t.model.train()
 
     start = time.perf_counter()
@@ -55,14 +57,12 @@ def main() -> int:
     t.optimizer.zero_grad()
 
     small = replace(t, batches=_Limited(t.batches, args.batches))
-    from train.loop import train_one_epoch
-
     record = train_one_epoch(small, 1)
-    print(f"train_augment_only_{args.imgsz}: {aug:.1f} img/s")
-    print(f"train_forward_backward_only_{args.imgsz}: {fwd_bwd:.1f} img/s")
-    print(
-        f"train_throughput_{args.imgsz}: {record['train_images_per_s']:.1f} img/s (target >= 12, {torch.get_num_threads()} threads)"
-    )
+    tag = f"{args.imgsz}" if args.backbone == "cspdarknet" else f"{args.imgsz}_{args.backbone}"
+    threads = torch.get_num_threads()
+    print(f"train_augment_only_{tag}: {aug:.1f} img/s")
+    print(f"train_forward_backward_only_{tag}: {fwd_bwd:.1f} img/s")
+    print(f"train_throughput_{tag}: {record['train_images_per_s']:.1f} img/s (target >= 12, {threads} threads)")
     return 0
 
 

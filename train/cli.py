@@ -54,7 +54,7 @@ def build_config(args: argparse.Namespace):
     cfg = TrainConfig(epochs=args.epochs, imgsz=args.imgsz, batch=args.batch, seed=args.seed, threads=args.threads)
     if args.imgsz % 32:
         raise ValueError(f"--imgsz must be a multiple of 32, got {args.imgsz}")
-    return replace(cfg, model=ModelConfig(size=args.size, autoanchor=not args.no_autoanchor))
+    return replace(cfg, model=ModelConfig(size=args.size, autoanchor=not args.no_autoanchor, backbone=args.backbone))
 
 
 def cmd_train(args: argparse.Namespace) -> int:
@@ -99,6 +99,12 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--batch", type=int, default=16, help="images per step; gradients accumulate to 64 (default 16)")
     p.add_argument("--seed", type=int, default=0, help="seed of weights, shuffles and augmentations (default 0)")
     p.add_argument("--size", choices=("n", "s", "m"), default="n", help="model width/depth (default n)")
+    p.add_argument(
+        "--backbone",
+        choices=("cspdarknet", "efficientnet-lite0"),
+        default="cspdarknet",
+        help="cspdarknet (YOLOv5, CPU-friendly) or efficientnet-lite0 (ImageNet weights; ~8x slower on CPU)",
+    )
     p.add_argument("--threads", type=int, default=0, help="torch threads (default: torch's choice)")
     p.add_argument("--train-split", help="split of --train to use (default: train when present, else all)")
     p.add_argument("--val-split", help="split of --val to use (default: valid/val when present, else all)")

@@ -29,6 +29,10 @@ class ModelConfig:
     # anchors per level, (w, h) input pixels; None = DEFAULT_ANCHORS, re-fitted by k-means when they fit badly
     anchors: Optional[tuple[tuple[tuple[float, float], ...], ...]] = None
     autoanchor: bool = True  # run the best-possible-recall check and k-means when recall < 0.98
+    # "cspdarknet" (YOLOv5, dense convs: the CPU choice) or "efficientnet-lite0" (ImageNet weights, ~8x slower
+    # to train on CPU: a GPU option); see train/backbones.py
+    backbone: Literal["cspdarknet", "efficientnet-lite0"] = "cspdarknet"
+    pretrained: bool = True  # efficientnet-lite0: start from the ImageNet weights of the installed package
 
 
 @dataclass(frozen=True)

@@ -100,7 +100,7 @@ def build_trainer(cfg: TrainConfig, train_ds: Dataset) -> Trainer:
         anchors, report = check_anchors(wh, anchors, np.random.default_rng(cfg.seed), cfg.loss.anchor_t)
     model_cfg = replace(cfg.model, anchors=_nested(anchors), autoanchor=False)
     names = train_ds.category_names
-    model = build_model(len(names), model_cfg)
+    model = build_model(len(names), model_cfg, cfg.imgsz)
     batches = TrainBatches(cache, cfg.imgsz, cfg.batch, cfg.augment, cfg.seed)
     schedule = Schedule(cfg.optim, cfg.epochs, len(batches), cfg.batch)
     loss_fn = DetectionLoss(model.head.anchors, STRIDES, len(names), cfg.imgsz, cfg.loss)
@@ -205,10 +205,11 @@ def _best_weights(t: Trainer) -> dict[str, Any]:
 def load_detector(path: Path | str) -> tuple[Detector, list[str], int]:
     """A ``best.pt``/``last.pt`` file -> (detector in eval mode with its EMA weights, class names, imgsz)."""
     state = torch.load(path, map_location="cpu", weights_only=False)
-    model_cfg = ModelConfig(size=state["config"]["model"]["size"], anchors=state["anchors"], autoanchor=False)
-    model = build_model(len(state["class_names"]), model_cfg)
+    saved = {**state["config"]["model"], "anchors": state["anchors"], "autoanchor": False, "pretrained": False}
+    imgsz = int(state["config"]["imgsz"])
+    model = build_model(len(state["class_names"]), ModelConfig(**saved), imgsz)
     model.load_state_dict(state["model"] if "ema" not in state else state["ema"]["weights"])
-    return model.eval(), list(state["class_names"]), int(state["config"]["imgsz"])
+    return model.eval(), list(state["class_names"]), imgsz
 
 
 def _epoch_line(record: dict[str, Any], epochs: int) -> str:

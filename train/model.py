@@ -1,6 +1,6 @@
 """A YOLOv5-shaped detector written from the published architecture (no YOLOv5 code).
 
-Backbone: Conv(6x6, s2) - Conv(s2) - C3 x3 - Conv(s2) - C3 x6 - Conv(s2) - C3 x9 - Conv(s2) - C3 x3 - SPPF.
+Backbone (default ``cspdarknet``; see :mod:`train.backbones` for EfficientNet-Lite0): Conv(6x6, s2) - Conv(s2) - C3 x3 - Conv(s2) - C3 x6 - Conv(s2) - C3 x9 - Conv(s2) - C3 x3 - SPPF.
 Neck: a PAN (top-down 1x1 conv + nearest upsample + concat + C3, then bottom-up 3x3 s2 conv + concat + C3).
 Head: one 1x1 conv per level (strides 8, 16, 32) predicting, for each of 3 anchors, ``(tx, ty, tw, th, obj,
 cls_1..cls_C)`` logits. Every Conv is Conv2d (no bias) + BatchNorm + SiLU; depth (block repeats) and width
@@ -19,6 +19,7 @@ from collections.abc import Sequence
 import torch
 from torch import Tensor, nn
 
+from train.backbones import build_backbone
 from train.config import DEFAULT_ANCHORS, MODEL_SIZES, ModelConfig
 
 STRIDES: tuple[int, ...] = (8, 16, 32)
@@ -191,11 +192,11 @@ class Detector(nn.Module):
     """Backbone + PAN + Detect. ``forward`` returns raw per-level logits (for the loss); ``predict`` the
     decoded (B, N, 5 + C) tensor in letterboxed input pixels."""
 
-    def __init__(self, num_classes: int, cfg: ModelConfig | None = None) -> None:
+    def __init__(self, num_classes: int, cfg: ModelConfig | None = None, imgsz: int = 640) -> None:
         super().__init__()
         cfg = cfg or ModelConfig()
         depth, width = MODEL_SIZES[cfg.size]
-        self.backbone = Backbone(depth, width)
+        self.backbone = build_backbone(cfg.backbone, depth, width, imgsz, cfg.pretrained)
         self.neck = PAN(self.backbone.channels, depth)
         anchors = torch.tensor(cfg.anchors or DEFAULT_ANCHORS, dtype=torch.float32)
         if anchors.shape != (3, 3, 2):
@@ -215,7 +216,8 @@ class Detector(nn.Module):
         return self.head.decode(self.forward(images))
 
 
-def build_model(num_classes: int, cfg: ModelConfig | None = None) -> Detector:
+def build_model(num_classes: int, cfg: ModelConfig | None = None, imgsz: int = 640) -> Detector:
+    """The detector for ``num_classes`` classes; ``imgsz`` only matters to backbones with fixed padding."""
     if num_classes < 1:
         raise ValueError(f"num_classes must be >= 1, got {num_classes}")
-    return Detector(num_classes, cfg)
+    return Detector(num_classes, cfg, imgsz)
