@@ -63,6 +63,10 @@ def bench_scoring(tmp: Path) -> None:
     per_image = result.metrics.detections / result.metrics.images
     print(f"score_throughput: {result.metrics.images / elapsed:.0f} img/s ({what}, {SIZE} px, target >= 100)")
     print(f"score_detections: {per_image:.0f} per image after NMS (an untrained model: NMS's worst case)")
+    start = time.perf_counter()
+    sparse = score(det, ds, PredictOptions(batch=16, conf=0.25))
+    elapsed = time.perf_counter() - start
+    print(f"score_throughput_conf0.25: {sparse.metrics.images / elapsed:.0f} img/s (same, few boxes: decode+onnx+COCO)")
     x = np.random.default_rng(0).random((16, 3, SIZE, SIZE), dtype=np.float32)
     onnx_s = _best_of(lambda: det.raw(x))
     with torch.inference_mode():
