@@ -151,7 +151,7 @@ class Detect(nn.Module):
         self.register_buffer("strides", torch.tensor(STRIDES, dtype=torch.float32))
         self.m = nn.ModuleList(nn.Conv2d(c, self.na * self.no, 1) for c in channels)
 
-    def init_biases(self, image_size: int = 640) -> None:
+    def init_biases(self) -> None:
         """Prior biases: ~8 objects per 640 px image, class prior 0.6 / (C - 0.99) (YOLOv5's published init)."""
         with torch.no_grad():
             for conv, stride in zip(self.m, STRIDES):

@@ -1,0 +1,36 @@
+"""The training schema: YOLOv5 recipe defaults, strict loading through fuzzyfire.config."""
+
+from __future__ import annotations
+
+import pytest
+
+from fuzzyfire.config import ConfigError, build_config, to_dict
+from train.config import MODEL_SIZES, TrainConfig
+
+
+def test_defaults_are_the_published_recipe() -> None:
+    cfg = TrainConfig()
+    assert (cfg.optim.lr0, cfg.optim.lrf, cfg.optim.momentum, cfg.optim.weight_decay) == (0.01, 0.01, 0.937, 5e-4)
+    assert cfg.optim.nominal_batch == 64 and cfg.loss.anchor_t == 4.0 and cfg.loss.balance == (4.0, 1.0, 0.4)
+    a = cfg.augment
+    assert (a.mosaic, a.translate, a.scale, a.hsv_h, a.hsv_s, a.hsv_v, a.fliplr) == (
+        1.0,
+        0.1,
+        0.5,
+        0.015,
+        0.7,
+        0.4,
+        0.5,
+    )
+    assert MODEL_SIZES["n"] == (0.33, 0.25) and MODEL_SIZES["s"] == (0.33, 0.50)
+
+
+def test_round_trip_and_strictness() -> None:
+    raw = {"epochs": 3, "model": {"size": "s", "backbone": "efficientnet-lite0"}, "augment": {"mosaic": 0.5}}
+    cfg = build_config(raw, TrainConfig)
+    assert cfg.model.size == "s" and cfg.augment.mosaic == 0.5
+    assert build_config(to_dict(cfg), TrainConfig) == cfg
+    with pytest.raises(ConfigError, match="optim.lr: unknown key"):
+        build_config({"optim": {"lr": 0.1}}, TrainConfig)
+    with pytest.raises(ConfigError, match="model.backbone"):
+        build_config({"model": {"backbone": "resnet"}}, TrainConfig)
