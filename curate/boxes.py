@@ -200,3 +200,11 @@ def nms_xyxy(
         alive = np.flatnonzero(iou <= iou_threshold) + 1
         order, x1, y1, x2, y2, area = (a[alive] for a in (order, x1, y1, x2, y2, area))
     return np.asarray(keep, dtype=np.int64)
+
+
+def points_to_xyxy(points: ArrayLike) -> Boxes:
+    """(N, 2) points (x, y) in pixels, N >= 1 -> (4,) xyxy box enclosing them (e.g. a plane's projected corners)."""
+    p = np.asarray(points, dtype=np.float64)
+    if p.ndim != 2 or p.shape[1] != 2 or len(p) == 0:
+        raise ValueError(f"points must be (N, 2) with N >= 1, got shape {p.shape}")
+    return np.concatenate((p.min(axis=0), p.max(axis=0)))

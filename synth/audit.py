@@ -2,7 +2,8 @@
 
 For an image ``images/<name>.<ext>`` the mask is ``masks/<name>.png``: value k marks the k-th fire box of that
 image (annotations in id order). ``masks/box_modes.json`` (Method 1) may hold alternative box sets per image,
-audited too.
+audited too: ``{file_name: {mode: [xywh | null, ...]}}``, entry k against instance k + 1 (no mask: IoU 0;
+``null``: the mode gives no box for that flame, skipped).
 """
 
 from __future__ import annotations
@@ -53,7 +54,9 @@ def audit_dataset(folder: Path) -> dict[str, Any]:
         truths = [mask_to_xywh(labels == k) for k in range(1, int(labels.max()) + 1)]
         ious += [_iou(box, truths[k]) if k < len(truths) else 0.0 for k, box in enumerate(anns[img["id"]])]
         for mode, boxes in modes.get(img["file_name"], {}).items():
-            mode_ious.setdefault(mode, []).extend(_iou(b, truths[k]) for k, b in enumerate(boxes))
+            mode_ious.setdefault(mode, []).extend(
+                _iou(b, truths[k]) if k < len(truths) else 0.0 for k, b in enumerate(boxes) if b is not None
+            )
     result = _summary(ious, len(coco["images"]))
     if mode_ious:
         result["modes"] = {m: _summary(v, len(coco["images"])) for m, v in sorted(mode_ious.items())}

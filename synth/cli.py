@@ -1,4 +1,4 @@
-"""``fuzzyfire synth`` subcommands: flames, scenes, method2, audit (registered by ``fuzzyfire.cli``)."""
+"""``fuzzyfire synth`` subcommands: flames, scenes, method1, method2, audit (registered by ``fuzzyfire.cli``)."""
 
 from __future__ import annotations
 
@@ -66,17 +66,30 @@ def cmd_scenes(args: argparse.Namespace) -> int:
     return 0
 
 
+def _library(args: argparse.Namespace) -> list:
+    from synth.sprites import load_library
+
+    if args.flames:
+        return load_library(args.flames)
+    return flame_library(args.library, args.seed, 240, 12, 0.1)
+
+
+def cmd_method1(args: argparse.Namespace) -> int:
+    from synth.method1 import Method1Config, run_method1
+
+    w, h = args.size
+    cfg = Method1Config(n=args.n, seed=args.seed, width=w, height=h, scenes=args.scenes, box_mode=args.box_mode)
+    result = run_method1(cfg, _library(args), args.out, overwrite=args.overwrite)
+    print(f"wrote {args.out}: {args.n} images, {args.box_mode} boxes ({', '.join(result.files.values())})")
+    return 0
+
+
 def cmd_method2(args: argparse.Namespace) -> int:
     from synth.method2 import Method2Config, run_method2
-    from synth.sprites import load_library
 
     w, h = args.size
     cfg = Method2Config(n=args.n, seed=args.seed, width=w, height=h, scenes=args.scenes, smoke_class=False)
-    if args.flames:
-        library = load_library(args.flames)
-    else:
-        library = flame_library(args.library, args.seed, 240, 12, 0.1)
-    result = run_method2(cfg, library, args.out, overwrite=args.overwrite)
+    result = run_method2(cfg, _library(args), args.out, overwrite=args.overwrite)
     print(f"wrote {args.out}: {args.n} images ({', '.join(result.files.values())})")
     return 0
 
@@ -130,6 +143,35 @@ def _register_scenes(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=cmd_scenes)
 
 
+def _dataset_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--out", required=True, type=Path)
+    p.add_argument("--n", type=int, default=100)
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--size", type=parse_size, default=(640, 480))
+    p.add_argument("--scenes", type=int, default=48, help="number of environments")
+    p.add_argument("--flames", type=Path, nargs="*", help="sequence folders (synth flames output, or RGBA PNGs)")
+    p.add_argument("--library", type=int, default=12, help="procedural sequences to make when --flames is absent")
+    p.add_argument("--overwrite", action="store_true")
+
+
+def _register_method1(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "method1",
+        help="Method 1: flame planes in the 3D scenes (paper boxes vs visible boxes)",
+        formatter_class=FMT,
+        description="Place flame image planes in the rendered environments (camera rules as in the paper)\n"
+        "and annotate them with the visible box (segmentation pass + warped flame mask, occlusion\n"
+        "handled) or the paper's box (projected plane corners, clipped). Both box sets are kept in\n"
+        "masks/box_modes.json; `synth audit` reports both. Resumes an interrupted run.\n\n"
+        "example:\n  fuzzyfire synth method1 --n 1000 --seed 0 --out out/m1 --size 640x480 --scenes 48\n"
+        "  fuzzyfire synth method1 --n 200 --out out/m1-paper --box-mode paper\n"
+        "  fuzzyfire synth audit out/m1 --json",
+    )
+    _dataset_arguments(p)
+    p.add_argument("--box-mode", default="visible", choices=("visible", "paper"), help="annotation written")
+    p.set_defaults(func=cmd_method1)
+
+
 def _register_method2(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "method2",
@@ -140,14 +182,7 @@ def _register_method2(sub: argparse._SubParsersAction) -> None:
         "example:\n  fuzzyfire synth method2 --n 1000 --seed 0 --out out/m2 --size 640x480 --scenes 48\n"
         "  fuzzyfire synth audit out/m2 --json",
     )
-    p.add_argument("--out", required=True, type=Path)
-    p.add_argument("--n", type=int, default=100)
-    p.add_argument("--seed", type=int, default=0)
-    p.add_argument("--size", type=parse_size, default=(640, 480))
-    p.add_argument("--scenes", type=int, default=48, help="number of environments")
-    p.add_argument("--flames", type=Path, nargs="*", help="sequence folders (synth flames output, or RGBA PNGs)")
-    p.add_argument("--library", type=int, default=12, help="procedural sequences to make when --flames is absent")
-    p.add_argument("--overwrite", action="store_true")
+    _dataset_arguments(p)
     p.set_defaults(func=cmd_method2)
 
 
@@ -170,9 +205,9 @@ def register(sub: argparse._SubParsersAction) -> None:
         "synth",
         help="procedural flames, environments and synthetic datasets",
         formatter_class=FMT,
-        description="Synthetic data: flames, scenes, Method 2, audit.\n\n"
+        description="Synthetic data: flames, scenes, Method 1, Method 2, audit.\n\n"
         "example:\n  fuzzyfire synth method2 --n 200 --out out/m2 --size 320x240",
     )
     inner = synth.add_subparsers(dest="synth_command", metavar="SUBCOMMAND")
-    for add in (_register_flames, _register_scenes, _register_method2, _register_audit):
+    for add in (_register_flames, _register_scenes, _register_method1, _register_method2, _register_audit):
         add(inner)

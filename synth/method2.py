@@ -1,7 +1,7 @@
 """Method 2: render each camera view of a procedural environment once, then composite flame sprites onto it
 many times; each flame's box is the box of its final visible mask (after clipping, truncation and occlusion).
 
-Image ``i`` uses view ``i // images_per_view`` (environment ``view % scenes``) and its own rng
+Image ``i`` uses view ``i // images_per_view`` (see :mod:`synth.views`) and its own rng
 ``default_rng([seed, 2, i])``, so any image can be (re)made alone: runs resume and are byte-reproducible.
 """
 
@@ -10,18 +10,18 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from curate.boxes import mask_to_xywh
 from curate.progress import progress
-from synth import camera, render, scenes
+from synth import render
 from synth.composite import BLEND_MODES, Placement, composite
 from synth.effects import apply_effects, sample_effects
 from synth.output import Staging, finish
 from synth.sprites import SpriteSequence
+from synth.views import ViewCache
 
 
 @dataclass(frozen=True)
@@ -41,32 +41,6 @@ class Method2Config:
     def __post_init__(self) -> None:
         if self.n < 1 or self.scenes < 1 or self.images_per_view < 1 or self.width < 16 or self.height < 16:
             raise ValueError(f"invalid Method 2 config: {self}")
-
-
-class ViewCache:
-    """Renders each (environment, view) once; keeps the pyrender scenes of the environments in use."""
-
-    def __init__(self, cfg: Method2Config, renderer: render.Renderer) -> None:
-        self.cfg, self.renderer = cfg, renderer
-        self._scenes: dict[int, tuple[scenes.Environment, Any]] = {}
-        self._last: tuple[int, Any] | None = None
-
-    def get(self, view_index: int) -> tuple[NDArray[np.uint8], NDArray[np.float32], dict]:
-        if self._last and self._last[0] == view_index:
-            return self._last[1]
-        env_index = view_index % self.cfg.scenes
-        if env_index not in self._scenes:
-            env = scenes.build_environment(env_index, self.cfg.seed)
-            self._scenes[env_index] = (env, scenes.to_pyrender(env, self.renderer.pyrender))
-        env, scene = self._scenes[env_index]
-        rng = np.random.default_rng([self.cfg.seed, 1, view_index])
-        view = camera.find_view(
-            env.camera, rng, lambda v: render.render_view(self.renderer, scene, v.pose, v.yfov, True)[1]
-        )
-        rgb, depth = render.render_view(self.renderer, scene, view.pose, view.yfov)
-        meta = {"environment": env.name, "family": env.family, "camera": view.to_json()}
-        self._last = (view_index, (rgb, depth, meta))
-        return rgb, depth, meta
 
 
 def plan_flames(
@@ -98,7 +72,7 @@ def plan_flames(
 
 def make_image(cfg: Method2Config, i: int, library: Sequence[SpriteSequence], views: ViewCache):
     """Image ``i``: (H, W, 3) uint8, kept fire masks, record dict (boxes xywh, metadata)."""
-    background, depth, view_meta = views.get(i // cfg.images_per_view)
+    background, depth, view_meta = views.background(i // cfg.images_per_view)
     rng = np.random.default_rng([cfg.seed, 2, i])
     planned = plan_flames(cfg, library, depth, view_meta["camera"]["yfov"], rng)
     image, masks = composite(background, [p for p, _ in planned])
@@ -128,7 +102,7 @@ def run_method2(
     staging = Staging(out)
     todo = [i for i in range(cfg.n) if not staging.done(i)]
     with render.Renderer(cfg.width, cfg.height, platform) as renderer:
-        views = ViewCache(cfg, renderer)
+        views = ViewCache(cfg.seed, cfg.scenes, renderer)
         for i in progress(todo, total=len(todo), desc="method2 images"):
             image, masks, record = make_image(cfg, i, library, views)
             staging.save(i, image, masks, record)

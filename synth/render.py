@@ -14,6 +14,8 @@ pyrender traps handled here, each with a test in ``tests/test_synth_render.py``:
    ``v = 1`` at the top edge so images appear upright.
 5. ``RenderFlags.SEG`` draws only the nodes in ``seg_node_map`` (unmapped geometry does not occlude):
    :meth:`Renderer.segment` maps every other mesh node to id 0.
+6. RGB textures are uploaded with OpenGL's default 4-byte row alignment: a width whose ``3 * width`` is not a
+   multiple of 4 shears the image into diagonal colour stripes. Textures made here are RGBA (always aligned).
 
 Coordinates: world +Y is up; a camera looks down its local -Z with +Y up (OpenGL / pyrender convention).
 Images are (H, W, 3) uint8 RGB, row 0 at the top; depth is (H, W) float32 metres along the view axis, 0 where
@@ -25,7 +27,8 @@ from __future__ import annotations
 import ctypes
 import os
 import sys
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
+from contextlib import contextmanager
 from types import ModuleType
 from typing import Any
 
@@ -159,14 +162,18 @@ class Renderer:
 
     def segment(self, scene: Any, ids: Mapping[Any, int]) -> NDArray[np.int32]:
         """(H, W) int32 map of node ids: ``ids`` maps mesh nodes to ids >= 1; every other mesh node of the scene
-        is drawn as id 0 so it still occludes (trap 5)."""
+        is drawn as id 0 so it still occludes (trap 5). Meshes with ``is_visible = False`` are not drawn."""
+        return self.segment_depth(scene, ids)[0]
+
+    def segment_depth(self, scene: Any, ids: Mapping[Any, int]) -> tuple[NDArray[np.int32], NDArray[np.float32]]:
+        """:meth:`segment` plus the (H, W) float32 depth of the drawn surfaces (metres, 0 = nothing)."""
         self._fix_program_cache()
         nodes = list(scene.mesh_nodes)
         values = np.array([ids.get(n, 0) for n in nodes], dtype=np.int64)
         colors = ids_to_colors(values)
         seg_map = {n: colors[i] for i, n in enumerate(nodes)}
-        color, _ = self._r.render(scene, flags=self.pyrender.RenderFlags.SEG, seg_node_map=seg_map)
-        return colors_to_ids(np.asarray(color)[..., :3])
+        color, depth = self._r.render(scene, flags=self.pyrender.RenderFlags.SEG, seg_node_map=seg_map)
+        return colors_to_ids(np.asarray(color)[..., :3]), np.ascontiguousarray(depth, dtype=np.float32)
 
     def close(self) -> None:
         if self._r is not None:
@@ -180,6 +187,13 @@ class Renderer:
         self.close()
 
 
+def rgba_opaque(rgba: NDArray[np.uint8]) -> NDArray[np.uint8]:
+    """(h, w, 4) uint8 copy with alpha 255 (an emissive map: colour only, in 4 channels, see trap 6)."""
+    out = np.array(rgba, dtype=np.uint8, copy=True)
+    out[..., 3] = 255
+    return out
+
+
 def rgba_material(pyrender: ModuleType, rgba: NDArray[np.uint8], emissive: bool = True) -> Any:
     """A material showing an (h, w, 4) uint8 RGBA image with its alpha (trap 3). ``emissive``: the colour is
     emitted (unlit, shown as is) rather than lit."""
@@ -187,7 +201,7 @@ def rgba_material(pyrender: ModuleType, rgba: NDArray[np.uint8], emissive: bool 
         raise ValueError(f"rgba must be (h, w, 4) uint8, got {rgba.shape} {rgba.dtype}")
     tex = pyrender.Texture(source=rgba, source_channels="RGBA")
     if emissive:
-        emit = pyrender.Texture(source=np.ascontiguousarray(rgba[..., :3]), source_channels="RGB")
+        emit = pyrender.Texture(source=rgba_opaque(rgba), source_channels="RGBA")  # trap 6: RGBA keeps rows aligned
         return pyrender.MetallicRoughnessMaterial(
             baseColorFactor=(0.0, 0.0, 0.0, 0.999),
             baseColorTexture=tex,
@@ -264,17 +278,33 @@ def project(points: NDArray[np.float64], pose: NDArray[np.float64], k: NDArray[n
     return np.stack([u, v, depth], axis=1)
 
 
+def unproject(uv: NDArray[np.float64], depth: NDArray[np.float64], pose, k: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Inverse of :func:`project`: (N, 2) pixel coords (row 0 at the top) and (N,) depths along the view axis ->
+    (N, 3) world points, for camera-to-world ``pose`` (4, 4) and intrinsics ``k`` (3, 3)."""
+    uv, d = np.asarray(uv, float).reshape(-1, 2), np.asarray(depth, float).reshape(-1)
+    pc = np.stack([(uv[:, 0] - k[0, 2]) / k[0, 0] * d, -(uv[:, 1] - k[1, 2]) / k[1, 1] * d, -d], axis=1)
+    return (np.asarray(pose, float)[:3, :3] @ pc.T).T + np.asarray(pose, float)[:3, 3]
+
+
+@contextmanager
+def camera_at(renderer: Renderer, scene: Any, pose: NDArray[np.float64], yfov: float) -> Iterator[Any]:
+    """Context in which ``scene`` has a perspective camera at ``pose`` (4, 4) with vertical field of view ``yfov``
+    (radians, aspect of the renderer); the camera node is removed again on exit."""
+    pr = renderer.pyrender
+    cam = pr.PerspectiveCamera(yfov=yfov, aspectRatio=renderer.width / renderer.height, znear=0.05, zfar=200.0)
+    node = scene.add(cam, pose=pose)
+    try:
+        yield node
+    finally:
+        scene.remove_node(node)
+
+
 def render_view(
     renderer: Renderer, scene: Any, pose: NDArray[np.float64], yfov: float, depth_only: bool = False
 ) -> tuple[NDArray[np.uint8] | None, NDArray[np.float32]]:
     """Render ``scene`` from a camera at ``pose`` (4, 4) with vertical field of view ``yfov`` (radians); the
     camera node is removed again. Returns (RGB or None when ``depth_only``, depth)."""
-    pr = renderer.pyrender
-    cam = pr.PerspectiveCamera(yfov=yfov, aspectRatio=renderer.width / renderer.height, znear=0.05, zfar=200.0)
-    node = scene.add(cam, pose=pose)
-    try:
+    with camera_at(renderer, scene, pose, yfov):
         if depth_only:
             return None, renderer.depth(scene)
         return renderer.color_depth(scene)
-    finally:
-        scene.remove_node(node)

@@ -21,7 +21,7 @@ from numpy.typing import NDArray
 
 from synth.camera import CameraRule
 from synth.colour import blackbody_rgb
-from synth.render import textured_quad
+from synth.render import rgba_opaque, textured_quad
 from synth.textures import make_texture
 
 Pose = NDArray[np.float64]
@@ -292,7 +292,7 @@ def to_pyrender(env: Environment, pr: Any, texture_size: int = 128) -> Any:
         if panel.texture not in cache:
             img = make_texture(panel.texture, rng, texture_size)
             cache[panel.texture] = pr.MetallicRoughnessMaterial(
-                baseColorTexture=pr.Texture(source=img, source_channels="RGB"),
+                baseColorTexture=pr.Texture(source=rgba_opaque(np.dstack([img, img[..., :1]])), source_channels="RGBA"),
                 metallicFactor=0.0,
                 roughnessFactor=0.9,
                 doubleSided=True,

@@ -64,6 +64,21 @@ def crop_to_content(sprite: Sprite, threshold: int = 2, pad: int = 1) -> Sprite 
     return Sprite(sprite.over[cut].copy(), sprite.emission[cut].copy(), sprite.mask[cut].copy())
 
 
+def flatten_rgba(sprite: Sprite) -> NDArray[np.uint8]:
+    """One (h, w, 4) uint8 straight-alpha RGBA image approximating the sprite under plain alpha blending (what
+    a textured plane in a 3D scene can show): the emission counts as coverage ``e`` (its brightest channel),
+    ``a = 1 - (1 - a_smoke)(1 - e)`` and ``rgb = (smoke * a_smoke (1 - e) + emission) / a``. Flame cores
+    become opaque, their edges and the smoke semi-transparent."""
+    over = sprite.over.astype(np.float32) / 255.0
+    emission = sprite.emission.astype(np.float32) / 255.0
+    e = emission.max(axis=-1, keepdims=True)
+    a_smoke = over[..., 3:4]
+    alpha = 1.0 - (1.0 - a_smoke) * (1.0 - e)
+    rgb = (over[..., :3] * a_smoke * (1.0 - e) + emission) / np.maximum(alpha, 1e-6)
+    out = np.concatenate([np.clip(rgb, 0.0, 1.0), alpha], axis=-1)
+    return np.round(out * 255.0).astype(np.uint8)
+
+
 def sprite_from_rgba(rgba: NDArray[np.uint8], flame_threshold: float = 0.55) -> Sprite:
     """A sprite from a user's (h, w, 4) straight-alpha RGBA render: laid over as is, no added emission; the flame
     mask is where alpha >= 0.5 and the brightest channel >= ``flame_threshold`` (bright, not grey smoke)."""

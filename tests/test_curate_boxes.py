@@ -121,3 +121,11 @@ def test_nms_xyxy_keeps_best_and_disjoint():
     assert boxes.nms_xyxy(b, s, 0.99).tolist() == [1, 3, 2]  # 0 duplicates 3 exactly (IoU 1)
     assert boxes.nms_xyxy(b, s, 0.5, max_keep=1).tolist() == [1]
     assert boxes.nms_xyxy(np.zeros((0, 4)), np.zeros(0), 0.5).tolist() == []
+
+
+def test_points_to_xyxy_encloses_points():
+    pts = np.array([[3.0, 9.0], [-2.5, 4.0], [7.0, 1.0], [0.0, 5.0]])
+    np.testing.assert_allclose(boxes.points_to_xyxy(pts), [-2.5, 1.0, 7.0, 9.0])
+    np.testing.assert_allclose(boxes.points_to_xyxy([[1.0, 2.0]]), [1, 2, 1, 2])
+    with pytest.raises(ValueError, match="N, 2"):
+        boxes.points_to_xyxy(np.zeros((0, 2)))

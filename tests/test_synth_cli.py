@@ -23,3 +23,31 @@ def test_bad_size_is_rejected(capsys):
     with pytest.raises(SystemExit):
         main(["synth", "method2", "--out", "x", "--size", "big"])
     assert "640x480" in capsys.readouterr().err
+
+
+def test_method1_command_writes_both_box_modes(tmp_path, capsys):
+    assert (
+        main(["synth", "flames", "--out", str(tmp_path / "fl"), "--n", "1", "--frames", "60", "--keep-every", "30"])
+        == 0
+    )
+    out = tmp_path / "m1"
+    args = [
+        "synth",
+        "method1",
+        "--n",
+        "3",
+        "--out",
+        str(out),
+        "--size",
+        "64x48",
+        "--scenes",
+        "1",
+        "--box-mode",
+        "paper",
+    ]
+    assert main([*args, "--flames", str(tmp_path / "fl")]) == 0
+    capsys.readouterr()
+    assert main(["synth", "audit", str(out), "--json"]) == 0
+    report = json.loads(capsys.readouterr().out)
+    assert report["images"] == 3 and set(report["modes"]) == {"paper", "visible"}
+    assert report["modes"]["visible"]["mean_iou"] == 1.0

@@ -63,7 +63,7 @@ def test_same_seed_gives_byte_identical_output_and_resume_matches(written, libra
 
     st = Staging(out)
     with M.render.Renderer(CFG.width, CFG.height) as r:
-        views = M.ViewCache(CFG, r)
+        views = M.ViewCache(CFG.seed, CFG.scenes, r)
         for i in range(2):
             st.save(i, *M.make_image(CFG, i, library, views))
     assert staging.is_dir()

@@ -147,3 +147,27 @@ def test_rss_stays_flat_over_50_renders(platform):
     )
     assert out.returncode == 0, out.stderr
     assert float(out.stdout.strip().splitlines()[-1]) < 50.0
+
+
+def test_odd_width_textures_are_not_sheared(renderer):
+    """Trap 6: rgba_material uploads RGBA only; an odd-width texture shows its vertical stripes upright."""
+    pr = renderer.pyrender
+    scene, pose = _scene(pr, bg=(0.0, 0.0, 0.0, 1.0))
+    img = np.zeros((33, 31, 4), np.uint8)
+    img[..., 3] = 255
+    img[:, :15, :3] = (255, 40, 0)  # left half orange, right half white
+    img[:, 15:, :3] = 255
+    scene.add(R.textured_quad(pr, 1.0, 1.0, R.rgba_material(pr, img)))
+    color, depth = renderer.color_depth(scene)
+    ys, xs = np.nonzero(depth > 0)
+    left = color[ys.min() + 2 : ys.max() - 1, xs.min() + 2 : (xs.min() + xs.max()) // 2 - 2]
+    right = color[ys.min() + 2 : ys.max() - 1, (xs.min() + xs.max()) // 2 + 2 : xs.max() - 1]
+    assert left[..., 2].max() < 60 and right[..., 2].min() > 200
+
+
+def test_unproject_inverts_project():
+    pose = R.look_at(np.array([1.0, 2.0, 3.0]), np.array([0.0, 0.5, -1.0]))
+    k = R.intrinsics(0.9, 160, 120)
+    pts = np.random.default_rng(0).uniform(-2, 2, (20, 3)) + np.array([0.0, 0.5, -1.0])
+    uvd = R.project(pts, pose, k)
+    np.testing.assert_allclose(R.unproject(uvd[:, :2], uvd[:, 2], pose, k), pts, atol=1e-9)

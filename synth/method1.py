@@ -1,0 +1,262 @@
+"""Method 1 (the paper's first method): flame image planes placed in the 3D scene relative to the camera and
+rendered with it; boxes computed two ways.
+
+Placement: the camera follows the environment's camera rules (area, height, look-at target, limited pitch, no
+roll: :mod:`synth.camera`). Each plane stands on the surface seen at a random pixel of the lower two thirds of
+the view, ``clearance_m`` in front of it (towards the camera), upright (a horizontal view of a vertical flame),
+turned to face the camera up to ``yaw_jitter_deg``, ``flame_height_m`` tall with the sprite's aspect; the
+plane's texture is the sprite flattened to straight-alpha RGBA (:func:`synth.sprites.flatten_rgba`).
+
+Boxes (all in pixels, row 0 at the top):
+- ``paper``: the box of the plane's four projected corners, clipped to the image (the paper's way; it
+  includes the plane's transparent margin, its smoke, and parts hidden behind scene geometry);
+- ``visible``: the box of the flame's visible mask = the plane's segmentation pass (scene geometry occludes)
+  ∧ the sprite's flame mask warped by the plane's homography ∧ not behind an opaque part (alpha >= 0.5 or
+  flame) of a nearer plane (per-pixel depths from the segmentation passes).
+
+Image ``i`` uses view ``i // images_per_view`` (:mod:`synth.views`) and ``default_rng([seed, 3, i])``, so any
+image can be (re)made alone: runs resume and are byte-reproducible.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Any
+
+import cv2
+import numpy as np
+from numpy.typing import NDArray
+
+from curate.boxes import clip_xyxy, mask_to_xywh, points_to_xyxy, xyxy_to_xywh
+from curate.progress import progress
+from synth import render
+from synth.effects import Effects, apply_effects, sample_effects
+from synth.output import Staging, finish
+from synth.scenes import translate
+from synth.sprites import Sprite, SpriteSequence, flatten_rgba
+from synth.views import View, ViewCache
+
+BOX_MODES: tuple[str, ...] = ("paper", "visible")
+
+
+@dataclass(frozen=True)
+class Method1Config:
+    n: int = 100
+    seed: int = 0
+    width: int = 640
+    height: int = 480
+    scenes: int = 48
+    images_per_view: int = 1
+    max_flames: int = 3
+    negatives: float = 0.1  # fraction of images without flames
+    flame_height_m: tuple[float, float] = (0.3, 2.5)
+    distance_m: tuple[float, float] = (1.0, 25.0)  # plane distance from the camera
+    clearance_m: tuple[float, float] = (0.05, 0.5)  # plane stands this far in front of the surface it is on
+    yaw_jitter_deg: float = 25.0  # plane rotation about the vertical away from facing the camera
+    box_mode: str = "visible"  # written annotation: "visible" (accurate) or "paper" (projected corners)
+    min_box_px: int = 4  # boxes smaller than this (either side) are not annotated
+    effects: bool = True  # camera effects (white balance, blur, noise, JPEG) as in Method 2
+    smoke_class: bool = False
+
+    def __post_init__(self) -> None:
+        if self.box_mode not in BOX_MODES:
+            raise ValueError(f"unknown box mode {self.box_mode!r}; choose one of {', '.join(BOX_MODES)}")
+        if self.n < 1 or self.scenes < 1 or self.images_per_view < 1 or self.width < 16 or self.height < 16:
+            raise ValueError(f"invalid Method 1 config: {self}")
+        if self.distance_m[0] <= 0.2 or self.distance_m[1] < self.distance_m[0] or self.max_flames < 1:
+            raise ValueError(f"invalid Method 1 plane rules: {self}")
+
+
+@dataclass(frozen=True)
+class Plane:
+    """A flame image plane: ``width`` x ``height`` metres, bottom edge centred at the pose origin, facing +Z."""
+
+    sprite: Sprite
+    flame_id: str
+    pose: NDArray[np.float64]  # (4, 4) plane-to-world
+    width: float
+    height: float
+
+    def corners(self) -> NDArray[np.float64]:
+        """(4, 3) world corners: top-left, top-right, bottom-right, bottom-left (as the texture's corners)."""
+        local = render.quad_corners(self.width, self.height)
+        return local @ self.pose[:3, :3].T + self.pose[:3, 3]
+
+    def to_json(self) -> dict:
+        return {
+            "pose": np.round(self.pose, 6).tolist(),
+            "width_m": round(self.width, 6),
+            "height_m": round(self.height, 6),
+        }
+
+
+def _stand(cfg: Method1Config, view: View, k: NDArray[np.float64], rng: np.random.Generator):
+    """A random base point on the surface seen in the lower two thirds of the view, moved ``clearance_m``
+    towards the camera; None when the pixel shows sky or lies outside ``distance_m``."""
+    u, v = rng.uniform(0, cfg.width), rng.uniform(cfg.height / 3, cfg.height)
+    d = float(view.depth[min(int(v), cfg.height - 1), min(int(u), cfg.width - 1)])
+    if d <= 0:
+        return None
+    eye = view.camera.pose[:3, 3]
+    hit = render.unproject(np.array([[u, v]]), np.array([d]), view.camera.pose, k)[0]
+    ray = (hit - eye) / np.linalg.norm(hit - eye)
+    base = hit - ray * rng.uniform(*cfg.clearance_m)
+    return base if cfg.distance_m[0] <= np.linalg.norm(base - eye) <= cfg.distance_m[1] else None
+
+
+def place_plane(cfg: Method1Config, sprite: Sprite, view: View, rng: np.random.Generator, tries: int = 10):
+    """A plane for ``sprite`` obeying the placement rules (module docstring), or None after ``tries``."""
+    k = render.intrinsics(view.camera.yfov, cfg.width, cfg.height)
+    eye = view.camera.pose[:3, 3]
+    for _ in range(tries):
+        base = _stand(cfg, view, k, rng)
+        height = float(rng.uniform(*cfg.flame_height_m))
+        width = height * sprite.size[0] / sprite.size[1]
+        if base is None:
+            continue
+        to_eye = eye - base
+        yaw = np.degrees(np.arctan2(to_eye[0], to_eye[2])) + rng.uniform(-cfg.yaw_jitter_deg, cfg.yaw_jitter_deg)
+        plane = Plane(sprite, "", translate(*base, yaw_deg=float(yaw)), width, height)
+        if render.project(plane.corners(), view.camera.pose, k)[:, 2].min() > 0.1:
+            return plane
+    return None
+
+
+def place_planes(cfg: Method1Config, library: Sequence[SpriteSequence], view: View, rng: np.random.Generator):
+    """Up to ``max_flames`` planes (none for a negative image) with random sprites of the library."""
+    if rng.random() < cfg.negatives:
+        return []
+    planes = []
+    for _ in range(int(rng.integers(1, cfg.max_flames + 1))):
+        seq = library[int(rng.integers(len(library)))]
+        frame = int(rng.integers(len(seq.sprites)))
+        plane = place_plane(cfg, seq.sprites[frame], view, rng)
+        if plane is not None:
+            planes.append(Plane(plane.sprite, f"{seq.name}/{frame}", plane.pose, plane.width, plane.height))
+    return planes
+
+
+def render_planes(renderer: render.Renderer, view: View, planes: Sequence[Plane]):
+    """Render the view with the planes: ((H, W, 3) uint8 RGB, per plane ((H, W) bool coverage, (H, W) float32
+    depth)). A plane's coverage comes from a segmentation pass with the other planes hidden, so scene geometry
+    (and only it) occludes it; its depth is valid where it is covered."""
+    pr = renderer.pyrender
+    scene, cam = view.scene, view.camera
+    nodes = []
+    for p in planes:
+        quad = render.textured_quad(pr, p.width, p.height, render.rgba_material(pr, flatten_rgba(p.sprite)))
+        nodes.append(scene.add(quad, pose=p.pose))
+    try:
+        with render.camera_at(renderer, scene, cam.pose, cam.yfov):
+            rgb, _ = renderer.color_depth(scene)
+            passes = []
+            for node in nodes:
+                for other in nodes:
+                    other.mesh.is_visible = other is node
+                ids, depth = renderer.segment_depth(scene, {node: 1})
+                passes.append((ids == 1, depth))
+    finally:
+        for node in nodes:
+            scene.remove_node(node)
+    return rgb, passes
+
+
+def plane_layers(plane: Plane, corners_uv: NDArray[np.float64], width: int, height: int) -> NDArray[np.bool_]:
+    """(H, W, 2) bool: the sprite's flame mask and its opaque part (alpha >= 0.5 or flame) warped into the image
+    by the homography taking the sprite's corners to the plane's projected corners ``corners_uv`` (4, 2)."""
+    sw, sh = plane.sprite.size
+    src = np.array([[0, 0], [sw, 0], [sw, sh], [0, sh]], np.float32) - 0.5  # texel edges, cv2 centre convention
+    homography = cv2.getPerspectiveTransform(src, corners_uv.astype(np.float32) - 0.5)
+    mask = plane.sprite.mask
+    layers = np.stack([mask, mask | (flatten_rgba(plane.sprite)[..., 3] >= 128)], axis=-1).astype(np.float32)
+    warped = cv2.warpPerspective(layers, homography, (width, height), flags=cv2.INTER_LINEAR)
+    return warped >= 0.5
+
+
+def visible_masks(layers: Sequence[NDArray[np.bool_]], passes) -> list[NDArray[np.bool_]]:
+    """Per plane: (H, W) bool visible flame = covered ∧ flame ∧ not behind an opaque part of a nearer plane."""
+    out = []
+    for k, (cover_k, depth_k) in enumerate(passes):
+        visible = cover_k & layers[k][..., 0]
+        for j, (cover_j, depth_j) in enumerate(passes):
+            if j != k:
+                visible &= ~(cover_j & layers[j][..., 1] & (depth_j < depth_k))
+        out.append(visible)
+    return out
+
+
+def paper_box(corners_uv: NDArray[np.float64], width: int, height: int) -> NDArray[np.float64]:
+    """(4,) xywh: the box of the projected corners (4, 2), clipped to the image (the paper's annotation)."""
+    return xyxy_to_xywh(clip_xyxy(points_to_xyxy(corners_uv)[None], width, height))[0]
+
+
+def _box_json(box: NDArray[np.float64] | None) -> list[float] | None:
+    return None if box is None else [round(float(v), 3) for v in box]
+
+
+def annotate(cfg: Method1Config, planes: Sequence[Plane], paper: Sequence, masks: Sequence[NDArray[np.bool_]]):
+    """Order the flames for writing: first those with a visible box of at least ``min_box_px`` (annotated in
+    both modes; their masks are kept, instance k = k-th), then those only the paper's box sees (annotated in
+    paper mode only, no mask). Returns (kept masks, record fields)."""
+    big = [min(b[2], b[3]) >= cfg.min_box_px for b in (mask_to_xywh(m) for m in masks)]
+    seen = [i for i, ok in enumerate(big) if ok]
+    paper_only = [i for i, ok in enumerate(big) if not ok and min(paper[i][2], paper[i][3]) >= cfg.min_box_px]
+    order = seen + paper_only
+    modes = {
+        "paper": [_box_json(paper[i]) for i in order],
+        "visible": [_box_json(mask_to_xywh(masks[i])) for i in seen] + [None] * len(paper_only),
+    }
+    flames = [
+        {
+            "flame": planes[i].flame_id,
+            "plane": planes[i].to_json(),
+            "paper_box": modes["paper"][n],
+            "visible_box": modes["visible"][n],
+        }
+        for n, i in enumerate(order)
+    ]
+    boxes = modes["visible"][: len(seen)] if cfg.box_mode == "visible" else modes["paper"]
+    return [masks[i] for i in seen], {"boxes": boxes, "box_modes": modes, "flames": flames}
+
+
+def make_image(cfg: Method1Config, i: int, library: Sequence[SpriteSequence], views: ViewCache):
+    """Image ``i``: (H, W, 3) uint8, kept fire masks, record dict (boxes xywh, both box modes, metadata)."""
+    view = views.view(i // cfg.images_per_view)
+    rng = np.random.default_rng([cfg.seed, 3, i])
+    planes = place_planes(cfg, library, view, rng)
+    rgb, passes = render_planes(views.renderer, view, planes)
+    k = render.intrinsics(view.camera.yfov, cfg.width, cfg.height)
+    corners = [render.project(p.corners(), view.camera.pose, k)[:, :2] for p in planes]
+    layers = [plane_layers(p, c, cfg.width, cfg.height) for p, c in zip(planes, corners)]
+    masks = visible_masks(layers, passes)
+    paper = [paper_box(c, cfg.width, cfg.height) for c in corners]
+    kept, fields = annotate(cfg, planes, paper, masks)
+    effects = sample_effects(rng) if cfg.effects else Effects()
+    image = apply_effects(rgb, effects)
+    meta: dict[str, Any] = {**view.meta(), "flames": fields["flames"], "box_mode": cfg.box_mode}
+    meta["effects"] = effects.to_json()
+    record = {"width": cfg.width, "height": cfg.height, "boxes": fields["boxes"], "box_modes": fields["box_modes"]}
+    return image, kept, {**record, "meta": meta}
+
+
+def run_method1(
+    cfg: Method1Config,
+    library: Sequence[SpriteSequence],
+    out: Path,
+    overwrite: bool = False,
+    platform: str | None = None,
+):
+    """Generate (or resume) ``cfg.n`` images and write the dataset to ``out``; returns the WriteResult."""
+    if not library or not all(seq.sprites for seq in library):
+        raise ValueError("the flame library is empty")
+    staging = Staging(out)
+    todo = [i for i in range(cfg.n) if not staging.done(i)]
+    with render.Renderer(cfg.width, cfg.height, platform) as renderer:
+        views = ViewCache(cfg.seed, cfg.scenes, renderer)
+        for i in progress(todo, total=len(todo), desc="method1 images"):
+            image, masks, record = make_image(cfg, i, library, views)
+            staging.save(i, image, masks, record)
+    args = {**asdict(cfg), "flames": [s.name for s in library]}
+    return finish(staging, out, cfg.n, "synth:method1", "synth method1", args, cfg.smoke_class, overwrite)

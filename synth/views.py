@@ -1,0 +1,74 @@
+"""Camera views of the procedural environments, shared by Method 1 and Method 2.
+
+View ``v`` of a run seeded ``seed`` looks at environment ``v % scenes`` from a camera drawn by the
+environment's camera rules with ``default_rng([seed, 1, v])`` (blocked views rejected), so a view can be
+(re)made alone: runs resume and are byte-reproducible.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from synth import camera, render, scenes
+
+
+@dataclass(frozen=True)
+class View:
+    """One camera view: the environment, its pyrender scene (no camera node), the camera and the (H, W) float32
+    depth of the scene's geometry seen from it (metres along the view axis, 0 = sky)."""
+
+    env: scenes.Environment
+    scene: Any
+    camera: camera.CameraView
+    depth: NDArray[np.float32]
+
+    def meta(self) -> dict:
+        return {"environment": self.env.name, "family": self.env.family, "camera": self.camera.to_json()}
+
+
+class ViewCache:
+    """Builds each environment's pyrender scene once and remembers the last view (and background) made."""
+
+    def __init__(self, seed: int, scenes_count: int, renderer: render.Renderer) -> None:
+        if scenes_count < 1:
+            raise ValueError("at least one environment is needed")
+        self.seed, self.scenes, self.renderer = seed, scenes_count, renderer
+        self._scenes: dict[int, tuple[scenes.Environment, Any]] = {}
+        self._view: View | None = None
+        self._view_index = -1
+        self._background: tuple[int, Any] | None = None
+
+    def environment(self, env_index: int) -> tuple[scenes.Environment, Any]:
+        if env_index not in self._scenes:
+            env = scenes.build_environment(env_index, self.seed)
+            self._scenes[env_index] = (env, scenes.to_pyrender(env, self.renderer.pyrender))
+        return self._scenes[env_index]
+
+    def view(self, view_index: int) -> View:
+        """View ``view_index`` (see the module docstring); its depth is the accepted depth-only render."""
+        if self._view is not None and self._view_index == view_index:
+            return self._view
+        env, scene = self.environment(view_index % self.scenes)
+        rng = np.random.default_rng([self.seed, 1, view_index])
+        depths: list[NDArray[np.float32]] = []
+
+        def depth_of(v: camera.CameraView) -> NDArray[np.float32]:
+            depths.append(render.render_view(self.renderer, scene, v.pose, v.yfov, True)[1])
+            return depths[-1]
+
+        cam = camera.find_view(env.camera, rng, depth_of)
+        self._view, self._view_index = View(env, scene, cam, depths[-1]), view_index
+        return self._view
+
+    def background(self, view_index: int) -> tuple[NDArray[np.uint8], NDArray[np.float32], dict]:
+        """The rendered view: ((H, W, 3) uint8 RGB, (H, W) float32 depth, metadata), cached for reuse."""
+        if self._background and self._background[0] == view_index:
+            return self._background[1]
+        v = self.view(view_index)
+        rgb, depth = render.render_view(self.renderer, v.scene, v.camera.pose, v.camera.yfov)
+        self._background = (view_index, (rgb, depth, v.meta()))
+        return self._background[1]
