@@ -62,7 +62,8 @@ def train_one_epoch(t: Trainer, epoch: int) -> dict[str, float]:
     sums = {"box": 0.0, "obj": 0.0, "cls": 0.0}
     seen, pending, start = 0, 0, time.perf_counter()
     t.optimizer.zero_grad(set_to_none=True)
-    for i, (images, targets) in enumerate(progress(t.batches.epoch(epoch), total=nb, desc=f"epoch {epoch}")):
+    batches = progress(t.batches.epoch(epoch), total=nb, desc=f"epoch {epoch + 1}", unit="batch", min_items=10)
+    for i, (images, targets) in enumerate(batches):
         iteration = epoch * nb + i
         t.schedule.apply(t.optimizer, iteration, epoch)
         loss, parts = t.loss_fn(t.model(images), targets)
