@@ -208,3 +208,12 @@ def points_to_xyxy(points: ArrayLike) -> Boxes:
     if p.ndim != 2 or p.shape[1] != 2 or len(p) == 0:
         raise ValueError(f"points must be (N, 2) with N >= 1, got shape {p.shape}")
     return np.concatenate((p.min(axis=0), p.max(axis=0)))
+
+
+def xyxy_to_cxcywh(boxes: ArrayLike) -> Boxes:
+    """(N, 4) xyxy pixels -> (N, 4) centre boxes ``[cx, cy, w, h]`` in pixels (inverse of :func:`cxcywh_to_xyxy`)."""
+    b = _as_boxes(boxes)
+    out = b.copy()
+    out[..., :2] = (b[..., :2] + b[..., 2:]) / 2.0
+    out[..., 2:] = b[..., 2:] - b[..., :2]
+    return out

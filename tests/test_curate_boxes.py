@@ -129,3 +129,9 @@ def test_points_to_xyxy_encloses_points():
     np.testing.assert_allclose(boxes.points_to_xyxy([[1.0, 2.0]]), [1, 2, 1, 2])
     with pytest.raises(ValueError, match="N, 2"):
         boxes.points_to_xyxy(np.zeros((0, 2)))
+
+
+def test_xyxy_to_cxcywh_inverts_cxcywh_to_xyxy():
+    b = np.array([[8.0, 17.0, 12.0, 23.0], [0.0, 0.0, 1.0, 3.0]])
+    np.testing.assert_allclose(boxes.xyxy_to_cxcywh(b), [[10, 20, 4, 6], [0.5, 1.5, 1, 3]])
+    np.testing.assert_allclose(boxes.cxcywh_to_xyxy(boxes.xyxy_to_cxcywh(b)), b)

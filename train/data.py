@@ -75,9 +75,8 @@ def collate(samples: list[Sample]) -> tuple[torch.Tensor, torch.Tensor]:
     images = torch.from_numpy(np.ascontiguousarray(batch)).float().div_(255.0)
     rows = []
     for i, s in enumerate(samples):
-        b = s.boxes.reshape(-1, 4)
-        cxcywh = np.concatenate(((b[:, :2] + b[:, 2:]) / 2, b[:, 2:] - b[:, :2]), axis=1)
-        rows.append(np.concatenate((np.full((len(b), 1), i), s.classes.reshape(-1, 1), cxcywh), axis=1))
+        cxcywh = bx.xyxy_to_cxcywh(s.boxes.reshape(-1, 4)).reshape(-1, 4)
+        rows.append(np.concatenate((np.full((len(cxcywh), 1), i), s.classes.reshape(-1, 1), cxcywh), axis=1))
     targets = torch.from_numpy(np.concatenate(rows).astype(np.float32)) if rows else torch.zeros(0, 6)
     return images, targets
 

@@ -52,7 +52,7 @@ class Trainer:
     schedule: Schedule
     batches: TrainBatches
     class_names: list[str]
-    anchors: list
+    anchors: tuple
 
 
 def train_one_epoch(t: Trainer, epoch: int) -> dict[str, float]:
