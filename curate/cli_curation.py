@@ -103,6 +103,48 @@ def cmd_dedup(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_leakage(args: argparse.Namespace) -> int:
+    import json
+
+    from curate.leakage import find_leaks, leak_summary
+    from curate.scan import list_image_files, scan_images
+
+    embedder, cache = load_model_from_args(args)
+    try:
+        scans = [
+            scan_images(list_image_files([d]), embedder, cache, args.workers, args.batch_size) for d in (args.a, args.b)
+        ]
+    finally:
+        if cache is not None:
+            cache.close()
+    leaks = find_leaks(scans[0], scans[1], args.threshold, args.backend)
+    summary = leak_summary(scans[0], scans[1], leaks)
+    for problem in scans[0].problems + scans[1].problems:
+        print(problem, file=sys.stderr)
+    for leak in leaks[: args.show]:
+        print(f"{leak.kind} {leak.distance:.3f}  {leak.a}  {leak.b}")
+    if len(leaks) > args.show:
+        print(f"... and {len(leaks) - args.show} more" + (f" (see {args.json})" if args.json else " (use --json)"))
+    print(
+        f"{summary['pairs']} duplicate pairs ({summary['exact_pairs']} exact): {summary['a_with_leak']} of "
+        f"{summary['images_a']} images in A have a duplicate among the {summary['images_b']} in B "
+        f"(threshold {args.threshold:.3f})"
+    )
+    if args.json:
+        doc = {
+            "a": str(args.a.resolve()),
+            "b": str(args.b.resolve()),
+            "model": scans[0].model_id,
+            "threshold": args.threshold,
+            "summary": summary,
+            "leaks": [{"a": x.a, "b": x.b, "kind": x.kind, "distance": round(x.distance, 5)} for x in leaks],
+            "problems": [p.to_dict() for p in scans[0].problems + scans[1].problems],
+        }
+        args.json.parent.mkdir(parents=True, exist_ok=True)
+        args.json.write_text(json.dumps(doc, indent=1, ensure_ascii=False) + "\n", encoding="utf-8")
+    return 1 if leaks else 0
+
+
 def register(sub: argparse._SubParsersAction) -> None:
     """Add ``dedup`` and ``leakage`` to the ``fuzzyfire`` parser."""
     p = sub.add_parser(
@@ -138,3 +180,26 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--to", type=Path, help="target folder for --apply (new or empty)")
     add_model_args(p)
     p.set_defaults(func=cmd_dedup)
+
+    p = sub.add_parser(
+        "leakage",
+        help="report exact and near-duplicate images shared by two sets (e.g. train vs test)",
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+        description="List every pair (image in A, image in B) that is an exact copy (same bytes or pixels) or a near\n"
+        "duplicate (embeddings closer than --threshold). Exit code 1 when any pair is found (use it in CI).\n\n"
+        "example:\n  fuzzyfire leakage ../shared/data/fire-smoke-608/train ../shared/data/fire-smoke-608/test\n"
+        "  fuzzyfire leakage out/curated/images/train out/curated/images/test --json out/leaks.json",
+    )
+    p.add_argument("a", type=Path, help="first image folder (e.g. the training images)")
+    p.add_argument("b", type=Path, help="second image folder (e.g. the test images)")
+    p.add_argument(
+        "--threshold",
+        type=float,
+        default=DEFAULT_THRESHOLD,
+        help=f"near-duplicate distance (default {DEFAULT_THRESHOLD})",
+    )
+    p.add_argument("--backend", default="auto", choices=("auto", *BACKENDS), help="search backend (default auto)")
+    p.add_argument("--json", type=Path, help="write every pair to this JSON file")
+    p.add_argument("--show", type=int, default=20, help="pairs printed (default 20)")
+    add_model_args(p)
+    p.set_defaults(func=cmd_leakage)

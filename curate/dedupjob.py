@@ -109,10 +109,10 @@ def dedup_document(run: DedupRun, opts: DedupOptions, inputs: Sequence[str]) -> 
     }
 
 
-def write_outputs(run: DedupRun, doc: dict[str, Any], out: Path) -> dict[str, Path]:
-    """``dedup.json``, ``distances.png``, ``report.html`` (+ ``thumbs/``) in ``out``."""
+def write_outputs(run: DedupRun, doc: dict[str, Any], out: Path, json_name: str = "dedup.json") -> dict[str, Path]:
+    """``dedup.json`` (or ``json_name``), ``distances.png``, ``report.html`` (+ ``thumbs/``) in ``out``."""
     out.mkdir(parents=True, exist_ok=True)
-    files = {"json": out / "dedup.json", "histogram": out / "distances.png", "report": out / "report.html"}
+    files = {"json": out / json_name, "histogram": out / "distances.png", "report": out / "report.html"}
     files["json"].write_text(json.dumps(doc, indent=1, ensure_ascii=False) + "\n", encoding="utf-8")
     write_histogram(run.nn_dist, doc["threshold"], files["histogram"], f"{len(run.nn_dist)} images")
     images, removed = run.scan.images, {r.index: r for r in run.result.removed}
@@ -135,7 +135,7 @@ def write_outputs(run: DedupRun, doc: dict[str, Any], out: Path) -> dict[str, Pa
     ]
     write_html(
         files["report"],
-        "fuzzyfire dedup",
+        str(doc["tool"]),
         summary,
         [[(images[i].path, caption(i), i not in removed) for i in g] for g in groups],
         [(images[i].path, f"{run.scores[i]:.3f} {Path(images[i].path).name}") for i in top],

@@ -18,6 +18,7 @@ COMMAND_MODULES: tuple[str, ...] = (
     "synth.cli",
     "train.cli",
     "eval.cli",
+    "fuzzyfire.cmd_curate",
 )
 
 

@@ -69,3 +69,18 @@ def save(img: NDArray[np.uint8], path: Path, quality: int = 92) -> Path:
     kwargs = {"quality": quality} if path.suffix.lower() in (".jpg", ".jpeg") else {}
     Image.fromarray(img).save(path, **kwargs)
     return path
+
+
+def write_scene_dataset(
+    root: Path, items: dict[str, tuple[int, str | None]], names: tuple[str, ...] = ("fire", "smoke")
+) -> Path:
+    """A YOLO folder ``root/train/{images,labels}`` + data.yaml: ``stem -> (scene seed, transform or None)``;
+    each image gets one box of class ``seed % len(names)`` whose size depends on the seed."""
+    for stem, (seed, kind) in items.items():
+        img = scene(seed) if kind is None else transformed(scene(seed), kind)
+        save(img, root / "train" / "images" / f"{stem}.jpg")
+        label = root / "train" / "labels" / f"{stem}.txt"
+        label.parent.mkdir(parents=True, exist_ok=True)
+        label.write_text(f"{seed % len(names)} 0.5 0.5 {0.1 + 0.01 * (seed % 50):.2f} 0.25\n")
+    (root / "data.yaml").write_text(f"train: train/images\nnc: {len(names)}\nnames: [{', '.join(names)}]\n")
+    return root

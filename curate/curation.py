@@ -1,0 +1,154 @@
+"""FiIW-style curation with labels carried through (the ``fuzzyfire curate CONFIG`` pipeline):
+
+merge labelled sources -> exact duplicates -> near duplicates -> diversity ranking -> top N -> seeded split in
+which no group of near duplicates straddles two splits -> a curated dataset (COCO + YOLO + manifest) with
+``curation.json``, ``report.html`` and ``distances.png`` beside it.
+
+The schema dataclasses below are built from YAML by :mod:`fuzzyfire.config` (see ``configs/curate-shared.yaml``).
+"""
+
+from __future__ import annotations
+
+from collections import Counter
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Any, Literal, Optional
+
+import numpy as np
+
+from curate.dataset import Dataset
+from curate.dedup import DEFAULT_THRESHOLD
+from curate.dedupjob import DedupOptions, DedupRun, dedup_document, run_dedup
+from curate.embed import OnnxEmbedder, Preprocess, load_embedder
+from curate.embedcache import EmbeddingCache
+from curate.problems import Problem
+from curate.rank import rank_order
+from curate.sources import MergeConfig, SourceConfig, merge_sources
+from curate.split import near_groups, resolve_sizes, split_groups, straddling_groups
+
+
+@dataclass(frozen=True)
+class ModelConfig:
+    """Embedding model: ``path: null`` = built-in EfficientNet-Lite0 (then leave the rest at defaults)."""
+
+    path: Optional[Path] = None  # ONNX file of your own CNN
+    input_size: int = 224  # pixels, square
+    mean: tuple[float, ...] = (127.0, 127.0, 127.0)  # per channel on 0..255
+    std: tuple[float, ...] = (128.0, 128.0, 128.0)
+    bgr: bool = False
+    layout: Literal["nchw", "nhwc"] = "nchw"
+    output: Optional[str] = None  # output name used as the embedding (default: first)
+    batch_size: int = 8  # images per onnxruntime call
+    workers: int = 3  # decode threads
+
+
+@dataclass(frozen=True)
+class DedupConfig:
+    near: bool = True  # false: exact duplicates only
+    threshold: float = DEFAULT_THRESHOLD  # Euclidean distance of unit embeddings, 0..2
+    backend: Literal["auto", "numpy", "flat", "ivf", "hnsw"] = "auto"
+    protect_sources: tuple[str, ...] = ()  # source names whose images are never removed
+
+
+@dataclass(frozen=True)
+class RankConfig:
+    method: Literal["score", "kcenter"] = "score"  # score = mean distance to k nearest kept images
+    k: int = 10
+    top: Optional[int] = None  # keep the N most diverse; default: the sum of the split counts (or all)
+
+
+@dataclass(frozen=True)
+class SplitConfig:
+    sizes: dict[str, float] = field(default_factory=lambda: {"train": 0.8, "valid": 0.1, "test": 0.1})
+    group_threshold: float = 0.6  # images closer than this always share a split (>= dedup threshold)
+    seed: int = 0
+
+
+@dataclass(frozen=True)
+class CurateConfig:
+    sources: tuple[SourceConfig, ...]
+    classes: tuple[str, ...] = ("fire", "smoke")
+    dedup: DedupConfig = DedupConfig()
+    rank: RankConfig = RankConfig()
+    split: SplitConfig = SplitConfig()
+    model: ModelConfig = ModelConfig()
+    images: Literal["copy", "hardlink", "symlink"] = "copy"  # how images reach the output folder
+
+
+@dataclass
+class CurateResult:
+    dataset: Dataset  # the curated images (absolute paths) with their split
+    document: dict[str, Any]  # curation.json content
+    run: DedupRun
+    problems: list[Problem]
+
+
+def build_embedder(cfg: ModelConfig) -> OnnxEmbedder:
+    if cfg.path is None:
+        return load_embedder()
+    pre = Preprocess(cfg.input_size, tuple(cfg.mean), tuple(cfg.std), cfg.bgr, cfg.layout)  # type: ignore[arg-type]
+    return load_embedder(cfg.path, pre, output=cfg.output)
+
+
+def _selection_size(cfg: CurateConfig, n: int) -> int | None:
+    if cfg.rank.top is not None:
+        return min(cfg.rank.top, n)
+    values = list(cfg.split.sizes.values())
+    fractions = all(v <= 1 for v in values) and abs(sum(values) - 1) < 1e-6
+    return None if fractions else min(int(sum(values)), n)
+
+
+def curate(
+    cfg: CurateConfig, base: Path, out: Path, embedder: OnnxEmbedder, cache: EmbeddingCache | None
+) -> CurateResult:
+    """Run the pipeline (module docstring); relative source paths resolve against ``base``."""
+    merged, problems = merge_sources(MergeConfig(cfg.sources, cfg.classes), base, out)
+    protect = tuple(_source_path(s, base) for s in cfg.sources if s.name and s.name in cfg.dedup.protect_sources)
+    paths = [Path(img.file_name) for img in merged.images]
+    opts = DedupOptions(
+        cfg.dedup.threshold,
+        cfg.dedup.near,
+        cfg.dedup.backend,
+        protect,
+        cfg.rank.method,
+        cfg.rank.k,
+        None,
+        cfg.model.workers,
+        cfg.model.batch_size,
+    )
+    run = run_dedup(paths, embedder, cache, opts)  # ranks every kept image; the top N is cut below
+    top = _selection_size(cfg, len(run.result.kept))
+    opts = replace(opts, top=top)
+    if top is not None and cfg.rank.method == "kcenter":  # the k-center order depends on N
+        kept = run.result.kept
+        keys = [run.scan.images[i].path for i in kept]
+        order, _ = rank_order(run.scan.vectors[kept], keys, "kcenter", cfg.rank.k, cfg.dedup.backend, top)
+        run.ranking = [kept[i] for i in order]
+    run.selected = sorted(run.ranking[:top] if top is not None else run.ranking)
+    split_of, groups = assign_splits(run, cfg.split, len(run.selected))
+    by_path = {run.scan.images[i].path: name for i, name in split_of.items()}
+    curated = merged.filter_images(lambda img: img.file_name in by_path)
+    curated = replace(curated, images=tuple(replace(img, split=by_path[img.file_name]) for img in curated.images))
+    doc = dedup_document(run, opts, [str(_source_path(s, base)) for s in cfg.sources])
+    doc["tool"] = "fuzzyfire curate"
+    found = Counter(img.split for img in curated.images)
+    doc["splits"] = {name: found.get(name, 0) for name in cfg.split.sizes}
+    doc["split_groups"] = {"threshold": cfg.split.group_threshold, "groups": len(groups), "straddling": 0}
+    doc["split_seed"] = cfg.split.seed
+    return CurateResult(curated, doc, run, problems + run.scan.problems)
+
+
+def assign_splits(run: DedupRun, cfg: SplitConfig, n: int) -> tuple[dict[int, str], list[list[int]]]:
+    """Image index -> split for the selected images; groups of near duplicates (threshold
+    ``cfg.group_threshold``) stay whole. Returns the assignment and the groups (image indices)."""
+    selected = run.selected
+    local = near_groups(run.scan.vectors[selected], cfg.group_threshold, "auto")
+    groups = [[selected[i] for i in g] for g in local]
+    counts = resolve_sizes(cfg.sizes, n)
+    assignment = split_groups(groups, counts, np.random.default_rng(cfg.seed))
+    assert not straddling_groups(groups, assignment), "a near-duplicate group straddles two splits"
+    return assignment, groups
+
+
+def _source_path(src: SourceConfig, base: Path) -> Path:
+    return (src.path if src.path.is_absolute() else base / src.path).resolve()

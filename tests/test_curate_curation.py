@@ -1,0 +1,84 @@
+"""The curation pipeline on two tiny labelled sources: duplicates out, labels carried, leakage-free split."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+from curate_helpers import use_session_cache, write_scene_dataset
+
+from curate.curation import CurateConfig, DedupConfig, RankConfig, SplitConfig, curate
+from curate.embed import OnnxEmbedder, load_embedder
+from curate.sources import SourceConfig
+from curate.split import near_groups
+
+
+@pytest.fixture(scope="module")
+def embedder(tmp_path_factory: pytest.TempPathFactory) -> OnnxEmbedder:
+    use_session_cache(tmp_path_factory)
+    return load_embedder()
+
+
+@pytest.fixture(scope="module")
+def sources(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """src_a: scenes 0..19 plus 4 near copies; src_b: scenes 20..27 plus an exact copy of a scene of A."""
+    base = tmp_path_factory.mktemp("sources")
+    a = {f"a{s}": (s, None) for s in range(20)}
+    a |= {
+        "a100_flip": (100, "hflip"),
+        "a101_crop": (101, "crop"),
+        "a102_small": (102, "resize"),
+        "a103_b": (103, "bright"),
+    }
+    write_scene_dataset(base / "src_a", a)
+    write_scene_dataset(base / "src_b", {f"b{s}": (s, None) for s in range(20, 28)})
+    (base / "src_b" / "train" / "images" / "b_copy.jpg").write_bytes((base / "src_a/train/images/a10.jpg").read_bytes())
+    (base / "src_b" / "train" / "labels" / "b_copy.txt").write_text("1 0.5 0.5 0.2 0.2\n")
+    return base
+
+
+def _config(**kw) -> CurateConfig:
+    srcs = (SourceConfig(Path("src_a"), name="a"), SourceConfig(Path("src_b"), name="b"))
+    return CurateConfig(sources=srcs, **kw)
+
+
+def test_pipeline_removes_duplicates_and_splits_without_leakage(sources: Path, embedder: OnnxEmbedder) -> None:
+    cfg = _config(split=SplitConfig(sizes={"train": 20, "valid": 4, "test": 4}, group_threshold=0.6, seed=3))
+    result = curate(cfg, sources, sources / "out", embedder, None)
+    ds = result.dataset
+    names = {Path(img.file_name).stem for img in ds.images}
+    assert len(ds.images) == 28  # 28 distinct scenes; the top 28 of 28 kept
+    assert not names & {"a0_flip", "a1_crop", "a2_small", "a3_b"}
+    assert len(names & {"a10", "b_copy"}) == 1  # the exact copy across sources
+    assert result.document["splits"] == {"train": 20, "valid": 4, "test": 4}
+    # labels carried through: each kept image keeps its own box
+    by_image = ds.annotations_by_image()
+    for img in ds.images:
+        assert len(by_image[img.id]) == 1 and img.source in ("real:a", "real:b")
+    # no near-duplicate group (at the split threshold) straddles two splits
+    index = {im.path: i for i, im in enumerate(result.run.scan.images)}
+    rows = [index[img.file_name] for img in ds.images]
+    for group in near_groups(result.run.scan.vectors[rows], 0.6):
+        assert len({ds.images[i].split for i in group}) == 1
+
+
+def test_top_n_protect_and_determinism(sources: Path, embedder: OnnxEmbedder) -> None:
+    cfg = _config(
+        dedup=DedupConfig(protect_sources=("b",)),
+        rank=RankConfig(method="kcenter", top=10),
+        split=SplitConfig(sizes={"train": 0.6, "test": 0.4}, seed=1),
+    )
+    first = curate(cfg, sources, sources / "out", embedder, None)
+    again = curate(cfg, sources, sources / "out", embedder, None)
+    assert first.dataset.to_coco() == again.dataset.to_coco()
+    assert len(first.dataset.images) == 10 and first.document["splits"] == {"train": 6, "test": 4}
+    removed = {Path(r["path"]).stem for r in first.document["removed"]}
+    assert "a10" in removed and "b_copy" not in removed  # the protected source's copy stays
+    other_seed = curate(
+        _config(rank=RankConfig(top=10), split=SplitConfig(sizes={"train": 0.6, "test": 0.4}, seed=2)),
+        sources,
+        sources / "out",
+        embedder,
+        None,
+    )
+    assert [i.split for i in other_seed.dataset.images] != [i.split for i in first.dataset.images]
