@@ -3,7 +3,8 @@
 For an image ``images/<name>.<ext>`` the mask is ``masks/<name>.png``: value k marks the k-th fire box of that
 image (annotations in id order). ``masks/box_modes.json`` (Method 1) may hold alternative box sets per image,
 audited too: ``{file_name: {mode: [xywh | null, ...]}}``, entry k against instance k + 1 (no mask: IoU 0;
-``null``: the mode gives no box for that flame, skipped).
+``null``: the mode gives no box for that flame, skipped). Smoke boxes (category ``smoke``) are audited against
+``masks/<name>.smoke.png`` the same way.
 """
 
 from __future__ import annotations
@@ -31,33 +32,53 @@ def _iou(box: list[float], truth: np.ndarray) -> float:
     return float(box_iou_xyxy(xywh_to_xyxy(box), xywh_to_xyxy(truth))[0, 0])
 
 
+def _truths(path: Path) -> list[np.ndarray]:
+    labels = cv2.imread(str(path), cv2.IMREAD_UNCHANGED)
+    if labels is None:
+        raise FileNotFoundError(f"{path}: pixel-truth mask missing")
+    return [mask_to_xywh(labels == k) for k in range(1, int(labels.max()) + 1)]
+
+
+def _boxes_by_image(coco: dict, name: str) -> dict[int, list] | None:
+    cat = next((c["id"] for c in coco["categories"] if c["name"] == name), None)
+    if cat is None:
+        return None
+    boxes: dict[int, list] = {img["id"]: [] for img in coco["images"]}
+    for a in sorted(coco["annotations"], key=lambda a: a["id"]):
+        if a["category_id"] == cat:
+            boxes[a["image_id"]].append(a["bbox"])
+    return boxes
+
+
+def _ious(boxes: list, truths: list[np.ndarray]) -> list[float]:
+    """IoU of box k with truth k (0 when instance k has no mask); ``None`` boxes are skipped."""
+    return [_iou(b, truths[k]) if k < len(truths) else 0.0 for k, b in enumerate(boxes) if b is not None]
+
+
 def audit_dataset(folder: Path) -> dict[str, Any]:
     """``{"images", "boxes", "mean_iou", "min_iou"}`` of the written fire boxes vs their mask boxes, plus
-    ``"modes": {mode: {...}}`` when alternative box sets were kept."""
+    ``"modes": {mode: {...}}`` when alternative box sets were kept and ``"smoke": {...}`` for smoke boxes."""
     coco = json.loads((folder / "annotations.json").read_text(encoding="utf-8"))
-    fire = next((c["id"] for c in coco["categories"] if c["name"] == "fire"), None)
+    fire = _boxes_by_image(coco, "fire")
     if fire is None:
         raise ValueError(f"{folder}: no 'fire' category to audit")
-    anns: dict[int, list] = {img["id"]: [] for img in coco["images"]}
-    for a in sorted(coco["annotations"], key=lambda a: a["id"]):
-        if a["category_id"] == fire:
-            anns[a["image_id"]].append(a["bbox"])
+    smoke = _boxes_by_image(coco, "smoke")
     modes_path = folder / "masks" / "box_modes.json"
     modes = json.loads(modes_path.read_text(encoding="utf-8")) if modes_path.is_file() else {}
     ious: list[float] = []
+    smoke_ious: list[float] = []
     mode_ious: dict[str, list[float]] = {}
     for img in coco["images"]:
         mask_path = folder / "masks" / Path(img["file_name"]).relative_to("images").with_suffix(".png")
-        labels = cv2.imread(str(mask_path), cv2.IMREAD_UNCHANGED)
-        if labels is None:
-            raise FileNotFoundError(f"{mask_path}: pixel-truth mask missing")
-        truths = [mask_to_xywh(labels == k) for k in range(1, int(labels.max()) + 1)]
-        ious += [_iou(box, truths[k]) if k < len(truths) else 0.0 for k, box in enumerate(anns[img["id"]])]
+        truths = _truths(mask_path)
+        ious += _ious(fire[img["id"]], truths)
         for mode, boxes in modes.get(img["file_name"], {}).items():
-            mode_ious.setdefault(mode, []).extend(
-                _iou(b, truths[k]) if k < len(truths) else 0.0 for k, b in enumerate(boxes) if b is not None
-            )
+            mode_ious.setdefault(mode, []).extend(_ious(boxes, truths))
+        if smoke is not None:
+            smoke_ious += _ious(smoke[img["id"]], _truths(mask_path.with_suffix(".smoke.png")))
     result = _summary(ious, len(coco["images"]))
     if mode_ious:
         result["modes"] = {m: _summary(v, len(coco["images"])) for m, v in sorted(mode_ious.items())}
+    if smoke is not None:
+        result["smoke"] = _summary(smoke_ious, len(coco["images"]))
     return result

@@ -78,7 +78,9 @@ def cmd_method1(args: argparse.Namespace) -> int:
     from synth.method1 import Method1Config, run_method1
 
     w, h = args.size
-    cfg = Method1Config(n=args.n, seed=args.seed, width=w, height=h, scenes=args.scenes, box_mode=args.box_mode)
+    cfg = Method1Config(
+        n=args.n, seed=args.seed, width=w, height=h, scenes=args.scenes, box_mode=args.box_mode, smoke_class=args.smoke
+    )
     result = run_method1(cfg, _library(args), args.out, overwrite=args.overwrite)
     print(f"wrote {args.out}: {args.n} images, {args.box_mode} boxes ({', '.join(result.files.values())})")
     return 0
@@ -88,7 +90,7 @@ def cmd_method2(args: argparse.Namespace) -> int:
     from synth.method2 import Method2Config, run_method2
 
     w, h = args.size
-    cfg = Method2Config(n=args.n, seed=args.seed, width=w, height=h, scenes=args.scenes, smoke_class=False)
+    cfg = Method2Config(n=args.n, seed=args.seed, width=w, height=h, scenes=args.scenes, smoke_class=args.smoke)
     result = run_method2(cfg, _library(args), args.out, overwrite=args.overwrite)
     print(f"wrote {args.out}: {args.n} images ({', '.join(result.files.values())})")
     return 0
@@ -152,6 +154,7 @@ def _dataset_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--flames", type=Path, nargs="*", help="sequence folders (synth flames output, or RGBA PNGs)")
     p.add_argument("--library", type=int, default=12, help="procedural sequences to make when --flames is absent")
     p.add_argument("--overwrite", action="store_true")
+    p.add_argument("--smoke", action="store_true", help="also annotate smoke (class 'smoke', alpha >= 0.25)")
 
 
 def _register_method1(sub: argparse._SubParsersAction) -> None:

@@ -2,7 +2,9 @@
 
 Per sprite, in order: the ``over`` layer (smoke) is alpha-blended, then the emission is added (``add``) or
 screened (``screen``), plus a soft glow (blurred emission). A flame pixel stays visible unless a later sprite is
-opaque there (its smoke alpha >= 0.5 or its own flame mask). Boxes come from these final masks.
+opaque there (its smoke alpha >= 0.5 or its own flame mask); a smoke pixel (see ``synth.sprites.SMOKE_ALPHA``)
+likewise, and also where a later sprite has smoke (so smoke masks stay disjoint). Boxes come from these final
+masks.
 """
 
 from __future__ import annotations
@@ -40,14 +42,16 @@ class Placement:
 
 def scaled_layers(
     sprite: Sprite, width: int, height: int
-) -> tuple[NDArray[np.float32], NDArray[np.float32], NDArray[np.bool_]]:
-    """Sprite layers resized to (height, width): over (h, w, 4) and emission (h, w, 3) float32 in [0, 1], mask."""
+) -> tuple[NDArray[np.float32], NDArray[np.float32], NDArray[np.bool_], NDArray[np.bool_]]:
+    """Sprite layers resized to (height, width): over (h, w, 4) and emission (h, w, 3) float32 in [0, 1], flame
+    mask and smoke mask (h, w) bool."""
     sw, sh = sprite.size
     interp = cv2.INTER_AREA if width < sw else cv2.INTER_LINEAR
     over = cv2.resize(sprite.over, (width, height), interpolation=interp).astype(np.float32) / 255.0
     emission = cv2.resize(sprite.emission, (width, height), interpolation=interp).astype(np.float32) / 255.0
-    mask = cv2.resize(sprite.mask.astype(np.float32), (width, height), interpolation=cv2.INTER_LINEAR) >= 0.5
-    return over.reshape(height, width, 4), emission.reshape(height, width, 3), mask.reshape(height, width)
+    masks = np.stack([sprite.mask, sprite.smoke_mask()], axis=-1).astype(np.float32)
+    masks = cv2.resize(masks, (width, height), interpolation=cv2.INTER_LINEAR).reshape(height, width, 2) >= 0.5
+    return over.reshape(height, width, 4), emission.reshape(height, width, 3), masks[..., 0], masks[..., 1]
 
 
 def _clip(p: Placement, w: int, h: int) -> tuple[slice, slice, slice, slice] | None:
@@ -74,17 +78,25 @@ def _glow(img: NDArray[np.float32], emission: NDArray[np.float32], p: Placement,
         img[c[0], c[1]] = _add_light(img[c[0], c[1]], blurred[c[2], c[3]], p.blend)
 
 
-def composite(
-    background: NDArray[np.uint8], placements: Sequence[Placement]
-) -> tuple[NDArray[np.uint8], list[NDArray[np.bool_]]]:
-    """(H, W, 3) uint8 background + placements -> (H, W, 3) uint8 image and one (H, W) bool visible flame mask
-    per placement (after clipping to the image and occlusion by later sprites)."""
+@dataclass(frozen=True)
+class Composited:
+    """The composite: (H, W, 3) uint8 image and, per placement, its final visible (H, W) bool flame and smoke masks
+    (after clipping to the image and occlusion by later sprites)."""
+
+    image: NDArray[np.uint8]
+    flames: list[NDArray[np.bool_]]
+    smoke: list[NDArray[np.bool_]]
+
+
+def composite(background: NDArray[np.uint8], placements: Sequence[Placement]) -> Composited:
+    """Composite ``placements`` in order onto the (H, W, 3) uint8 ``background`` (see the module docstring)."""
     h, w = background.shape[:2]
     img = background.astype(np.float32) / 255.0
-    masks: list[NDArray[np.bool_]] = []
+    flames: list[NDArray[np.bool_]] = []
+    smoke: list[NDArray[np.bool_]] = []
     for p in placements:
-        over, emission, mask = scaled_layers(p.sprite, p.width, p.height)
-        full = np.zeros((h, w), bool)
+        over, emission, mask, smoke_mask = scaled_layers(p.sprite, p.width, p.height)
+        full, full_smoke = np.zeros((h, w), bool), np.zeros((h, w), bool)
         c = _clip(p, w, h)
         if c is not None:
             ys, xs, sy, sx = c
@@ -93,9 +105,12 @@ def composite(
             img[ys, xs] = _add_light(img[ys, xs], emission[sy, sx], p.blend)
             if p.glow > 0:
                 _glow(img, emission, p, c)
-            full[ys, xs] = mask[sy, sx]
+            full[ys, xs], full_smoke[ys, xs] = mask[sy, sx], smoke_mask[sy, sx]
             opaque = (over[sy, sx, 3] >= 0.5) | mask[sy, sx]
-            for earlier in masks:
+            for earlier in flames:
                 earlier[ys, xs] &= ~opaque
-        masks.append(full)
-    return np.round(img * 255.0).astype(np.uint8), masks
+            for earlier in smoke:  # later smoke takes over overlapping smoke: smoke masks stay disjoint
+                earlier[ys, xs] &= ~(opaque | smoke_mask[sy, sx])
+        flames.append(full)
+        smoke.append(full_smoke)
+    return Composited(np.round(img * 255.0).astype(np.uint8), flames, smoke)

@@ -33,7 +33,7 @@ from curate.boxes import clip_xyxy, mask_to_xywh, points_to_xyxy, xyxy_to_xywh
 from curate.progress import progress
 from synth import render
 from synth.effects import Effects, apply_effects, sample_effects
-from synth.output import Staging, finish
+from synth.output import Staging, boxes_from_masks, finish
 from synth.scenes import translate
 from synth.sprites import Sprite, SpriteSequence, flatten_rgba
 from synth.views import View, ViewCache
@@ -164,25 +164,29 @@ def render_planes(renderer: render.Renderer, view: View, planes: Sequence[Plane]
 
 
 def plane_layers(plane: Plane, corners_uv: NDArray[np.float64], width: int, height: int) -> NDArray[np.bool_]:
-    """(H, W, 2) bool: the sprite's flame mask and its opaque part (alpha >= 0.5 or flame) warped into the image
-    by the homography taking the sprite's corners to the plane's projected corners ``corners_uv`` (4, 2)."""
-    sw, sh = plane.sprite.size
+    """(H, W, 3) bool: the sprite's flame mask, its opaque part (alpha >= 0.5 or flame) and its smoke mask
+    (:meth:`Sprite.smoke_mask`) warped into the image by the homography taking the sprite's corners to the plane's
+    projected corners ``corners_uv`` (4, 2)."""
+    sp = plane.sprite
+    sw, sh = sp.size
     src = np.array([[0, 0], [sw, 0], [sw, sh], [0, sh]], np.float32) - 0.5  # texel edges, cv2 centre convention
     homography = cv2.getPerspectiveTransform(src, corners_uv.astype(np.float32) - 0.5)
-    mask = plane.sprite.mask
-    layers = np.stack([mask, mask | (flatten_rgba(plane.sprite)[..., 3] >= 128)], axis=-1).astype(np.float32)
+    opaque = sp.mask | (flatten_rgba(sp)[..., 3] >= 128)
+    layers = np.stack([sp.mask, opaque, sp.smoke_mask()], axis=-1).astype(np.float32)
     warped = cv2.warpPerspective(layers, homography, (width, height), flags=cv2.INTER_LINEAR)
     return warped >= 0.5
 
 
-def visible_masks(layers: Sequence[NDArray[np.bool_]], passes) -> list[NDArray[np.bool_]]:
-    """Per plane: (H, W) bool visible flame = covered ∧ flame ∧ not behind an opaque part of a nearer plane."""
+def visible_masks(layers: Sequence[NDArray[np.bool_]], passes, channel: int = 0) -> list[NDArray[np.bool_]]:
+    """Per plane: (H, W) bool visible flame (``channel`` 0) or smoke (2) = covered ∧ layer ∧ not behind an opaque
+    part of a nearer plane (for smoke: nor behind its smoke, so smoke masks stay disjoint)."""
     out = []
     for k, (cover_k, depth_k) in enumerate(passes):
-        visible = cover_k & layers[k][..., 0]
+        visible = cover_k & layers[k][..., channel]
         for j, (cover_j, depth_j) in enumerate(passes):
             if j != k:
-                visible &= ~(cover_j & layers[j][..., 1] & (depth_j < depth_k))
+                hides = layers[j][..., 1] | (layers[j][..., 2] if channel == 2 else False)
+                visible &= ~(cover_j & hides & (depth_j < depth_k))
         out.append(visible)
     return out
 
@@ -222,7 +226,8 @@ def annotate(cfg: Method1Config, planes: Sequence[Plane], paper: Sequence, masks
 
 
 def make_image(cfg: Method1Config, i: int, library: Sequence[SpriteSequence], views: ViewCache):
-    """Image ``i``: (H, W, 3) uint8, kept fire masks, record dict (boxes xywh, both box modes, metadata)."""
+    """Image ``i``: ((H, W, 3) uint8, kept fire masks, record dict (boxes xywh, both box modes, metadata), kept
+    smoke masks or None when smoke is not a class)."""
     view = views.view(i // cfg.images_per_view)
     rng = np.random.default_rng([cfg.seed, 3, i])
     planes = place_planes(cfg, library, view, rng)
@@ -238,7 +243,11 @@ def make_image(cfg: Method1Config, i: int, library: Sequence[SpriteSequence], vi
     meta: dict[str, Any] = {**view.meta(), "flames": fields["flames"], "box_mode": cfg.box_mode}
     meta["effects"] = effects.to_json()
     record = {"width": cfg.width, "height": cfg.height, "boxes": fields["boxes"], "box_modes": fields["box_modes"]}
-    return image, kept, {**record, "meta": meta}
+    record["meta"] = meta
+    if not cfg.smoke_class:
+        return image, kept, record, None
+    smoke, record["smoke_boxes"], _ = boxes_from_masks(visible_masks(layers, passes, 2), cfg.min_box_px)
+    return image, kept, record, smoke
 
 
 def run_method1(
@@ -256,7 +265,6 @@ def run_method1(
     with render.Renderer(cfg.width, cfg.height, platform) as renderer:
         views = ViewCache(cfg.seed, cfg.scenes, renderer)
         for i in progress(todo, total=len(todo), desc="method1 images"):
-            image, masks, record = make_image(cfg, i, library, views)
-            staging.save(i, image, masks, record)
+            staging.save(i, *make_image(cfg, i, library, views))
     args = {**asdict(cfg), "flames": [s.name for s in library]}
     return finish(staging, out, cfg.n, "synth:method1", "synth method1", args, cfg.smoke_class, overwrite)

@@ -14,12 +14,11 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from curate.boxes import mask_to_xywh
 from curate.progress import progress
 from synth import render
 from synth.composite import BLEND_MODES, Placement, composite
 from synth.effects import apply_effects, sample_effects
-from synth.output import Staging, finish
+from synth.output import Staging, boxes_from_masks, finish
 from synth.sprites import SpriteSequence
 from synth.views import ViewCache
 
@@ -71,22 +70,24 @@ def plan_flames(
 
 
 def make_image(cfg: Method2Config, i: int, library: Sequence[SpriteSequence], views: ViewCache):
-    """Image ``i``: (H, W, 3) uint8, kept fire masks, record dict (boxes xywh, metadata)."""
+    """Image ``i``: ((H, W, 3) uint8, kept fire masks, record dict (boxes xywh, metadata), kept smoke masks or
+    None when smoke is not a class)."""
     background, depth, view_meta = views.background(i // cfg.images_per_view)
     rng = np.random.default_rng([cfg.seed, 2, i])
     planned = plan_flames(cfg, library, depth, view_meta["camera"]["yfov"], rng)
-    image, masks = composite(background, [p for p, _ in planned])
+    result = composite(background, [p for p, _ in planned])
     effects = sample_effects(rng)
-    image = apply_effects(image, effects)
-    kept, boxes, flames = [], [], []
-    for (place, flame_id), mask in zip(planned, masks):
-        box = mask_to_xywh(mask)
-        if min(box[2], box[3]) >= cfg.min_box_px:
-            kept.append(mask)
-            boxes.append(box.tolist())
-            flames.append({"flame": flame_id, "blend": place.blend, "glow": round(place.glow, 4)})
+    image = apply_effects(result.image, effects)
+    kept, boxes, index = boxes_from_masks(result.flames, cfg.min_box_px)
+    flames = [
+        {"flame": planned[k][1], "blend": planned[k][0].blend, "glow": round(planned[k][0].glow, 4)} for k in index
+    ]
     meta = {**view_meta, "flames": flames, "effects": effects.to_json()}
-    return image, kept, {"width": cfg.width, "height": cfg.height, "boxes": boxes, "meta": meta}
+    record = {"width": cfg.width, "height": cfg.height, "boxes": boxes, "meta": meta}
+    if not cfg.smoke_class:
+        return image, kept, record, None
+    smoke, record["smoke_boxes"], _ = boxes_from_masks(result.smoke, cfg.min_box_px)
+    return image, kept, record, smoke
 
 
 def run_method2(
@@ -104,7 +105,6 @@ def run_method2(
     with render.Renderer(cfg.width, cfg.height, platform) as renderer:
         views = ViewCache(cfg.seed, cfg.scenes, renderer)
         for i in progress(todo, total=len(todo), desc="method2 images"):
-            image, masks, record = make_image(cfg, i, library, views)
-            staging.save(i, image, masks, record)
+            staging.save(i, *make_image(cfg, i, library, views))
     args = {**asdict(cfg), "flames": [s.name for s in library]}
     return finish(staging, out, cfg.n, "synth:method2", "synth method2", args, cfg.smoke_class, overwrite)

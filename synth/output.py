@@ -1,7 +1,8 @@
 """Staging, resume and final writing of a synthetic dataset (shared by Method 1 and Method 2).
 
 Each image ``i`` is staged in ``<out>/../.<out name>.parts/`` as ``images/NNNNNN.jpg``, ``masks/NNNNNN.png``
-(uint8 instance map: value k = the k-th fire box of the image, 0 = none) and ``records/NNNNNN.json`` (written
+(uint8 instance map: value k = the k-th fire box of the image, 0 = none; ``NNNNNN.smoke.png`` likewise for the
+smoke boxes when smoke is a class) and ``records/NNNNNN.json`` (written
 last, so its presence marks the image complete: an interrupted run resumes there). :func:`finish` writes the
 dataset with ``curate.writer.write_dataset`` (COCO + YOLO + manifest with per-image metadata), copies the masks
 to ``<out>/masks/`` beside the image names and draws a contact sheet.
@@ -21,10 +22,36 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
+from curate.boxes import mask_to_xywh
 from curate.dataset import Dataset, DatasetBuilder
 from curate.writer import WriteResult, plan_image_names, write_dataset
 
 CATEGORIES: tuple[str, ...] = ("fire", "smoke")
+
+
+def instance_map(shape: tuple[int, int], masks: Sequence[NDArray[np.bool_]]) -> NDArray[np.uint8]:
+    """(H, W) uint8 map: value k where the k-th (1-based) of the disjoint (H, W) bool ``masks`` is set, else 0."""
+    if len(masks) > 255:
+        raise ValueError("at most 255 instances per image")
+    labels = np.zeros(shape, np.uint8)
+    for k, m in enumerate(masks, start=1):
+        labels[m] = k
+    return labels
+
+
+def boxes_from_masks(
+    masks: Sequence[NDArray[np.bool_]], min_box_px: int
+) -> tuple[list[NDArray[np.bool_]], list[list[float]], list[int]]:
+    """The (H, W) bool masks whose box is at least ``min_box_px`` on both sides: (kept masks, their xywh boxes,
+    their indices in ``masks``)."""
+    kept, boxes, index = [], [], []
+    for i, m in enumerate(masks):
+        box = mask_to_xywh(m)
+        if min(box[2], box[3]) >= min_box_px:
+            kept.append(m)
+            boxes.append(box.tolist())
+            index.append(i)
+    return kept, boxes, index
 
 
 def staging_dir(out: Path) -> Path:
@@ -43,18 +70,23 @@ class Staging:
     def done(self, i: int) -> bool:
         return self.record_path(i).is_file()
 
-    def save(self, i: int, image: NDArray[np.uint8], masks: Sequence[NDArray[np.bool_]], record: Mapping) -> None:
-        """Stage image ``i``: (H, W, 3) RGB, its fire masks in box order, and its record (boxes, metadata)."""
-        if len(masks) > 255:
-            raise ValueError("at most 255 flames per image")
-        labels = np.zeros(image.shape[:2], np.uint8)
-        for k, m in enumerate(masks, start=1):
-            labels[m] = k
+    def save(
+        self,
+        i: int,
+        image: NDArray[np.uint8],
+        masks: Sequence[NDArray[np.bool_]],
+        record: Mapping,
+        smoke_masks: Sequence[NDArray[np.bool_]] | None = None,
+    ) -> None:
+        """Stage image ``i``: (H, W, 3) RGB, its fire masks in box order, its record (boxes, metadata) and, when
+        smoke is a class, its smoke masks in smoke-box order (``masks/NNNNNN.smoke.png``)."""
         name = f"{i:06d}"
         bgr = cv2.cvtColor(image, cv2.COLOR_RGB2BGR)
         if not cv2.imwrite(str(self.root / "images" / f"{name}.jpg"), bgr, [cv2.IMWRITE_JPEG_QUALITY, 95]):
             raise OSError(f"{self.root}: cannot write image {name}")
-        cv2.imwrite(str(self.root / "masks" / f"{name}.png"), labels)
+        cv2.imwrite(str(self.root / "masks" / f"{name}.png"), instance_map(image.shape[:2], masks))
+        if smoke_masks is not None:
+            cv2.imwrite(str(self.root / "masks" / f"{name}.smoke.png"), instance_map(image.shape[:2], smoke_masks))
         tmp = self.record_path(i).with_suffix(".tmp")
         tmp.write_text(json.dumps(dict(record), sort_keys=True) + "\n", encoding="utf-8")
         os.replace(tmp, self.record_path(i))
@@ -117,7 +149,10 @@ def finish(
     for img in ds.images:
         dst = out / "masks" / Path(plan[img.id]).relative_to("images").with_suffix(".png")
         dst.parent.mkdir(parents=True, exist_ok=True)
-        shutil.copyfile(staging.root / "masks" / f"{Path(img.file_name).stem}.png", dst)
+        stem = Path(img.file_name).stem
+        shutil.copyfile(staging.root / "masks" / f"{stem}.png", dst)
+        if (staging.root / "masks" / f"{stem}.smoke.png").is_file():
+            shutil.copyfile(staging.root / "masks" / f"{stem}.smoke.png", dst.with_suffix(".smoke.png"))
         rec = records[img.id - 1]
         if rec.get("box_modes"):
             extra[plan[img.id]] = rec["box_modes"]

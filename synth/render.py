@@ -16,6 +16,8 @@ pyrender traps handled here, each with a test in ``tests/test_synth_render.py``:
    :meth:`Renderer.segment` maps every other mesh node to id 0.
 6. RGB textures are uploaded with OpenGL's default 4-byte row alignment: a width whose ``3 * width`` is not a
    multiple of 4 shears the image into diagonal colour stripes. Textures made here are RGBA (always aligned).
+7. EGL displays are per-device singletons: pyrender's ``delete`` calls ``eglTerminate``, which breaks every other
+   open renderer of the process (``EGL_BAD_DISPLAY``). :meth:`Renderer.close` terminates only with the last one.
 
 Coordinates: world +Y is up; a camera looks down its local -Z with +Y up (OpenGL / pyrender convention).
 Images are (H, W, 3) uint8 RGB, row 0 at the top; depth is (H, W) float32 metres along the view axis, 0 where
@@ -126,8 +128,23 @@ def colors_to_ids(rgb: NDArray[np.uint8]) -> NDArray[np.int32]:
     return c[..., 0] | (c[..., 1] << 8) | (c[..., 2] << 16)
 
 
+def _keep_egl_display(platform: Any) -> None:
+    """Make pyrender's EGL platform destroy only its context on delete, not terminate the shared display."""
+
+    def delete_context() -> None:
+        from OpenGL.EGL import eglDestroyContext
+
+        if platform._egl_display is not None and platform._egl_context is not None:
+            eglDestroyContext(platform._egl_display, platform._egl_context)
+        platform._egl_context = platform._egl_display = None
+
+    platform.delete_context = delete_context
+
+
 class Renderer:
     """One offscreen context of a fixed size. Use as a context manager or call :meth:`close`."""
+
+    _live = 0  # open renderers in this process (trap 7)
 
     def __init__(self, width: int, height: int, platform: str | None = None) -> None:
         if width <= 0 or height <= 0:
@@ -139,6 +156,7 @@ class Renderer:
             self._r = self.pyrender.OffscreenRenderer(self.width, self.height)
         except Exception as exc:  # pyrender raises bare exceptions from EGL/OSMesa setup
             raise RenderError(f"cannot create a {self.platform} context: {exc}; {INSTALL_HINT}") from exc
+        Renderer._live += 1
         self._cache_cls = _stable_program_cache_class(self.pyrender)
         self._fix_program_cache()
 
@@ -177,6 +195,9 @@ class Renderer:
 
     def close(self) -> None:
         if self._r is not None:
+            Renderer._live -= 1
+            if self.platform == "egl" and Renderer._live > 0:
+                _keep_egl_display(self._r._platform)  # trap 7
             self._r.delete()
             self._r = None
 

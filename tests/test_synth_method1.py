@@ -207,3 +207,32 @@ def test_placement_follows_the_rules(renderer, library):
 def test_config_rejects_unknown_box_mode():
     with pytest.raises(ValueError, match="box mode"):
         M.Method1Config(box_mode="tight")
+
+
+def test_smoke_class_boxes_come_from_the_visible_smoke(tmp_path):
+    from dataclasses import replace
+
+    p = F.FlameParams(rows=40, cols=28, frames=40, keep_every=20, warmup=30, smoke=4.0, soot=1.2)
+    smoky = [F.generate_sequence("smoky", p, np.random.default_rng(0))]
+    out = tmp_path / "smoke"
+    M.run_method1(replace(CFG, n=3, smoke_class=True, max_flames=2), smoky, out)
+    report = audit_dataset(out)
+    assert report["mean_iou"] == 1.0 and report["smoke"]["boxes"] >= 1
+    assert report["smoke"]["mean_iou"] == 1.0 and report["smoke"]["min_iou"] == 1.0
+
+
+def test_smoke_mask_is_warped_like_the_flame(renderer):
+    """Smoke above the flame in the sprite lands above it in the image; the occluder test applies to it too."""
+    over = np.zeros((40, 30, 4), np.uint8)
+    over[:20, :, 3] = 220
+    sprite = _sprite(flame_rows=slice(20, 40), alpha=0)
+    sprite = Sprite(over, sprite.emission, sprite.mask)
+    plane = M.Plane(sprite, "t", translate(0, 0.3, 0), 1.0, 1.4)
+    view = _view(renderer)
+    k = R.intrinsics(view.camera.yfov, W, H)
+    corners = R.project(plane.corners(), view.camera.pose, k)[:, :2]
+    _, passes = M.render_planes(renderer, view, [plane])
+    layers = [M.plane_layers(plane, corners, W, H)]
+    smoke, flame = M.visible_masks(layers, passes, 2)[0], M.visible_masks(layers, passes, 0)[0]
+    s, f = mask_to_xywh(smoke), mask_to_xywh(flame)
+    assert s[1] + s[3] == f[1] and abs(s[3] - f[3]) <= 1 and not (smoke & flame).any()

@@ -71,19 +71,16 @@ def test_same_seed_gives_byte_identical_output_and_resume_matches(written, libra
     assert _files(out) == _files(written)
 
 
-def test_occluded_flames_lose_their_hidden_pixels():
-    from synth.composite import Placement, composite
-    from synth.sprites import Sprite
+def test_smoke_class_boxes_come_from_the_smoke_masks(tmp_path):
+    from dataclasses import replace
 
-    over = np.zeros((10, 10, 4), np.uint8)
-    emission = np.full((10, 10, 3), 200, np.uint8)
-    sprite = Sprite(over, emission, np.ones((10, 10), bool))
-    bg = np.zeros((20, 30, 3), np.uint8)
-    image, masks = composite(
-        bg, [Placement(sprite, 2, 2, 10, 10), Placement(sprite, 7, 2, 10, 10), Placement(sprite, 25, 15, 10, 10)]
-    )
-    assert masks[0].sum() == 50 and masks[1].sum() == 100  # the second flame hides half of the first
-    assert masks[2].sum() == 5 * 5  # truncated at the image border
-    assert image[5, 4].max() > 150
-    with pytest.raises(ValueError, match="blend"):
-        Placement(sprite, 0, 0, 5, 5, blend="multiply")
+    p = F.FlameParams(rows=40, cols=28, frames=40, keep_every=20, warmup=30, smoke=4.0, soot=1.2)
+    smoky = [F.generate_sequence("smoky", p, np.random.default_rng(0))]
+    out = tmp_path / "smoke"
+    M.run_method2(replace(CFG, n=4, smoke_class=True, max_flames=2), smoky, out)
+    coco = json.loads((out / "annotations.json").read_text())
+    assert [c["name"] for c in coco["categories"]] == ["fire", "smoke"]
+    report = audit_dataset(out)
+    assert report["mean_iou"] == 1.0 and report["smoke"]["boxes"] >= 1
+    assert report["smoke"]["mean_iou"] == 1.0 and report["smoke"]["min_iou"] == 1.0
+    assert len(list((out / "masks").glob("*.smoke.png"))) == 4

@@ -171,3 +171,17 @@ def test_unproject_inverts_project():
     pts = np.random.default_rng(0).uniform(-2, 2, (20, 3)) + np.array([0.0, 0.5, -1.0])
     uvd = R.project(pts, pose, k)
     np.testing.assert_allclose(R.unproject(uvd[:, :2], uvd[:, 2], pose, k), pts, atol=1e-9)
+
+
+def test_closing_one_renderer_keeps_the_others_working(renderer):
+    """Trap 7: pyrender's EGL delete terminates the display shared by every renderer of the process."""
+    pr = renderer.pyrender
+    scene, _ = _scene(pr)
+    scene.add(R.textured_quad(pr, 1.0, 1.0, R.rgba_material(pr, _halves((255, 0, 0), (0, 255, 0)))))
+    before, _ = renderer.color_depth(scene)
+    with R.Renderer(32, 24) as other:
+        own, _ = _scene(pr)
+        own.add(R.textured_quad(pr, 1.0, 1.0, R.rgba_material(pr, _halves((255, 0, 0), (0, 255, 0)))))
+        assert other.color_depth(own)[0][9, 16, 0] > 200  # the red top half
+    after, _ = renderer.color_depth(scene)
+    assert np.array_equal(before, after)

@@ -1,0 +1,59 @@
+"""Compositing: visible flame and smoke masks after clipping and occlusion by later sprites."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from curate.boxes import mask_to_xywh
+from synth.composite import Placement, composite
+from synth.sprites import SMOKE_ALPHA, Sprite
+
+
+def _flame(h=10, w=10, value=200):
+    return Sprite(np.zeros((h, w, 4), np.uint8), np.full((h, w, 3), value, np.uint8), np.ones((h, w), bool))
+
+
+def _smoky(h=20, w=10):
+    """Flame in the bottom half; smoke above: rows 0-4 faint (alpha below SMOKE_ALPHA), rows 5-9 dense."""
+    over = np.zeros((h, w, 4), np.uint8)
+    over[..., :3] = 70
+    over[: h // 4, :, 3] = round(0.5 * SMOKE_ALPHA * 255)
+    over[h // 4 : h // 2, :, 3] = 200
+    emission = np.zeros((h, w, 3), np.uint8)
+    emission[h // 2 :] = (255, 150, 30)
+    mask = np.zeros((h, w), bool)
+    mask[h // 2 :] = True
+    return Sprite(over, emission, mask)
+
+
+def test_occluded_flames_lose_their_hidden_pixels():
+    bg = np.zeros((20, 30, 3), np.uint8)
+    sprite = _flame()
+    out = composite(
+        bg, [Placement(sprite, 2, 2, 10, 10), Placement(sprite, 7, 2, 10, 10), Placement(sprite, 25, 15, 10, 10)]
+    )
+    masks = out.flames
+    assert masks[0].sum() == 50 and masks[1].sum() == 100  # the second flame hides half of the first
+    assert masks[2].sum() == 5 * 5  # truncated at the image border
+    assert out.image[5, 4].max() > 150
+    with pytest.raises(ValueError, match="blend"):
+        Placement(sprite, 0, 0, 5, 5, blend="multiply")
+
+
+def test_smoke_mask_is_dense_smoke_only():
+    sprite = _smoky()
+    assert np.array_equal(np.nonzero(sprite.smoke_mask().any(axis=1))[0], np.arange(5, 10))
+    out = composite(np.zeros((40, 40, 3), np.uint8), [Placement(sprite, 10, 5, 10, 20, glow=0.0)])
+    assert mask_to_xywh(out.smoke[0]).tolist() == [10, 10, 10, 5]
+    assert mask_to_xywh(out.flames[0]).tolist() == [10, 15, 10, 10]
+    assert not (out.smoke[0] & out.flames[0]).any()
+
+
+def test_later_flames_hide_earlier_smoke():
+    sprite = _smoky()
+    out = composite(
+        np.zeros((40, 40, 3), np.uint8), [Placement(sprite, 10, 5, 10, 20), Placement(_flame(), 15, 8, 10, 10)]
+    )
+    assert mask_to_xywh(out.smoke[0]).tolist() == [10, 10, 5, 5]
+    assert out.smoke[1].sum() == 0
