@@ -90,13 +90,19 @@ def _intensity(t: NDArray[np.float64], exposure: float) -> NDArray[np.float64]:
 
 
 def flame_palette(
-    kind: str = "blackbody", n: int = 256, t_min: float = 900.0, t_max: float = 3000.0, exposure: float = 9.0
+    kind: str = "blackbody",
+    n: int = 256,
+    t_min: float = 900.0,
+    t_max: float = 3000.0,
+    exposure: float = 9.0,
+    peak: float = 1.0,
 ) -> NDArray[np.float32]:
     """(n, 3) float32 sRGB-encoded colours for normalised temperature ``i / (n - 1)``.
 
     ``blackbody``: chromaticity of Planck's law at ``t_min + t (t_max - t_min)`` kelvin (red -> orange ->
     yellow-white), brightness ~ T^4. A chemical ``kind`` (see :data:`CHEMICAL_LINES`) colours the mid
-    temperatures with its line spectrum and keeps a whiter core.
+    temperatures with its line spectrum and keeps a whiter core. ``peak`` scales the linear colour at the core;
+    above 1 channels clip as in an over-exposed camera, so hot regions turn yellow, then white.
     """
     if kind not in PALETTES:
         raise ValueError(f"unknown flame palette {kind!r}; choose one of {', '.join(PALETTES)}")
@@ -106,5 +112,5 @@ def flame_palette(
         hue = line_spectrum_rgb(CHEMICAL_LINES[kind])
         white = np.clip(t**3 * 0.6, 0.0, 1.0)[:, None]
         body = chromaticity((1 - white) * hue[None, :] + white * np.ones(3) * 0.9 + 0.05 * body)
-    rgb = body * _intensity(t, exposure)[:, None]
+    rgb = body * _intensity(t, exposure)[:, None] * peak
     return srgb_encode(rgb).astype(np.float32)

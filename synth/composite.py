@@ -1,7 +1,9 @@
 """Vectorised 2D compositing of flame sprites onto a background, tracking each flame's visible mask.
 
-Per sprite, in order: the ``over`` layer (smoke) is alpha-blended, then the emission is added (``add``) or
-screened (``screen``), plus a soft glow (blurred emission). A flame pixel stays visible unless a later sprite is
+Per sprite, in order: the ``over`` layer (smoke) is alpha-blended and the background behind the flame dimmed by
+its luminous coverage (``opacity`` x emission brightness: a bright flame outshines a bright wall, as a camera
+exposed for the fire sees it), then the emission is added (``add``) or screened (``screen``), plus a soft glow
+(blurred emission). A flame pixel stays visible unless a later sprite is
 opaque there (its smoke alpha >= 0.5 or its own flame mask); a smoke pixel (see ``synth.sprites.SMOKE_ALPHA``)
 likewise, and also where a later sprite has smoke (so smoke masks stay disjoint). Boxes come from these final
 masks.
@@ -10,7 +12,7 @@ masks.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import cv2
 import numpy as np
@@ -32,6 +34,7 @@ class Placement:
     height: int
     blend: str = "screen"
     glow: float = 0.3
+    opacity: float = 0.8  # luminous coverage: the background behind the flame dims by opacity x its brightness
 
     def __post_init__(self) -> None:
         if self.blend not in BLEND_MODES:
@@ -72,7 +75,7 @@ def _glow(img: NDArray[np.float32], emission: NDArray[np.float32], p: Placement,
     canvas = np.zeros((p.height + 2 * r, p.width + 2 * r, 3), np.float32)
     canvas[r : r + p.height, r : r + p.width] = emission
     blurred = cv2.GaussianBlur(canvas, (0, 0), sigmaX=r / 2.5) * p.glow
-    big = Placement(p.sprite, p.x - r, p.y - r, p.width + 2 * r, p.height + 2 * r, p.blend, p.glow)
+    big = replace(p, x=p.x - r, y=p.y - r, width=p.width + 2 * r, height=p.height + 2 * r)
     c = _clip(big, w, h)
     if c is not None:
         img[c[0], c[1]] = _add_light(img[c[0], c[1]], blurred[c[2], c[3]], p.blend)
@@ -101,8 +104,10 @@ def composite(background: NDArray[np.uint8], placements: Sequence[Placement]) ->
         if c is not None:
             ys, xs, sy, sx = c
             a = over[sy, sx, 3:4]
-            img[ys, xs] = img[ys, xs] * (1.0 - a) + over[sy, sx, :3] * a
-            img[ys, xs] = _add_light(img[ys, xs], emission[sy, sx], p.blend)
+            light = emission[sy, sx]
+            cover = a + (1.0 - a) * p.opacity * light.max(axis=-1, keepdims=True)
+            img[ys, xs] = img[ys, xs] * (1.0 - cover) + over[sy, sx, :3] * a
+            img[ys, xs] = _add_light(img[ys, xs], light, p.blend)
             if p.glow > 0:
                 _glow(img, emission, p, c)
             full[ys, xs], full_smoke[ys, xs] = mask[sy, sx], smoke_mask[sy, sx]

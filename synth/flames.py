@@ -48,6 +48,9 @@ class FlameParams:
     smoke: float = 0.6  # smoke opacity scale (0: no smoke)
     smoke_grey: float = 0.25  # smoke colour (0 black .. 1 white)
     palette: str = "blackbody"
+    exposure: float = 9.0  # brightness curve of the palette (higher: brighter, more saturated flames)
+    peak: float = 1.0  # linear brightness at the core; > 1 clips to yellow-white like an over-exposed camera
+    base_fade: float = 3.0  # the flame's base fades out over an irregular line up to this many cells high
     frames: int = 1024
     keep_every: int = 12
     warmup: int = 40  # steps before the first kept frame
@@ -78,9 +81,11 @@ def sample_params(rng: np.random.Generator, generator: str = "fluid", rare: bool
         vorticity=float(rng.uniform(0.1, 0.4)),
         cooling=float(rng.uniform(0.04, 0.09)),
         soot=float(rng.uniform(0.3, 1.2)),
-        smoke=float(rng.choice([0.0, rng.uniform(0.2, 1.0)], p=[0.2, 0.8])),
+        smoke=float(rng.choice([0.0, rng.uniform(0.2, 1.0), rng.uniform(1.5, 5.0)], p=[0.2, 0.5, 0.3])),
         smoke_grey=float(rng.uniform(0.12, 0.45)),
         palette=palette,
+        exposure=float(rng.uniform(6.0, 20.0)),
+        peak=float(rng.uniform(1.0, 3.5)),
     )
     return replace(p, **fixed)
 
@@ -138,6 +143,16 @@ def _noise(rng: np.random.Generator, shape: tuple[int, int], cell: int) -> F32:
     return cv2.resize(small, (shape[1], shape[0]), interpolation=cv2.INTER_CUBIC)
 
 
+def base_attenuation(p: FlameParams, bottom: int, rng: np.random.Generator) -> F32:
+    """(rows, cols) factor in [0, 1] fading the flame out below an irregular line ``0..base_fade`` cells above
+    row ``bottom`` (a soft two-cell ramp), so flames do not end in a straight cut."""
+    if p.base_fade <= 0:
+        return np.ones((p.rows, p.cols), np.float32)
+    offset = (np.clip(_noise(rng, (1, p.cols), 6)[0] * 0.5 + 0.5, 0, 1) * p.base_fade).astype(np.float32)
+    above = (bottom - np.arange(p.rows, dtype=np.float32))[:, None]
+    return np.clip((above - offset[None, :]) / 2.0, 0.0, 1.0).astype(np.float32)
+
+
 @dataclass
 class FluidState:
     u: F32
@@ -168,6 +183,15 @@ def fluid_step(s: FluidState, p: FlameParams, src: F32, grid: tuple[F32, F32], r
     s.temperature = cooled.astype(np.float32)
 
 
+def _border_window(shape: tuple[int, int], fraction: float = 0.12) -> F32:
+    """(h, w) factor fading smoke to 0 towards the left, right and top borders (no hard edge where the plume
+    leaves the simulated domain)."""
+    h, w = shape
+    ramp_x = np.clip(np.minimum(np.arange(w), np.arange(w)[::-1]) / max(fraction * w, 1.0), 0, 1)
+    ramp_y = np.clip(np.arange(h) / max(fraction * h, 1.0), 0, 1)
+    return (ramp_y[:, None] * ramp_x[None, :]).astype(np.float32)
+
+
 def render_fields(temperature: F32, soot: F32, p: FlameParams, palette: F32, mask_level: float = 0.2) -> Sprite:
     """Fields (rows, cols) -> an uncropped sprite of (rows * scale, cols * scale) pixels. The flame mask is where
     the emitted colour's brightest channel exceeds ``mask_level`` (visible fire)."""
@@ -177,7 +201,7 @@ def render_fields(temperature: F32, soot: F32, p: FlameParams, palette: F32, mas
     emission = palette[idx]
     mask = emission.max(axis=-1) > mask_level
     dens = np.clip(cv2.resize(soot, size, interpolation=cv2.INTER_LINEAR), 0.0, None)
-    alpha = (1.0 - np.exp(-p.smoke * dens)) * (1.0 - emission.max(axis=-1))
+    alpha = (1.0 - np.exp(-p.smoke * dens)) * (1.0 - emission.max(axis=-1)) * _border_window(t.shape)
     over = np.empty(t.shape + (4,), np.uint8)
     over[..., :3] = np.uint8(round(p.smoke_grey * 255))
     over[..., 3] = np.round(np.clip(alpha, 0, 1) * 255).astype(np.uint8)
@@ -190,14 +214,15 @@ def simulate_fluid(p: FlameParams, rng: np.random.Generator) -> list[Sprite]:
     zeros = np.zeros(shape, np.float32)
     state = FluidState(zeros.copy(), zeros.copy(), zeros.copy(), zeros.copy(), zeros.copy())
     gy, gx = np.mgrid[0 : p.rows, 0 : p.cols].astype(np.float32)
-    palette = flame_palette(p.palette)
+    palette = flame_palette(p.palette, exposure=p.exposure, peak=p.peak)
     src = source_mask(p, rng)
+    base = base_attenuation(p, p.rows - 3, rng)
     frames = []
     for step in range(p.warmup + p.frames):
         fluid_step(state, p, src, (gx, gy), rng)
         kept = step - p.warmup
         if kept >= 0 and kept % p.keep_every == 0:
-            frames.append(render_fields(state.temperature, state.soot, p, palette))
+            frames.append(render_fields(state.temperature * base, state.soot, p, palette))
     return frames
 
 
@@ -207,7 +232,8 @@ def simulate_noise(p: FlameParams, rng: np.random.Generator) -> list[Sprite]:
     tall = sum(_noise(rng, (rows * 4, cols), c) * (c / 16) for c in (16, 8, 4))
     y = np.linspace(1.0, 0.0, rows, dtype=np.float32)[:, None]  # 0 at the bottom row, 1 at the top
     x = (np.arange(cols, dtype=np.float32) - cols / 2 + 0.5)[None, :] / cols
-    palette = flame_palette(p.palette)
+    palette = flame_palette(p.palette, exposure=p.exposure, peak=p.peak)
+    base = base_attenuation(p, rows, rng)
     frames = []
     for step in range(0, p.frames, p.keep_every):
         off = (step * 2) % (rows * 3)
@@ -217,7 +243,7 @@ def simulate_noise(p: FlameParams, rng: np.random.Generator) -> list[Sprite]:
         d = np.abs(x - sway) / width
         heat = np.clip(1.0 - d + 0.35 * n * (0.3 + y), 0, 1) * np.clip(1.2 - y * (1 + 0.3 * n), 0, 1)
         soot = np.clip(0.8 - d * 0.6, 0, 1) * np.clip(y - 0.5, 0, None) * (1 + 0.5 * n)
-        frames.append(render_fields(heat.astype(np.float32), soot.astype(np.float32), p, palette))
+        frames.append(render_fields((heat * base).astype(np.float32), soot.astype(np.float32), p, palette))
     return frames
 
 

@@ -64,7 +64,8 @@ def plan_flames(
         sw, sh = sprite.size
         wpx = max(int(round(hpx * sw / sh)), 2)
         blend = str(rng.choice(BLEND_MODES))
-        place = Placement(sprite, bx - wpx // 2, by - hpx, wpx, hpx, blend, float(rng.uniform(0.1, 0.5)))
+        glow, opacity = float(rng.uniform(0.1, 0.5)), float(rng.uniform(0.5, 0.95))
+        place = Placement(sprite, bx - wpx // 2, by - hpx, wpx, hpx, blend, glow, opacity)
         out.append((place, f"{seq.name}/{frame}"))
     return out
 
@@ -80,7 +81,13 @@ def make_image(cfg: Method2Config, i: int, library: Sequence[SpriteSequence], vi
     image = apply_effects(result.image, effects)
     kept, boxes, index = boxes_from_masks(result.flames, cfg.min_box_px)
     flames = [
-        {"flame": planned[k][1], "blend": planned[k][0].blend, "glow": round(planned[k][0].glow, 4)} for k in index
+        {
+            "flame": planned[k][1],
+            "blend": planned[k][0].blend,
+            "glow": round(planned[k][0].glow, 4),
+            "opacity": round(planned[k][0].opacity, 4),
+        }
+        for k in index
     ]
     meta = {**view_meta, "flames": flames, "effects": effects.to_json()}
     record = {"width": cfg.width, "height": cfg.height, "boxes": boxes, "meta": meta}

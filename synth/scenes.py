@@ -283,6 +283,17 @@ def load_user_environment(path: Path, kelvin: float = 4500.0) -> Environment:
     return env
 
 
+#: How much of a light's colour cast the camera's auto white balance removes (0: none, 1: all lights white).
+CAMERA_WHITE_BALANCE = 0.7
+
+
+def white_balanced(kelvin: float) -> NDArray[np.float64]:
+    """(3,) linear RGB of a black-body light of ``kelvin`` as a white-balanced camera sees it: the chromaticity
+    raised to ``1 - CAMERA_WHITE_BALANCE`` (warm lamps stay warm, not orange)."""
+    c = blackbody_rgb(kelvin) ** (1.0 - CAMERA_WHITE_BALANCE)
+    return c / c.max()
+
+
 def to_pyrender(env: Environment, pr: Any, texture_size: int = 128) -> Any:
     """A ``pyrender.Scene`` of ``env`` (no camera). Textures are drawn from the environment's own rng."""
     scene = pr.Scene(bg_color=(*env.sky, 1.0), ambient_light=(env.ambient,) * 3)
@@ -303,7 +314,7 @@ def to_pyrender(env: Environment, pr: Any, texture_size: int = 128) -> Any:
         mat = pr.MetallicRoughnessMaterial(baseColorFactor=(*solid.color, 1.0), metallicFactor=0.0, roughnessFactor=0.8)
         scene.add(pr.Mesh.from_trimesh(solid.mesh, material=mat, smooth=False), pose=solid.pose)
     for light in env.lights:
-        colour = blackbody_rgb(light.kelvin)
+        colour = white_balanced(light.kelvin)
         cls = pr.PointLight if light.kind == "point" else pr.DirectionalLight
         scene.add(cls(color=colour, intensity=light.intensity), pose=light.pose)
     return scene

@@ -35,12 +35,33 @@ def _jitter(rng: np.random.Generator, rgb: tuple[int, int, int], spread: float =
     return np.clip(np.asarray(rgb, float) + rng.normal(0, spread, 3), 10, 245)
 
 
+#: Paints and finishes seen in real buildings (sRGB); each texture picks one and jitters it slightly.
+PLASTER_PAINTS = (
+    (236, 234, 228),  # white
+    (226, 221, 208),  # off-white
+    (214, 205, 186),  # beige
+    (200, 200, 197),  # light grey
+    (224, 214, 178),  # cream
+    (192, 204, 210),  # pale blue
+    (201, 211, 190),  # pale green
+    (222, 204, 184),  # peach
+)
+CARPETS = ((112, 112, 116), (78, 88, 108), (108, 86, 66), (116, 54, 52), (80, 94, 72), (60, 60, 64))
+BRICKS = ((150, 70, 50), (166, 96, 66), (128, 62, 46), (176, 122, 92))
+TILES = ((222, 222, 218), (200, 200, 196), (214, 206, 190), (170, 172, 175))
+
+
+def _pick(rng: np.random.Generator, palette: tuple[tuple[int, int, int], ...], spread: float) -> NDArray[np.float64]:
+    return _jitter(rng, palette[int(rng.integers(len(palette)))], spread)
+
+
 def plaster(rng: np.random.Generator, size: int = 128) -> U8:
-    return _colourise(_jitter(rng, (205, 198, 185), 30), _fractal(rng, size), 0.06)
+    return _colourise(_pick(rng, PLASTER_PAINTS, 5), _fractal(rng, size), 0.05)
 
 
 def concrete(rng: np.random.Generator, size: int = 128) -> U8:
-    return _colourise(_jitter(rng, (140, 138, 132), 15), _fractal(rng, size), 0.18)
+    shade = _fractal(rng, size) * 0.6 + 0.4 * _tileable_noise(rng, size, 2)
+    return _colourise(_jitter(rng, (140, 138, 132), 12), shade, 0.12)
 
 
 def planks(rng: np.random.Generator, size: int = 128) -> U8:
@@ -54,19 +75,21 @@ def planks(rng: np.random.Generator, size: int = 128) -> U8:
 
 
 def tiles(rng: np.random.Generator, size: int = 128) -> U8:
-    img = _colourise(_jitter(rng, (200, 200, 195), 35), _fractal(rng, size), 0.05)
+    img = _colourise(_pick(rng, TILES, 6), _fractal(rng, size), 0.05)
     step = size // int(rng.choice([4, 8]))
-    img[::step], img[:, ::step] = 90, 90
+    grout = np.clip(img[0, 0].astype(int) - 70, 40, 255).astype(np.uint8)
+    img[::step], img[:, ::step] = grout, grout
     return img
 
 
 def bricks(rng: np.random.Generator, size: int = 128) -> U8:
-    img = _colourise(_jitter(rng, (150, 70, 50), 20), _fractal(rng, size), 0.15)
+    img = _colourise(_pick(rng, BRICKS, 10), _fractal(rng, size) + 0.4 * _tileable_noise(rng, size, 2), 0.15)
     rows, h = 8, size // 8
+    mortar = int(rng.integers(150, 200))
     for r in range(rows):
-        img[r * h : r * h + 2] = 170
-        off = (h if r % 2 else 0) + 0
-        img[r * h : (r + 1) * h, off :: 2 * h][:, :2] = 170
+        img[r * h : r * h + 2] = mortar
+        off = h if r % 2 else 0
+        img[r * h : (r + 1) * h, off :: 2 * h][:, :2] = mortar
     return img
 
 
@@ -85,7 +108,7 @@ def metal(rng: np.random.Generator, size: int = 128) -> U8:
 
 
 def carpet(rng: np.random.Generator, size: int = 128) -> U8:
-    return _colourise(_jitter(rng, (110, 60, 60), 50), _tileable_noise(rng, size, 2), 0.12)
+    return _colourise(_pick(rng, CARPETS, 8), _tileable_noise(rng, size, 2), 0.12)
 
 
 TEXTURES: dict[str, Callable[[np.random.Generator, int], U8]] = {

@@ -45,3 +45,12 @@ def test_flame_palette_is_dark_when_cold_and_brightens():
         assert np.all(np.diff(pal.max(axis=1)) >= 0)
     with pytest.raises(ValueError, match="unknown flame palette"):
         C.flame_palette("plasma")
+
+
+def test_peak_above_one_turns_the_core_yellow_white():
+    from synth.colour import flame_palette
+
+    plain, hot = flame_palette("blackbody", peak=1.0), flame_palette("blackbody", peak=3.0)
+    assert plain[-1][1] < 0.85 and hot[-1][1] > 0.95  # the core: orange vs clipped yellow-white
+    assert np.all(hot >= plain - 1e-6) and np.all(hot <= 1.0)
+    assert hot[0].max() == 0.0  # cold stays dark

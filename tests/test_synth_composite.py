@@ -57,3 +57,13 @@ def test_later_flames_hide_earlier_smoke():
     )
     assert mask_to_xywh(out.smoke[0]).tolist() == [10, 10, 5, 5]
     assert out.smoke[1].sum() == 0
+
+
+def test_bright_flames_outshine_bright_walls():
+    sprite = _flame(value=0)
+    sprite.emission[:] = (255, 150, 30)
+    white = np.full((10, 10, 3), 255, np.uint8)
+    lit = composite(white, [Placement(sprite, 0, 0, 10, 10, "screen", glow=0.0, opacity=1.0)]).image
+    assert np.abs(lit[5, 5].astype(int) - (255, 150, 30)).max() <= 1  # the flame's colour, not white
+    washed = composite(white, [Placement(sprite, 0, 0, 10, 10, "screen", glow=0.0, opacity=0.0)]).image
+    assert washed[5, 5].min() == 255

@@ -66,3 +66,13 @@ def test_rare_palettes_and_validation():
         F.FlameParams(shape="cube")
     with pytest.raises(ValueError, match="unknown flame generator"):
         F.FlameParams(generator="embergen")
+
+
+def test_flame_base_is_irregular_not_a_straight_cut():
+    p = F.FlameParams(shape="pool", base_fade=3.0, **SMALL)
+    att = F.base_attenuation(p, p.rows - 3, np.random.default_rng(0))
+    assert att.shape == (p.rows, p.cols) and att.min() == 0.0 and att.max() == 1.0
+    first_lit = (att > 0.5).argmin(axis=0)  # per column: first row (from the top) that is faded out
+    assert len(set(first_lit.tolist())) > 1
+    flat = F.base_attenuation(F.FlameParams(base_fade=0.0, **SMALL), 45, np.random.default_rng(0))
+    assert np.all(flat == 1.0)

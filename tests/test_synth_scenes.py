@@ -82,3 +82,13 @@ def test_camera_pose_looks_at_its_target():
     view = C.sample_view(rule, np.random.default_rng(0))
     fwd = -view.pose[:3, 2]
     assert np.allclose(fwd, [0, 0, -1], atol=1e-9)
+
+
+def test_walls_are_plausible_paints_and_lamps_are_white_balanced():
+    from synth.textures import plaster
+
+    for seed in range(30):
+        r, g, b = plaster(np.random.default_rng(seed), 32).reshape(-1, 3).mean(axis=0)
+        assert r - g < 30 and not (r - g > 12 and b - g > 12), (seed, r, g, b)  # never pink or purple
+    warm = S.white_balanced(2500.0)
+    assert warm.max() == 1.0 and warm[0] > warm[1] > warm[2] > 0.3
