@@ -19,25 +19,12 @@ def parse_size(text: str) -> tuple[int, int]:
     return w, h
 
 
-def flame_library(n: int, seed: int, frames: int, keep_every: int, rare: float, generator: str = "fluid"):
-    """``n`` procedural flame sequences; sequence k is drawn from ``default_rng([seed, k])``."""
-    import numpy as np
-
-    from synth.flames import generate_sequence, sample_params
-
-    seqs = []
-    for k in range(n):
-        rng = np.random.default_rng([seed, k])
-        params = sample_params(rng, generator, rare=bool(rng.random() < rare), frames=frames, keep_every=keep_every)
-        seqs.append(generate_sequence(f"{generator}-{seed}-{k:03d}", params, rng))
-    return seqs
-
-
 def cmd_flames(args: argparse.Namespace) -> int:
     from curate.progress import progress
+    from synth.library import procedural_library
     from synth.sprites import save_sequence
 
-    seqs = flame_library(args.n, args.seed, args.frames, args.keep_every, args.rare, args.generator)
+    seqs = procedural_library(args.n, args.seed, args.frames, args.keep_every, args.rare, args.generator)
     for seq in progress(seqs, total=len(seqs), desc="flames"):
         save_sequence(args.out / seq.name, seq)
     print(f"wrote {len(seqs)} sequences ({sum(len(s.sprites) for s in seqs)} sprites) to {args.out}")
@@ -66,32 +53,47 @@ def cmd_scenes(args: argparse.Namespace) -> int:
     return 0
 
 
-def _library(args: argparse.Namespace) -> list:
-    from synth.sprites import load_library
+def _library_config(args: argparse.Namespace):
+    from synth.library import FlameLibraryConfig
 
-    if args.flames:
-        return load_library(args.flames)
-    return flame_library(args.library, args.seed, 240, 12, 0.1)
+    return FlameLibraryConfig(sequences=args.library, seed=args.seed, folders=tuple(args.flames or ()))
 
 
 def cmd_method1(args: argparse.Namespace) -> int:
+    from synth.library import build_library
     from synth.method1 import Method1Config, run_method1
 
     w, h = args.size
     cfg = Method1Config(
-        n=args.n, seed=args.seed, width=w, height=h, scenes=args.scenes, box_mode=args.box_mode, smoke_class=args.smoke
+        n=args.n,
+        seed=args.seed,
+        width=w,
+        height=h,
+        scenes=args.scenes,
+        box_mode=args.box_mode,
+        smoke_class=args.smoke,
+        flames=_library_config(args),
     )
-    result = run_method1(cfg, _library(args), args.out, overwrite=args.overwrite)
+    result = run_method1(cfg, build_library(cfg.flames), args.out, overwrite=args.overwrite)
     print(f"wrote {args.out}: {args.n} images, {args.box_mode} boxes ({', '.join(result.files.values())})")
     return 0
 
 
 def cmd_method2(args: argparse.Namespace) -> int:
+    from synth.library import build_library
     from synth.method2 import Method2Config, run_method2
 
     w, h = args.size
-    cfg = Method2Config(n=args.n, seed=args.seed, width=w, height=h, scenes=args.scenes, smoke_class=args.smoke)
-    result = run_method2(cfg, _library(args), args.out, overwrite=args.overwrite)
+    cfg = Method2Config(
+        n=args.n,
+        seed=args.seed,
+        width=w,
+        height=h,
+        scenes=args.scenes,
+        smoke_class=args.smoke,
+        flames=_library_config(args),
+    )
+    result = run_method2(cfg, build_library(cfg.flames), args.out, overwrite=args.overwrite)
     print(f"wrote {args.out}: {args.n} images ({', '.join(result.files.values())})")
     return 0
 

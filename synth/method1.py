@@ -21,9 +21,9 @@ image can be (re)made alone: runs resume and are byte-reproducible.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal
 
 import cv2
 import numpy as np
@@ -33,8 +33,10 @@ from curate.boxes import clip_xyxy, mask_to_xywh, points_to_xyxy, xyxy_to_xywh
 from curate.progress import progress
 from synth import render
 from synth.effects import Effects, apply_effects, sample_effects
+from synth.library import FlameLibraryConfig
 from synth.output import Staging, boxes_from_masks, finish
 from synth.scenes import translate
+from synth.schema import check_range, to_json
 from synth.sprites import Sprite, SpriteSequence, flatten_rgba
 from synth.views import View, ViewCache
 
@@ -43,30 +45,37 @@ BOX_MODES: tuple[str, ...] = ("paper", "visible")
 
 @dataclass(frozen=True)
 class Method1Config:
-    n: int = 100
+    """Method 1 settings (``configs/synth-method1.yaml`` documents every key). ``flames`` describes the library
+    a command builds with :func:`synth.library.build_library`; the manifest records the sequences used."""
+
+    n: int = 100  # images
     seed: int = 0
     width: int = 640
     height: int = 480
-    scenes: int = 48
-    images_per_view: int = 1
-    max_flames: int = 3
+    scenes: int = 48  # environments (view v shows environment v % scenes)
+    images_per_view: int = 1  # images (different planes) per camera view
+    max_flames: int = 3  # planes per image: uniform in 1..max_flames
     negatives: float = 0.1  # fraction of images without flames
     flame_height_m: tuple[float, float] = (0.3, 2.5)
     distance_m: tuple[float, float] = (1.0, 25.0)  # plane distance from the camera
     clearance_m: tuple[float, float] = (0.05, 0.5)  # plane stands this far in front of the surface it is on
     yaw_jitter_deg: float = 25.0  # plane rotation about the vertical away from facing the camera
-    box_mode: str = "visible"  # written annotation: "visible" (accurate) or "paper" (projected corners)
+    box_mode: Literal["visible", "paper"] = "visible"  # written annotation: accurate, or projected corners
     min_box_px: int = 4  # boxes smaller than this (either side) are not annotated
     effects: bool = True  # camera effects (white balance, blur, noise, JPEG) as in Method 2
     smoke_class: bool = False
+    flames: FlameLibraryConfig = field(default_factory=FlameLibraryConfig)
 
     def __post_init__(self) -> None:
         if self.box_mode not in BOX_MODES:
             raise ValueError(f"unknown box mode {self.box_mode!r}; choose one of {', '.join(BOX_MODES)}")
         if self.n < 1 or self.scenes < 1 or self.images_per_view < 1 or self.width < 16 or self.height < 16:
             raise ValueError(f"invalid Method 1 config: {self}")
-        if self.distance_m[0] <= 0.2 or self.distance_m[1] < self.distance_m[0] or self.max_flames < 1:
-            raise ValueError(f"invalid Method 1 plane rules: {self}")
+        if self.max_flames < 1 or not 0.0 <= self.negatives <= 1.0 or self.min_box_px < 1:
+            raise ValueError(f"invalid Method 1 config: {self}")
+        check_range("flame_height_m", self.flame_height_m, 0.01)
+        check_range("distance_m", self.distance_m, 0.2)
+        check_range("clearance_m", self.clearance_m, 0.0)
 
 
 @dataclass(frozen=True)
@@ -266,5 +275,5 @@ def run_method1(
         views = ViewCache(cfg.seed, cfg.scenes, renderer)
         for i in progress(todo, total=len(todo), desc="method1 images"):
             staging.save(i, *make_image(cfg, i, library, views))
-    args = {**asdict(cfg), "flames": [s.name for s in library]}
+    args = {**to_json(cfg), "flame_sequences": [s.name for s in library]}
     return finish(staging, out, cfg.n, "synth:method1", "synth method1", args, cfg.smoke_class, overwrite)

@@ -8,7 +8,7 @@ Image ``i`` uses view ``i // images_per_view`` (see :mod:`synth.views`) and its 
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -18,28 +18,37 @@ from curate.progress import progress
 from synth import render
 from synth.composite import BLEND_MODES, Placement, composite
 from synth.effects import apply_effects, sample_effects
+from synth.library import FlameLibraryConfig
 from synth.output import Staging, boxes_from_masks, finish
+from synth.schema import check_range, to_json
 from synth.sprites import SpriteSequence
 from synth.views import ViewCache
 
 
 @dataclass(frozen=True)
 class Method2Config:
-    n: int = 100
+    """Method 2 settings (``configs/synth-method2.yaml`` documents every key). ``flames`` describes the library
+    a command builds with :func:`synth.library.build_library`; the manifest records the sequences used."""
+
+    n: int = 100  # images
     seed: int = 0
     width: int = 640
     height: int = 480
-    scenes: int = 48
-    images_per_view: int = 8
-    max_flames: int = 3
+    scenes: int = 48  # environments (view v shows environment v % scenes)
+    images_per_view: int = 8  # images composited on each rendered view
+    max_flames: int = 3  # flames per image: uniform in 1..max_flames
     negatives: float = 0.1  # fraction of images without flames
-    flame_height_m: tuple[float, float] = (0.3, 2.5)
+    flame_height_m: tuple[float, float] = (0.3, 2.5)  # flame height in the scene, metres
     min_box_px: int = 4  # visible flames smaller than this (either side) are dropped
     smoke_class: bool = False
+    flames: FlameLibraryConfig = field(default_factory=FlameLibraryConfig)
 
     def __post_init__(self) -> None:
         if self.n < 1 or self.scenes < 1 or self.images_per_view < 1 or self.width < 16 or self.height < 16:
             raise ValueError(f"invalid Method 2 config: {self}")
+        if self.max_flames < 1 or not 0.0 <= self.negatives <= 1.0 or self.min_box_px < 1:
+            raise ValueError(f"invalid Method 2 config: {self}")
+        check_range("flame_height_m", self.flame_height_m, 0.01)
 
 
 def plan_flames(
@@ -113,5 +122,5 @@ def run_method2(
         views = ViewCache(cfg.seed, cfg.scenes, renderer)
         for i in progress(todo, total=len(todo), desc="method2 images"):
             staging.save(i, *make_image(cfg, i, library, views))
-    args = {**asdict(cfg), "flames": [s.name for s in library]}
+    args = {**to_json(cfg), "flame_sequences": [s.name for s in library]}
     return finish(staging, out, cfg.n, "synth:method2", "synth method2", args, cfg.smoke_class, overwrite)
