@@ -1,41 +1,118 @@
-"""Synth throughput: flame simulation steps/s, compositing images/s (no rendering), Method 2 images/s at 320 px.
-Prints ``name: value unit`` lines."""
+"""Synth throughput against the issue's targets. Prints ``name: value unit`` lines.
+
+- flame simulation: steps/s and kept frames/s of one stable-fluid sequence;
+- compositing alone at 640x480 (target >= 20 img/s);
+- Method 2: ``--n`` images at 640x480 from 48 environments, rendering included (target: 1,000 in <= 3 min);
+- Method 1: ``--n`` images at 640x480 (target: 1,000 in <= 6 min);
+- RSS growth over each run: peak RSS in the last half of the run minus RSS after the first 10 % of it (target: flat).
+
+Usage: ``python bench/bench_synth.py [--n 1000] [--only flames,composite,method2,method1]``.
+Figures depend on the machine and on other load: take them on an otherwise idle machine.
+"""
 
 from __future__ import annotations
 
+import argparse
 import tempfile
+import threading
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
 
 from synth import flames as F
 from synth.composite import composite
+from synth.library import FlameLibraryConfig, build_library
+from synth.method1 import Method1Config, run_method1
 from synth.method2 import Method2Config, plan_flames, run_method2
 
 
-def main() -> None:
+def rss_mb() -> float:
+    with open("/proc/self/statm", encoding="ascii") as f:
+        return int(f.read().split()[1]) * 4096 / 1e6
+
+
+class RssSampler:
+    """Samples RSS every ``period`` seconds in a thread: (seconds since start, MB) pairs."""
+
+    def __init__(self, period: float = 0.25) -> None:
+        self.period, self.samples = period, []
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._run, daemon=True)
+
+    def _run(self) -> None:
+        t0 = time.perf_counter()
+        while not self._stop.is_set():
+            self.samples.append((time.perf_counter() - t0, rss_mb()))
+            self._stop.wait(self.period)
+
+    def __enter__(self) -> RssSampler:
+        self._thread.start()
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self._stop.set()
+        self._thread.join()
+
+    def growth(self) -> float:
+        """Peak RSS in the last half of the run minus RSS at 10 % of it, MB."""
+        end = self.samples[-1][0]
+        early = next(mb for t, mb in self.samples if t >= 0.1 * end)
+        return max(mb for t, mb in self.samples if t >= 0.5 * end) - early
+
+
+def bench_flames() -> None:
     p = F.FlameParams(frames=240, keep_every=12, warmup=0)
     t = time.perf_counter()
     seq = F.generate_sequence("bench", p, np.random.default_rng(0))
     dt = time.perf_counter() - t
     print(f"flame_fluid_steps_per_s: {p.frames / dt:.1f} steps/s")
     print(f"flame_fluid_frames_per_s: {len(seq.sprites) / dt:.2f} kept frames/s")
-    library = [seq]
-    cfg = Method2Config(width=640, height=480)
+
+
+def bench_composite(library) -> None:
+    cfg = Method2Config(width=640, height=480, negatives=0.0)
     rng = np.random.default_rng(1)
     bg = rng.integers(0, 255, (480, 640, 3), dtype=np.uint8)
     depth = np.full((480, 640), 4.0, np.float32)
-    plans = [[pl for pl, _ in plan_flames(cfg, library, depth, 1.0, rng)] for _ in range(50)]
+    plans = [[pl for pl, _ in plan_flames(cfg, library, depth, 1.0, rng)] for _ in range(100)]
     t = time.perf_counter()
     for placements in plans:
         composite(bg, placements)
     print(f"composite_640x480: {len(plans) / (time.perf_counter() - t):.1f} img/s")
-    with tempfile.TemporaryDirectory() as tmp:
-        cfg = Method2Config(n=64, width=320, height=240, scenes=8)
+
+
+def bench_run(name: str, run: Callable[[Path], object], n: int) -> None:
+    with tempfile.TemporaryDirectory() as tmp, RssSampler() as rss:
         t = time.perf_counter()
-        run_method2(cfg, library, Path(tmp) / "m2")
-        print(f"method2_320x240: {cfg.n / (time.perf_counter() - t):.1f} img/s")
+        run(Path(tmp) / name)
+        dt = time.perf_counter() - t
+    print(f"{name}_640x480_images_per_s: {n / dt:.2f} img/s")
+    print(f"{name}_640x480_{n}_images: {dt:.1f} s")
+    print(f"{name}_rss_growth: {rss.growth():.1f} MB")
+    print(f"{name}_rss_peak: {max(mb for _, mb in rss.samples):.0f} MB")
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--n", type=int, default=1000, help="images per Method run")
+    ap.add_argument("--only", default="flames,composite,method2,method1")
+    args = ap.parse_args()
+    only = set(args.only.split(","))
+    if "flames" in only:
+        bench_flames()
+    t = time.perf_counter()
+    library = build_library(FlameLibraryConfig())
+    print(f"flame_library_12x240_steps: {time.perf_counter() - t:.1f} s")
+    if "composite" in only:
+        bench_composite(library)
+    if "method2" in only:
+        cfg2 = Method2Config(n=args.n, width=640, height=480, scenes=48)
+        bench_run("method2", lambda out: run_method2(cfg2, library, out), args.n)
+    if "method1" in only:
+        cfg1 = Method1Config(n=args.n, width=640, height=480, scenes=48)
+        bench_run("method1", lambda out: run_method1(cfg1, library, out), args.n)
 
 
 if __name__ == "__main__":
