@@ -57,18 +57,35 @@ def load_model_from_args(args: argparse.Namespace):  # noqa: ANN201 - (OnnxEmbed
 
 
 def cmd_dedup(args: argparse.Namespace) -> int:
-    from curate.dedupjob import DedupOptions, apply_selection, dedup_document, run_dedup, write_outputs
-    from curate.scan import list_image_files
+    from dataclasses import asdict
+
+    from curate.dedupjob import (
+        DedupOptions,
+        apply_selection,
+        check_apply_target,
+        dedup_document,
+        run_dedup,
+        write_outputs,
+    )
+    from curate.scan import list_image_files, scan_images
 
     if args.apply and not args.to:
         raise ValueError("--apply needs --to DIR")
     paths = list_image_files(args.dirs)
+    if args.apply:
+        check_apply_target(args.dirs, args.to, args.apply)
     embedder, cache = load_model_from_args(args)
-    threshold = args.threshold
+    try:
+        scan = scan_images(paths, embedder, cache, args.workers, args.batch_size)
+    finally:
+        if cache is not None:
+            cache.close()
+    threshold, calib = args.threshold, None
     if args.calibrate:
         from curate.calibrate import calibrate_threshold
 
-        calib = calibrate_threshold(paths, embedder, precision=args.precision, seed=args.seed)
+        readable = [Path(im.path) for im in scan.images]
+        calib = calibrate_threshold(readable, embedder, args.precision, args.seed)
         threshold = calib.threshold
         print(calib.summary())
     opts = DedupOptions(
@@ -82,12 +99,10 @@ def cmd_dedup(args: argparse.Namespace) -> int:
         args.workers,
         args.batch_size,
     )
-    try:
-        run = run_dedup(paths, embedder, cache, opts)
-    finally:
-        if cache is not None:
-            cache.close()
+    run = run_dedup(paths, embedder, None, opts, scan)
     doc = dedup_document(run, opts, [str(Path(d).resolve()) for d in args.dirs])
+    if calib is not None:
+        doc["calibration"] = asdict(calib)
     files = write_outputs(run, doc, args.out)
     for problem in run.scan.problems:
         print(problem, file=sys.stderr)
@@ -168,7 +183,9 @@ def register(sub: argparse._SubParsersAction) -> None:
         help=f"near-duplicate distance (default {DEFAULT_THRESHOLD})",
     )
     p.add_argument("--calibrate", action="store_true", help="pick the threshold from augmented copies of your images")
-    p.add_argument("--precision", type=float, default=0.99, help="target pair precision for --calibrate")
+    p.add_argument(
+        "--precision", type=float, default=0.99, help="target (balanced) pair precision for --calibrate (default 0.99)"
+    )
     p.add_argument("--seed", type=int, default=0, help="seed for --calibrate")
     p.add_argument("--exact-only", action="store_true", help="remove exact duplicates only")
     p.add_argument("--protect", action="append", default=[], type=Path, metavar="DIR", help="never remove images here")

@@ -54,9 +54,15 @@ class DedupRun:
 
 
 def run_dedup(
-    paths: Sequence[Path], embedder: OnnxEmbedder, cache: EmbeddingCache | None, opts: DedupOptions
+    paths: Sequence[Path],
+    embedder: OnnxEmbedder,
+    cache: EmbeddingCache | None,
+    opts: DedupOptions,
+    scan: ScanResult | None = None,
 ) -> DedupRun:
-    scan = scan_images(paths, embedder, cache, workers=opts.workers, batch_size=opts.batch_size)
+    """The whole job on ``paths`` (or on an existing ``scan`` of them)."""
+    if scan is None:
+        scan = scan_images(paths, embedder, cache, workers=opts.workers, batch_size=opts.batch_size)
     result = find_duplicates(scan.images, scan.vectors, opts.threshold, opts.backend, opts.protect, opts.near)
     kept = result.kept
     order, scores = rank_order(
@@ -145,18 +151,23 @@ def write_outputs(run: DedupRun, doc: dict[str, Any], out: Path, json_name: str 
     return files
 
 
+def check_apply_target(roots: Sequence[Path], to: Path, mode: str) -> None:
+    """Raise ValueError for an unknown mode, a ``to`` inside an input folder, or a ``to`` holding files."""
+    if mode not in APPLY_MODES:
+        raise ValueError(f"unknown apply mode {mode!r}; choose {' or '.join(APPLY_MODES)}")
+    to_r = to.resolve()
+    if any(to_r.is_relative_to(Path(r).resolve()) for r in roots if Path(r).is_dir()):
+        raise ValueError(f"{to}: --to must not be inside an input folder")
+    if to.exists() and any(to.iterdir()):
+        raise ValueError(f"{to}: folder is not empty; choose a new --to")
+
+
 def apply_selection(paths: Sequence[str], roots: Sequence[Path], to: Path, mode: str) -> int:
     """Copy (or hard-link, falling back to a copy) ``paths`` into ``to/<root name>/<path below root>``.
 
     Refuses a ``to`` inside an input folder or one that already holds files. Returns the number placed."""
-    if mode not in APPLY_MODES:
-        raise ValueError(f"unknown apply mode {mode!r}; choose {' or '.join(APPLY_MODES)}")
-    to_r = to.resolve()
+    check_apply_target(roots, to, mode)
     roots = [Path(r).resolve() for r in roots]
-    if any(to_r.is_relative_to(r) for r in roots if r.is_dir()):
-        raise ValueError(f"{to}: --to must not be inside an input folder")
-    if to.exists() and any(to.iterdir()):
-        raise ValueError(f"{to}: folder is not empty; choose a new --to")
     for path in map(Path, paths):
         root = next((r for r in roots if r.is_dir() and path.is_relative_to(r)), path.parent)
         dst = to / root.name / path.relative_to(root)

@@ -70,3 +70,10 @@ def test_help_has_examples(capsys) -> None:
     with pytest.raises(SystemExit):
         main(["dedup", "--help"])
     assert "example:" in capsys.readouterr().out
+
+
+def test_dedup_calibrate_records_threshold(folder: Path, tmp_path: Path, capsys) -> None:
+    assert main(["dedup", str(folder), "--out", str(tmp_path / "c"), "--calibrate", "--seed", "1"]) == 0
+    doc = json.loads((tmp_path / "c" / "dedup.json").read_text())
+    assert doc["threshold"] == doc["calibration"]["threshold"] and doc["calibration"]["images"] == 9
+    assert "calibrated threshold" in capsys.readouterr().out
