@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import sys
 from pathlib import Path
 
 FMT = argparse.RawDescriptionHelpFormatter
@@ -110,7 +109,10 @@ def cmd_audit(args: argparse.Namespace) -> int:
             f"min IoU {report['min_iou']:.4f}"
         )
         for mode, rep in report.get("modes", {}).items():
-            print(f"  {mode}: mean IoU {rep['mean_iou']:.4f}, min IoU {rep['min_iou']:.4f}", file=sys.stdout)
+            print(f"  {mode} boxes: {rep['boxes']}, mean IoU {rep['mean_iou']:.4f}, min IoU {rep['min_iou']:.4f}")
+        if "smoke" in report:
+            rep = report["smoke"]
+            print(f"  smoke boxes: {rep['boxes']}, mean IoU {rep['mean_iou']:.4f}, min IoU {rep['min_iou']:.4f}")
     return 0
 
 

@@ -110,17 +110,32 @@ def build_dataset(staging: Staging, n: int, source: str, smoke: bool) -> tuple[D
     return builder.build(info={"description": f"fuzzyfire {source}"}), records
 
 
-def contact_sheet(ds: Dataset, out: Path, count: int = 16, cols: int = 4, thumb: int = 320) -> Path:
-    """A PNG grid of the first ``count`` images with their boxes drawn (fire red, smoke grey)."""
+def _draw(pic: NDArray[np.uint8], box: Sequence[float], colour: tuple[int, int, int], width: int) -> None:
+    x, y, w, h = (int(round(v)) for v in box)
+    cv2.rectangle(pic, (x, y), (x + w - 1, y + h - 1), colour, width)
+
+
+def contact_sheet(
+    ds: Dataset,
+    out: Path,
+    other_boxes: Mapping[str, Sequence] | None = None,
+    count: int = 16,
+    cols: int = 4,
+    thumb: int = 320,
+) -> Path:
+    """A PNG grid of the first ``count`` images with their boxes drawn (fire red, smoke grey) over
+    ``other_boxes`` (file name -> xywh boxes or None, e.g. Method 1's paper boxes; yellow)."""
     tiles = []
     by_image = ds.annotations_by_image()
     for img in ds.images[:count]:
         pic = cv2.imread(str(ds.image_path(img)))
         scale = thumb / img.width
+        width = max(1, int(round(1.5 / scale)))
+        for box in (other_boxes or {}).get(img.file_name, []):
+            if box is not None:
+                _draw(pic, box, (0, 220, 255), width)
         for ann in by_image[img.id]:
-            x, y, w, h = (int(round(v)) for v in ann.bbox)
-            colour = (0, 0, 255) if ann.category_id == 1 else (160, 160, 160)
-            cv2.rectangle(pic, (x, y), (x + w - 1, y + h - 1), colour, max(1, int(round(1.5 / scale))))
+            _draw(pic, ann.bbox, (0, 0, 255) if ann.category_id == 1 else (160, 160, 160), width)
         tiles.append(cv2.resize(pic, (thumb, int(round(img.height * scale))), interpolation=cv2.INTER_AREA))
     while len(tiles) % cols:
         tiles.append(np.zeros_like(tiles[0]))
@@ -159,6 +174,7 @@ def finish(
     if extra:
         (out / "masks" / "box_modes.json").write_text(json.dumps(extra, sort_keys=True) + "\n", encoding="utf-8")
     written = replace(ds, root=out, images=tuple(replace(img, file_name=plan[img.id]) for img in ds.images))
-    result.files["contact_sheet"] = contact_sheet(written, out).name
+    others = {name: [b for boxes in modes.values() for b in boxes] for name, modes in extra.items()}
+    result.files["contact_sheet"] = contact_sheet(written, out, others).name
     shutil.rmtree(staging.root)
     return result

@@ -6,6 +6,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+import cv2
 import numpy as np
 import pytest
 import trimesh
@@ -122,7 +123,11 @@ def test_dataset_layout_and_manifest(written):
     assert len(per_image) == CFG.n and {"environment", "camera", "flames", "effects", "box_mode"} <= set(per_image[0])
     flame = per_image[0]["flames"][0]
     assert {"flame", "plane", "paper_box", "visible_box"} <= set(flame) and len(flame["plane"]["pose"]) == 4
-    assert (written / "masks" / "box_modes.json").is_file() and (written / "contact_sheet.png").is_file()
+    assert (written / "masks" / "box_modes.json").is_file()
+    sheet = cv2.imread(str(written / "contact_sheet.png")).astype(int)
+    yellow = (np.abs(sheet - (0, 220, 255)).max(axis=-1) < 40).sum()  # BGR: the paper boxes under the red ones
+    red = (np.abs(sheet - (0, 0, 255)).max(axis=-1) < 40).sum()
+    assert yellow > 50 and red > 50
     assert not staging_dir(written).exists()
 
 
