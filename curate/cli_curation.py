@@ -36,8 +36,8 @@ def add_model_args(p: argparse.ArgumentParser) -> None:
     g.add_argument("--output", help="name of the model output to use as the embedding")
     g.add_argument("--cache", type=Path, help="embedding cache file (default: user cache dir)")
     g.add_argument("--no-cache", action="store_true", help="do not read or write the embedding cache")
-    g.add_argument("--workers", type=int, default=3, help="decode threads (default 3)")
-    g.add_argument("--batch-size", type=int, default=8, help="images per onnxruntime call (default 8)")
+    g.add_argument("--workers", type=int, default=0, help="decode + embed threads (default 0 = one per core)")
+    g.add_argument("--batch-size", type=int, default=4, help="images per onnxruntime call (default 4)")
 
 
 def load_model_from_args(args: argparse.Namespace):  # noqa: ANN201 - (OnnxEmbedder, EmbeddingCache | None)

@@ -38,8 +38,8 @@ class ModelConfig:
     bgr: bool = False
     layout: Literal["nchw", "nhwc"] = "nchw"
     output: Optional[str] = None  # output name used as the embedding (default: first)
-    batch_size: int = 8  # images per onnxruntime call
-    workers: int = 3  # decode threads
+    batch_size: int = 4  # images per onnxruntime call
+    workers: int = 0  # decode + embed threads; 0 = one per CPU core
 
 
 @dataclass(frozen=True)

@@ -39,8 +39,8 @@ class DedupOptions:
     rank: str = "score"  # score | kcenter
     k: int = 10  # neighbours in the diversity score
     top: int | None = None  # keep only the N most diverse kept images
-    workers: int = 3  # decode threads
-    batch_size: int = 8  # images per onnxruntime call
+    workers: int = 0  # decode + embed threads; 0 = one per CPU core
+    batch_size: int = 4  # images per onnxruntime call
 
 
 @dataclass

@@ -131,15 +131,16 @@ def export_lite0(path: Path) -> Path:
 class OnnxEmbedder:
     """Runs an ONNX CNN on batches: ``embed(batch uint8 (N, S, S, 3)) -> (N, D) float32``."""
 
-    def __init__(self, model: Path | str, preprocess: Preprocess, output: str | None = None, threads: int = 2) -> None:
+    def __init__(self, model: Path | str, preprocess: Preprocess, output: str | None = None, threads: int = 1) -> None:
         import onnxruntime as ort
 
         self.path = Path(model)
         if not self.path.is_file():
             raise FileNotFoundError(f"{self.path}: ONNX model not found")
         opts = ort.SessionOptions()
-        opts.intra_op_num_threads = threads
+        opts.intra_op_num_threads = threads  # 1: parallelism comes from concurrent run() calls (see scan.py)
         opts.inter_op_num_threads = 1
+        opts.add_session_config_entry("session.intra_op.allow_spinning", "0")
         self.session = ort.InferenceSession(str(self.path), opts, providers=["CPUExecutionProvider"])
         self.preprocess = preprocess
         self.input_name = self.session.get_inputs()[0].name

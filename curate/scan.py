@@ -1,13 +1,14 @@
 """Scan image files once: content hash, decoded-pixel hash, size, sharpness and embedding per file.
 
-Decoding and resizing run in a thread pool (OpenCV and hashlib release the GIL) while onnxruntime embeds
-the previous batch. Results are cached by content hash (:mod:`curate.embedcache`), so a rerun only reads
+A pool of threads (one per core) each decode, resize and embed whole batches: OpenCV, hashlib and
+onnxruntime (one intra-op thread per call) release the GIL, so the cores stay busy without oversubscription. Results are cached by content hash (:mod:`curate.embedcache`), so a rerun only reads
 and hashes the files and decodes the new ones. Unreadable files become :class:`Problem` records.
 """
 
 from __future__ import annotations
 
 import hashlib
+import os
 from collections import deque
 from collections.abc import Callable, Iterable, Iterator, Sequence
 from concurrent.futures import Future, ThreadPoolExecutor
@@ -121,10 +122,13 @@ def scan_images(
     paths: Sequence[Path],
     embedder: OnnxEmbedder,
     cache: EmbeddingCache | None = None,
-    workers: int = 3,
-    batch_size: int = 16,
+    workers: int = 0,
+    batch_size: int = 4,
 ) -> ScanResult:
-    """Facts and normalised embeddings for ``paths`` (see :class:`ScanResult`); bad files become problems."""
+    """Facts and normalised embeddings for ``paths`` (see :class:`ScanResult`); bad files become problems.
+
+    ``workers`` threads (0 = one per CPU core) decode and embed; ``batch_size`` images per onnxruntime call."""
+    workers = workers or os.cpu_count() or 2
     problems: list[Problem] = []
     with ThreadPoolExecutor(max_workers=workers) as pool:
         hashed = list(progress(pool.map(file_sha256, paths), total=len(paths), desc="hashing"))
@@ -134,7 +138,7 @@ def scan_images(
         vectors = cache.get_vectors(embedder.model_id, list(shas.values())) if cache else {}
         cached = sum(1 for s in shas.values() if s in facts and s in vectors)
         todo = [p for p, s in shas.items() if s not in facts or s not in vectors]
-        for path, item in _embed_misses(todo, embedder, cache, pool, batch_size):
+        for path, item in _embed_misses(todo, embedder, cache, pool, batch_size, workers):
             if isinstance(item, Problem):
                 problems.append(item)
             else:
@@ -146,28 +150,41 @@ def scan_images(
     return ScanResult(images, l2_normalize(matrix), problems, embedder.model_id, cached)
 
 
+def embed_batch(
+    paths: Sequence[Path], embedder: OnnxEmbedder
+) -> list[tuple[Path, tuple[FileFacts, NDArray[np.float32]] | Problem]]:
+    """Decode ``paths`` and embed the readable ones in one onnxruntime call; (path, (facts, raw vector) or
+    Problem) in input order. Runs in a worker thread (onnxruntime and OpenCV release the GIL)."""
+    decoded = [(p, decode_facts(p, embedder.preprocess)) for p in paths]
+    good = [(p, d) for p, d in decoded if not isinstance(d, Problem)]
+    out: dict[Path, tuple[FileFacts, NDArray[np.float32]] | Problem] = {
+        p: d for p, d in decoded if isinstance(d, Problem)
+    }
+    if good:
+        vectors = embedder.embed(np.stack([d[1] for _, d in good]))  # type: ignore[misc]
+        for (p, d), v in zip(good, vectors):
+            out[p] = (d[0], v)  # type: ignore[index]
+    return [(p, out[p]) for p in paths]
+
+
 def _embed_misses(
     paths: Sequence[Path],
     embedder: OnnxEmbedder,
     cache: EmbeddingCache | None,
     pool: ThreadPoolExecutor,
     batch_size: int,
+    workers: int,
 ) -> Iterator[tuple[Path, tuple[FileFacts, NDArray[np.float32]] | Problem]]:
-    """Decode in ``pool`` while embedding batches here; yields (path, (facts, raw vector) or Problem)."""
-    decoded = bounded_map(lambda p: (p, decode_facts(p, embedder.preprocess)), paths, pool, ahead=4 * batch_size)
-    batch: list[tuple[Path, FileFacts, NDArray[np.uint8]]] = []
+    """Each pool thread decodes and embeds whole batches (one thread per core keeps every core busy without
+    onnxruntime's spinning intra-op threads); yields (path, (facts, raw vector) or Problem), saving as it goes."""
+    batches = [paths[s : s + batch_size] for s in range(0, len(paths), batch_size)]
+    results = bounded_map(lambda b: embed_batch(b, embedder), batches, pool, ahead=2 * workers)
     unsaved: list[tuple[FileFacts, NDArray[np.float32]]] = []
-    for i, (path, item) in enumerate(progress(decoded, total=len(paths), desc="embedding")):
-        if isinstance(item, Problem):
+    for k, batch in enumerate(progress(results, total=len(batches), desc="embedding", unit="batch", min_items=20)):
+        for path, item in batch:
+            if not isinstance(item, Problem):
+                unsaved.append(item)
             yield path, item
-        else:
-            batch.append((path, item[0], item[1]))  # type: ignore[arg-type]
-        if batch and (len(batch) == batch_size or i == len(paths) - 1):
-            vecs = embedder.embed(np.stack([b[2] for b in batch]))
-            for (p, f, _), v in zip(batch, vecs):
-                unsaved.append((f, v))
-                yield p, (f, v)
-            batch = []
-        if cache is not None and (len(unsaved) >= _SAVE_EVERY or (i == len(paths) - 1 and unsaved)):
+        if cache is not None and unsaved and (len(unsaved) >= _SAVE_EVERY or k == len(batches) - 1):
             cache.put(embedder.model_id, [u[0] for u in unsaved], np.stack([u[1] for u in unsaved]))
             unsaved = []

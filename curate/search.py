@@ -108,7 +108,7 @@ class FaissIndex(SearchIndex):
         dists, idxs = [], []
         for s in range(0, len(q), 8192):
             sims, idx = self.index.search(q[s : s + 8192], k)
-            dists.append(np.where(idx >= 0, sim_to_dist(sims), np.inf).astype(np.float32))
+            dists.append(np.where(idx >= 0, sim_to_dist(np.where(idx >= 0, sims, -1.0)), np.inf).astype(np.float32))
             idxs.append(idx.astype(np.int64))
         if not dists:
             return np.zeros((0, k), np.float32), np.zeros((0, k), np.int64)
