@@ -7,7 +7,7 @@ import hashlib
 import json
 import subprocess
 import sys
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable, Mapping, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from importlib import metadata
 from pathlib import Path
@@ -54,6 +54,12 @@ def git_commit(cwd: Path | None = None) -> str | None:
         return None
 
 
+def hash_files(paths: Sequence[Path]) -> list[tuple[str, int]]:
+    """``(sha256, bytes)`` of each file, hashed in a thread pool, in input order."""
+    with ThreadPoolExecutor(max_workers=4) as pool:
+        return list(pool.map(lambda p: (file_sha256(p), Path(p).stat().st_size), paths))
+
+
 def build_manifest(
     command: str,
     args: Mapping[str, Any],
@@ -61,10 +67,9 @@ def build_manifest(
     outputs: Mapping[str, str] | None = None,
     extra: Mapping[str, Any] | None = None,
 ) -> dict[str, Any]:
-    """The manifest dict. ``sources`` are hashed (sha256) in a thread pool, listed sorted by path."""
+    """The manifest dict. ``sources`` (configs, input files) are hashed, listed sorted by path."""
     paths = sorted({Path(p).resolve() for p in sources}, key=lambda p: p.as_posix())
-    with ThreadPoolExecutor(max_workers=4) as pool:
-        hashes = list(pool.map(file_sha256, paths))
+    hashes = hash_files(paths)
     return {
         "tool": "fuzzyfire",
         "command": command,
@@ -73,7 +78,7 @@ def build_manifest(
         "git_commit": git_commit(),
         "outputs": dict(outputs or {}),
         **dict(extra or {}),
-        "sources": [{"path": p.as_posix(), "sha256": h, "bytes": p.stat().st_size} for p, h in zip(paths, hashes)],
+        "sources": [{"path": p.as_posix(), "sha256": h, "bytes": n} for p, (h, n) in zip(paths, hashes)],
     }
 
 

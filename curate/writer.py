@@ -14,7 +14,7 @@ from typing import Any
 from curate.dataset import Dataset, source_roots
 from curate.formats.coco import write_coco
 from curate.formats.yolo import write_data_yaml, write_yolo_labels
-from curate.manifest import build_manifest, write_manifest
+from curate.manifest import build_manifest, hash_files, write_manifest
 from curate.problems import Problem
 from curate.progress import progress
 
@@ -114,9 +114,14 @@ def write_dataset(
     args: Mapping[str, Any] | None = None,
     sources: Iterable[Path] = (),
     overwrite: bool = False,
+    generated: bool = False,
 ) -> WriteResult:
-    """Write ``ds`` to the folder ``out`` in the given formats, with a manifest hashing ``sources`` and
-    every source image."""
+    """Write ``ds`` to the folder ``out`` in the given formats, with a manifest.
+
+    The manifest hashes ``sources`` (configs, input files) and lists every image as ``{"file": output name,
+    "sha256", "bytes", "source": original path}``. ``generated=True`` says the images were made by fuzzyfire
+    in a temporary place: ``source`` is left out, so the manifest never points at files that are gone.
+    """
     out = Path(out)
     unknown = [f for f in formats if f not in OUTPUT_FORMATS]
     if unknown or not formats:
@@ -134,15 +139,26 @@ def write_dataset(
     if "yolo" in formats:
         result.problems += write_yolo_labels(placed, out)
         result.files["yolo"] = write_data_yaml(placed, out).name
-    manifest = build_manifest(
-        command,
-        dict(args or {}),
-        [*sources, *source_images],
-        outputs=result.files,
-        extra={"images_mode": images, "counts": _counts(placed)},
-    )
+    extra = {
+        "images_mode": images,
+        "counts": _counts(placed),
+        "images": _image_entries(placed, source_images, generated),
+    }
+    manifest = build_manifest(command, dict(args or {}), sources, outputs=result.files, extra=extra)
     result.files["manifest"] = write_manifest(out, manifest).name
     return result
+
+
+def _image_entries(placed: Dataset, source_images: Sequence[Path], generated: bool) -> list[dict[str, Any]]:
+    """One entry per image in dataset order: output file name, content hash, size and (real data) source."""
+    hashes = hash_files(source_images)
+    entries = []
+    for img, src, (sha, size) in zip(placed.images, source_images, hashes):
+        entry: dict[str, Any] = {"file": img.file_name, "sha256": sha, "bytes": size}
+        if not generated:
+            entry["source"] = src.resolve().as_posix()
+        entries.append(entry)
+    return entries
 
 
 def _counts(ds: Dataset) -> dict[str, Any]:

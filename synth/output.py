@@ -158,7 +158,9 @@ def finish(
     """Write the dataset, its masks (``masks/<image stem>.png``) and a contact sheet; remove the staging."""
     ds, records = build_dataset(staging, n, source, smoke)
     per_image = [rec["meta"] for rec in records]
-    result = write_dataset(ds, out, ("coco", "yolo"), "copy", command, {**args, "per_image": per_image}, (), overwrite)
+    result = write_dataset(
+        ds, out, ("coco", "yolo"), "copy", command, {**args, "per_image": per_image}, (), overwrite, generated=True
+    )
     plan = plan_image_names(ds)
     extra = {}
     for img in ds.images:

@@ -93,7 +93,7 @@ def test_coco_writer_is_deterministic(tmp_path):
         assert (tmp_path / "a" / name).read_bytes() == (tmp_path / "b" / name).read_bytes()
     ma = json.loads((tmp_path / "a" / "manifest.json").read_text())
     mb = json.loads((tmp_path / "b" / "manifest.json").read_text())
-    assert ma["sources"] == mb["sources"]
+    assert ma["images"] == mb["images"]
 
 
 def test_not_coco():

@@ -51,10 +51,23 @@ def test_manifest_hashes_sources_and_counts(src, tmp_path):
     man = json.loads((tmp_path / "out" / "manifest.json").read_text())
     assert man["command"] == "convert" and man["args"] == {"to": "all"}
     assert man["counts"] == {"images": 4, "boxes": 3, "negatives": 2, "categories": ["fire", "smoke"]}
-    by_path = {s["path"]: s["sha256"] for s in man["sources"]}
-    a = (tmp_path / "src" / "train" / "images" / "a.jpg").resolve().as_posix()
-    assert by_path[a] == file_sha256(tmp_path / "src" / "train" / "images" / "a.jpg")
+    a = tmp_path / "src" / "train" / "images" / "a.jpg"
+    entry = next(e for e in man["images"] if e["file"] == "images/train/a.jpg")
+    assert entry == {
+        "file": "images/train/a.jpg",
+        "sha256": file_sha256(a),
+        "bytes": a.stat().st_size,
+        "source": a.resolve().as_posix(),
+    }
+    assert file_sha256(tmp_path / "out" / entry["file"]) == entry["sha256"]
     assert "numpy" in man["versions"] and "created" not in man
+
+
+def test_generated_images_have_no_source_path(src, tmp_path):
+    write_dataset(src, tmp_path / "out", ["coco"], generated=True, sources=[tmp_path / "src" / "data.yaml"])
+    man = json.loads((tmp_path / "out" / "manifest.json").read_text())
+    assert all(set(e) == {"file", "sha256", "bytes"} for e in man["images"])
+    assert [s["path"].rsplit("/", 1)[-1] for s in man["sources"]] == ["data.yaml"]
 
 
 @pytest.mark.parametrize("mode", ["hardlink", "symlink"])
