@@ -4,7 +4,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: install test test-fast lint bench clean
+.PHONY: install test test-fast lint bench clean experiment
 
 install: $(STAMP)
 
@@ -27,6 +27,13 @@ lint: $(STAMP)
 
 bench: $(STAMP)
 	@for script in bench/*.py; do echo "# $$script"; $(BIN)/python $$script || exit 1; done
+
+# The study: make experiment [CONFIG=configs/paper.yaml] [REAL=labelled/folder] [RARE=folder] [OUT=folder]
+CONFIG ?= configs/demo.yaml
+experiment: $(STAMP)
+	$(BIN)/fuzzyfire experiment $(CONFIG) $(if $(OUT),--out $(OUT)) \
+	  $(if $(REAL),--set real.path=$(abspath $(REAL)) --set real.standin=null) \
+	  $(if $(RARE),--set rare.path=$(abspath $(RARE)) --set rare.standin=null)
 
 clean:
 	rm -rf $(VENV) .pytest_cache build *.egg-info

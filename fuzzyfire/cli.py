@@ -19,6 +19,7 @@ COMMAND_MODULES: tuple[str, ...] = (
     "train.cli",
     "eval.cli",
     "fuzzyfire.cmd_curate",
+    "fuzzyfire.cmd_experiment",
 )
 
 

@@ -1,0 +1,166 @@
+"""The schema of ``fuzzyfire experiment CONFIG``: frozen dataclasses built once from commented YAML by
+:func:`fuzzyfire.config.load_config` (``configs/demo.yaml`` documents every key with its unit and range).
+
+Component configs are the packages' own: :class:`curate.curation.CurateConfig`, :class:`synth.method1.
+Method1Config`, :class:`synth.method2.Method2Config`, :class:`synth.standin.StandInConfig`,
+:class:`train.config.TrainConfig`. Relative paths resolve against the config file's folder.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Literal, Optional
+
+from curate.curation import CurateConfig
+from curate.sources import SourceConfig
+from synth.method1 import Method1Config
+from synth.method2 import Method2Config
+from synth.standin import StandInConfig
+from train.config import TrainConfig
+
+METHODS: tuple[str, ...] = ("method1", "method2")
+
+
+class ExperimentConfigError(ValueError):
+    """A config whose parts do not fit together (e.g. no source for the real data)."""
+
+
+@dataclass(frozen=True)
+class RealConfig:
+    """The real data: a labelled folder (``path``), optionally curated first (``curate``; its sources default to
+    ``path``), or a generated stand-in (``standin``, the offline demo). The result must have the three splits."""
+
+    path: Optional[Path] = None  # dataset folder (any format the toolkit reads) or COCO .json
+    format: Literal["auto", "coco", "yolo", "voc", "dfire"] = "auto"
+    aliases: dict[str, str] = field(default_factory=dict)  # source class -> class, e.g. {flame: fire}
+    drop_classes: tuple[str, ...] = ()  # classes whose boxes are removed (their images stay)
+    curate: Optional[CurateConfig] = None  # `fuzzyfire curate` settings; sources: [] = curate ``path``
+    standin: Optional[StandInConfig] = None
+    train_split: str = "train"  # mixtures draw their real images from this split
+    val_split: str = "valid"  # every run selects its best epoch on this split
+    test_split: str = "test"  # the common test set
+    name: str = "common"  # test-set label in tables and figures
+
+    def source(self) -> str:
+        """``"path"``, ``"curate"`` or ``"standin"``; raises when the keys contradict each other."""
+        if self.standin is not None:
+            if self.path is not None or self.curate is not None:
+                raise ExperimentConfigError("real: standin excludes path and curate")
+            return "standin"
+        if self.curate is not None:
+            if bool(self.curate.sources) == (self.path is not None):
+                raise ExperimentConfigError("real: give curate.sources or path (the folder to curate), not both")
+            return "curate"
+        if self.path is None:
+            raise ExperimentConfigError("real: give path (a labelled folder), curate or standin")
+        return "path"
+
+    def curate_config(self) -> CurateConfig:
+        """``curate`` with its sources filled in from ``path`` when it lists none."""
+        assert self.curate is not None, "curate_config() without real.curate"
+        if self.curate.sources:
+            return self.curate
+        src = SourceConfig(self.path, self.format, aliases=self.aliases, drop_classes=self.drop_classes)
+        return replace(self.curate, sources=(src,))
+
+
+@dataclass(frozen=True)
+class RareConfig:
+    """The rare test set: a dataset folder (``path``, optionally one ``split``) or a generated stand-in."""
+
+    path: Optional[Path] = None
+    format: Literal["auto", "coco", "yolo", "voc", "dfire"] = "auto"
+    split: Optional[str] = None  # null = every image of the folder
+    aliases: dict[str, str] = field(default_factory=dict)
+    drop_classes: tuple[str, ...] = ()
+    standin: Optional[StandInConfig] = None
+    name: str = "rare"
+
+    def source(self) -> str:
+        given = [k for k in ("path", "standin") if getattr(self, k) is not None]
+        if len(given) != 1:
+            raise ExperimentConfigError(f"rare: give exactly one of path, standin (got {given or 'none'})")
+        return given[0]
+
+
+@dataclass(frozen=True)
+class SynthConfig:
+    """The two synthetic pools; ``null`` leaves a method out (Table 1 then has one method)."""
+
+    method1: Optional[Method1Config] = field(default_factory=Method1Config)
+    method2: Optional[Method2Config] = field(default_factory=Method2Config)
+
+
+@dataclass(frozen=True)
+class GridConfig:
+    """The runs: every mixture x seed. ``mixtures`` make Table 2 (their synthetic images from ``synthetic``);
+    ``table1`` mixtures (synthetic only) are trained with every method for Table 1."""
+
+    mixtures: tuple[str, ...] = (
+        "R250_S0", "R500_S0", "R750_S0", "R1000_S0",
+        "R750_S250", "R500_S500", "R250_S750",
+        "R0_S250", "R0_S500", "R0_S750", "R0_S1000",
+    )  # fmt: skip
+    synthetic: Literal["method1", "method2"] = "method2"
+    table1: tuple[str, ...] = ("R0_S1000",)
+    seeds: tuple[int, ...] = (0, 1, 2, 3, 4)
+
+
+@dataclass(frozen=True)
+class ScoreConfig:
+    """Scoring every run's ``best.onnx`` on every test set (as ``fuzzyfire score``)."""
+
+    conf: float = 0.001  # score threshold before NMS, 0..1
+    iou: float = 0.6  # NMS IoU threshold, 0..1
+    max_det: int = 300  # detections kept per image
+    batch: int = 16  # images per onnxruntime call
+    workers: int = 2  # image decoding threads
+    threads: int = 0  # onnxruntime threads; 0 = every core the run may use
+
+
+@dataclass(frozen=True)
+class ExecutorConfig:
+    name: str = "local"  # local (one run at a time, all cores) | ray (one task per run)
+    address: Optional[str] = None  # ray: address of a running cluster (e.g. ray://head:10001); null = start one here
+    num_cpus: float = 2  # CPUs per run (ray task resources; also the torch threads when train.threads is 0)
+    num_gpus: float = 0  # GPUs per run (ray task resources)
+    local_cpus: Optional[int] = None  # ray without address: CPUs the local Ray may use (null = all)
+
+
+@dataclass(frozen=True)
+class ReportConfig:
+    title: str = "fuzzyfire study"
+    bootstrap: int = 1000  # paired image-level bootstrap resamples per comparison (0 = no comparisons)
+    baseline: Optional[str] = None  # mixture the others are compared with (default: largest real-only one)
+    samples: int = 8  # sample thumbnails per dataset in report.html
+
+
+@dataclass(frozen=True)
+class ExperimentConfig:
+    real: RealConfig
+    rare: Optional[RareConfig] = None
+    classes: tuple[str, ...] = ("fire",)  # trained and scored classes; other classes' boxes are dropped
+    synth: SynthConfig = field(default_factory=SynthConfig)
+    grid: GridConfig = field(default_factory=GridConfig)
+    train: TrainConfig = field(default_factory=TrainConfig)
+    score: ScoreConfig = field(default_factory=ScoreConfig)
+    executor: ExecutorConfig = field(default_factory=ExecutorConfig)
+    report: ReportConfig = field(default_factory=ReportConfig)
+    images: Literal["symlink", "hardlink", "copy"] = "symlink"  # how images reach the mixture folders
+
+    def check(self) -> None:
+        """Raise :class:`ExperimentConfigError` when the parts do not fit together."""
+        self.real.source()
+        if self.rare is not None:
+            self.rare.source()
+        if getattr(self.synth, self.grid.synthetic) is None:
+            raise ExperimentConfigError(
+                f"grid.synthetic is {self.grid.synthetic} but synth.{self.grid.synthetic} is null"
+            )
+        if not self.grid.seeds:
+            raise ExperimentConfigError("grid.seeds is empty")
+        if not self.grid.mixtures and not self.grid.table1:
+            raise ExperimentConfigError("grid.mixtures and grid.table1 are both empty: nothing to train")
+        if not self.classes:
+            raise ExperimentConfigError("classes is empty")

@@ -1,0 +1,154 @@
+"""Data stages of an experiment, each cached in a folder named by a hash of its resolved config.
+
+A stage writes ``OUT/data/<name>-<hash>/`` and, last, ``stage.json`` (its identity): a folder with
+``stage.json`` is reused as is; a folder without it is an interrupted stage of ours and is rebuilt (synthetic
+generators resume from their own staging folders beside it). Stages: the real data (a user folder read in
+place, a curation of sources, or a generated stand-in), the rare test set, and the Method 1 / Method 2 pools.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import shutil
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from curate.dataset import Dataset
+from curate.formats.registry import read_dataset
+from fuzzyfire import __version__
+from fuzzyfire.config import to_dict
+
+STAGE_FILE = "stage.json"
+STANDIN_LABEL = " (stand-in)"
+
+
+def digest(identity: Mapping[str, Any]) -> str:
+    """12 hex digits of the SHA-256 of ``identity`` as canonical JSON."""
+    text = json.dumps(identity, sort_keys=True, separators=(",", ":"), default=str)
+    return hashlib.sha256(text.encode("utf-8")).hexdigest()[:12]
+
+
+@dataclass(frozen=True)
+class DataRef:
+    """A labelled dataset a run reads: ``path`` (folder or COCO .json) in ``format``, one ``split`` of it (None =
+    every image), classes renamed by ``aliases`` and ``drop`` removed. ``identity``: what made it (hashable
+    JSON; no absolute output paths, so two experiment folders give the same run identities)."""
+
+    path: Path
+    identity: Mapping[str, Any]
+    format: str = "auto"
+    split: str | None = None
+    aliases: Mapping[str, str] = field(default_factory=dict)
+    drop: tuple[str, ...] = ()
+    standin: bool = False
+
+    def with_split(self, split: str | None) -> DataRef:
+        return DataRef(self.path, self.identity, self.format, split, self.aliases, self.drop, self.standin)
+
+    def key(self) -> dict[str, Any]:
+        """The identity of this split of the data."""
+        return {"data": dict(self.identity), "split": self.split}
+
+
+def load_data(ref: DataRef, classes: Sequence[str]) -> Dataset:
+    """The dataset of ``ref`` with exactly ``classes`` (in that order; boxes of other classes dropped).
+    Raises ValueError when the split is missing or empty."""
+    ds = read_dataset(ref.path, ref.format, aliases=dict(ref.aliases) or None).dataset
+    if ref.split is not None:
+        if ref.split not in ds.splits:
+            shown = ", ".join(repr(s) for s in ds.splits)
+            raise ValueError(f"{ref.path}: no split {ref.split!r} (splits: {shown}); curate it (real.curate) first")
+        ds = ds.select_split(ref.split)
+    if not ds.images:
+        raise ValueError(f"{ref.path}: no images{f' in split {ref.split!r}' if ref.split else ''}")
+    drop = [*ref.drop, *(n for n in ds.category_names if n not in classes and n not in ref.drop)]
+    return ds.drop_categories(drop).with_categories(list(classes))
+
+
+@dataclass(frozen=True)
+class Stage:
+    folder: Path
+    hash: str
+    cached: bool
+
+
+def cached_stage(root: Path, name: str, identity: Mapping[str, Any], build: Callable[[Path], Any]) -> Stage:
+    """Run ``build(folder)`` unless ``root/<name>-<hash>/stage.json`` exists; write ``stage.json`` last."""
+    identity = {**identity, "fuzzyfire": __version__}
+    h = digest(identity)
+    folder = Path(root) / f"{name}-{h}"
+    if (folder / STAGE_FILE).is_file():
+        return Stage(folder, h, True)
+    if folder.exists():
+        shutil.rmtree(folder)  # our own interrupted stage (no stage.json): rebuild it
+    build(folder)
+    doc = {"stage": name, "hash": h, "identity": identity}
+    (folder / STAGE_FILE).write_text(json.dumps(doc, indent=1, sort_keys=True, default=str) + "\n", encoding="utf-8")
+    return Stage(folder, h, False)
+
+
+def _absolute(path: Path, base: Path) -> Path:
+    return (path if path.is_absolute() else base / path).resolve()
+
+
+def folder_ref(path: Path, base: Path, fmt: str, aliases, drop, split: str | None = None) -> DataRef:
+    """A user's dataset read in place (identity = its resolved path and reading options)."""
+    where = _absolute(path, base)
+    if not where.exists():
+        raise FileNotFoundError(f"{where}: dataset not found")
+    identity = {"kind": "folder", "path": where.as_posix(), "format": fmt, "aliases": dict(aliases), "drop": list(drop)}
+    return DataRef(where, identity, fmt, split, dict(aliases), tuple(drop))
+
+
+def standin_stage(root: Path, name: str, cfg: Any) -> tuple[Stage, DataRef]:
+    """A generated stand-in set (:func:`synth.standin.run_standin`)."""
+    from synth.standin import run_standin
+
+    stage = cached_stage(root, name, {"kind": "standin", "config": to_dict(cfg)}, lambda out: run_standin(cfg, out))
+    return stage, DataRef(stage.folder, {"kind": "standin", "hash": stage.hash}, "coco", standin=True)
+
+
+def synth_stage(root: Path, method: str, cfg: Any) -> tuple[Stage, DataRef]:
+    """A Method 1 or Method 2 pool, its flame library built from ``cfg.flames``."""
+    from synth.library import build_library
+    from synth.method1 import run_method1
+    from synth.method2 import run_method2
+
+    runner = {"method1": run_method1, "method2": run_method2}[method]
+    stage = cached_stage(
+        root, method, {"kind": method, "config": to_dict(cfg)}, lambda out: runner(cfg, build_library(cfg.flames), out)
+    )
+    return stage, DataRef(stage.folder, {"kind": method, "hash": stage.hash}, "coco")
+
+
+def curate_stage(root: Path, cfg: Any, base: Path) -> tuple[Stage, DataRef]:
+    """``fuzzyfire curate`` of ``cfg`` (a :class:`curate.curation.CurateConfig`; sources relative to ``base``)
+    with the user's embedding cache."""
+    config = to_dict(cfg)
+    for source in config["sources"]:
+        where = _absolute(Path(source["path"]), base)
+        if not where.exists():
+            raise FileNotFoundError(f"{where}: dataset to curate not found")
+        source["path"] = where.as_posix()
+    stage = cached_stage(root, "curated", {"kind": "curate", "config": config}, lambda out: _curate(cfg, base, out))
+    return stage, DataRef(stage.folder, {"kind": "curate", "hash": stage.hash}, "coco")
+
+
+def _curate(cfg: Any, base: Path, out: Path) -> None:
+    from curate.curation import build_embedder, curate
+    from curate.dedupjob import write_outputs
+    from curate.embed import cache_dir
+    from curate.embedcache import EmbeddingCache
+    from curate.writer import write_dataset
+
+    cache = EmbeddingCache(cache_dir() / "embeddings.sqlite")
+    try:
+        result = curate(cfg, base, out, build_embedder(cfg.model), cache)
+    finally:
+        cache.close()
+    args = {"config": to_dict(cfg)}
+    write_dataset(result.dataset, out, ("coco", "yolo"), cfg.images, command="experiment curate", args=args)
+    write_outputs(result.run, result.document, out, "curation.json")

@@ -1,0 +1,40 @@
+"""A toy experiment config: stand-in data and synthetic pools of a dozen 64x48 images, 1 epoch at 64 px."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from fuzzyfire.config import build_config
+from fuzzyfire.experiment_config import ExperimentConfig
+
+SIZE = {"width": 64, "height": 48}
+FLAMES = {"sequences": 2, "frames": 48, "keep_every": 12}
+
+
+def toy_dict(**grid: Any) -> dict[str, Any]:
+    """Plain data of a toy config; ``grid`` overrides grid keys (default: R12_S0, R6_S6, Table 1 R0_S12, seed 0)."""
+    return {
+        "classes": ["fire"],
+        "real": {"standin": {"kind": "common", "splits": {"train": 12, "valid": 6, "test": 6}, **SIZE, **FLAMES}},
+        "rare": {"standin": {"kind": "rare", "splits": {"test": 6}, "seed": 1, **SIZE, **FLAMES}},
+        "synth": {
+            "method1": {"n": 12, "scenes": 2, "images_per_view": 6, **SIZE, "flames": FLAMES},
+            "method2": {"n": 12, "scenes": 2, **SIZE, "flames": FLAMES},
+        },
+        "grid": {"mixtures": ["R12_S0", "R6_S6"], "table1": ["R0_S12"], "seeds": [0], **grid},
+        "train": {"epochs": 1, "imgsz": 64, "batch": 8, "optim": {"warmup_min_iters": 2, "nominal_batch": 16}},
+        "executor": {"num_cpus": 2, "local_cpus": 2},
+        "report": {"bootstrap": 20, "samples": 2},
+    }
+
+
+def toy_config(**grid: Any) -> ExperimentConfig:
+    return build_config(toy_dict(**grid), ExperimentConfig)
+
+
+def write_toy_config(path: Path, **grid: Any) -> Path:
+    path.write_text(yaml.safe_dump(toy_dict(**grid), sort_keys=False), encoding="utf-8")
+    return path

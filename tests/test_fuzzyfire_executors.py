@@ -1,0 +1,59 @@
+"""Executors: a registry that raises on unknown names; failures reported, not fatal; a local Ray gives the
+same results.json bytes as the local executor for the same seeds."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from pathlib import Path
+
+import pytest
+from factories_experiment import toy_config
+
+from fuzzyfire.executors import EXECUTORS, ExecutorError, LocalExecutor, build_executor
+from fuzzyfire.experiment import plan_runs, prepare_data, write_mixtures
+from fuzzyfire.runs import RESULTS_FILE, execute_run
+
+
+def _square_or_fail(x: int) -> int:
+    if x == 2:
+        raise ValueError("two is not allowed")
+    return x * x
+
+
+def test_registry_raises_on_unknown_names() -> None:
+    assert set(EXECUTORS) == {"local", "ray"}
+    with pytest.raises(ExecutorError, match="unknown executor 'dask'; choose one of local, ray"):
+        build_executor("dask")
+    assert isinstance(build_executor("local"), LocalExecutor)
+
+
+def test_local_reports_a_failed_item_and_goes_on() -> None:
+    outcomes = list(LocalExecutor().map(_square_or_fail, [1, 2, 3]))
+    assert [(o.index, o.result) for o in outcomes] == [(0, 1), (1, None), (2, 9)]
+    assert outcomes[1].error == "ValueError: two is not allowed"
+
+
+@pytest.fixture(scope="module")
+def toy_specs(tmp_path_factory: pytest.TempPathFactory):
+    """Two runs of a toy grid (one real-only, one mixed) with their data prepared once."""
+    out = tmp_path_factory.mktemp("grid")
+    cfg = toy_config(mixtures=["R12_S0", "R6_S6"], table1=[])
+    data = prepare_data(cfg, out, out)
+    return plan_runs(cfg, data, write_mixtures(cfg, data, out), out), out
+
+
+@pytest.mark.slow
+def test_ray_gives_the_same_results_as_local(toy_specs, tmp_path: Path) -> None:
+    specs, _ = toy_specs
+    local = [replace(s, out=tmp_path / "local" / s.label) for s in specs]
+    remote = [replace(s, out=tmp_path / "ray" / s.label) for s in specs]
+    assert [o.error for o in LocalExecutor().map(execute_run, local)] == [None, None]
+    ray_executor = build_executor("ray", num_cpus=2, local_cpus=2)
+    try:
+        outcomes = list(ray_executor.map(execute_run, remote))
+    finally:
+        ray_executor.close()
+    assert sorted(o.index for o in outcomes) == [0, 1] and all(o.error is None for o in outcomes)
+    assert all(o.result["skipped"] is False for o in outcomes)
+    for a, b in zip(local, remote):
+        assert (a.out / RESULTS_FILE).read_bytes() == (b.out / RESULTS_FILE).read_bytes()

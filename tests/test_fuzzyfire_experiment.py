@@ -1,0 +1,106 @@
+"""The experiment end to end on a toy grid: stages, mixtures, runs, report; resume after an interruption skips
+finished runs; the same seeds give byte-identical results.json in another folder; stand-in data says so."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+from factories_experiment import toy_config, write_toy_config
+
+import fuzzyfire.experiment as experiment
+from fuzzyfire.cli import main
+from fuzzyfire.executors import LocalExecutor
+from fuzzyfire.experiment import grid_entries, label, needed_methods, run_experiment
+
+RUNS = ["R12_S0", "R6_S6-method2", "R0_S12-method1", "R0_S12-method2"]
+
+
+def test_grid_entries_dedupe_and_need_only_used_methods() -> None:
+    cfg = toy_config(mixtures=["R12_S0", "R6_S6", "R0_S12"], table1=["R0_S12"])
+    assert grid_entries(cfg) == [("R12_S0", None), ("R6_S6", "method2"), ("R0_S12", "method2"), ("R0_S12", "method1")]
+    assert needed_methods(cfg) == ["method1", "method2"]
+    assert needed_methods(toy_config(mixtures=["R12_S0"], table1=[])) == []
+    with pytest.raises(ValueError, match="Table 1 compares synthetic-only"):
+        grid_entries(toy_config(table1=["R6_S6"]))
+
+
+def test_labels_say_stand_in_once() -> None:
+    assert label("common", True) == "common (stand-in)" and label("rare (stand-in)", True) == "rare (stand-in)"
+    assert label("common", False) == "common"
+
+
+@pytest.fixture(scope="module")
+def full_run(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, str]:
+    """The toy grid run through the CLI (4 runs); returns the folder and what the command printed."""
+    root = tmp_path_factory.mktemp("experiment")
+    config = write_toy_config(root / "toy.yaml")
+    capture = root / "stdout.txt"
+    import contextlib
+
+    with open(capture, "w") as fh, contextlib.redirect_stdout(fh):
+        code = main(["experiment", str(config), "--out", str(root / "A")])
+    assert code == 0
+    return root / "A", capture.read_text()
+
+
+def _results(out: Path) -> dict[str, bytes]:
+    """Each run's own results.json (not train/results.json, which records the git commit), by run folder."""
+    return {
+        p.parent.relative_to(out / "runs").as_posix(): p.read_bytes() for p in (out / "runs").glob("*/*/results.json")
+    }
+
+
+@pytest.mark.slow
+def test_report_files_exist_and_say_stand_in(full_run: tuple[Path, str]) -> None:
+    out, printed = full_run
+    for name in ("table1.md", "table1.csv", "table1.tex", "table2.md", "table2.csv", "table2.tex"):
+        assert (out / "tables" / name).stat().st_size > 0
+        assert "(stand-in)" in (out / "tables" / name).read_text()
+    assert {p.name for p in (out / "figures").iterdir()} == {"figure5_AP.png", "figure5_AP50.png"}
+    page = (out / "report.html").read_text()
+    assert "STAND-IN DATA" in page and "Paired comparisons" in page and "R6_S6" in page
+    assert "STAND-IN DATA" in printed and f"report: {out.resolve() / 'report.html'}" in printed
+    assert "**Table 2" in printed and "common (stand-in) AP" in printed
+    summary = json.loads((out / "experiment.json").read_text())
+    assert summary["standin"] is True and [r["status"] for r in summary["runs"]] == ["done"] * 4
+    rows = [json.loads(line) for line in (out / "results.jsonl").read_text().splitlines()]
+    assert len(rows) == 8 and {r["test_set"] for r in rows} == {"common (stand-in)", "rare (stand-in)"}
+    assert sorted({k.split("/")[0] for k in _results(out)}) == sorted(RUNS)
+    assert (out / "data").is_dir() and len(list((out / "data").glob("*/stage.json"))) == 4
+
+
+@pytest.mark.slow
+def test_interrupted_grid_resumes_and_gives_identical_results(
+    full_run: tuple[Path, str], tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    out = tmp_path / "B"
+    real_execute = experiment.execute_run
+    calls: list[str] = []
+
+    def interrupted(spec):
+        if len(calls) == 2:
+            raise KeyboardInterrupt  # Ctrl-C before the third run
+        calls.append(spec.label)
+        return real_execute(spec)
+
+    monkeypatch.setattr(experiment, "execute_run", interrupted)
+    with pytest.raises(KeyboardInterrupt):
+        run_experiment(toy_config(), tmp_path, out, LocalExecutor())
+    first = _results(out)
+    assert len(first) == 2
+    stamps = {p: p.stat().st_mtime_ns for p in (out / "runs").glob("*/*/results.json")}
+
+    skipped: list[bool] = []
+
+    def recording(spec):
+        result = real_execute(spec)
+        skipped.append(result["skipped"])
+        return result
+
+    monkeypatch.setattr(experiment, "execute_run", recording)
+    result = run_experiment(toy_config(), tmp_path, out, LocalExecutor())
+    assert skipped == [True, True, False, False] and not result.failed
+    assert all(p.stat().st_mtime_ns == t for p, t in stamps.items())  # finished runs untouched
+    assert _results(out) == _results(full_run[0])  # same seeds, another folder: byte-identical results.json

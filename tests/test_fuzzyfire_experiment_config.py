@@ -1,0 +1,78 @@
+"""Experiment schema: every shipped config loads strictly; the paper's protocol is exact; contradictions raise."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+from conftest import REPO
+
+from curate.mix import paper_grid, parse_mixture
+from fuzzyfire.config import ConfigError, build_config, load_config
+from fuzzyfire.experiment_config import ExperimentConfig, ExperimentConfigError
+
+CONFIGS = REPO / "configs"
+
+
+def _load(name: str, *overrides: str) -> ExperimentConfig:
+    cfg = load_config(CONFIGS / name, ExperimentConfig, overrides)
+    cfg.check()
+    return cfg
+
+
+@pytest.mark.parametrize("name", ["demo.yaml", "paper.yaml", "shared-data.yaml"])
+def test_shipped_configs_load(name: str) -> None:
+    cfg = _load(name)
+    assert cfg.classes == ("fire",)
+    assert all(parse_mixture(m).total for m in (*cfg.grid.mixtures, *cfg.grid.table1))
+
+
+def test_every_key_of_the_shipped_configs_is_commented() -> None:
+    for path in CONFIGS.glob("*.yaml"):
+        if path.name not in ("demo.yaml", "paper.yaml", "shared-data.yaml"):
+            continue
+        text = path.read_text()
+        assert text.lstrip().startswith("#") and text.count("#") > 30, path
+
+
+def test_demo_is_small_offline_and_a_stand_in() -> None:
+    cfg = _load("demo.yaml")
+    assert cfg.real.source() == "standin" and cfg.rare.source() == "standin"
+    assert cfg.real.standin.kind == "common" and cfg.rare.standin.kind == "rare"
+    sizes = [cfg.real.standin.width, cfg.rare.standin.width, cfg.synth.method1.width, cfg.synth.method2.width]
+    assert max(sizes) <= 320 and cfg.train.imgsz <= 320
+    assert cfg.grid.seeds == (0, 1) and cfg.synth.method1.flames.generator == "fluid"
+    assert cfg.executor.name == "local"
+
+
+def test_paper_is_the_papers_protocol() -> None:
+    cfg = _load("paper.yaml")
+    assert list(cfg.grid.mixtures) == [m.name for m in paper_grid()]
+    assert cfg.grid.seeds == (0, 1, 2, 3, 4) and cfg.grid.table1 == ("R0_S1000",)
+    assert (cfg.train.epochs, cfg.train.imgsz, cfg.train.batch) == (100, 640, 64)
+    assert cfg.synth.method1.n == cfg.synth.method2.n == 1000
+    cur = cfg.real.curate_config()
+    assert cur.rank.top == 1400 and cur.split.sizes == {"train": 1000, "valid": 200, "test": 200}
+    assert cur.sources[0].path == cfg.real.path and cfg.rare.path is not None
+
+
+def test_overrides_go_through_the_schema() -> None:
+    cfg = _load("paper.yaml", "real.path=/data/mine", "grid.seeds=[7]", "executor.name=ray")
+    assert cfg.real.path == Path("/data/mine") and cfg.grid.seeds == (7,) and cfg.executor.name == "ray"
+    with pytest.raises(ConfigError, match="train.epoch"):
+        _load("demo.yaml", "train.epoch=3")
+    with pytest.raises(ConfigError, match="grid.seeds"):
+        _load("demo.yaml", "grid.seeds=zero")
+
+
+def test_contradictions_raise() -> None:
+    with pytest.raises(ExperimentConfigError, match="give path"):
+        build_config({"real": {}}, ExperimentConfig).check()
+    with pytest.raises(ExperimentConfigError, match="standin excludes"):
+        build_config({"real": {"path": "x", "standin": {}}}, ExperimentConfig).check()
+    with pytest.raises(ExperimentConfigError, match="not both"):
+        build_config({"real": {"curate": {"sources": []}}}, ExperimentConfig).check()
+    with pytest.raises(ExperimentConfigError, match="synth.method2 is null"):
+        build_config({"real": {"path": "x"}, "synth": {"method2": None}}, ExperimentConfig).check()
+    with pytest.raises(ExperimentConfigError, match="rare"):
+        build_config({"real": {"path": "x"}, "rare": {}}, ExperimentConfig).check()
