@@ -152,3 +152,21 @@ def _curate(cfg: Any, base: Path, out: Path) -> None:
     args = {"config": to_dict(cfg)}
     write_dataset(result.dataset, out, ("coco", "yolo"), cfg.images, command="experiment curate", args=args)
     write_outputs(result.run, result.document, out, "curation.json")
+
+
+@dataclass(frozen=True)
+class Prepared:
+    """The experiment's data: the real set (with splits), the rare test set and the synthetic pools."""
+
+    real: DataRef
+    rare: DataRef | None
+    pools: dict[str, DataRef]
+
+    @property
+    def standin(self) -> bool:
+        return self.real.standin or bool(self.rare and self.rare.standin)
+
+
+def label(name: str, standin: bool) -> str:
+    """A test-set label; stand-in data says so in every table column and figure legend."""
+    return f"{name}{STANDIN_LABEL}" if standin and "stand-in" not in name else name

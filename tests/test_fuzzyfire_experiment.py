@@ -12,7 +12,8 @@ from factories_experiment import toy_config, write_toy_config
 import fuzzyfire.experiment as experiment
 from fuzzyfire.cli import main
 from fuzzyfire.executors import LocalExecutor
-from fuzzyfire.experiment import grid_entries, label, needed_methods, run_experiment
+from fuzzyfire.experiment import grid_entries, needed_methods, run_experiment
+from fuzzyfire.stages import label
 
 RUNS = ["R12_S0", "R6_S6-method2", "R0_S12-method1", "R0_S12-method2"]
 
