@@ -50,21 +50,24 @@ def prepare_data(cfg: ExperimentConfig, base: Path, out: Path) -> Prepared:
     if kind == "path":
         real_ref = folder_ref(real.path, base, real.format, real.aliases, real.drop_classes)
     elif kind == "curate":
-        real_ref = _report_stage("real (curated)", *curate_stage(root, real.curate_config(), base))
+        real_ref = _stage("real (curated)", curate_stage, root, real.curate_config(), base)
     else:
-        real_ref = _report_stage("real (stand-in)", *standin_stage(root, "real-standin", real.standin))
+        real_ref = _stage("real (stand-in)", standin_stage, root, "real-standin", real.standin)
     rare_ref = None
     if rare is not None and rare.source() == "path":
         rare_ref = folder_ref(rare.path, base, rare.format, rare.aliases, rare.drop_classes, rare.split)
     elif rare is not None:
-        rare_ref = _report_stage("rare (stand-in)", *standin_stage(root, "rare-standin", rare.standin))
+        rare_ref = _stage("rare (stand-in)", standin_stage, root, "rare-standin", rare.standin)
     pools = {}
     for method in needed_methods(cfg):
-        pools[method] = _report_stage(method, *synth_stage(root, method, getattr(cfg.synth, method)))
+        pools[method] = _stage(method, synth_stage, root, method, getattr(cfg.synth, method))
     return Prepared(real_ref, rare_ref, pools)
 
 
-def _report_stage(what: str, stage, ref: DataRef) -> DataRef:
+def _stage(what: str, make, *args) -> DataRef:
+    """``make(*args)`` -> (Stage, DataRef), announced before (it may take minutes) and after."""
+    _say(f"data   {what:<16} ...")
+    stage, ref = make(*args)
     _say(f"data   {what:<16} {stage.folder}{'  (cached)' if stage.cached else ''}")
     return ref
 
