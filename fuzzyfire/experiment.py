@@ -182,6 +182,8 @@ def run_experiment(cfg: ExperimentConfig, base: Path, out: Path, executor) -> Ex
     data = prepare_data(cfg, base, out)
     if data.standin:
         _say(STANDIN_NOTICE)
+    for split in (cfg.real.val_split, cfg.real.test_split):  # fail now, not after the first training
+        load_data(data.real.with_split(split), cfg.classes)
     specs = plan_runs(cfg, data, write_mixtures(cfg, data, out), out)
     results = run_grid(specs, executor)
     rows = result_rows(cfg, specs, results, out)

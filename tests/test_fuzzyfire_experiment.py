@@ -105,3 +105,20 @@ def test_interrupted_grid_resumes_and_gives_identical_results(
     assert skipped == [True, True, False, False] and not result.failed
     assert all(p.stat().st_mtime_ns == t for p, t in stamps.items())  # finished runs untouched
     assert _results(out) == _results(full_run[0])  # same seeds, another folder: byte-identical results.json
+
+
+def test_missing_test_split_fails_before_training(tmp_path: Path) -> None:
+    from dataclasses import replace
+
+    from factories_train import painted_dataset
+
+    from curate.writer import write_dataset
+    from fuzzyfire.experiment_config import RealConfig
+
+    ds = painted_dataset(tmp_path / "src", 6, seed=0)
+    images = tuple(replace(img, split="train" if img.id <= 4 else "valid") for img in ds.images)
+    write_dataset(replace(ds, images=images), tmp_path / "real", ("coco",))
+    cfg = replace(toy_config(mixtures=["R4_S0"], table1=[]), real=RealConfig(path=tmp_path / "real"), rare=None)
+    with pytest.raises(ValueError, match="no split 'test'"):
+        run_experiment(cfg, tmp_path, tmp_path / "out", LocalExecutor())
+    assert not (tmp_path / "out" / "runs").exists()
