@@ -14,6 +14,7 @@ of their config and every run writes results.json last: run the same command aga
 example:
   fuzzyfire experiment configs/demo.yaml --out out/demo
   fuzzyfire experiment configs/shared-data.yaml --out out/shared --set grid.seeds=[0,1,2]
+  fuzzyfire experiment configs/shared-data.yaml --out out/shared --report-only   # tables so far
   fuzzyfire experiment configs/paper.yaml --out /shared/study --executor ray --address ray://head:10001 \\
       --set real.path=/data/fiiw --set rare.path=/data/rare
 
@@ -39,7 +40,7 @@ def cmd_experiment(args: argparse.Namespace) -> int:
             raise ExperimentConfigError("--address (executor.address) needs --executor ray")
         e = cfg.executor
         options = {"address": e.address, "num_cpus": e.num_cpus, "num_gpus": e.num_gpus, "local_cpus": e.local_cpus}
-        executor = build_executor(e.name, **(options if e.name == "ray" else {}))
+        executor = None if args.report_only else build_executor(e.name, **(options if e.name == "ray" else {}))
     except (ConfigError, ExperimentConfigError, ExecutorError) as exc:
         print(f"error: {args.config}: {exc}", file=sys.stderr)
         return 2
@@ -47,16 +48,18 @@ def cmd_experiment(args: argparse.Namespace) -> int:
     try:
         result = run_experiment(cfg, Path(args.config).resolve().parent, out, executor)
     finally:
-        executor.close()
+        if executor is not None:
+            executor.close()
     print(table_text(out.resolve()))
     if result.standin:
         print(STANDIN_NOTICE)
-    for spec in result.failed:
-        print(
-            f"error: run {spec.label} seed {spec.seed} failed (see above); rerun the command to retry", file=sys.stderr
-        )
+    if args.report_only:
+        print(f"{len(result.failed)} runs not finished yet", file=sys.stderr)
+    else:
+        for spec in result.failed:
+            print(f"error: run {spec.label} seed {spec.seed} failed (see above); rerun to retry", file=sys.stderr)
     print(f"report: {result.report}")
-    return 1 if result.failed else 0
+    return 1 if result.failed and not args.report_only else 0
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -72,4 +75,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--executor", help="local (default: one run at a time, all cores) or ray (one task per run)")
     p.add_argument("--address", help="ray: address of a running cluster, e.g. ray://head:10001 (default: local Ray)")
     p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="override a config key")
+    p.add_argument(
+        "--report-only",
+        action="store_true",
+        help="train nothing: tables and report from the runs finished so far (e.g. while a cluster works)",
+    )
     p.set_defaults(func=cmd_experiment)

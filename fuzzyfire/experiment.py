@@ -24,7 +24,7 @@ from curate.mix import mixture_dir, parse_mixture, write_mixture
 from fuzzyfire.aggregate import STANDIN_NOTICE, result_rows, write_report, write_summary
 from fuzzyfire.executors import Outcome
 from fuzzyfire.experiment_config import METHODS, ExperimentConfig
-from fuzzyfire.runs import EvalSet, RunSpec, execute_run
+from fuzzyfire.runs import EvalSet, RunSpec, execute_run, finished
 from fuzzyfire.stages import (
     DataRef,
     Prepared,
@@ -174,8 +174,16 @@ class ExperimentResult:
     standin: bool
 
 
-def run_experiment(cfg: ExperimentConfig, base: Path, out: Path, executor) -> ExperimentResult:
-    """The whole study (module docstring); ``base`` resolves relative paths of the config."""
+def finished_runs(specs: Sequence[RunSpec]) -> list[dict[str, Any] | None]:
+    """The results of the specs that already finished (None for the others); trains nothing."""
+    results = [finished(spec) for spec in specs]
+    _say(f"runs   {sum(r is not None for r in results)} of {len(specs)} runs finished (report only)")
+    return results
+
+
+def run_experiment(cfg: ExperimentConfig, base: Path, out: Path, executor=None) -> ExperimentResult:
+    """The whole study (module docstring); ``base`` resolves relative paths of the config. Without an
+    ``executor`` nothing is trained: the report covers the runs finished so far (``failed`` lists the others)."""
     cfg.check()
     out = Path(out).resolve()
     out.mkdir(parents=True, exist_ok=True)
@@ -185,7 +193,7 @@ def run_experiment(cfg: ExperimentConfig, base: Path, out: Path, executor) -> Ex
     for split in (cfg.real.val_split, cfg.real.test_split):  # fail now, not after the first training
         load_data(data.real.with_split(split), cfg.classes)
     specs = plan_runs(cfg, data, write_mixtures(cfg, data, out), out)
-    results = run_grid(specs, executor)
+    results = run_grid(specs, executor) if executor is not None else finished_runs(specs)
     rows = result_rows(cfg, specs, results, out)
     write_summary(cfg, specs, results, rows, out, data.standin)
     report = write_report(cfg, data, rows, out)

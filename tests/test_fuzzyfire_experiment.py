@@ -92,6 +92,8 @@ def test_interrupted_grid_resumes_and_gives_identical_results(
     first = _results(out)
     assert len(first) == 2
     stamps = {p: p.stat().st_mtime_ns for p in (out / "runs").glob("*/*/results.json")}
+    partial = run_experiment(toy_config(), tmp_path, out)  # no executor: report the finished runs only
+    assert len(partial.failed) == 2 and len(partial.rows) == 4 and partial.report.is_file()
 
     skipped: list[bool] = []
 
