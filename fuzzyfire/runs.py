@@ -15,10 +15,14 @@ import os
 import time
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from fuzzyfire.config import to_dict
 from fuzzyfire.stages import DataRef, digest, load_data
+
+if TYPE_CHECKING:
+    from fuzzyfire.experiment_config import ScoreConfig
+    from train.config import TrainConfig
 
 RESULTS_FILE = "results.json"
 METRICS = ("AP", "AP50", "APs", "APm", "APl")
@@ -45,8 +49,8 @@ class RunSpec:
     val_data: DataRef
     tests: tuple[EvalSet, ...]
     classes: tuple[str, ...]
-    train: Any  # train.config.TrainConfig (its seed is replaced by ``seed``)
-    score: Any  # fuzzyfire.experiment_config.ScoreConfig
+    train: TrainConfig  # its seed is replaced by ``seed``
+    score: ScoreConfig
     out: Path
 
     @property
