@@ -4,7 +4,8 @@ A seeded random sample of images is augmented (flip, crop, resize, JPEG, noise, 
 pairs (original, its copy) are the positives and the pairs of different originals the negatives. The threshold
 is the largest distance at which the *balanced* pair precision ``R / (R + F)`` is still >= the target (R, F:
 shares of positive and negative pairs closer than the threshold). Balancing makes the answer independent of
-the sample size (negative pairs grow quadratically with it, positives linearly). At the default target 0.99 at
+the sample size (negative pairs grow quadratically with it, positives linearly). Distances follow the two-view
+rule of :func:`curate.search.duplicate_pairs`. At the default target 0.99 at
 most ~1 % of random image pairs of the folder fall under the threshold; consecutive video frames among them are
 counted as negatives, so the estimate errs on the side of keeping images.
 """
@@ -137,18 +138,27 @@ def calibrate_threshold(
         copies.append([augment(img, kind, rng) for kind in AUGMENTATIONS])
     if len(originals) < 2:
         raise ValueError("calibration needs at least 2 readable images")
-    base = _embed(embedder, originals)
-    aug = _embed(embedder, [c for cs in copies for c in cs]).reshape(len(originals), len(AUGMENTATIONS), -1)
-    pos = np.linalg.norm(aug - base[:, None, :], axis=2).ravel()
+    base, base_c = _embed(embedder, originals)
+    aug, aug_c = _embed(embedder, [c for cs in copies for c in cs])
+    k = len(AUGMENTATIONS)
+    rep, rep_c = np.repeat(base, k, axis=0), np.repeat(base_c, k, axis=0)
+    pos = np.minimum.reduce(
+        [np.linalg.norm(aug - rep, axis=1), np.linalg.norm(aug - rep_c, axis=1), np.linalg.norm(aug_c - rep, axis=1)]
+    )
+    sims = np.maximum.reduce([base @ base.T, base_c @ base.T, base @ base_c.T])  # two-view rule, both ways
     iu = np.triu_indices(len(base), 1)
-    neg = np.sqrt(np.maximum(2 - 2 * (base @ base.T)[iu], 0))
+    neg = np.sqrt(np.maximum(2 - 2 * sims[iu], 0))
     t, p, r = threshold_at_precision(pos.astype(np.float32), neg.astype(np.float32), precision)
     return Calibration(t, p, r, precision, len(originals), len(pos), len(neg))
 
 
-def _embed(embedder: OnnxEmbedder, images: list[Image], batch: int = 16) -> NDArray[np.float32]:
+def _embed(
+    embedder: OnnxEmbedder, images: list[Image], batch: int = 8
+) -> tuple[NDArray[np.float32], NDArray[np.float32]]:
+    """Unit embeddings of the whole and centre views, each (N, D)."""
     rows = [
-        embedder.embed(np.stack([embedder.preprocess.resize(im) for im in images[s : s + batch]]))
+        embedder.embed(np.concatenate([embedder.preprocess.views(im) for im in images[s : s + batch]]))
         for s in range(0, len(images), batch)
     ]
-    return l2_normalize(np.concatenate(rows))
+    both = np.concatenate(rows).reshape(len(images), 2, -1)
+    return l2_normalize(both[:, 0]), l2_normalize(both[:, 1])

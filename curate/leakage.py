@@ -1,7 +1,8 @@
 """Leakage between two image sets (e.g. train vs test): exact copies and near duplicates across the sets.
 
 Exact = equal file bytes or equal decoded pixels (distance 0); near = unit embeddings closer than the
-threshold. Searches set B's index with set A's vectors in batches (never an |A| x |B| matrix).
+threshold in the two-view distance of :func:`curate.search.duplicate_pairs` (whole vs whole, centre view vs
+whole, both ways). Searches indexes in batches (never an |A| x |B| matrix).
 """
 
 from __future__ import annotations
@@ -32,9 +33,15 @@ def find_leaks(a: ScanResult, b: ScanResult, threshold: float, backend: str = "a
             for other in in_b.get(getattr(im.facts, attr), []):
                 leaks.setdefault((im.path, other), Leak(im.path, other, "exact", 0.0))
     if a.images and b.images and threshold > 0:
-        qi, bi, dist = build_index(b.vectors, backend).within(a.vectors, threshold)
-        for q, t, d in zip(qi.tolist(), bi.tolist(), dist.tolist()):
-            key = (a.images[q].path, b.images[t].path)
+        near: dict[tuple[int, int], float] = {}
+        index_b, index_a = build_index(b.vectors, backend), build_index(a.vectors, backend)
+        for queries, index, a_asks in ((a.vectors, index_b, True), (a.crops, index_b, True), (b.crops, index_a, False)):
+            qi, ti, dist = index.within(queries, threshold)
+            for q, t, d in zip(qi.tolist(), ti.tolist(), dist.tolist()):
+                key = (q, t) if a_asks else (t, q)
+                near[key] = min(d, near.get(key, d))
+        for (ia, ib), d in near.items():
+            key = (a.images[ia].path, b.images[ib].path)
             leaks.setdefault(key, Leak(*key, "near", float(d)))
     return sorted(leaks.values(), key=lambda x: (x.distance, x.a, x.b))
 

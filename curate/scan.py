@@ -39,10 +39,12 @@ class ScannedImage:
 
 @dataclass
 class ScanResult:
-    """Readable images in input order; ``vectors[i]`` (L2-normalised, (N, D) float32) belongs to ``images[i]``."""
+    """Readable images in input order. ``vectors[i]`` / ``crops[i]``: L2-normalised embeddings (N, D) float32 of
+    the whole of ``images[i]`` and of its centre view (see :mod:`curate.embed`)."""
 
     images: list[ScannedImage]
     vectors: NDArray[np.float32]
+    crops: NDArray[np.float32]
     problems: list[Problem] = field(default_factory=list)
     model_id: str = ""
     cached: int = 0  # images whose facts and embedding came from the cache
@@ -99,7 +101,7 @@ def sharpness(image: NDArray[np.uint8]) -> float:
 
 
 def decode_facts(path: Path, preprocess: Preprocess | None) -> tuple[FileFacts, NDArray[np.uint8] | None] | Problem:
-    """Decode one file: its facts and the resized (S, S, 3) model input (None without ``preprocess``)."""
+    """Decode one file: its facts and the (2, S, S, 3) model inputs of its two views (None without ``preprocess``)."""
     try:
         data = path.read_bytes()
         image = decode_image(data, path)
@@ -115,7 +117,7 @@ def decode_facts(path: Path, preprocess: Preprocess | None) -> tuple[FileFacts, 
         pixel_hash(image),
         sharpness(image),
     )
-    return facts, (preprocess.resize(image) if preprocess is not None else None)
+    return facts, (preprocess.views(image) if preprocess is not None else None)
 
 
 def scan_images(
@@ -147,21 +149,26 @@ def scan_images(
     images = [ScannedImage(p.as_posix(), facts[shas[p]]) for p in paths if p in shas and shas[p] in vectors]
     dim = next(iter(vectors.values())).shape[0] if vectors else 0
     matrix = np.stack([vectors[im.facts.sha256] for im in images]) if images else np.zeros((0, dim), np.float32)
-    return ScanResult(images, l2_normalize(matrix), problems, embedder.model_id, cached)
+    half = matrix.shape[1] // 2  # cached rows hold [whole view, centre view]
+    return ScanResult(
+        images, l2_normalize(matrix[:, :half]), l2_normalize(matrix[:, half:]), problems, embedder.model_id, cached
+    )
 
 
 def embed_batch(
     paths: Sequence[Path], embedder: OnnxEmbedder
 ) -> list[tuple[Path, tuple[FileFacts, NDArray[np.float32]] | Problem]]:
-    """Decode ``paths`` and embed the readable ones in one onnxruntime call; (path, (facts, raw vector) or
-    Problem) in input order. Runs in a worker thread (onnxruntime and OpenCV release the GIL)."""
+    """Decode ``paths`` and embed both views of the readable ones in one onnxruntime call; (path, (facts, raw
+    [whole, centre] vector (2 D,)) or Problem) in input order. Runs in a worker thread (onnxruntime and OpenCV
+    release the GIL)."""
     decoded = [(p, decode_facts(p, embedder.preprocess)) for p in paths]
     good = [(p, d) for p, d in decoded if not isinstance(d, Problem)]
     out: dict[Path, tuple[FileFacts, NDArray[np.float32]] | Problem] = {
         p: d for p, d in decoded if isinstance(d, Problem)
     }
     if good:
-        vectors = embedder.embed(np.stack([d[1] for _, d in good]))  # type: ignore[misc]
+        views = np.concatenate([d[1] for _, d in good])  # type: ignore[misc]  # (2 B, S, S, 3)
+        vectors = embedder.embed(views).reshape(len(good), -1)  # (B, 2 D): whole view then centre view
         for (p, d), v in zip(good, vectors):
             out[p] = (d[0], v)  # type: ignore[index]
     return [(p, out[p]) for p in paths]

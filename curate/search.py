@@ -202,11 +202,32 @@ def self_pairs(index: SearchIndex, radius: float) -> Pairs:
 
     A pair found from either end counts (approximate backends may see it from one side only)."""
     qi, bi, dist = index.within(index.base, radius)
+    return canonical_pairs(qi, bi, dist, len(index.base))
+
+
+def duplicate_pairs(
+    vectors: NDArray[np.floating], crops: NDArray[np.floating] | None, radius: float, backend: str = "auto"
+) -> Pairs:
+    """Pairs ``i < j`` whose two-view distance ``min(d(v_i, v_j), d(c_i, v_j), d(v_i, c_j))`` is below
+    ``radius``, for whole-image vectors ``vectors`` (N, D) and centre-view vectors ``crops`` (N, D) (a cropped
+    copy of an image matches that image's centre view). ``crops=None``: whole views only."""
+    index = build_index(vectors, backend)
+    qi, bi, dist = index.within(index.base, radius)
+    if crops is not None and len(crops):
+        ci, cb, cd = index.within(crops, radius)
+        qi, bi, dist = np.concatenate([qi, ci]), np.concatenate([bi, cb]), np.concatenate([dist, cd])
+    return canonical_pairs(qi, bi, dist, len(vectors))
+
+
+def canonical_pairs(qi: Idx, bi: Idx, dist: Vec, n: int) -> Pairs:
+    """Unordered pairs ``i < j`` (self pairs dropped), each once with its smallest distance, sorted by (i, j)."""
     i, j = np.minimum(qi, bi), np.maximum(qi, bi)
     keep = i != j
-    key = i[keep] * len(index.base) + j[keep]
+    key, d = i[keep] * n + j[keep], dist[keep]
+    order = np.lexsort((d, key))
+    key, d = key[order], d[order]
     key, first = np.unique(key, return_index=True)
-    return Pairs(key // len(index.base), key % len(index.base), dist[keep][first])
+    return Pairs(key // n, key % n, d[first])
 
 
 def _cat(qi: list, bi: list, ds: list) -> tuple[Idx, Idx, Vec]:

@@ -15,7 +15,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from curate.dedup import UnionFind
-from curate.search import build_index, self_pairs
+from curate.search import duplicate_pairs
 
 
 def resolve_sizes(sizes: Mapping[str, float], n: int) -> dict[str, int]:
@@ -38,11 +38,14 @@ def resolve_sizes(sizes: Mapping[str, float], n: int) -> dict[str, int]:
     return {k: int(v) for k, v in sizes.items()}
 
 
-def near_groups(vectors: NDArray[np.float32], threshold: float, backend: str = "auto") -> list[list[int]]:
-    """Connected components of the rows of unit ``vectors`` (N, D) closer than ``threshold``; singletons too."""
+def near_groups(
+    vectors: NDArray[np.float32], threshold: float, backend: str = "auto", crops: NDArray[np.float32] | None = None
+) -> list[list[int]]:
+    """Connected components of the rows of unit ``vectors`` (N, D) (with centre views ``crops``) closer than
+    ``threshold`` (:func:`curate.search.duplicate_pairs`); singletons included."""
     uf = UnionFind(len(vectors))
     if len(vectors) > 1 and threshold > 0:
-        pairs = self_pairs(build_index(vectors, backend), threshold)
+        pairs = duplicate_pairs(vectors, crops, threshold, backend)
         for a, b in zip(pairs.i.tolist(), pairs.j.tolist()):
             uf.union(a, b)
     return uf.components()

@@ -58,7 +58,7 @@ def test_pipeline_removes_duplicates_and_splits_without_leakage(sources: Path, e
     # no near-duplicate group (at the split threshold) straddles two splits
     index = {im.path: i for i, im in enumerate(result.run.scan.images)}
     rows = [index[img.file_name] for img in ds.images]
-    for group in near_groups(result.run.scan.vectors[rows], 0.6):
+    for group in near_groups(result.run.scan.vectors[rows], 0.6, crops=result.run.scan.crops[rows]):
         assert len({ds.images[i].split for i in group}) == 1
 
 

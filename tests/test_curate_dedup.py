@@ -64,7 +64,7 @@ def _outcome(scan: ScanResult, result) -> tuple[set, set, set]:
 
 def test_finds_planted_pairs_with_keeper_policy(planted: Path, embedder: OnnxEmbedder) -> None:
     scan = _scan(planted, embedder)
-    removed, kept, groups = _outcome(scan, find_duplicates(scan.images, scan.vectors))
+    removed, kept, groups = _outcome(scan, find_duplicates(scan.images, scan.vectors, crops=scan.crops))
     assert {frozenset(r[:2]) for r in removed} == {frozenset(p) for p in ORDERED} | UNORDERED
     assert ORDERED <= {r[:2] for r in removed}
     kinds = {r[0]: r[2] for r in removed}
@@ -74,17 +74,19 @@ def test_finds_planted_pairs_with_keeper_policy(planted: Path, embedder: OnnxEmb
 
 def test_same_result_for_any_input_order(planted: Path, embedder: OnnxEmbedder) -> None:
     scan = _scan(planted, embedder)
-    reference = _outcome(scan, find_duplicates(scan.images, scan.vectors))
+    reference = _outcome(scan, find_duplicates(scan.images, scan.vectors, crops=scan.crops))
     for seed in (1, 2):
         shuffled = _scan(planted, embedder, shuffle_seed=seed)
-        assert _outcome(shuffled, find_duplicates(shuffled.images, shuffled.vectors)) == reference
+        assert _outcome(shuffled, find_duplicates(shuffled.images, shuffled.vectors, crops=shuffled.crops)) == reference
 
 
 def test_exact_only_and_protect(planted: Path, embedder: OnnxEmbedder) -> None:
     scan = _scan(planted, embedder)
     removed, _, _ = _outcome(scan, find_duplicates(scan.images, None, near=False))
     assert {r[0] for r in removed} == {"s4.jpg", "s5_pixels.png"}
-    removed, kept, _ = _outcome(scan, find_duplicates(scan.images, scan.vectors, protect=[planted / "copies"]))
+    removed, kept, _ = _outcome(
+        scan, find_duplicates(scan.images, scan.vectors, protect=[planted / "copies"], crops=scan.crops)
+    )
     assert {r[0] for r in removed} == {"s0.jpg", "s1.jpg", "s2.jpg", "s3.jpg", "s4.jpg", "s5.png"}
     assert {"s0_hflip.jpg", "s1_crop.jpg", "s2_resize.jpg", "s3_bright.jpg", "s4_bytes.jpg", "s5_pixels.png"} <= kept
 

@@ -8,8 +8,10 @@ import torch
 from curate_helpers import GRACE_HOPPER
 
 from curate.effnet import EMBED_DIM, EfficientNetLite0, SameConv, efficientnet_lite0
-from curate.embed import LITE0_PREPROCESS, lite0_weights_path
+from curate.embed import Preprocess, lite0_weights_path
 from curate.imageio import read_image
+
+IMAGENET = Preprocess(size=224)  # the resolution the weights were trained at, no blur
 
 
 @pytest.fixture(scope="module")
@@ -18,7 +20,7 @@ def net() -> EfficientNetLite0:
 
 
 def _predict(net: EfficientNetLite0, image: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    x = LITE0_PREPROCESS.normalize(LITE0_PREPROCESS.resize(image)[None])
+    x = IMAGENET.normalize(IMAGENET.resize(image)[None])
     with torch.no_grad():
         emb, logits = net(torch.from_numpy(x))
     return emb.numpy(), torch.softmax(logits, 1).numpy()

@@ -35,9 +35,11 @@ def _batch() -> np.ndarray:
 def test_onnxruntime_matches_torch(embedder: OnnxEmbedder) -> None:
     batch = _batch()
     with torch.no_grad():
-        expected, _ = efficientnet_lite0()(torch.from_numpy(LITE0_PREPROCESS.normalize(batch)))
+        expected, _ = efficientnet_lite0(image_size=LITE0_PREPROCESS.size)(
+            torch.from_numpy(LITE0_PREPROCESS.normalize(batch))
+        )
     got = embedder.embed(batch)
-    assert got.shape == (4, 1280)
+    assert got.shape == (4, 320)
     np.testing.assert_allclose(got, expected.numpy(), rtol=1e-3, atol=1e-4)
 
 
@@ -96,6 +98,18 @@ def test_bad_inputs_are_rejected(tmp_path: Path) -> None:
         Preprocess(std=(1.0, 0.0, 1.0))
     with pytest.raises(ValueError, match="fixed preprocessing"):
         load_embedder(None, Preprocess(size=128))
+
+
+def test_views_are_whole_and_centre_blurred() -> None:
+    img = np.zeros((100, 200, 3), np.uint8)
+    img[:10] = 255  # a white band at the top: outside the centre 80 % view
+    pre = Preprocess(size=32)
+    views = pre.views(img)
+    assert views.shape == (2, 32, 32, 3) and views[0].max() == 255 and views[1].max() == 0
+    blurred = Preprocess(size=32, blur=2.0).resize(img)
+    assert 0 < blurred[4, 16, 0] < 255 or blurred[:, 16, 0].std() < views[0][:, 16, 0].std()
+    with pytest.raises(ValueError):
+        Preprocess(blur=-1)
 
 
 def test_l2_normalize_rows() -> None:

@@ -49,8 +49,10 @@ def test_scan_reports_bad_files_and_keeps_going(folder: Path, embedder: OnnxEmbe
         result = scan_images(paths, embedder, cache, batch_size=4)
     assert sorted(Path(p.path).name for p in result.problems) == ["broken.jpg", "empty.png"]
     assert [Path(im.path).name for im in result.images] == ["s1.png", "s0.jpg", "s1.jpg", "s2.jpg", "s3.jpg", "s4.jpg"]
-    assert result.vectors.shape == (6, 1280)
+    assert result.vectors.shape == result.crops.shape == (6, 320)
     np.testing.assert_allclose(np.linalg.norm(result.vectors, axis=1), 1.0, rtol=1e-5)
+    np.testing.assert_allclose(np.linalg.norm(result.crops, axis=1), 1.0, rtol=1e-5)
+    assert not np.allclose(result.vectors, result.crops)
     s0 = result.images[1]
     assert s0.facts.sha256 == hashlib.sha256((folder / "s0.jpg").read_bytes()).hexdigest()
     assert (s0.facts.width, s0.facts.height) == (160, 120) and s0.facts.sharpness > 0
@@ -67,6 +69,7 @@ def test_rerun_hits_cache_with_identical_vectors(folder: Path, embedder: OnnxEmb
     index = {im.path: i for i, im in enumerate(first.images)}
     assert [im.path for im in second.images] == [im.path for im in reversed(first.images)]
     np.testing.assert_array_equal(second.vectors, first.vectors[[index[im.path] for im in second.images]])
+    np.testing.assert_array_equal(second.crops, first.crops[[index[im.path] for im in second.images]])
 
 
 def test_pixel_hash_sees_pixels_not_bytes(tmp_path: Path) -> None:

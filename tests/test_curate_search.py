@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from curate.embed import l2_normalize
-from curate.search import BACKENDS, build_index, dist_to_sim, self_pairs, sim_to_dist
+from curate.search import BACKENDS, build_index, dist_to_sim, duplicate_pairs, self_pairs, sim_to_dist
 
 
 def _planted(n: int = 600, d: int = 32, seed: int = 0) -> np.ndarray:
@@ -48,6 +48,26 @@ def test_faiss_range_pairs_match_brute_force(backend: str) -> None:
         np.testing.assert_allclose(np.sort(got.dist), np.sort(ref.dist), atol=1e-3)
     else:
         assert len(missing) <= 0.05 * len(ref)
+
+
+@pytest.mark.parametrize("backend", ["numpy", "flat"])
+def test_two_view_pairs_match_brute_force(backend: str) -> None:
+    """min(d(v_i, v_j), d(c_i, v_j), d(v_i, c_j)) < r, computed densely, equals the batched search."""
+    rng = np.random.default_rng(5)
+    v = _planted(240, 32, seed=5)
+    c = l2_normalize(v + 0.4 * rng.standard_normal(v.shape))
+    c[:20] = l2_normalize(v[100:120] + 0.05 * rng.standard_normal((20, 32)))  # i's centre view ~ whole of 100+i
+    radius = 0.6
+    sims = np.maximum.reduce([v @ v.T, c @ v.T, v @ c.T])
+    d = sim_to_dist(sims)
+    i, j = np.nonzero(np.triu(d < radius, 1))
+    expected = set(zip(i.tolist(), j.tolist()))
+    got = duplicate_pairs(v, c, radius, backend)
+    border = {(a, b) for a, b in zip(*np.nonzero(np.triu(np.abs(d - radius) < 1e-4, 1)))}
+    assert _pair_set(got) ^ expected <= border
+    assert {(k, 100 + k) for k in range(20)} <= _pair_set(got)  # found only through the centre views
+    assert not {(k, 100 + k) for k in range(20)} & _pair_set(self_pairs(build_index(v, "numpy"), radius))
+    np.testing.assert_allclose(got.dist, d[got.i, got.j], atol=1e-3)
 
 
 def test_flat_knn_matches_numpy() -> None:
