@@ -24,8 +24,8 @@ def add_model_args(p: argparse.ArgumentParser) -> None:
     g = p.add_argument_group(
         "embedding model",
         "default: the built-in ImageNet EfficientNet-Lite0. A user ONNX model gets the image resized to "
-        "SIZE x SIZE (stretched), RGB (or --bgr), scaled (pixel - mean) / std with pixel in 0..255, NCHW "
-        "(or --nhwc); VGG16/ResNet exports: --mean 123.675,116.28,103.53 --std 58.395,57.12,57.375",
+        "SIZE x SIZE (stretched), blurred (--blur), RGB (or --bgr), scaled (pixel - mean) / std with pixel in "
+        "0..255, NCHW (or --nhwc); each image is embedded whole and as its centre 80 percent; VGG16/ResNet exports: --mean 123.675,116.28,103.53 --std 58.395,57.12,57.375",
     )
     g.add_argument("--model", type=Path, help="ONNX file of your own CNN (embedding = its first output)")
     g.add_argument("--input-size", type=int, default=224, help="model input side S in pixels (default 224)")
@@ -33,6 +33,7 @@ def add_model_args(p: argparse.ArgumentParser) -> None:
     g.add_argument("--std", type=_floats3, default=(128.0, 128.0, 128.0), help="per-channel std (0..255)")
     g.add_argument("--bgr", action="store_true", help="the model expects BGR channel order")
     g.add_argument("--nhwc", action="store_true", help="the model input is (N, S, S, 3)")
+    g.add_argument("--blur", type=float, default=0.0, help="Gaussian sigma in input pixels after resizing (default 0)")
     g.add_argument("--output", help="name of the model output to use as the embedding")
     g.add_argument("--cache", type=Path, help="embedding cache file (default: user cache dir)")
     g.add_argument("--no-cache", action="store_true", help="do not read or write the embedding cache")
@@ -45,12 +46,14 @@ def load_model_from_args(args: argparse.Namespace):  # noqa: ANN201 - (OnnxEmbed
     from curate.embedcache import EmbeddingCache
 
     if args.model is None:
-        custom = (args.input_size, args.mean, args.std, args.bgr, args.nhwc, args.output)
-        if custom != (224, (127.0, 127.0, 127.0), (128.0, 128.0, 128.0), False, False, None):
-            raise ValueError("preprocessing flags (--input-size --mean --std --bgr --nhwc --output) need --model")
+        custom = (args.input_size, args.mean, args.std, args.bgr, args.nhwc, args.output, args.blur)
+        if custom != (224, (127.0, 127.0, 127.0), (128.0, 128.0, 128.0), False, False, None, 0.0):
+            raise ValueError(
+                "preprocessing flags (--input-size --mean --std --bgr --nhwc --output --blur) need --model"
+            )
         embedder = load_embedder()
     else:
-        pre = Preprocess(args.input_size, args.mean, args.std, args.bgr, "nhwc" if args.nhwc else "nchw")
+        pre = Preprocess(args.input_size, args.mean, args.std, args.bgr, "nhwc" if args.nhwc else "nchw", args.blur)
         embedder = load_embedder(args.model, pre, output=args.output)
     cache = None if args.no_cache else EmbeddingCache(args.cache or cache_dir() / "embeddings.sqlite")
     return embedder, cache

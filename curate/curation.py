@@ -38,6 +38,7 @@ class ModelConfig:
     bgr: bool = False
     layout: Literal["nchw", "nhwc"] = "nchw"
     output: Optional[str] = None  # output name used as the embedding (default: first)
+    blur: float = 0.0  # Gaussian sigma in input pixels after resizing
     batch_size: int = 4  # images per onnxruntime call
     workers: int = 0  # decode + embed threads; 0 = one per CPU core
 
@@ -86,7 +87,7 @@ class CurateResult:
 def build_embedder(cfg: ModelConfig) -> OnnxEmbedder:
     if cfg.path is None:
         return load_embedder()
-    pre = Preprocess(cfg.input_size, tuple(cfg.mean), tuple(cfg.std), cfg.bgr, cfg.layout)  # type: ignore[arg-type]
+    pre = Preprocess(cfg.input_size, tuple(cfg.mean), tuple(cfg.std), cfg.bgr, cfg.layout, cfg.blur)  # type: ignore[arg-type]
     return load_embedder(cfg.path, pre, output=cfg.output)
 
 
