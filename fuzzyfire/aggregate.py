@@ -83,7 +83,7 @@ def write_report(cfg: ExperimentConfig, data: Prepared, rows: Sequence[dict], ou
     if data.rare is not None:
         samples[label(cfg.rare.name, data.rare.standin)] = data.rare
     samples.update({f"synthetic {m}": ref for m, ref in data.pools.items()})
-    datasets = {k: load_data(ref, cfg.classes) for k, ref in samples.items()}
+    datasets = {k: load_data(ref, cfg.classes) for k, ref in samples.items()} if cfg.report.samples else {}
     columns = ("mixture", "method", "seed", "test_set", "AP", "AP50", "run")
     title = cfg.report.title + (" — STAND-IN DATA" if data.standin else "")
     return write_study_report(

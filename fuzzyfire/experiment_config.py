@@ -133,7 +133,7 @@ class ReportConfig:
     title: str = "fuzzyfire study"
     bootstrap: int = 1000  # paired image-level bootstrap resamples per comparison (0 = no comparisons)
     baseline: Optional[str] = None  # mixture the others are compared with (default: largest real-only one)
-    samples: int = 8  # sample thumbnails per dataset in report.html
+    samples: bool = True  # sample thumbnails with boxes (8 per dataset) in report.html
 
 
 @dataclass(frozen=True)
