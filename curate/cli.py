@@ -73,7 +73,8 @@ def print_problems(problems: Sequence[Problem], stream: TextIO | None = None, li
 
 def cmd_convert(args: argparse.Namespace) -> int:
     result = read_dataset(args.src, args.fmt, names=args.names, source=args.source, aliases=_aliases(args.alias))
-    ds = result.dataset.drop_categories(args.drop_class) if args.drop_class else result.dataset
+    result = result.drop_classes(args.drop_class)
+    ds = result.dataset
     formats = list(OUTPUT_FORMATS) if args.to == "all" else [args.to]
     try:
         written = write_dataset(
@@ -111,7 +112,7 @@ def cmd_validate(args: argparse.Namespace) -> int:
 
 def cmd_stats(args: argparse.Namespace) -> int:
     result = read_dataset(args.src, args.fmt, names=args.names, source=args.source, aliases=_aliases(args.alias))
-    ds = result.dataset.drop_categories(args.drop_class) if args.drop_class else result.dataset
+    ds = result.drop_classes(args.drop_class).dataset
     stats = dataset_stats(ds)
     png = Path(args.png) if args.png else None
     if png is not None:

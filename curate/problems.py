@@ -21,12 +21,14 @@ class Problem:
     path: str
     reason: str
     level: Level = "error"
+    code: str = ""  # machine-readable kind, e.g. "unknown-class:default" ("" when none is needed)
 
     def __str__(self) -> str:
         return f"{self.path}: {self.reason}"
 
     def to_dict(self) -> dict[str, str]:
-        return {"path": self.path, "reason": self.reason, "level": self.level}
+        out = {"path": self.path, "reason": self.reason, "level": self.level}
+        return {**out, "code": self.code} if self.code else out
 
 
 def count_levels(problems: Iterable[Problem]) -> dict[str, int]:

@@ -39,8 +39,8 @@ def read_source(src: SourceConfig, base: Path) -> tuple[Dataset, list[Problem]]:
     path = src.path if src.path.is_absolute() else base / src.path
     tag = f"real:{src.name}" if src.name else None
     result = read_dataset(path, src.format, names=src.names, source=tag, aliases=src.aliases)
-    ds = result.dataset.drop_categories(src.drop_classes) if src.drop_classes else result.dataset
-    return ds, result.problems
+    result = result.drop_classes(src.drop_classes)
+    return result.dataset, result.problems
 
 
 def merge_sources(cfg: MergeConfig, base: Path, out_root: Path) -> tuple[Dataset, list[Problem]]:

@@ -46,8 +46,8 @@ def load_test_set(
 ) -> tuple[Dataset, list[Problem]]:
     """Read any dataset :func:`curate.formats.registry.read_dataset` reads, optionally one split of it,
     with class ``aliases`` (source name -> class) and the boxes of classes ``drop`` removed."""
-    result = read_dataset(path, fmt, aliases=aliases)
-    ds = result.dataset.drop_categories(drop) if drop else result.dataset
+    result = read_dataset(path, fmt, aliases=aliases).drop_classes(drop)
+    ds = result.dataset
     if split:
         if split not in ds.splits:
             raise ScoreError(f"{path}: no split {split!r} (splits: {', '.join(s or '(none)' for s in ds.splits)})")

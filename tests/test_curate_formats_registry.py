@@ -24,3 +24,14 @@ def test_undetectable_and_unknown(tmp_path):
     write_yolo_dataset(tmp_path / "yolo")
     with pytest.raises(ValueError, match="unknown format 'kitti'"):
         read_dataset(tmp_path / "yolo", "kitti")
+
+
+def test_drop_classes_silences_their_unknown_class_warning(tmp_path):
+    write_yolo_dataset(tmp_path / "ds", names=("Fire", "Default"))
+    result = read_dataset(tmp_path / "ds")
+    assert [p.code for p in result.problems if p.code] == ["unknown-class:default"]
+    dropped = result.drop_classes(["DEFAULT"])
+    assert dropped.dataset.category_names == ["fire"] and len(dropped.dataset.annotations) == 2
+    assert not [p for p in dropped.problems if p.level == "warning"]
+    assert any(p.reason == "dropped 1 boxes of class 'default' as asked" for p in dropped.problems)
+    assert result.drop_classes([]) is result and result.dataset.category_names == ["fire", "default"]

@@ -44,7 +44,7 @@ def _read(path: str, fmt: str, split: str | None, defaults: tuple[str, ...], dro
     errors = [p for p in result.problems if p.level == "error"]
     if errors:
         print_problems(errors, sys.stderr, limit=20)
-    ds = result.dataset.drop_categories(drop) if drop else result.dataset
+    ds = result.drop_classes(drop).dataset
     return pick_split(ds, split, defaults, path)
 
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 import os
+from collections import Counter
 from collections.abc import Iterable, Mapping, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
@@ -23,6 +24,22 @@ class ReadResult:
 
     dataset: Dataset
     problems: list[Problem] = field(default_factory=list)
+
+    def drop_classes(self, names: Iterable[str]) -> ReadResult:
+        """Without the boxes of the classes ``names`` (any spelling; their images stay, maybe as negatives).
+
+        The user chose to drop them, so their "unknown class" warnings go; an info line per class says how many
+        boxes were dropped.
+        """
+        drop = {canonical_class(n) for n in names} & set(self.dataset.category_names)
+        if not drop:
+            return self
+        ds = self.dataset
+        counts = Counter(ds.categories[a.category_id - 1].name for a in ds.annotations)
+        problems = [p for p in self.problems if p.code not in {f"unknown-class:{n}" for n in drop}]
+        where = str(ds.info.get("source_root") or ds.info.get("source_file") or ds.root)
+        problems += [Problem(where, f"dropped {counts[n]} boxes of class {n!r} as asked", "info") for n in sorted(drop)]
+        return ReadResult(ds.drop_categories(drop), problems)
 
 
 def list_images(folder: Path) -> list[Path]:
@@ -102,6 +119,7 @@ class ClassResolver:
                     f"class {name!r} is not a known class (fire, smoke): kept as {canonical!r}; "
                     "map it with --alias NAME=fire or drop it with --drop-class",
                     "warning",
+                    code=f"unknown-class:{canonical}",
                 )
             )
         return canonical
