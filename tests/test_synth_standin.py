@@ -111,6 +111,7 @@ def test_written_set_has_splits_labels_and_notice(written: tuple[Path, Path]) ->
     assert (a / "STAND-IN.txt").read_text().strip() == NOTICE and (a / "contact_sheet.png").is_file()
     manifest = json.loads((a / "manifest.json").read_text())
     assert "stand-in" in json.dumps(manifest).lower()
+    assert all("source" not in entry for entry in manifest["images"])  # no pointers into the removed staging
     assert not any(p.name.endswith(".parts") for p in a.parent.iterdir())  # staging removed
 
 
