@@ -38,7 +38,7 @@ def add_reader_args(p: argparse.ArgumentParser) -> None:
         action="append",
         default=[],
         metavar="NAME",
-        help="remove the boxes of a class (its images stay, possibly as negatives)",
+        help="remove the boxes of a class (its images stay, possibly as negatives); repeatable or comma-separated",
     )
     p.add_argument("--source", help="source tag for every image (default: real:<folder name>)")
 

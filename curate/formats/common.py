@@ -28,18 +28,24 @@ class ReadResult:
     def drop_classes(self, names: Iterable[str]) -> ReadResult:
         """Without the boxes of the classes ``names`` (any spelling; their images stay, maybe as negatives).
 
-        The user chose to drop them, so their "unknown class" warnings go; an info line per class says how many
-        boxes were dropped.
+        A name may be a comma-separated list (``"default,smoke"``). The user chose to drop them, so their "unknown
+        class" warnings go; an info line per class says how many boxes were dropped, or that the dataset has no
+        such class (a typo shows up instead of silently keeping the boxes).
         """
-        drop = {canonical_class(n) for n in names} & set(self.dataset.category_names)
-        if not drop:
-            return self
+        asked = {canonical_class(part) for name in names for part in name.split(",") if part.strip()}
+        drop = asked & set(self.dataset.category_names)
         ds = self.dataset
+        where = str(ds.info.get("source_root") or ds.info.get("source_file") or ds.root)
+        absent = [
+            Problem(where, f"no class {n!r} to drop (classes: {', '.join(ds.category_names) or 'none'})", "info")
+            for n in sorted(asked - drop)
+        ]
+        if not drop:
+            return ReadResult(ds, [*self.problems, *absent]) if absent else self
         counts = Counter(ds.categories[a.category_id - 1].name for a in ds.annotations)
         problems = [p for p in self.problems if p.code not in {f"unknown-class:{n}" for n in drop}]
-        where = str(ds.info.get("source_root") or ds.info.get("source_file") or ds.root)
         problems += [Problem(where, f"dropped {counts[n]} boxes of class {n!r} as asked", "info") for n in sorted(drop)]
-        return ReadResult(ds.drop_categories(drop), problems)
+        return ReadResult(ds.drop_categories(drop), problems + absent)
 
 
 def list_images(folder: Path) -> list[Path]:
