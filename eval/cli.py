@@ -156,7 +156,9 @@ def _add_scoring_args(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--alias", action="append", default=[], metavar="NAME=CLASS", help="map a test-set class, e.g. Flame=fire"
     )
-    p.add_argument("--drop-class", action="append", default=[], metavar="NAME", help="ignore a test-set class (repeatable or a,b)")
+    p.add_argument(
+        "--drop-class", action="append", default=[], metavar="NAME", help="ignore a test-set class (repeatable or a,b)"
+    )
     p.add_argument(
         "--format", default="auto", choices=("auto", "fuzzyfire", "yolov5", "yolov8"), help="model output layout"
     )

@@ -247,9 +247,7 @@ def run_standin(cfg: StandInConfig, out: Path, overwrite: bool = False) -> Write
     ds, records = build_dataset(staging, cfg.n, f"standin:{cfg.kind}", smoke=False)
     ds = replace(ds, images=tuple(replace(img, split=split_of(cfg, img.id - 1)) for img in ds.images))
     args = {**config_json(cfg), "per_image": [rec["meta"] for rec in records], "notice": NOTICE}
-    result = write_dataset(
-        ds, out, ("coco", "yolo"), "copy", "synth standin", args, (), overwrite, generated=True
-    )
+    result = write_dataset(ds, out, ("coco", "yolo"), "copy", "synth standin", args, (), overwrite, generated=True)
     plan = plan_image_names(ds)
     written = replace(ds, root=out, images=tuple(replace(img, file_name=plan[img.id]) for img in ds.images))
     result.files["contact_sheet"] = contact_sheet(written, out).name

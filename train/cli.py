@@ -111,6 +111,12 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--train-format", default="auto", help="format of --train (default: detect)")
     p.add_argument("--val-format", default="auto", help="format of --val (default: detect)")
     p.add_argument("--classes", help="training class names in output order, e.g. fire,smoke")
-    p.add_argument("--drop-class", action="append", default=[], metavar="NAME", help="drop a class in both sets (repeatable or a,b)")
+    p.add_argument(
+        "--drop-class",
+        action="append",
+        default=[],
+        metavar="NAME",
+        help="drop a class in both sets (repeatable or a,b)",
+    )
     p.add_argument("--no-autoanchor", action="store_true", help="keep the default anchors even when they fit badly")
     p.set_defaults(func=cmd_train)
