@@ -30,13 +30,13 @@ import numpy as np
 from numpy.typing import NDArray
 
 from curate.boxes import clip_xyxy, mask_to_xywh, points_to_xyxy, xyxy_to_xywh
-from curate.progress import progress
 from synth import render
 from synth.effects import Effects, apply_effects, sample_effects
+from synth.generate import generate
 from synth.library import FlameLibraryConfig
-from synth.output import Staging, boxes_from_masks, finish
+from synth.output import boxes_from_masks
 from synth.scenes import translate
-from synth.schema import check_range, to_json
+from synth.schema import check_range
 from synth.sprites import Sprite, SpriteSequence, flatten_rgba
 from synth.views import View, ViewCache
 
@@ -267,13 +267,4 @@ def run_method1(
     platform: str | None = None,
 ):
     """Generate (or resume) ``cfg.n`` images and write the dataset to ``out``; returns the WriteResult."""
-    if not library or not all(seq.sprites for seq in library):
-        raise ValueError("the flame library is empty")
-    staging = Staging(out)
-    todo = [i for i in range(cfg.n) if not staging.done(i)]
-    with render.Renderer(cfg.width, cfg.height, platform) as renderer:
-        views = ViewCache(cfg.seed, cfg.scenes, renderer)
-        for i in progress(todo, total=len(todo), desc="method1 images"):
-            staging.save(i, *make_image(cfg, i, library, views))
-    args = {**to_json(cfg), "flame_sequences": [s.name for s in library]}
-    return finish(staging, out, cfg.n, "synth:method1", "synth method1", args, cfg.smoke_class, overwrite)
+    return generate("method1", cfg, make_image, library, out, overwrite, platform)

@@ -14,13 +14,13 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from curate.progress import progress
 from synth import render
 from synth.composite import BLEND_MODES, Placement, composite
 from synth.effects import apply_effects, sample_effects
+from synth.generate import generate
 from synth.library import FlameLibraryConfig
-from synth.output import Staging, boxes_from_masks, finish
-from synth.schema import check_range, to_json
+from synth.output import boxes_from_masks
+from synth.schema import check_range
 from synth.sprites import SpriteSequence
 from synth.views import ViewCache
 
@@ -114,13 +114,4 @@ def run_method2(
     platform: str | None = None,
 ):
     """Generate (or resume) ``cfg.n`` images and write the dataset to ``out``; returns the WriteResult."""
-    if not library or not all(seq.sprites for seq in library):
-        raise ValueError("the flame library is empty")
-    staging = Staging(out)
-    todo = [i for i in range(cfg.n) if not staging.done(i)]
-    with render.Renderer(cfg.width, cfg.height, platform) as renderer:
-        views = ViewCache(cfg.seed, cfg.scenes, renderer)
-        for i in progress(todo, total=len(todo), desc="method2 images"):
-            staging.save(i, *make_image(cfg, i, library, views))
-    args = {**to_json(cfg), "flame_sequences": [s.name for s in library]}
-    return finish(staging, out, cfg.n, "synth:method2", "synth method2", args, cfg.smoke_class, overwrite)
+    return generate("method2", cfg, make_image, library, out, overwrite, platform)

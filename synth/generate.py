@@ -1,0 +1,45 @@
+"""The resumable generation loop that Method 1 and Method 2 share: stage image ``i`` for every ``i`` in
+``range(cfg.n)`` not yet staged, from views rendered once per (scene, camera) and cached, then write the dataset.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from pathlib import Path
+from typing import Any
+
+from curate.progress import progress
+from curate.writer import WriteResult
+from synth import render
+from synth.output import Staging, finish
+from synth.schema import to_json
+from synth.sprites import SpriteSequence
+from synth.views import ViewCache
+
+MakeImage = Callable[[Any, int, Sequence[SpriteSequence], ViewCache], tuple]
+
+
+def generate(
+    method: str,
+    cfg: Any,
+    make_image: MakeImage,
+    library: Sequence[SpriteSequence],
+    out: Path,
+    overwrite: bool = False,
+    platform: str | None = None,
+) -> WriteResult:
+    """Generate (or resume) ``cfg.n`` images with ``make_image(cfg, i, library, views)`` and write ``out``.
+
+    ``method`` names the source tag (``synth:<method>``) and the command in the manifest; ``cfg`` is a
+    Method1Config or Method2Config (``n``, ``seed``, ``scenes``, ``width``, ``height``, ``smoke_class``).
+    """
+    if not library or not all(seq.sprites for seq in library):
+        raise ValueError("the flame library is empty")
+    staging = Staging(out)
+    todo = [i for i in range(cfg.n) if not staging.done(i)]
+    with render.Renderer(cfg.width, cfg.height, platform) as renderer:
+        views = ViewCache(cfg.seed, cfg.scenes, renderer)
+        for i in progress(todo, total=len(todo), desc=f"{method} images"):
+            staging.save(i, *make_image(cfg, i, library, views))
+    args = {**to_json(cfg), "flame_sequences": [s.name for s in library]}
+    return finish(staging, out, cfg.n, f"synth:{method}", f"synth {method}", args, cfg.smoke_class, overwrite)
