@@ -6,12 +6,22 @@ import argparse
 import sys
 from pathlib import Path
 
-from curate.mix import MixError, check_available, paper_grid, parse_mixtures, parse_seeds, training_pool, write_mixture
+from curate.mix import (
+    MixError,
+    check_available,
+    paper_grid,
+    parse_mixtures,
+    parse_seeds,
+    training_pool,
+    validation_set,
+    write_mixture,
+)
 from curate.writer import OutputError
 
 _EXAMPLE = """example:
   fuzzyfire mix --real ../shared/data/fire-cctv-416 --synth out/method2 \\
       --mixtures R1000_S0,R750_S250,R500_S500 --seeds 0-4 --out out/mixtures
+  fuzzyfire mix --real out/real --synth out/method2 --mixtures R500_S500 --val out/real --out out/mixtures
   fuzzyfire mix --real out/real --synth out/method2 --paper-grid --seed 0 --out out/mixtures
 
 Writes OUT/seed<S>/R<m>_S<n>/ per mixture and seed: annotations.json (COCO), labels/ + data.yaml (YOLO),
@@ -31,6 +41,7 @@ def cmd_mix(args: argparse.Namespace) -> int:
         real = training_pool(real_read.dataset, args.split)
         synth = training_pool(synth_read.dataset, args.split)
         check_available(real, synth, mixtures)
+        val = validation_set(read_dataset(args.val, args.val_format).dataset, args.val_split) if args.val else None
     except MixError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
@@ -40,7 +51,7 @@ def cmd_mix(args: argparse.Namespace) -> int:
         for mix in mixtures:
             try:
                 folder = write_mixture(
-                    real, synth, mix, seed, args.out, args.images, classes, command_args(args), args.overwrite
+                    real, synth, mix, seed, args.out, args.images, classes, command_args(args), args.overwrite, val
                 )
             except (MixError, OutputError) as exc:
                 print(f"error: {exc}", file=sys.stderr)
@@ -78,6 +89,13 @@ def register(sub: argparse._SubParsersAction) -> None:
         choices=("symlink", "hardlink", "copy"),
         help="how images reach the mixture (default symlink: referenced, not copied)",
     )
+    p.add_argument(
+        "--val",
+        help="YOLO validation set whose images data.yaml's val names (default: the training images), "
+        "e.g. the real set's valid split; its class ids must be the mixture's",
+    )
+    p.add_argument("--val-split", help="split of --val (default: val or valid when present, else all)")
+    p.add_argument("--val-format", default="auto", help="format of --val (default: detect)")
     p.add_argument("--real-format", default="auto", help="format of --real (default: detect)")
     p.add_argument("--synth-format", default="auto", help="format of --synth (default: detect)")
     p.add_argument("--overwrite", action="store_true", help="replace mixtures already at --out")

@@ -21,6 +21,7 @@ from typing import Any
 import numpy as np
 
 from curate.dataset import Dataset, ImageRecord, merge
+from curate.formats.yolo import ultralytics_val_folders, write_data_yaml
 from curate.writer import plan_image_names, write_dataset
 
 _NAME = re.compile(r"^R(\d+)_S(\d+)$")
@@ -176,18 +177,38 @@ def write_mixture(
     category_names: Sequence[str] = (),
     command_args: dict[str, Any] | None = None,
     overwrite: bool = False,
+    val: Dataset | None = None,
 ) -> Path:
     """Write one mixture folder (COCO + YOLO + data.yaml + manifest + ``mixture.json``); returns its path.
 
-    ``images="symlink"`` references the source files instead of copying them.
+    ``images="symlink"`` references the source files instead of copying them. ``val``: a YOLO validation set
+    whose image folders become the ``val`` entry of ``data.yaml`` (default: the training images); raises
+    :class:`MixError` when ultralytics could not use it (no label files where it looks, other class ids).
     """
     folder = mixture_dir(out, mix, seed)
     ds = build_mixture(real, synth, mix, seed, folder, category_names)
+    try:
+        val_folders = ultralytics_val_folders(val, ds.category_names) if val is not None else []
+    except ValueError as exc:
+        raise MixError(f"validation set: {exc}") from None
     args = {**(command_args or {}), "mixture": mix.name, "seed": seed}
     write_dataset(ds, folder, ("coco", "yolo"), images, command="mix", args=args, overwrite=overwrite)
+    if val_folders:
+        write_data_yaml(ds, folder, val_folders)
     record = mixture_record(ds, mix, seed)
     (folder / MIXTURE_FILE).write_text(json.dumps(record, indent=1, ensure_ascii=False) + "\n", encoding="utf-8")
     return folder
+
+
+def validation_set(ds: Dataset, split: str | None) -> Dataset:
+    """The validation images of ``ds``: split ``split``; by default ``val`` or ``valid`` when present, else all."""
+    if split is None:
+        named = [s for s in ("val", "valid") if s in ds.splits]
+        return ds.select_split(named[0]) if named else ds
+    pool = ds.select_split(split)
+    if not pool.images:
+        raise MixError(f"{ds.root}: no images in split {split!r} (splits: {ds.splits})")
+    return pool
 
 
 def training_pool(ds: Dataset, split: str | None) -> Dataset:

@@ -20,6 +20,8 @@ from pathlib import Path
 from typing import Any
 
 from curate.dataset import Dataset, DatasetBuilder
+from curate.formats.registry import read_dataset
+from curate.formats.yolo import ultralytics_val_folders
 from curate.mix import mixture_dir, parse_mixture, write_mixture
 from fuzzyfire.aggregate import STANDIN_NOTICE, result_rows, write_report, write_summary
 from fuzzyfire.executors import Outcome
@@ -96,6 +98,7 @@ def write_mixtures(cfg: ExperimentConfig, data: Prepared, out: Path) -> dict[tup
     """Write every (mixture, method, seed) training set; returns their references."""
     real_train = data.real.with_split(cfg.real.train_split)
     real_pool = load_data(real_train, cfg.classes)
+    val = _yolo_validation(data.real.with_split(cfg.real.val_split), cfg.classes)
     refs = {}
     for method in dict.fromkeys(m for _, m in grid_entries(cfg)):
         synth = data.pools[method].with_split(None) if method else None
@@ -106,21 +109,35 @@ def write_mixtures(cfg: ExperimentConfig, data: Prepared, out: Path) -> dict[tup
             for name, m in grid_entries(cfg):
                 if m != method:
                     continue
-                folder = _write_mixture(cfg, real_pool, pool, name, seed, root)
+                folder = _write_mixture(cfg, real_pool, pool, name, seed, root, val)
                 identity = {"kind": "mixture", "mixture": name, "seed": seed, **key}
                 refs[(name, method, seed)] = DataRef(folder, identity, "coco")
     _say(f"mix    {len(refs)} training sets in {out / 'mixtures'}")
     return refs
 
 
-def _write_mixture(cfg: ExperimentConfig, real: Dataset, synth: Dataset, name: str, seed: int, root: Path) -> Path:
+def _yolo_validation(ref: DataRef, classes: Sequence[str]) -> Dataset | None:
+    """The real validation split as read, when ultralytics can validate on it (the mixtures' ``data.yaml``
+    then names it); else None and a line saying why (``data.yaml``'s val stays the training images)."""
+    ds = read_dataset(ref.path, ref.format, aliases=dict(ref.aliases) or None).dataset.select_split(ref.split)
+    try:
+        ultralytics_val_folders(ds, classes)
+    except ValueError as exc:
+        _say(f"mix    data.yaml val = training images ({exc})")
+        return None
+    return ds
+
+
+def _write_mixture(
+    cfg: ExperimentConfig, real: Dataset, synth: Dataset, name: str, seed: int, root: Path, val: Dataset | None
+) -> Path:
     mix = parse_mixture(name)
     folder = mixture_dir(root, mix, seed)
     if (folder / "mixture.json").is_file():
         return folder
     if folder.exists():
         shutil.rmtree(folder)  # our own interrupted mixture
-    return write_mixture(real, synth, mix, seed, root, cfg.images, cfg.classes)
+    return write_mixture(real, synth, mix, seed, root, cfg.images, cfg.classes, val=val)
 
 
 def plan_runs(

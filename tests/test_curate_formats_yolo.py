@@ -1,3 +1,5 @@
+from pathlib import Path
+
 import numpy as np
 import pytest
 import yaml
@@ -175,3 +177,11 @@ def test_fire_smoke_608_keeps_every_image_and_row(shared_data, tmp_path):
     assert [p for p in result.problems if p.level == "error"] == []
     assert set(result.dataset.category_names) == {"fire", "default", "smoke"}
     assert set(result.dataset.splits) == {"train", "valid", "test"}
+
+
+def test_ultralytics_label_path_replaces_the_last_images_folder():
+    from curate.formats.yolo import ultralytics_label_path
+
+    assert ultralytics_label_path(Path("/d/images/valid/images/a.b.jpg")) == Path("/d/images/valid/labels/a.b.txt")
+    assert ultralytics_label_path(Path("/d/valid/images/x.png")) == Path("/d/valid/labels/x.txt")
+    assert ultralytics_label_path(Path("/d/images.jpg")) is None

@@ -126,3 +126,48 @@ def test_cli_writes_grid_per_seed(pools: tuple[Dataset, Dataset], tmp_path: Path
     assert made == ["seed0/R10_S10", "seed0/R20_S0", "seed1/R10_S10", "seed1/R20_S0"]
     assert main([*args, "--mixtures", "R5_S5,R99_S0", "--out", str(tmp_path / "o2")]) == 2
     assert not (tmp_path / "o2").exists()  # checked before anything is written
+
+
+def test_data_yaml_val_names_a_yolo_validation_set(pools: tuple[Dataset, Dataset], tmp_path: Path) -> None:
+    import yaml
+
+    from curate.writer import write_dataset
+
+    real, synth = pools
+    default = write_mixture(real, synth, Mixture(4, 4), 0, tmp_path / "default")
+    doc = yaml.safe_load((default / "data.yaml").read_text())
+    assert doc["val"] == doc["train"] and "val = the training images" in (default / "data.yaml").read_text()
+    write_dataset(real, tmp_path / "val", ("coco", "yolo"), "copy")
+    val = read_coco(tmp_path / "val").dataset
+    folder = write_mixture(real, synth, Mixture(4, 4), 0, tmp_path / "with-val", val=val)
+    doc = yaml.safe_load((folder / "data.yaml").read_text())
+    assert doc["val"] == str((tmp_path / "val" / "images").absolute()) and doc["train"] == "images/train"
+    assert "training images" not in (folder / "data.yaml").read_text()
+
+
+def test_unusable_validation_sets_are_refused(pools: tuple[Dataset, Dataset], tmp_path: Path) -> None:
+    from curate.writer import write_dataset
+
+    real, synth = pools
+    with pytest.raises(MixError, match="no YOLO label files"):  # COCO only: ultralytics finds no labels
+        write_mixture(real, synth, Mixture(4, 4), 0, tmp_path / "a", val=real)
+    smoke = _pool(tmp_path / "smoke-src", 3, "real:x", "smoke")
+    write_dataset(smoke, tmp_path / "smoke", ("coco", "yolo"), "copy")
+    with pytest.raises(MixError, match="would mix them up"):
+        write_mixture(real, synth, Mixture(4, 4), 0, tmp_path / "b", val=read_coco(tmp_path / "smoke").dataset)
+    assert not (tmp_path / "a").exists() and not (tmp_path / "b").exists()
+
+
+def test_cli_val_option(pools: tuple[Dataset, Dataset], tmp_path: Path) -> None:
+    import yaml
+
+    from curate.writer import write_dataset
+
+    real, synth = pools
+    write_dataset(real, tmp_path / "real", ("coco", "yolo"), "copy")
+    write_dataset(synth, tmp_path / "synth", ("coco",), "copy")
+    args = ["mix", "--real", str(tmp_path / "real"), "--synth", str(tmp_path / "synth"), "--mixtures", "R5_S5"]
+    assert main([*args, "--val", str(tmp_path / "real"), "--out", str(tmp_path / "o")]) == 0
+    doc = yaml.safe_load((tmp_path / "o" / "seed0" / "R5_S5" / "data.yaml").read_text())
+    assert doc["val"] == str((tmp_path / "real" / "images").absolute())
+    assert main([*args, "--val", str(tmp_path / "synth"), "--out", str(tmp_path / "o2")]) == 2

@@ -7,6 +7,7 @@ import json
 from pathlib import Path
 
 import pytest
+import yaml
 from factories_experiment import toy_config, write_toy_config
 
 import fuzzyfire.experiment as experiment
@@ -70,6 +71,8 @@ def test_report_files_exist_and_say_stand_in(full_run: tuple[Path, str]) -> None
     assert len(rows) == 8 and {r["test_set"] for r in rows} == {"common (stand-in)", "rare (stand-in)"}
     assert sorted({k.split("/")[0] for k in _results(out)}) == sorted(RUNS)
     assert (out / "data").is_dir() and len(list((out / "data").glob("*/stage.json"))) == 4
+    for data_yaml in (out / "mixtures").rglob("data.yaml"):  # ultralytics validates on the real valid split
+        assert Path(yaml.safe_load(data_yaml.read_text())["val"]).parts[-2:] == ("images", "valid")
 
 
 @pytest.mark.slow

@@ -216,8 +216,46 @@ def write_yolo_labels(ds: Dataset, out: Path) -> list[Problem]:
     return problems
 
 
-def write_data_yaml(ds: Dataset, out: Path) -> Path:
-    """An ultralytics ``data.yaml``: ``path`` is the folder itself, splits map to ``images/<split>``."""
+def ultralytics_label_path(image: Path) -> Path | None:
+    """Where ultralytics looks for the label file of ``image``: the last ``images`` folder of the path replaced by
+    ``labels``, suffix ``.txt``; None when no folder of the path is called ``images`` (ultralytics finds none)."""
+    parts = image.parts
+    if "images" not in parts[:-1]:
+        return None
+    i = len(parts) - 2 - parts[:-1][::-1].index("images")
+    return Path(*parts[:i], "labels", *parts[i + 1 :]).with_suffix(".txt")
+
+
+def ultralytics_val_folders(ds: Dataset, class_names: Sequence[str]) -> list[Path]:
+    """The absolute folders holding the images of ``ds``, sorted: a ``data.yaml`` ``val`` entry for a dataset
+    trained with ``class_names`` (YOLO id order).
+
+    Raises ValueError unless ultralytics can use them as they are: the label files it looks for exist (for at
+    least one image; negatives may have none) and ``ds``'s classes, in id order, are ``class_names``.
+    """
+    images = [(ds.root / img.file_name).absolute() for img in ds.images]
+    if not images:
+        raise ValueError(f"{ds.root}: no validation images")
+    labels = [ultralytics_label_path(p) for p in images]
+    if not any(label is not None and label.is_file() for label in labels):
+        raise ValueError(
+            f"{ds.root}: no YOLO label files where ultralytics looks for them (images/ -> labels/, .txt); "
+            "write the set with `fuzzyfire convert --to yolo` first"
+        )
+    if list(ds.category_names) != list(class_names):
+        raise ValueError(
+            f"{ds.root}: its label files number the classes {list(ds.category_names)}, the training set "
+            f"{list(class_names)}; ultralytics would mix them up"
+        )
+    return sorted({p.parent for p in images})
+
+
+def write_data_yaml(ds: Dataset, out: Path, val: Sequence[Path] = ()) -> Path:
+    """An ultralytics ``data.yaml``: ``path`` is the folder itself, splits map to ``images/<split>``.
+
+    ``val``: absolute image folders of a validation set (:func:`ultralytics_val_folders`); by default the
+    ``val``/``valid`` split, else the training images (the file's header then says so).
+    """
     splits = [s for s in ds.splits]
     doc: dict[str, Any] = {"path": str(out.resolve())}
     if splits == [""]:
@@ -229,9 +267,13 @@ def write_data_yaml(ds: Dataset, out: Path) -> Path:
         doc["val"] = named.get("val", named.get("valid", doc["train"]))
         if "test" in named:
             doc["test"] = named["test"]
+    if val:
+        doc["val"] = [str(p) for p in val] if len(val) > 1 else str(val[0])
     doc["nc"] = len(ds.categories)
     doc["names"] = {c.id - 1: c.name for c in ds.categories}
     path = out / "data.yaml"
     header = "# ultralytics dataset file written by fuzzyfire; class ids are 0-based.\n"
+    if doc["val"] == doc["train"]:
+        header += "# val = the training images: no validation set was given (fuzzyfire mix --val).\n"
     path.write_text(header + yaml.safe_dump(doc, sort_keys=False, allow_unicode=True), encoding="utf-8")
     return path
