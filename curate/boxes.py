@@ -202,6 +202,24 @@ def nms_xyxy(
     return np.asarray(keep, dtype=np.int64)
 
 
+def batched_nms_xyxy(
+    boxes: ArrayLike, scores: ArrayLike, labels: ArrayLike, iou_threshold: float, max_keep: int | None = None
+) -> NDArray[np.int64]:
+    """Class-aware NMS over (N, 4) xyxy ``boxes``, (N,) ``scores`` and (N,) integer ``labels``: boxes of different
+    labels never suppress each other. Indices kept, best first (ties: lower label, then lower index)."""
+    boxes = np.asarray(boxes, dtype=np.float64).reshape(-1, 4)
+    scores, labels = np.asarray(scores, dtype=np.float64), np.asarray(labels)
+    kept = [
+        np.flatnonzero(labels == c)[nms_xyxy(boxes[labels == c], scores[labels == c], iou_threshold, max_keep)]
+        for c in np.unique(labels)
+    ]
+    if not kept:
+        return np.zeros(0, dtype=np.int64)
+    idx = np.concatenate(kept)
+    idx = idx[np.argsort(-scores[idx], kind="stable")]
+    return idx if max_keep is None else idx[:max_keep]
+
+
 def points_to_xyxy(points: ArrayLike) -> Boxes:
     """(N, 2) points (x, y) in pixels, N >= 1 -> (4,) xyxy box enclosing them (e.g. a plane's projected corners)."""
     p = np.asarray(points, dtype=np.float64)

@@ -1,5 +1,4 @@
-"""Class-aware non-maximum suppression (on :func:`curate.boxes.nms_xyxy`) and the detector post-processing
-built on it."""
+"""Detector post-processing: confidence filter, class-aware NMS (:func:`curate.boxes.batched_nms_xyxy`)."""
 
 from __future__ import annotations
 
@@ -8,7 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from curate.boxes import cxcywh_to_xyxy, nms_xyxy
+from curate.boxes import batched_nms_xyxy, cxcywh_to_xyxy
 
 #: Scoring defaults (COCO-style evaluation keeps low-confidence boxes: they only add recall).
 CONF_THRESHOLD = 0.001
@@ -29,21 +28,6 @@ class ImageDetections:
 
     def __len__(self) -> int:
         return len(self.scores)
-
-
-def batched_nms_xyxy(
-    boxes: NDArray, scores: NDArray, labels: NDArray, iou_threshold: float, max_keep: int | None = None
-) -> NDArray[np.int64]:
-    """Class-aware NMS: boxes of different ``labels`` never suppress each other. Indices kept, best first."""
-    kept = [
-        np.flatnonzero(labels == c)[nms_xyxy(boxes[labels == c], scores[labels == c], iou_threshold, max_keep)]
-        for c in np.unique(labels)
-    ]
-    if not kept:
-        return np.zeros(0, dtype=np.int64)
-    idx = np.concatenate(kept)
-    idx = idx[np.argsort(-scores[idx], kind="stable")]
-    return idx if max_keep is None else idx[:max_keep]
 
 
 def postprocess(

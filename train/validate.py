@@ -37,9 +37,7 @@ def postprocess(
         top = np.argsort(-values, kind="stable")[:MAX_CANDIDATES]
         rows, labels, values = rows[top], labels[top], values[top]
     xyxy = bx.cxcywh_to_xyxy(pred[rows, :4]).reshape(-1, 4)
-    # Class-aware NMS in one pass: boxes of different classes are moved apart so they never overlap.
-    offset = labels[:, None] * (float(np.abs(xyxy).max(initial=0.0)) + 1.0) * 2.0
-    keep = bx.nms_xyxy(xyxy + offset, values, iou, max_keep=max_det)
+    keep = bx.batched_nms_xyxy(xyxy, values, labels, iou, max_keep=max_det)
     return xyxy[keep], values[keep], labels[keep].astype(np.int64)
 
 
