@@ -81,18 +81,14 @@ def detection_records(preds: Predictions, match: ClassMatch) -> list[dict[str, A
     """COCO result records ``{image_id, category_id, bbox: [x, y, w, h], score}`` of the matched classes."""
     records = []
     for image_id, det in sorted(preds.by_image.items()):
-        xywh = xyxy_to_xywh(det.boxes) if len(det) else np.zeros((0, 4))
-        for box, score, label in zip(xywh, det.scores, det.labels):
-            cat = match.label_to_cat.get(int(label))
+        if not len(det):
+            continue
+        boxes = np.round(xyxy_to_xywh(det.boxes), 3).reshape(-1, 4).tolist()
+        scores = np.round(det.scores, 5).tolist()
+        for box, score, label in zip(boxes, scores, det.labels.tolist()):
+            cat = match.label_to_cat.get(label)
             if cat is not None:
-                records.append(
-                    {
-                        "image_id": int(image_id),
-                        "category_id": cat,
-                        "bbox": [round(float(v), 3) for v in box],
-                        "score": round(float(score), 5),
-                    }
-                )
+                records.append({"image_id": int(image_id), "category_id": cat, "bbox": box, "score": score})
     return records
 
 

@@ -33,6 +33,6 @@ def letterbox_image(
 
 def to_nchw_float(images: list[NDArray[np.uint8]]) -> NDArray[np.float32]:
     """A list of (H, W, 3) uint8 RGB images of one size -> (N, 3, H, W) float32 in [0, 1]."""
-    batch = np.stack(images).astype(np.float32)
+    batch = np.ascontiguousarray(np.stack(images).transpose(0, 3, 1, 2), dtype=np.float32)  # one pass
     batch *= 1.0 / 255.0
-    return np.ascontiguousarray(batch.transpose(0, 3, 1, 2))
+    return batch

@@ -176,3 +176,16 @@ def test_batched_nms_class_aware_and_max_keep():
     assert boxes.batched_nms_xyxy(bxs, scores, labels, 0.5).tolist() == [0, 1, 3]
     assert boxes.batched_nms_xyxy(bxs, scores, labels, 0.5, max_keep=2).tolist() == [0, 1]
     assert boxes.batched_nms_xyxy(bxs[:0], scores[:0], labels[:0], 0.5).tolist() == []
+
+
+@pytest.mark.parametrize("max_keep", [1, 7, 300, 5000])
+def test_nms_in_blocks_equals_one_greedy_pass(max_keep):
+    bxs, scores, _ = random_boxes(np.random.default_rng(11), 6000)  # > one block of candidates
+    scores[::3] = 0.5  # many ties: the order must still be score, then index
+    full = boxes.nms_xyxy(bxs, scores, 0.5)  # no max_keep: a single greedy pass over every box
+    assert boxes.nms_xyxy(bxs, scores, 0.5, max_keep).tolist() == full[:max_keep].tolist()
+
+
+def test_nms_counts_two_empty_boxes_as_duplicates_and_keeps_an_empty_box_beside_a_real_one():
+    bxs = np.array([[5, 5, 5, 5], [5, 5, 5, 5], [0, 0, 10, 10]], float)
+    assert boxes.nms_xyxy(bxs, np.array([0.9, 0.8, 0.7]), 0.5).tolist() == [0, 2]
