@@ -8,13 +8,14 @@ from __future__ import annotations
 
 import contextlib
 import io
+from collections import defaultdict
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 from pycocotools.coco import COCO
-from pycocotools.cocoeval import COCOeval
+from pycocotools.cocoeval import COCOeval, Params
 
 from curate.boxes import xyxy_to_xywh
 from curate.classes import canonical_class
@@ -92,12 +93,31 @@ def detection_records(preds: Predictions, match: ClassMatch) -> list[dict[str, A
     return records
 
 
+def top_records(records: Sequence[dict[str, Any]], max_det: int) -> list[dict[str, Any]]:
+    """``records`` without those COCOeval never reads: beyond the ``max_det`` best of their (image, category).
+
+    COCOeval sorts each (image, category)'s detections by score with a stable sort and keeps the first
+    ``max_det`` before matching, for every area range; the same stable sort here keeps the same ones, in
+    their original order (so ties still resolve the same way)."""
+    groups: dict[tuple[int, int], list[int]] = defaultdict(list)
+    for i, r in enumerate(records):
+        groups[(r["image_id"], r["category_id"])].append(i)
+    if all(len(idx) <= max_det for idx in groups.values()):
+        return list(records)
+    keep: list[int] = []
+    for idx in groups.values():
+        keep += sorted(idx, key=lambda i: -records[i]["score"])[:max_det] if len(idx) > max_det else idx
+    return [records[i] for i in sorted(keep)]
+
+
 def run_cocoeval(dataset: Dataset, records: Sequence[dict[str, Any]], cat_ids: Sequence[int]) -> COCOeval:
     """``COCOeval`` over every image of ``dataset`` and categories ``cat_ids``, evaluated and accumulated.
 
-    Results are loaded without ``COCO.loadRes`` so an empty list is a valid input (AP 0)."""
+    Results are loaded without ``COCO.loadRes`` so an empty list is a valid input (AP 0). Only the records
+    COCOeval can look at are loaded (:func:`top_records`), which gives the same numbers faster."""
     gt_doc = dataset.to_coco()
     gt = _coco_from_dict(gt_doc)
+    records = top_records(records, Params(iouType="bbox").maxDets[-1])
     anns = [{**r, "id": i, "area": float(r["bbox"][2] * r["bbox"][3]), "iscrowd": 0} for i, r in enumerate(records, 1)]
     dt = _coco_from_dict({"images": gt_doc["images"], "categories": gt_doc["categories"], "annotations": anns})
     ev = COCOeval(gt, dt, "bbox")

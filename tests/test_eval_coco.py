@@ -79,3 +79,43 @@ def test_test_classes_the_model_lacks_are_not_scored(tmp_path):
     assert m.extra["classes"]["not_in_model"] == ["smoke"]
     with pytest.raises(ClassMatchError, match="no class in common"):
         match_classes(["person"], ds)
+
+
+def test_records_cocoeval_never_reads_are_left_out_with_identical_results(tmp_path):
+    import contextlib
+    import io
+
+    from pycocotools.coco import COCO
+    from pycocotools.cocoeval import COCOeval
+
+    from eval.coco import top_records
+
+    rng = np.random.default_rng(0)
+    b = DatasetBuilder(tmp_path, ["fire", "smoke"])
+    records = []
+    for _ in range(6):
+        image_id = b.add_image("x.jpg", 200, 200)
+        for _ in range(3):
+            b.add_box(image_id, "fire", (*rng.uniform(0, 120, 2), *rng.uniform(5, 80, 2)))
+        for _ in range(260):  # 130 per class on average: more than the 100 COCOeval reads
+            box = [*np.round(rng.uniform(0, 150, 2), 1), *np.round(rng.uniform(2, 80, 2), 1)]
+            score = float(rng.choice([0.5, 0.25, rng.uniform()]))  # many ties
+            records.append({"image_id": image_id, "category_id": int(rng.integers(1, 3)), "bbox": box, "score": score})
+    ds = b.build()
+    kept = top_records(records, 100)
+    assert len(kept) < len(records) and all(r in records for r in kept)
+    ours = run_cocoeval(ds, records, [1, 2])
+    doc = ds.to_coco()
+    gt, dt = COCO(), COCO()
+    anns = [{**r, "id": i, "area": r["bbox"][2] * r["bbox"][3], "iscrowd": 0} for i, r in enumerate(records, 1)]
+    gt.dataset, dt.dataset = doc, {"images": doc["images"], "categories": doc["categories"], "annotations": anns}
+    with contextlib.redirect_stdout(io.StringIO()):
+        gt.createIndex()
+        dt.createIndex()
+        ref = COCOeval(gt, dt, "bbox")
+        ref.params.catIds = [1, 2]
+        ref.evaluate()
+        ref.accumulate()
+        ref.summarize()
+    np.testing.assert_array_equal(ours.stats, ref.stats)
+    np.testing.assert_array_equal(ours.eval["precision"], ref.eval["precision"])
