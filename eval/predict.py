@@ -97,6 +97,7 @@ def predict_dataset(detector: OnnxDetector, dataset: Dataset, options: PredictOp
     out = Predictions(spec.class_names, {}, [])
     load = _loader(spec.input_width, spec.input_height, spec.pad_value)
     done = 0
+    pending: list[tuple[int, Future]] = []
     with ThreadPoolExecutor(max_workers=max(1, opt.workers)) as pool:
         batches = _prefetched(paths, max(1, opt.batch), pool, load)
         for loaded in progress(batches, total=-(-len(paths) // max(1, opt.batch)), desc="scoring", unit="batch"):
@@ -113,8 +114,11 @@ def predict_dataset(detector: OnnxDetector, dataset: Dataset, options: PredictOp
                 continue
             boxes, scores = detector(to_nchw_float([item[0] for _, item in good]))
             sizes = [item[1] for _, item in good]
-            # NMS in the pool too: numpy releases the GIL on large arrays.
+            # NMS in the pool too (OpenCV releases the GIL), collected at the end: the next batch runs meanwhile.
             post = partial(_postprocess_one, opt=opt, input_size=input_size)
-            for (rec, _), det in zip(good, pool.map(post, boxes, scores, sizes)):
-                out.by_image[rec.id] = det
+            pending += [
+                (rec.id, pool.submit(post, b, s, size)) for (rec, _), b, s, size in zip(good, boxes, scores, sizes)
+            ]
+        for image_id, future in pending:
+            out.by_image[image_id] = future.result()
     return out
