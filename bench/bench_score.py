@@ -1,7 +1,7 @@
 """Scoring speed at 320 px on CPU, and bootstrap speed.
 
 - ``score_*``: ``fuzzyfire score`` end to end (decode + letterbox in threads, onnxruntime, NMS, pycocotools)
-  on ../shared/data/fire-smoke-608 (test + valid, 102 images) or on generated 640x480 JPEGs, with our detector
+  on ../shared/data/fire-smoke-608 (all 979 images, 608x608 JPEGs) or on generated 640x480 JPEGs, with our detector
   (random weights: its many low-confidence boxes make NMS the worst case) exported by ``train/export.py``.
 - ``onnx_vs_torch``: the same model's forward pass, onnxruntime vs torch eager, batch 16 (target >= 4x).
 - ``bootstrap_*``: image-level bootstrap resamples of AP on 1,000 images (target: 1,000 in seconds).
@@ -32,8 +32,7 @@ SHARED = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "fire-
 
 def _dataset(tmp: Path):
     if SHARED.is_dir():
-        ds = read_dataset(SHARED).dataset
-        return ds.filter_images(lambda img: img.split in ("test", "valid")), "fire-smoke-608 test+valid"
+        return read_dataset(SHARED).dataset, "fire-smoke-608, all 979 images"
     import cv2
 
     rng = np.random.default_rng(0)

@@ -249,6 +249,7 @@ def _open_session(path: Path, threads: int, providers: Sequence[str]):  # -> onn
     opts.intra_op_num_threads = max(0, int(threads))
     opts.inter_op_num_threads = 1
     opts.log_severity_level = 3
+    opts.add_session_config_entry("session.intra_op.allow_spinning", "0")  # decoding threads need the cores
     try:
         return ort.InferenceSession(str(path), opts, providers=list(providers))
     except Exception as exc:  # noqa: BLE001 - onnxruntime raises its own exception types for bad files
