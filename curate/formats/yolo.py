@@ -107,11 +107,17 @@ def _names_from_yaml(doc: dict[str, Any], path: Path, problems: list[Problem]) -
     return names
 
 
+def _last_images_folder(parts: Sequence[str]) -> int | None:
+    """Index in a path's ``parts`` of the last folder (not the file) called ``images``; None when there is none."""
+    folders = list(parts[:-1])
+    return len(folders) - 1 - folders[::-1].index("images") if "images" in folders else None
+
+
 def _label_path_for(root: Path, image: Path) -> tuple[Path, str]:
     """The label file of ``image`` and its split name."""
     parts = image.relative_to(root).parts
-    if "images" in parts[:-1]:
-        i = len(parts) - 2 - parts[:-1][::-1].index("images")
+    i = _last_images_folder(parts)
+    if i is not None:
         label = root.joinpath(*parts[:i], "labels", *parts[i + 1 :]).with_suffix(".txt")
         split = parts[i - 1] if i > 0 else (parts[i + 1] if len(parts) > i + 2 else "")
         return label, split
@@ -220,10 +226,8 @@ def ultralytics_label_path(image: Path) -> Path | None:
     """Where ultralytics looks for the label file of ``image``: the last ``images`` folder of the path replaced by
     ``labels``, suffix ``.txt``; None when no folder of the path is called ``images`` (ultralytics finds none)."""
     parts = image.parts
-    if "images" not in parts[:-1]:
-        return None
-    i = len(parts) - 2 - parts[:-1][::-1].index("images")
-    return Path(*parts[:i], "labels", *parts[i + 1 :]).with_suffix(".txt")
+    i = _last_images_folder(parts)
+    return None if i is None else Path(*parts[:i], "labels", *parts[i + 1 :]).with_suffix(".txt")
 
 
 def ultralytics_val_folders(ds: Dataset, class_names: Sequence[str]) -> list[Path]:
