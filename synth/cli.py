@@ -52,27 +52,28 @@ def cmd_scenes(args: argparse.Namespace) -> int:
     return 0
 
 
-def _library_config(args: argparse.Namespace):
+def _dataset_config(args: argparse.Namespace) -> dict:
+    """The config fields Method 1 and Method 2 share, from :func:`_dataset_arguments`."""
     from synth.library import FlameLibraryConfig
 
-    return FlameLibraryConfig(sequences=args.library, seed=args.seed, folders=tuple(args.flames or ()))
+    w, h = args.size
+    flames = FlameLibraryConfig(sequences=args.library, seed=args.seed, folders=tuple(args.flames or ()))
+    return {
+        "n": args.n,
+        "seed": args.seed,
+        "width": w,
+        "height": h,
+        "scenes": args.scenes,
+        "smoke_class": args.smoke,
+        "flames": flames,
+    }
 
 
 def cmd_method1(args: argparse.Namespace) -> int:
     from synth.library import build_library
     from synth.method1 import Method1Config, run_method1
 
-    w, h = args.size
-    cfg = Method1Config(
-        n=args.n,
-        seed=args.seed,
-        width=w,
-        height=h,
-        scenes=args.scenes,
-        box_mode=args.box_mode,
-        smoke_class=args.smoke,
-        flames=_library_config(args),
-    )
+    cfg = Method1Config(box_mode=args.box_mode, **_dataset_config(args))
     result = run_method1(cfg, build_library(cfg.flames), args.out, overwrite=args.overwrite)
     print(f"wrote {args.out}: {args.n} images, {args.box_mode} boxes ({', '.join(result.files.values())})")
     return 0
@@ -82,19 +83,14 @@ def cmd_method2(args: argparse.Namespace) -> int:
     from synth.library import build_library
     from synth.method2 import Method2Config, run_method2
 
-    w, h = args.size
-    cfg = Method2Config(
-        n=args.n,
-        seed=args.seed,
-        width=w,
-        height=h,
-        scenes=args.scenes,
-        smoke_class=args.smoke,
-        flames=_library_config(args),
-    )
+    cfg = Method2Config(**_dataset_config(args))
     result = run_method2(cfg, build_library(cfg.flames), args.out, overwrite=args.overwrite)
     print(f"wrote {args.out}: {args.n} images ({', '.join(result.files.values())})")
     return 0
+
+
+def _ious(rep: dict) -> str:
+    return f"mean IoU {rep['mean_iou']:.4f}, min IoU {rep['min_iou']:.4f}"
 
 
 def cmd_audit(args: argparse.Namespace) -> int:
@@ -104,15 +100,10 @@ def cmd_audit(args: argparse.Namespace) -> int:
     if args.json:
         print(json.dumps(report))
     else:
-        print(
-            f"{report['images']} images, {report['boxes']} boxes: mean IoU {report['mean_iou']:.4f}, "
-            f"min IoU {report['min_iou']:.4f}"
-        )
-        for mode, rep in report.get("modes", {}).items():
-            print(f"  {mode} boxes: {rep['boxes']}, mean IoU {rep['mean_iou']:.4f}, min IoU {rep['min_iou']:.4f}")
-        if "smoke" in report:
-            rep = report["smoke"]
-            print(f"  smoke boxes: {rep['boxes']}, mean IoU {rep['mean_iou']:.4f}, min IoU {rep['min_iou']:.4f}")
+        print(f"{report['images']} images, {report['boxes']} boxes: {_ious(report)}")
+        parts = {**report.get("modes", {}), **({"smoke": report["smoke"]} if "smoke" in report else {})}
+        for name, rep in parts.items():
+            print(f"  {name} boxes: {rep['boxes']}, {_ious(rep)}")
     return 0
 
 
