@@ -13,8 +13,9 @@ every test set -> aggregate -> report. Output folder::
 
 from __future__ import annotations
 
+import functools
 import shutil
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
@@ -98,7 +99,8 @@ def write_mixtures(cfg: ExperimentConfig, data: Prepared, out: Path) -> dict[tup
     """Write every (mixture, method, seed) training set; returns their references."""
     real_train = data.real.with_split(cfg.real.train_split)
     real_pool = load_data(real_train, cfg.classes)
-    val = _yolo_validation(data.real.with_split(cfg.real.val_split), cfg.classes)
+    val_ref = data.real.with_split(cfg.real.val_split)
+    val = functools.cache(lambda: _yolo_validation(val_ref, cfg.classes))  # read only if a mixture is written
     refs = {}
     for method in dict.fromkeys(m for _, m in grid_entries(cfg)):
         synth = data.pools[method].with_split(None) if method else None
@@ -129,7 +131,13 @@ def _yolo_validation(ref: DataRef, classes: Sequence[str]) -> Dataset | None:
 
 
 def _write_mixture(
-    cfg: ExperimentConfig, real: Dataset, synth: Dataset, name: str, seed: int, root: Path, val: Dataset | None
+    cfg: ExperimentConfig,
+    real: Dataset,
+    synth: Dataset,
+    name: str,
+    seed: int,
+    root: Path,
+    val: Callable[[], Dataset | None],
 ) -> Path:
     mix = parse_mixture(name)
     folder = mixture_dir(root, mix, seed)
@@ -137,7 +145,7 @@ def _write_mixture(
         return folder
     if folder.exists():
         shutil.rmtree(folder)  # our own interrupted mixture
-    return write_mixture(real, synth, mix, seed, root, cfg.images, cfg.classes, val=val)
+    return write_mixture(real, synth, mix, seed, root, cfg.images, cfg.classes, val=val())
 
 
 def plan_runs(
