@@ -21,7 +21,7 @@ from typing import Any
 import numpy as np
 
 from curate.dataset import Dataset, ImageRecord, merge
-from curate.formats.yolo import ultralytics_val_folders, write_data_yaml
+from curate.formats.yolo import ultralytics_val_folders
 from curate.writer import plan_image_names, write_dataset
 
 _NAME = re.compile(r"^R(\d+)_S(\d+)$")
@@ -192,9 +192,9 @@ def write_mixture(
     except ValueError as exc:
         raise MixError(f"validation set: {exc}") from None
     args = {**(command_args or {}), "mixture": mix.name, "seed": seed}
-    write_dataset(ds, folder, ("coco", "yolo"), images, command="mix", args=args, overwrite=overwrite)
-    if val_folders:
-        write_data_yaml(ds, folder, val_folders)
+    write_dataset(
+        ds, folder, ("coco", "yolo"), images, command="mix", args=args, overwrite=overwrite, yolo_val=val_folders
+    )
     record = mixture_record(ds, mix, seed)
     (folder / MIXTURE_FILE).write_text(json.dumps(record, indent=1, ensure_ascii=False) + "\n", encoding="utf-8")
     return folder

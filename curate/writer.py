@@ -115,12 +115,15 @@ def write_dataset(
     sources: Iterable[Path] = (),
     overwrite: bool = False,
     generated: bool = False,
+    yolo_val: Sequence[Path] = (),
 ) -> WriteResult:
     """Write ``ds`` to the folder ``out`` in the given formats, with a manifest.
 
     The manifest hashes ``sources`` (configs, input files) and lists every image as ``{"file": output name,
     "sha256", "bytes", "source": original path}``. ``generated=True`` says the images were made by fuzzyfire
     in a temporary place: ``source`` is left out, so the manifest never points at files that are gone.
+    ``yolo_val``: absolute image folders of a validation set for ``data.yaml``'s ``val`` (see
+    :func:`curate.formats.yolo.write_data_yaml`).
     """
     out = Path(out)
     unknown = [f for f in formats if f not in OUTPUT_FORMATS]
@@ -138,7 +141,7 @@ def write_dataset(
         result.files["coco"] = write_coco(placed, out).name
     if "yolo" in formats:
         result.problems += write_yolo_labels(placed, out)
-        result.files["yolo"] = write_data_yaml(placed, out).name
+        result.files["yolo"] = write_data_yaml(placed, out, yolo_val).name
     extra = {
         "images_mode": images,
         "counts": _counts(placed),
