@@ -60,7 +60,7 @@ def _report_problems(result) -> None:
 
 
 def cmd_score(args: argparse.Namespace) -> int:
-    from eval.coco import ClassMatchError
+    from curate.cocoeval import ClassMatchError
     from eval.onnx_model import ModelError
     from eval.score import ScoreError, load_test_set, write_outputs
 
@@ -87,7 +87,7 @@ def cmd_score(args: argparse.Namespace) -> int:
 def cmd_compare(args: argparse.Namespace) -> int:
     import numpy as np
 
-    from eval.coco import ClassMatchError
+    from curate.cocoeval import ClassMatchError
     from eval.onnx_model import ModelError
     from eval.score import ScoreError, load_test_set
     from eval.stats import MatchTable, paired_bootstrap

@@ -12,13 +12,20 @@ from functools import partial
 import numpy as np
 from numpy.typing import NDArray
 
-from curate.boxes import clip_xyxy, letterbox_to_image_xyxy
 from curate.dataset import Dataset, ImageRecord
+from curate.detections import (
+    CONF_THRESHOLD,
+    IOU_THRESHOLD,
+    MAX_DETECTIONS,
+    ImageDetections,
+    Predictions,
+    postprocess,
+    to_original,
+)
 from curate.imageio import ImageError, read_image
+from curate.letterbox import letterbox_image, to_nchw_float
 from curate.problems import Problem
 from curate.progress import progress
-from eval.letterbox import letterbox_image, to_nchw_float
-from eval.nms import CONF_THRESHOLD, IOU_THRESHOLD, MAX_DETECTIONS, ImageDetections, postprocess
 from eval.onnx_model import OnnxDetector
 
 Loaded = tuple[NDArray[np.uint8], tuple[int, int]] | ImageError
@@ -35,16 +42,6 @@ class PredictOptions:
     batch: int = 16
     workers: int = 2
     multi_label: bool = True
-
-
-@dataclass
-class Predictions:
-    """Detections per image id (xyxy in original pixels, labels index the model's ``class_names``) and the
-    images that could not be scored."""
-
-    class_names: tuple[str, ...]
-    by_image: dict[int, ImageDetections]
-    problems: list[Problem]
 
 
 def _loader(width: int, height: int, pad: int) -> Callable[[str], Loaded]:
@@ -73,17 +70,11 @@ def _prefetched(
         yield [f.result() for f in futures]
 
 
-def _to_original(det: ImageDetections, size: tuple[int, int], input_size: tuple[int, int]) -> ImageDetections:
-    width, height = size
-    boxes = letterbox_to_image_xyxy(det.boxes, width, height, *input_size) if len(det) else det.boxes
-    return ImageDetections(clip_xyxy(boxes, width, height), det.scores, det.labels)
-
-
 def _postprocess_one(
     boxes: NDArray, scores: NDArray, size: tuple[int, int], opt: PredictOptions, input_size: tuple[int, int]
 ) -> ImageDetections:
     det = postprocess(boxes, scores, opt.conf, opt.iou, opt.max_det, opt.multi_label)
-    return _to_original(det, size, input_size)
+    return to_original(det, size, input_size)
 
 
 def predict_dataset(detector: OnnxDetector, dataset: Dataset, options: PredictOptions | None = None) -> Predictions:

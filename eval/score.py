@@ -10,13 +10,14 @@ from typing import Any
 
 from pycocotools.cocoeval import COCOeval
 
+from curate.cocoeval import CocoMetrics, evaluate_predictions
 from curate.dataset import Dataset
+from curate.detections import Predictions
 from curate.formats.registry import read_dataset
 from curate.problems import Problem
-from eval.coco import CocoMetrics, evaluate_predictions
 from eval.onnx_model import ModelSpec, OnnxDetector
 from eval.plots import plot_pr_curves, pr_curves_from_eval
-from eval.predict import Predictions, PredictOptions, predict_dataset
+from eval.predict import PredictOptions, predict_dataset
 from eval.stats import MatchTable
 
 

@@ -39,3 +39,36 @@ def test_lite0_uses_imagenet_weights_and_exports(tmp_path: Path) -> None:
         expected = model.predict(x).numpy()
     (got,) = ort.InferenceSession(str(path), providers=["CPUExecutionProvider"]).run(None, {"images": x.numpy()})
     np.testing.assert_allclose(got, expected, rtol=1e-3, atol=1e-4)
+
+
+@pytest.mark.parametrize("freeze", [0, 1, 3, 4, 5, 7])
+def test_frozen_split_is_the_same_network(freeze: int) -> None:
+    model = build_model(1, ModelConfig(backbone="efficientnet-lite0", freeze=freeze), imgsz=64).eval()
+    x = torch.rand(2, 3, 64, 64, generator=torch.Generator().manual_seed(1))
+    with torch.no_grad():
+        whole = model(x)
+        split = model.forward_frozen(model.frozen_features(x))
+    assert all(torch.equal(a, b) for a, b in zip(whole, split))
+    frozen = [n for n, p in model.backbone.named_parameters() if not p.requires_grad]
+    assert bool(frozen) == (freeze > 0) and model.has_frozen == (freeze > 0)
+    if freeze:
+        assert all(n.startswith(("stem", "blocks.")) for n in frozen)
+        assert not any(n.startswith(f"blocks.{model.backbone.split}.") for n in frozen)
+
+
+def test_frozen_stages_stay_in_inference_mode() -> None:
+    model = build_model(1, ModelConfig(backbone="efficientnet-lite0", freeze=3), imgsz=64).train()
+    assert not model.backbone.stem_bn.training and not model.backbone.blocks[4]._bn2.training
+    assert model.backbone.blocks[5]._bn2.training and model.neck.training
+    before = model.backbone.blocks[4]._bn2.running_mean.clone()
+    model(torch.rand(2, 3, 64, 64))
+    assert torch.equal(before, model.backbone.blocks[4]._bn2.running_mean)
+
+
+def test_freeze_needs_pretrained_lite0() -> None:
+    with pytest.raises(ValueError, match="only efficientnet-lite0"):
+        build_model(1, ModelConfig(freeze=3), imgsz=64)
+    with pytest.raises(ValueError, match="pretrained is false"):
+        build_model(1, ModelConfig(backbone="efficientnet-lite0", freeze=3, pretrained=False), imgsz=64)
+    with pytest.raises(ValueError, match="freeze must be 0..7"):
+        build_model(1, ModelConfig(backbone="efficientnet-lite0", freeze=8), imgsz=64)

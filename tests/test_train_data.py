@@ -12,7 +12,7 @@ from factories_train import painted_dataset
 from curate.dataset import DatasetBuilder
 from train.augment import Sample
 from train.config import AugmentConfig
-from train.data import TrainBatches, cache_images, collate, val_batches
+from train.data import TrainBatches, cache_images, collate, letterboxed_images
 
 
 @pytest.fixture(scope="module")
@@ -73,8 +73,16 @@ def test_batches_are_seeded_and_resumable(dataset) -> None:
             assert float(targets[:, 2:].min()) >= 0 and float(targets[:, 2:4].max()) <= 64
 
 
-def test_val_batches_letterbox(dataset) -> None:
+def test_letterboxed_validation_images(dataset) -> None:
+    images = letterboxed_images(dataset, 64)
+    assert len(images) == 10 and images[0].image.shape == (64, 64, 3)
+    assert tuple(images[0].image[0, 0]) == (114, 114, 114)  # 80 x 64 -> 64 x 51, grey bands
+
+
+def test_worker_processes_give_the_same_batches(dataset) -> None:
     cache = cache_images(dataset, 64)
-    records, images = next(iter(val_batches(cache, 64, 8)))
-    assert len(records) == 8 and images.shape == (8, 3, 64, 64)
-    assert abs(float(images[0, 0, 0, 0]) - 114 / 255) < 1e-6  # 80 x 64 -> 64 x 51, grey bands
+    threads = list(TrainBatches(cache, 64, 4, AugmentConfig(), seed=3).epoch(2))
+    processes = list(TrainBatches(cache, 64, 4, AugmentConfig(), seed=3, workers=2).epoch(2))
+    assert len(threads) == len(processes) == 3
+    for (xa, ta), (xb, tb) in zip(threads, processes):
+        assert torch.equal(xa, xb) and torch.equal(ta, tb)

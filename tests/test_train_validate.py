@@ -1,4 +1,4 @@
-"""Validation post-processing and COCO AP: AP = 1 on ground truth fed back, class-aware NMS."""
+"""Training-time validation: the shared post-processing and COCO evaluation, AP = 1 on ground truth fed back."""
 
 from __future__ import annotations
 
@@ -6,45 +6,59 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import torch
 
-from curate.dataset import DatasetBuilder
-from train.validate import coco_ap, fitness, postprocess
-
-
-def _pred(rows: list[list[float]]) -> np.ndarray:
-    return np.asarray(rows, dtype=np.float32)
+from curate.dataset import DatasetBuilder, ImageRecord
+from train.validate import evaluate, fitness
 
 
-def test_postprocess_scores_nms_and_classes() -> None:
-    pred = _pred(
-        [
-            [20, 20, 10, 10, 0.9, 0.9, 0.1],  # fire 0.81
-            [21, 20, 10, 10, 0.8, 0.9, 0.1],  # overlaps the first, same class: suppressed
-            [21, 20, 10, 10, 0.8, 0.1, 0.9],  # same place, other class: kept
-            [60, 60, 8, 8, 0.0005, 1.0, 1.0],  # below conf
-        ]
-    )
-    boxes, scores, labels = postprocess(pred, conf=0.001, iou=0.6, max_det=10)
-    pairs = [(int(lbl), round(float(s), 3)) for lbl, s in zip(labels, scores)]
-    assert pairs == [(0, 0.81), (1, 0.72)]  # best first; each class suppresses only its own boxes
-    assert np.allclose(boxes[0], [15, 15, 25, 25]) and np.allclose(boxes[1], [16, 15, 26, 25])
-    assert len(postprocess(pred, 0.001, 0.6, max_det=1)[0]) == 1
+class _FixedDetector(torch.nn.Module):
+    """Returns a fixed decoded output (B, N, 5 + C) whatever the input (stands in for a Detector)."""
+
+    def __init__(self, rows: np.ndarray) -> None:
+        super().__init__()
+        self.rows = torch.from_numpy(rows)
+
+    def predict_frozen(self, feats):
+        return self.rows.expand(feats[0].shape[0], *self.rows.shape).clone()
 
 
-def test_ap_is_one_on_ground_truth(tmp_path: Path) -> None:
+class _Inputs:
+    """One batch of one record (what ValidationInputs yields)."""
+
+    def __init__(self, record: ImageRecord) -> None:
+        self.record = record
+
+    def __iter__(self):
+        yield [self.record], (torch.zeros(1, 3, 64, 64),)
+
+
+def _dataset(tmp_path: Path):
     b = DatasetBuilder(tmp_path, ["fire", "smoke"])
-    i1 = b.add_image("a.jpg", 100, 80)
-    b.add_box(i1, "fire", (10, 10, 30, 20))
-    b.add_box(i1, "smoke", (50, 30, 20, 40))
-    b.add_image("negative.jpg", 100, 80)
-    ds = b.build()
-    dets = [
-        {"image_id": a.image_id, "category_id": a.category_id, "bbox": list(a.bbox), "score": 0.9}
-        for a in ds.annotations
-    ]
-    metrics = coco_ap(ds, dets)
-    assert metrics == {"AP": pytest.approx(1.0), "AP50": pytest.approx(1.0)}
-    assert fitness(metrics) == pytest.approx(1.0)
-    shifted = [{**d, "bbox": [d["bbox"][0] + 8, *d["bbox"][1:]]} for d in dets]
-    worse = coco_ap(ds, shifted)
-    assert worse["AP"] < 1.0 and coco_ap(ds, []) == {"AP": 0.0, "AP50": 0.0}
+    image = b.add_image("a.jpg", 128, 64)  # letterboxed to 64 x 64: scale 0.5, 16 px bands above and below
+    b.add_box(image, "fire", (20, 20, 40, 20))
+    b.add_box(image, "smoke", (80, 10, 30, 40))
+    return b.build()
+
+
+def test_ground_truth_fed_back_scores_one(tmp_path: Path) -> None:
+    ds = _dataset(tmp_path)
+    # the two boxes in letterboxed input pixels (cx, cy, w, h), obj, p_fire, p_smoke
+    rows = np.array([[20, 31, 20, 10, 0.9, 1.0, 0.0], [47.5, 31, 15, 20, 0.9, 0.0, 1.0]], np.float32)
+    metrics = evaluate(_FixedDetector(rows), _Inputs(ds.images[0]), ds, ["fire", "smoke"], 64, 0.001, 0.6, 300)
+    assert metrics["AP"] == pytest.approx(1.0) and metrics["AP50"] == pytest.approx(1.0)
+    assert metrics["fitness"] == pytest.approx(1.0) and metrics["detections"] == 2.0
+    shifted = rows + np.array([[6, 0, 0, 0, 0, 0, 0]], np.float32)
+    worse = evaluate(_FixedDetector(shifted), _Inputs(ds.images[0]), ds, ["fire", "smoke"], 64, 0.001, 0.6, 300)
+    assert worse["AP"] < 1.0
+
+
+def test_no_detection_scores_zero(tmp_path: Path) -> None:
+    ds = _dataset(tmp_path)
+    rows = np.array([[20, 31, 20, 10, 0.0, 1.0, 0.0]], np.float32)  # below every threshold
+    metrics = evaluate(_FixedDetector(rows), _Inputs(ds.images[0]), ds, ["fire", "smoke"], 64, 0.001, 0.6, 300)
+    assert metrics == {"AP": 0.0, "AP50": 0.0, "fitness": 0.0, "detections": 0.0}
+
+
+def test_fitness_weights() -> None:
+    assert fitness({"AP": 0.5, "AP50": 1.0}) == pytest.approx(0.55)

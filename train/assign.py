@@ -49,7 +49,7 @@ def assign_level(
     a_idx, t_idx = match.nonzero(as_tuple=True)
     t = t[t_idx]
     gxy = t[:, 2:4]
-    gxi = torch.tensor([w, h], dtype=gxy.dtype) - gxy
+    gxi = torch.tensor([w, h], dtype=gxy.dtype, device=gxy.device) - gxy
     near_low = (gxy % 1.0 < 0.5) & (gxy > 1.0)  # neighbour to the left / above
     near_high = (gxi % 1.0 < 0.5) & (gxi > 1.0)  # neighbour to the right / below
     use = torch.stack(
@@ -58,7 +58,7 @@ def assign_level(
     off_idx, m_idx = use.nonzero(as_tuple=True)
     t, a_idx = t[m_idx], a_idx[m_idx]
     gxy = t[:, 2:4]
-    gij = (gxy - _OFFSETS.to(gxy.dtype)[off_idx] * 0.5).floor().long()
+    gij = (gxy - _OFFSETS.to(gxy)[off_idx] * 0.5).floor().long()
     gi = gij[:, 0].clamp(0, w - 1)
     gj = gij[:, 1].clamp(0, h - 1)
     box = torch.cat((gxy - torch.stack((gi, gj), 1).to(gxy.dtype), t[:, 4:6]), dim=1)

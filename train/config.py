@@ -29,15 +29,16 @@ class ModelConfig:
     # anchors per level, (w, h) input pixels; None = DEFAULT_ANCHORS, re-fitted by k-means when they fit badly
     anchors: Optional[tuple[tuple[tuple[float, float], ...], ...]] = None
     autoanchor: bool = True  # run the best-possible-recall check and k-means when recall < 0.98
-    # "cspdarknet" (YOLOv5, dense convs: the CPU choice) or "efficientnet-lite0" (ImageNet weights, ~8x slower
-    # to train on CPU: a GPU option); see train/backbones.py
+    # "cspdarknet" (YOLOv5, from scratch) or "efficientnet-lite0" (ImageNet weights); see train/backbones.py
     backbone: Literal["cspdarknet", "efficientnet-lite0"] = "cspdarknet"
     pretrained: bool = True  # efficientnet-lite0: start from the ImageNet weights of the installed package
+    freeze: int = 0  # efficientnet-lite0: stages 1..freeze (and the stem) keep their ImageNet weights, 0..7
 
 
 @dataclass(frozen=True)
 class OptimConfig:
-    lr0: float = 0.01  # initial learning rate (SGD)
+    optimizer: Literal["sgd", "adamw"] = "sgd"  # SGD nesterov (YOLOv5) or AdamW (momentum = beta1)
+    lr0: float = 0.01  # initial learning rate
     lrf: float = 0.01  # final learning rate = lr0 * lrf (linear schedule)
     momentum: float = 0.937  # SGD momentum (nesterov)
     weight_decay: float = 5e-4  # at the nominal batch; not applied to BatchNorm weights or biases
@@ -82,6 +83,12 @@ class TrainConfig:
     val_iou: float = 0.6  # validation: NMS IoU threshold
     max_det: int = 300  # validation: detections kept per image
     threads: int = 0  # torch threads; 0 = leave torch's default (all cores)
+    device: str = "auto"  # auto | cpu | cuda | cuda:N; auto = the first CUDA GPU when there is one, else the CPU
+    workers: Optional[int] = None  # data-loading processes; null = none on the CPU (a thread), 8 on a GPU
+    # frozen features (model.freeze > 0): augmented views per image whose features are computed once and reused
+    # (epoch e trains on view e mod views); 0 = a fresh view every epoch. See train/features.py
+    feature_views: int = 0
+    feature_cache_gb: float = 4.0  # RAM for cached views; fewer views are kept when they would not fit
     model: ModelConfig = field(default_factory=ModelConfig)
     optim: OptimConfig = field(default_factory=OptimConfig)
     loss: LossConfig = field(default_factory=LossConfig)

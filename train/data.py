@@ -1,8 +1,10 @@
 """Training and validation data: images decoded once and cached in RAM, seeded augmented batches.
 
-Every image is decoded once, resized so its longest side is the training size and kept in memory (about
-``3 * imgsz^2`` bytes per image: 0.3 MB at 320 px). A sample's augmentation draws from its own generator
-seeded by ``(seed, epoch, index)``, so batches do not depend on threads or on where a run resumed.
+Every training image is decoded once, resized so its longest side is the training size and kept in memory
+(about ``3 * imgsz^2`` bytes per image: 0.3 MB at 320 px). A sample's augmentation draws from its own
+generator seeded by ``(seed, draw, index)`` (``draw`` is the epoch, or the view number when frozen features are
+cached: :mod:`train.features`), so batches do not depend on threads, worker processes or where a run resumed.
+Validation images are decoded and letterboxed exactly as ``fuzzyfire score`` does (:mod:`curate.letterbox`).
 
 Batches are ``(images, targets)``: images (B, 3, S, S) float32 RGB in [0, 1]; targets (T, 6) float32 rows
 ``[image index in batch, class (0-based), cx, cy, w, h]`` in input pixels.
@@ -14,6 +16,7 @@ import sys
 from collections.abc import Iterator
 from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass
+from functools import partial
 
 import numpy as np
 import torch
@@ -22,8 +25,9 @@ from numpy.typing import NDArray
 from curate import boxes as bx
 from curate.dataset import Dataset, ImageRecord
 from curate.imageio import ImageError, read_image
+from curate.letterbox import letterbox_image
 from curate.progress import progress
-from train.augment import Sample, augment, letterbox, resize_longest
+from train.augment import Sample, augment, resize_longest
 from train.config import AugmentConfig
 
 
@@ -48,22 +52,45 @@ def _load_one(ds: Dataset, img: ImageRecord, size: int, by_image: dict) -> Cache
 
 
 def cache_images(ds: Dataset, size: int, desc: str = "decoding images", workers: int = 2) -> list[CachedImage]:
-    """Decode every image of ``ds`` once (thread pool). Unreadable images are reported on stderr and left
-    out; raises ValueError when none is readable."""
+    """Decode every image of ``ds`` once (thread pool), longest side ``size``. Unreadable images are reported
+    on stderr and left out; raises ValueError when none is readable."""
     by_image = ds.annotations_by_image()
+    return _decode_all(ds, lambda img: _load_one(ds, img, size, by_image), desc, workers)
 
-    def one(img: ImageRecord) -> CachedImage | ImageError:
+
+@dataclass(frozen=True)
+class LetterboxedImage:
+    """A validation image as a scorer feeds it to the model: ``image`` (size, size, 3) uint8 RGB, letterboxed
+    from the original pixels by :func:`curate.letterbox.letterbox_image`."""
+
+    record: ImageRecord
+    image: NDArray[np.uint8]
+
+
+def letterboxed_images(
+    ds: Dataset, size: int, desc: str = "decoding images", workers: int = 2
+) -> list[LetterboxedImage]:
+    """Decode and letterbox every image of ``ds`` to ``size`` x ``size``; unreadable ones reported and left out."""
+
+    def load(img: ImageRecord) -> LetterboxedImage:
+        return LetterboxedImage(img, letterbox_image(read_image(ds.image_path(img)), size, size))
+
+    return _decode_all(ds, load, desc, workers)
+
+
+def _decode_all(ds: Dataset, load, desc: str, workers: int) -> list:
+    def one(img: ImageRecord):
         try:
-            return _load_one(ds, img, size, by_image)
+            return load(img)
         except ImageError as exc:
             return exc
 
     with ThreadPoolExecutor(max_workers=workers) as pool:
         results = list(progress(pool.map(one, ds.images), total=len(ds.images), desc=desc))
-    cached = [r for r in results if isinstance(r, CachedImage)]
     for r in results:
         if isinstance(r, ImageError):
             print(f"warning: {r} (image left out)", file=sys.stderr)
+    cached = [r for r in results if not isinstance(r, ImageError)]
     if not cached:
         raise ValueError(f"{ds.root}: no readable images")
     return cached
@@ -81,9 +108,9 @@ def collate(samples: list[Sample]) -> tuple[torch.Tensor, torch.Tensor]:
     return images, targets
 
 
-def sample_rng(seed: int, epoch: int, index: int) -> np.random.Generator:
-    """The generator of one sample's augmentation in one epoch."""
-    return np.random.default_rng([seed, epoch, index])
+def sample_rng(seed: int, draw: int, index: int) -> np.random.Generator:
+    """The generator of one sample's augmentation in one draw (an epoch, or a cached view)."""
+    return np.random.default_rng([seed, draw, index])
 
 
 def epoch_order(count: int, seed: int, epoch: int) -> NDArray[np.int64]:
@@ -92,40 +119,72 @@ def epoch_order(count: int, seed: int, epoch: int) -> NDArray[np.int64]:
 
 
 class TrainBatches:
-    """Augmented batches of a cached training set; the last partial batch is kept."""
+    """Augmented batches of a cached training set; the last partial batch is kept.
 
-    def __init__(self, cache: list[CachedImage], size: int, batch: int, cfg: AugmentConfig, seed: int) -> None:
+    ``workers`` > 0 prepares batches in that many worker processes (to keep a GPU fed); 0 prepares the next
+    batch in a thread while the caller trains on the current one. Both give the same batches."""
+
+    def __init__(
+        self, cache: list[CachedImage], size: int, batch: int, cfg: AugmentConfig, seed: int, workers: int = 0
+    ) -> None:
         self.cache, self.size, self.batch, self.cfg, self.seed = cache, size, batch, cfg, seed
+        self.workers = workers
 
     def __len__(self) -> int:
         return -(-len(self.cache) // self.batch)
 
-    def _sample(self, epoch: int, index: int) -> Sample:
+    def sample(self, draw: int, index: int) -> Sample:
+        """The augmented view of image ``index`` in ``draw`` (size x size)."""
+
         def load(i: int) -> Sample:
             return self.cache[i].sample
 
-        return augment(load, index, len(self.cache), self.size, self.cfg, sample_rng(self.seed, epoch, index))
+        return augment(load, index, len(self.cache), self.size, self.cfg, sample_rng(self.seed, draw, index))
 
-    def _batch(self, epoch: int, indices: NDArray[np.int64]) -> tuple[torch.Tensor, torch.Tensor]:
-        return collate([self._sample(epoch, int(i)) for i in indices])
+    def make_batch(self, draw: int, indices: NDArray[np.int64]) -> tuple[torch.Tensor, torch.Tensor]:
+        """Collated views of ``indices`` in ``draw``: (B, 3, S, S) float32 in [0, 1] and (T, 6) targets."""
+        return collate([self.sample(draw, int(i)) for i in indices])
+
+    def chunks(self, epoch: int, start: int = 0) -> list[NDArray[np.int64]]:
+        """Image indices of each batch of ``epoch`` from batch number ``start``."""
+        order = epoch_order(len(self.cache), self.seed, epoch)
+        return [order[i : i + self.batch] for i in range(start * self.batch, len(order), self.batch)]
 
     def epoch(self, epoch: int, start: int = 0) -> Iterator[tuple[torch.Tensor, torch.Tensor]]:
-        """Batches of ``epoch`` from batch number ``start``; the next batch is prepared in a thread while the
-        caller trains on the current one."""
-        order = epoch_order(len(self.cache), self.seed, epoch)
-        chunks = [order[i : i + self.batch] for i in range(start * self.batch, len(order), self.batch)]
-        with ThreadPoolExecutor(max_workers=1) as pool:
-            pending: Future | None = pool.submit(self._batch, epoch, chunks[0]) if chunks else None
-            for k in range(len(chunks)):
-                assert pending is not None
-                current = pending.result()
-                pending = pool.submit(self._batch, epoch, chunks[k + 1]) if k + 1 < len(chunks) else None
-                yield current
+        """Batches of ``epoch`` from batch number ``start``."""
+        chunks = self.chunks(epoch, start)
+        if self.workers > 0:
+            yield from _in_processes(partial(self.make_batch, epoch), chunks, self.workers)
+        else:
+            yield from prefetched(partial(self.make_batch, epoch), chunks)
 
 
-def val_batches(cache: list[CachedImage], size: int, batch: int) -> Iterator[tuple[list[ImageRecord], torch.Tensor]]:
-    """Letterboxed validation batches: (records, (B, 3, S, S) float32 in [0, 1])."""
-    for i in range(0, len(cache), batch):
-        chunk = cache[i : i + batch]
-        images, _ = collate([letterbox(c.sample, size) for c in chunk])
-        yield [c.record for c in chunk], images
+def prefetched(make, items: list) -> Iterator:
+    """``make(item)`` for each item in order, the next one computed in a thread while the caller uses the current."""
+    with ThreadPoolExecutor(max_workers=1) as pool:
+        pending: Future | None = pool.submit(make, items[0]) if items else None
+        for k in range(len(items)):
+            assert pending is not None
+            current = pending.result()
+            pending = pool.submit(make, items[k + 1]) if k + 1 < len(items) else None
+            yield current
+
+
+class _Chunks(torch.utils.data.Dataset):
+    """``make(chunk)`` per item, for a DataLoader whose workers each build whole batches."""
+
+    def __init__(self, make, chunks: list) -> None:
+        self.make, self.items = make, chunks
+
+    def __len__(self) -> int:
+        return len(self.items)
+
+    def __getitem__(self, k: int):
+        return self.make(self.items[k])
+
+
+def _in_processes(make, chunks: list, workers: int) -> Iterator:
+    loader = torch.utils.data.DataLoader(
+        _Chunks(make, chunks), batch_size=None, shuffle=False, num_workers=workers, prefetch_factor=4
+    )
+    yield from loader

@@ -24,14 +24,19 @@ from curate.manifest import git_commit, versions
 from curate.progress import progress
 from train.anchors import check_anchors, label_sizes
 from train.config import DEFAULT_ANCHORS, ModelConfig, TrainConfig
-from train.data import TrainBatches, cache_images
+from train.data import TrainBatches, cache_images, letterboxed_images
+from train.device import resolve_device, uses_amp
 from train.ema import ModelEMA
 from train.export import export_onnx
+from train.features import FeatureBatches, FrozenRunner, ValidationInputs
 from train.loss import DetectionLoss
 from train.model import STRIDES, Detector, build_model
 from train.optim import Schedule, build_optimizer
 from train.plots import plot_curves, read_metrics
 from train.validate import evaluate
+
+#: Data-loading worker processes on a GPU when ``workers`` is not set.
+GPU_WORKERS = 8
 
 GRAD_CLIP = 10.0  # max gradient norm before each optimizer step
 
@@ -50,9 +55,12 @@ class Trainer:
     optimizer: torch.optim.SGD
     loss_fn: DetectionLoss
     schedule: Schedule
-    batches: TrainBatches
+    batches: FeatureBatches
     class_names: list[str]
     anchors: tuple
+    device: torch.device
+    runner: FrozenRunner
+    scaler: torch.amp.GradScaler
 
 
 def train_one_epoch(t: Trainer, epoch: int) -> dict[str, float]:
@@ -63,18 +71,21 @@ def train_one_epoch(t: Trainer, epoch: int) -> dict[str, float]:
     seen, pending, start = 0, 0, time.perf_counter()
     t.optimizer.zero_grad(set_to_none=True)
     batches = progress(t.batches.epoch(epoch), total=nb, desc=f"epoch {epoch + 1}", unit="batch", min_items=10)
-    for i, (images, targets) in enumerate(batches):
+    amp = uses_amp(t.device)
+    for i, (feats, targets) in enumerate(batches):
         iteration = epoch * nb + i
         t.schedule.apply(t.optimizer, iteration, epoch)
-        loss, parts = t.loss_fn(t.model(images), targets)
-        loss.backward()
+        with torch.autocast(t.device.type, enabled=amp):
+            raw = t.model.forward_frozen(feats)
+        loss, parts = t.loss_fn([r.float() for r in raw], targets)
+        t.scaler.scale(loss).backward()
         pending += 1
         if pending >= t.schedule.accumulate(iteration) or i == nb - 1:
             _step(t)
             pending = 0
         for key in sums:
             sums[key] += parts[key]
-        seen += images.shape[0]
+        seen += feats[0].shape[0]
     elapsed = time.perf_counter() - start
     return {
         **{f"loss_{k}": v / nb for k, v in sums.items()},
@@ -84,14 +95,18 @@ def train_one_epoch(t: Trainer, epoch: int) -> dict[str, float]:
 
 
 def _step(t: Trainer) -> None:
+    t.scaler.unscale_(t.optimizer)
     torch.nn.utils.clip_grad_norm_(t.model.parameters(), max_norm=GRAD_CLIP)
-    t.optimizer.step()
+    t.scaler.step(t.optimizer)
+    t.scaler.update()
     t.optimizer.zero_grad(set_to_none=True)
     t.ema.update(t.model)
 
 
 def build_trainer(cfg: TrainConfig, train_ds: Dataset) -> Trainer:
-    """Cache the training images, fit anchors, build model, EMA, optimizer, loss and schedule (seeded)."""
+    """Cache the training images, fit anchors, build model, EMA, optimizer, loss and schedule (seeded), all on
+    the configured device."""
+    device = resolve_device(cfg.device)
     torch.manual_seed(cfg.seed)
     cache = cache_images(train_ds, cfg.imgsz, desc="decoding training images")
     anchors = np.asarray(cfg.model.anchors or DEFAULT_ANCHORS, dtype=np.float64)
@@ -101,17 +116,21 @@ def build_trainer(cfg: TrainConfig, train_ds: Dataset) -> Trainer:
         anchors, report = check_anchors(wh, anchors, np.random.default_rng(cfg.seed), cfg.loss.anchor_t)
     model_cfg = replace(cfg.model, anchors=_nested(anchors), autoanchor=False)
     names = train_ds.category_names
-    model = build_model(len(names), model_cfg, cfg.imgsz)
-    batches = TrainBatches(cache, cfg.imgsz, cfg.batch, cfg.augment, cfg.seed)
+    model = build_model(len(names), model_cfg, cfg.imgsz).to(device)
+    workers = cfg.workers if cfg.workers is not None else (GPU_WORKERS if device.type == "cuda" else 0)
+    samples = TrainBatches(cache, cfg.imgsz, cfg.batch, cfg.augment, cfg.seed, workers)
+    runner = FrozenRunner(model, cfg.imgsz, device, cfg.threads)
+    batches = FeatureBatches(samples, runner, cfg.feature_views, cfg.feature_cache_gb)
     schedule = Schedule(cfg.optim, cfg.epochs, len(batches), cfg.batch)
     loss_fn = DetectionLoss(model.head.anchors, STRIDES, len(names), cfg.imgsz, cfg.loss)
     ema = ModelEMA(model, cfg.ema_decay, cfg.ema_tau)
     if report.get("refitted"):
         print(f"anchors re-fitted by k-means: best possible recall {report['bpr_before']:.3f} -> {report['bpr']:.3f}")
+    scaler = torch.amp.GradScaler(device.type, enabled=uses_amp(device))
+    optimizer = build_optimizer(model, cfg.optim, cfg.batch)
     return Trainer(
-        cfg, model, ema, build_optimizer(model, cfg.optim, cfg.batch), loss_fn, schedule, batches, names,
-        _nested(anchors),
-    )  # fmt: skip
+        cfg, model, ema, optimizer, loss_fn, schedule, batches, names, _nested(anchors), device, runner, scaler
+    )
 
 
 def _nested(anchors: Any) -> tuple:
@@ -133,6 +152,7 @@ def _checkpoint(t: Trainer, epoch: int, best: dict[str, Any]) -> dict[str, Any]:
         "model": t.model.state_dict(),
         "ema": t.ema.state_dict(),
         "optimizer": t.optimizer.state_dict(),
+        "scaler": t.scaler.state_dict(),
         "best": best,
     }
 
@@ -142,12 +162,13 @@ def _resume(t: Trainer, out: Path) -> tuple[int, dict[str, Any]]:
     last = out / "last.pt"
     if not last.is_file():
         return 0, {"fitness": -1.0, "epoch": -1}
-    state = torch.load(last, map_location="cpu", weights_only=False)
+    state = torch.load(last, map_location=t.device, weights_only=False)
     if state["config"] != asdict(t.cfg) or state["class_names"] != t.class_names:
         raise ResumeError(f"{last}: the run there used another config or classes; choose another --out")
     t.model.load_state_dict(state["model"])
     t.ema.load_state_dict(state["ema"])
     t.optimizer.load_state_dict(state["optimizer"])
+    t.scaler.load_state_dict(state.get("scaler", {}))
     return int(state["epoch"]) + 1, state["best"]
 
 
@@ -176,14 +197,15 @@ def fit(cfg: TrainConfig, train_ds: Dataset, val_ds: Dataset, out: Path | str) -
         torch.set_num_threads(cfg.threads)
     val_ds = val_ds.with_categories(train_ds.category_names)
     t = build_trainer(cfg, train_ds)
-    val_cache = cache_images(val_ds, cfg.imgsz, desc="decoding validation images")
+    val_images = letterboxed_images(val_ds, cfg.imgsz, desc="decoding validation images")
+    val_inputs = ValidationInputs(val_images, t.runner, cfg.batch)
     first, best = _resume(t, out)
     _truncate_metrics(out, first)
     for epoch in range(first, cfg.epochs):
         record = {"epoch": epoch, **train_one_epoch(t, epoch)}
         start = time.perf_counter()
-        args = (cfg.imgsz, cfg.batch, cfg.val_conf, cfg.val_iou, cfg.max_det)
-        record.update(evaluate(t.ema.ema, val_cache, val_ds, *args))
+        args = (t.class_names, cfg.imgsz, cfg.val_conf, cfg.val_iou, cfg.max_det)
+        record.update(evaluate(t.ema.ema, val_inputs, val_ds, *args))
         record["val_seconds"] = time.perf_counter() - start
         if record["fitness"] > best["fitness"]:
             best = {k: record[k] for k in ("epoch", "fitness", "AP", "AP50")}
@@ -196,7 +218,7 @@ def fit(cfg: TrainConfig, train_ds: Dataset, val_ds: Dataset, out: Path | str) -
 
 def _best_weights(t: Trainer) -> dict[str, Any]:
     return {
-        "model": t.ema.ema.state_dict(),
+        "model": {k: v.detach().cpu() for k, v in t.ema.ema.state_dict().items()},
         "class_names": t.class_names,
         "anchors": t.anchors,
         "config": asdict(t.cfg),
@@ -207,6 +229,7 @@ def load_detector(path: Path | str) -> tuple[Detector, list[str], int]:
     """A ``best.pt``/``last.pt`` file -> (detector in eval mode with its EMA weights, class names, imgsz)."""
     state = torch.load(path, map_location="cpu", weights_only=False)
     saved = {**state["config"]["model"], "anchors": state["anchors"], "autoanchor": False, "pretrained": False}
+    saved["freeze"] = 0  # the weights are all in the file
     imgsz = int(state["config"]["imgsz"])
     model = build_model(len(state["class_names"]), ModelConfig(**saved), imgsz)
     model.load_state_dict(state["model"] if "ema" not in state else state["ema"]["weights"])
@@ -233,6 +256,7 @@ def _finish(t: Trainer, out: Path, best: dict[str, Any]) -> dict[str, Any]:
         "class_names": t.class_names,
         "anchors": t.anchors,
         "onnx": "best.onnx" if (out / "best.onnx").is_file() else None,
+        "device": str(t.device),
         "versions": versions(),
         "git_commit": git_commit(),
     }

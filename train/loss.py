@@ -76,7 +76,7 @@ class DetectionLoss:
         for level, p in enumerate(raw):
             h, w = p.shape[2:4]
             m = assign_level(targets, self.anchors[level], self.strides[level], (h, w), self.cfg.anchor_t)
-            tobj = torch.zeros(p.shape[:4], dtype=p.dtype)
+            tobj = torch.zeros(p.shape[:4], dtype=p.dtype, device=p.device)
             if len(m.b):
                 ps = p[m.b, m.a, m.gj, m.gi]  # (M, 5 + C)
                 pxy = ps[:, :2].sigmoid() * 2 - 0.5

@@ -20,96 +20,10 @@ import torch
 from torch import Tensor, nn
 
 from train.backbones import build_backbone
+from train.blocks import C3, Conv, scaled_depth
 from train.config import DEFAULT_ANCHORS, MODEL_SIZES, ModelConfig
 
 STRIDES: tuple[int, ...] = (8, 16, 32)
-
-
-def _width(channels: int, multiple: float) -> int:
-    """Channels scaled by ``multiple``, rounded up to a multiple of 8."""
-    return int(math.ceil(channels * multiple / 8) * 8)
-
-
-def _depth(repeats: int, multiple: float) -> int:
-    return max(round(repeats * multiple), 1)
-
-
-class Conv(nn.Module):
-    """Conv2d (no bias, 'same' padding) + BatchNorm (eps 1e-3, momentum 0.03) + SiLU."""
-
-    def __init__(self, c_in: int, c_out: int, k: int = 1, s: int = 1, p: int | None = None) -> None:
-        super().__init__()
-        self.conv = nn.Conv2d(c_in, c_out, k, s, k // 2 if p is None else p, bias=False)
-        self.bn = nn.BatchNorm2d(c_out, eps=1e-3, momentum=0.03)
-        self.act = nn.SiLU()
-
-    def forward(self, x: Tensor) -> Tensor:
-        return self.act(self.bn(self.conv(x)))
-
-
-class Bottleneck(nn.Module):
-    """1x1 conv then 3x3 conv, with a residual add when ``shortcut`` (channels unchanged)."""
-
-    def __init__(self, c: int, shortcut: bool = True) -> None:
-        super().__init__()
-        self.cv1 = Conv(c, c, 1)
-        self.cv2 = Conv(c, c, 3)
-        self.add = shortcut
-
-    def forward(self, x: Tensor) -> Tensor:
-        y = self.cv2(self.cv1(x))
-        return x + y if self.add else y
-
-
-class C3(nn.Module):
-    """CSP block: two 1x1 branches of half width, ``n`` bottlenecks on one, concat, 1x1 to ``c_out``."""
-
-    def __init__(self, c_in: int, c_out: int, n: int = 1, shortcut: bool = True) -> None:
-        super().__init__()
-        hidden = c_out // 2
-        self.cv1 = Conv(c_in, hidden, 1)
-        self.cv2 = Conv(c_in, hidden, 1)
-        self.m = nn.Sequential(*(Bottleneck(hidden, shortcut) for _ in range(n)))
-        self.cv3 = Conv(2 * hidden, c_out, 1)
-
-    def forward(self, x: Tensor) -> Tensor:
-        return self.cv3(torch.cat((self.m(self.cv1(x)), self.cv2(x)), dim=1))
-
-
-class SPPF(nn.Module):
-    """Spatial pyramid pooling (fast): three chained 5x5 max-pools, concat with the input, 1x1 conv."""
-
-    def __init__(self, c_in: int, c_out: int, k: int = 5) -> None:
-        super().__init__()
-        hidden = c_in // 2
-        self.cv1 = Conv(c_in, hidden, 1)
-        self.pool = nn.MaxPool2d(k, 1, k // 2)
-        self.cv2 = Conv(4 * hidden, c_out, 1)
-
-    def forward(self, x: Tensor) -> Tensor:
-        x = self.cv1(x)
-        y1 = self.pool(x)
-        y2 = self.pool(y1)
-        return self.cv2(torch.cat((x, y1, y2, self.pool(y2)), dim=1))
-
-
-class Backbone(nn.Module):
-    """CSP-Darknet: returns the P3, P4, P5 feature maps (strides 8, 16, 32)."""
-
-    def __init__(self, depth: float, width: float) -> None:
-        super().__init__()
-        c = [_width(v, width) for v in (64, 128, 256, 512, 1024)]
-        self.stem = Conv(3, c[0], 6, 2, 2)
-        self.stage2 = nn.Sequential(Conv(c[0], c[1], 3, 2), C3(c[1], c[1], _depth(3, depth)))
-        self.stage3 = nn.Sequential(Conv(c[1], c[2], 3, 2), C3(c[2], c[2], _depth(6, depth)))
-        self.stage4 = nn.Sequential(Conv(c[2], c[3], 3, 2), C3(c[3], c[3], _depth(9, depth)))
-        self.stage5 = nn.Sequential(Conv(c[3], c[4], 3, 2), C3(c[4], c[4], _depth(3, depth)), SPPF(c[4], c[4]))
-        self.channels = (c[2], c[3], c[4])
-
-    def forward(self, x: Tensor) -> tuple[Tensor, Tensor, Tensor]:
-        p3 = self.stage3(self.stage2(self.stem(x)))
-        p4 = self.stage4(p3)
-        return p3, p4, self.stage5(p4)
 
 
 class PAN(nn.Module):
@@ -118,7 +32,7 @@ class PAN(nn.Module):
     def __init__(self, channels: Sequence[int], depth: float) -> None:
         super().__init__()
         c3, c4, c5 = channels
-        n = _depth(3, depth)
+        n = scaled_depth(3, depth)
         self.reduce5 = Conv(c5, c4, 1)
         self.up = nn.Upsample(scale_factor=2.0, mode="nearest")
         self.td4 = C3(2 * c4, c4, n, shortcut=False)
@@ -190,13 +104,16 @@ class Detect(nn.Module):
 
 class Detector(nn.Module):
     """Backbone + PAN + Detect. ``forward`` returns raw per-level logits (for the loss); ``predict`` the
-    decoded (B, N, 5 + C) tensor in letterboxed input pixels."""
+    decoded (B, N, 5 + C) tensor in letterboxed input pixels.
+
+    Training and validation may start after the backbone's frozen part: ``frozen_features(images)`` once, then
+    ``forward_frozen`` / ``predict_frozen`` on what it returned (see :mod:`train.backbones`)."""
 
     def __init__(self, num_classes: int, cfg: ModelConfig | None = None, imgsz: int = 640) -> None:
         super().__init__()
         cfg = cfg or ModelConfig()
         depth, width = MODEL_SIZES[cfg.size]
-        self.backbone = build_backbone(cfg.backbone, depth, width, imgsz, cfg.pretrained)
+        self.backbone = build_backbone(cfg.backbone, depth, width, imgsz, cfg.pretrained, cfg.freeze)
         self.neck = PAN(self.backbone.channels, depth)
         anchors = torch.tensor(cfg.anchors or DEFAULT_ANCHORS, dtype=torch.float32)
         if anchors.shape != (3, 3, 2):
@@ -208,12 +125,29 @@ class Detector(nn.Module):
     def num_classes(self) -> int:
         return self.head.nc
 
+    @property
+    def has_frozen(self) -> bool:
+        """Whether part of the backbone is frozen (then its features can be computed once and cached)."""
+        return bool(self.backbone.has_frozen)
+
     def forward(self, images: Tensor) -> list[Tensor]:
         """images (B, 3, H, W) float RGB in [0, 1], H and W multiples of 32 -> per-level (B, 3, H/s, W/s, 5+C)."""
         return self.head(self.neck(self.backbone(images)))
 
     def predict(self, images: Tensor) -> Tensor:
         return self.head.decode(self.forward(images))
+
+    @torch.no_grad()
+    def frozen_features(self, images: Tensor) -> tuple[Tensor, ...]:
+        """images (B, 3, H, W) in [0, 1] -> the backbone's frozen features (``(images,)`` when none is frozen)."""
+        return self.backbone.frozen_forward(images)
+
+    def forward_frozen(self, frozen: Sequence[Tensor]) -> list[Tensor]:
+        """:meth:`forward` from the frozen features of the images."""
+        return self.head(self.neck(self.backbone.trainable_forward(frozen)))
+
+    def predict_frozen(self, frozen: Sequence[Tensor]) -> Tensor:
+        return self.head.decode(self.forward_frozen(frozen))
 
 
 def build_model(num_classes: int, cfg: ModelConfig | None = None, imgsz: int = 640) -> Detector:

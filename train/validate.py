@@ -1,85 +1,42 @@
-"""Per-epoch validation: detections of the (EMA) model on letterboxed images, COCO AP via pycocotools.
-
-Post-processing mirrors what a scorer does with the exported ONNX model: score = objectness x class
-probability for every (box, class) pair above ``conf``, class-aware greedy NMS, at most ``max_det`` boxes
-per image, boxes mapped from letterboxed input pixels back to the original image.
+"""Per-epoch validation: detections of the (EMA) model on the letterboxed validation images, scored with
+the toolkit's one post-processing (:mod:`curate.detections`) and one COCO evaluation (:mod:`curate.cocoeval`),
+the very code ``fuzzyfire score`` runs on the exported ONNX model. So the best epoch's AP is the AP that
+scoring its ``best.onnx`` on the same images reports (up to ONNX float differences).
 """
 
 from __future__ import annotations
 
-import contextlib
-import io
 from collections.abc import Sequence
-from typing import Any
 
 import numpy as np
 import torch
-from numpy.typing import NDArray
-from pycocotools.coco import COCO
-from pycocotools.cocoeval import COCOeval
 
-from curate import boxes as bx
+from curate.cocoeval import evaluate_predictions
 from curate.dataset import Dataset
-from train.data import CachedImage, val_batches
-
-#: Highest-scoring (box, class) pairs passed to NMS per image.
-MAX_CANDIDATES = 30000
+from curate.detections import Predictions, postprocess, to_original
+from train.features import ValidationInputs
 
 
-def postprocess(
-    pred: NDArray[np.float32], conf: float, iou: float, max_det: int
-) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.int64]]:
-    """One image's decoded output (N, 5 + C) -> ``(boxes (K, 4) xyxy input px, scores (K,), labels (K,))``."""
-    scores = pred[:, 4:5] * pred[:, 5:]
-    rows, labels = np.nonzero(scores > conf)
-    values = scores[rows, labels].astype(np.float64)
-    if len(values) > MAX_CANDIDATES:
-        top = np.argsort(-values, kind="stable")[:MAX_CANDIDATES]
-        rows, labels, values = rows[top], labels[top], values[top]
-    xyxy = bx.cxcywh_to_xyxy(pred[rows, :4]).reshape(-1, 4)
-    keep = bx.batched_nms_xyxy(xyxy, values, labels, iou, max_keep=max_det)
-    return xyxy[keep], values[keep], labels[keep].astype(np.int64)
-
-
-def coco_detections(
-    cache: Sequence[CachedImage], model: torch.nn.Module, imgsz: int, batch: int, conf: float, iou: float, max_det: int
-) -> list[dict[str, Any]]:
-    """COCO result dicts (``image_id``, ``category_id`` = class index + 1, ``bbox`` xywh original px, ``score``)."""
-    results: list[dict[str, Any]] = []
+def predictions(
+    model: torch.nn.Module,
+    inputs: ValidationInputs,
+    class_names: Sequence[str],
+    imgsz: int,
+    conf: float,
+    iou: float,
+    max_det: int,
+) -> Predictions:
+    """Detections of ``model`` (a :class:`train.model.Detector`) on every validation image, boxes in original
+    pixels; scores ``obj * p_c`` as in the exported model."""
+    by_image = {}
     model.eval()
     with torch.no_grad():
-        for records, images in val_batches(list(cache), imgsz, batch):
-            preds = model.predict(images).numpy()
-            for record, pred in zip(records, preds):
-                xyxy, scores, labels = postprocess(pred, conf, iou, max_det)
-                xyxy = bx.letterbox_to_image_xyxy(xyxy, record.width, record.height, imgsz, imgsz)
-                xywh = bx.xyxy_to_xywh(bx.clip_xyxy(xyxy, record.width, record.height)).reshape(-1, 4)
-                for box, score, label in zip(xywh, scores, labels):
-                    results.append(
-                        {
-                            "image_id": record.id,
-                            "category_id": int(label) + 1,
-                            "bbox": [round(float(v), 3) for v in box],
-                            "score": round(float(score), 5),
-                        }
-                    )
-    return results
-
-
-def coco_ap(ground_truth: Dataset, detections: list[dict[str, Any]]) -> dict[str, float]:
-    """``{"AP", "AP50"}`` (COCO AP@[.5:.95] and AP@.5, all classes, area all, 100 detections)."""
-    if not detections or not ground_truth.annotations:
-        return {"AP": 0.0, "AP50": 0.0}
-    with contextlib.redirect_stdout(io.StringIO()):
-        gt = COCO()
-        gt.dataset = ground_truth.to_coco()
-        gt.createIndex()
-        dt = gt.loadRes(detections)
-        ev = COCOeval(gt, dt, "bbox")
-        ev.evaluate()
-        ev.accumulate()
-        ev.summarize()
-    return {"AP": max(float(ev.stats[0]), 0.0), "AP50": max(float(ev.stats[1]), 0.0)}
+        for records, feats in inputs:
+            decoded = model.predict_frozen(feats).float().cpu().numpy()
+            for record, pred in zip(records, decoded):
+                det = postprocess(pred[:, :4], pred[:, 4:5] * pred[:, 5:], conf, iou, max_det)
+                by_image[record.id] = to_original(det, (record.width, record.height), (imgsz, imgsz))
+    return Predictions(tuple(class_names), by_image)
 
 
 def fitness(metrics: dict[str, float]) -> float:
@@ -89,17 +46,17 @@ def fitness(metrics: dict[str, float]) -> float:
 
 def evaluate(
     model: torch.nn.Module,
-    cache: Sequence[CachedImage],
+    inputs: ValidationInputs,
     ground_truth: Dataset,
+    class_names: Sequence[str],
     imgsz: int,
-    batch: int,
     conf: float,
     iou: float,
     max_det: int,
 ) -> dict[str, float]:
-    """``{"AP", "AP50", "fitness", "detections"}`` of ``model`` on the cached validation images."""
-    kept = {c.record.id for c in cache}
-    gt = ground_truth.filter_images(lambda img: img.id in kept)
-    dets = coco_detections(cache, model, imgsz, batch, conf, iou, max_det)
-    metrics = coco_ap(gt, dets)
-    return {**metrics, "fitness": fitness(metrics), "detections": float(len(dets))}
+    """``{"AP", "AP50", "fitness", "detections"}`` of ``model`` on the validation images (AP 0 where COCO
+    leaves it undefined, e.g. a validation set without boxes)."""
+    preds = predictions(model, inputs, class_names, imgsz, conf, iou, max_det)
+    metrics, _, records = evaluate_predictions(ground_truth, preds)
+    values = {k: float(np.nan_to_num(metrics.summary[k] or 0.0)) for k in ("AP", "AP50")}
+    return {**values, "fitness": fitness(values), "detections": float(len(records))}

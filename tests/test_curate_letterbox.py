@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from eval.letterbox import letterbox_image, to_nchw_float
+from curate.letterbox import letterbox_image, to_nchw_float
 
 
 def test_wide_image_is_centred_with_grey_bands():

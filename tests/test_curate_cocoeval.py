@@ -5,11 +5,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from curate.cocoeval import ClassMatchError, match_classes, run_cocoeval
+from curate.cocoeval import evaluate_predictions as evaluate
 from curate.dataset import DatasetBuilder
-from eval.coco import ClassMatchError, match_classes, run_cocoeval
-from eval.coco import evaluate_predictions as evaluate
-from eval.nms import ImageDetections
-from eval.predict import Predictions
+from curate.detections import ImageDetections, Predictions
 
 
 def make_dataset(tmp_path):
@@ -88,7 +87,7 @@ def test_records_cocoeval_never_reads_are_left_out_with_identical_results(tmp_pa
     from pycocotools.coco import COCO
     from pycocotools.cocoeval import COCOeval
 
-    from eval.coco import top_records
+    from curate.cocoeval import top_records
 
     rng = np.random.default_rng(0)
     b = DatasetBuilder(tmp_path, ["fire", "smoke"])

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from eval.nms import postprocess
+from curate.detections import postprocess
 
 
 def test_postprocess_multi_label_and_thresholds():

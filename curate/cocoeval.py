@@ -1,4 +1,6 @@
-"""COCO box metrics with pycocotools: AP, AP50, AP75, small/medium/large and per class.
+"""COCO box metrics with pycocotools: AP, AP50, AP75, small/medium/large and per class. The one COCO
+evaluation of the toolkit: training-time validation (best-epoch selection) and ``fuzzyfire score`` both call
+:func:`evaluate_predictions`.
 
 Every image of the test set counts (negatives included: their detections are false positives); classes are
 matched by *name* between the model and the test set; an empty detection list gives AP 0, not an error.
@@ -20,7 +22,7 @@ from pycocotools.cocoeval import COCOeval, Params
 from curate.boxes import xyxy_to_xywh
 from curate.classes import canonical_class
 from curate.dataset import Dataset
-from eval.predict import Predictions
+from curate.detections import Predictions
 
 #: ``COCOeval.stats`` entries we report, by index.
 _STATS = {"AP": 0, "AP50": 1, "AP75": 2, "AP_small": 3, "AP_medium": 4, "AP_large": 5}

@@ -1,13 +1,19 @@
-"""Detector post-processing: confidence filter, class-aware NMS (:func:`curate.boxes.batched_nms_xyxy`)."""
+"""Detector post-processing shared by training-time validation and scoring: confidence filter, class-aware
+NMS (:func:`curate.boxes.batched_nms_xyxy`), boxes mapped from letterboxed input pixels back to the image.
+
+``train`` (validation of every epoch) and ``eval`` (``fuzzyfire score``) both turn a detector's raw output
+into :class:`Predictions` here and score them with :mod:`curate.cocoeval`, so the AP that picks the best
+epoch and the AP that scoring reports are computed by the same code."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import NDArray
 
-from curate.boxes import batched_nms_xyxy, cxcywh_to_xyxy
+from curate.boxes import batched_nms_xyxy, clip_xyxy, cxcywh_to_xyxy, letterbox_to_image_xyxy
+from curate.problems import Problem
 
 #: Scoring defaults (COCO-style evaluation keeps low-confidence boxes: they only add recall).
 CONF_THRESHOLD = 0.001
@@ -28,6 +34,16 @@ class ImageDetections:
 
     def __len__(self) -> int:
         return len(self.scores)
+
+
+@dataclass
+class Predictions:
+    """Detections per image id (xyxy in original pixels, labels index the model's ``class_names``) and the
+    images that could not be scored."""
+
+    class_names: tuple[str, ...]
+    by_image: dict[int, ImageDetections]
+    problems: list[Problem] = field(default_factory=list)
 
 
 def postprocess(
@@ -56,3 +72,11 @@ def postprocess(
     xyxy = cxcywh_to_xyxy(boxes_cxcywh[rows]) if len(rows) else np.zeros((0, 4))
     keep = batched_nms_xyxy(xyxy, picked, labels, iou, max_det)
     return ImageDetections(xyxy[keep], picked[keep], labels[keep].astype(np.int64))
+
+
+def to_original(det: ImageDetections, size: tuple[int, int], input_size: tuple[int, int]) -> ImageDetections:
+    """Boxes of ``det`` from letterboxed input pixels (``input_size`` = (W, H)) to the original image of
+    ``size`` = (width, height) pixels, clipped to it."""
+    width, height = size
+    boxes = letterbox_to_image_xyxy(det.boxes, width, height, *input_size) if len(det) else det.boxes
+    return ImageDetections(clip_xyxy(boxes, width, height), det.scores, det.labels)
