@@ -20,6 +20,16 @@ def _size(text: str) -> tuple[int, int]:
         raise argparse.ArgumentTypeError(f"{text!r}: expected N or WxH, e.g. 320 or 640x480") from None
 
 
+def _device(text: str) -> str:
+    from curate.device import DeviceError, parse_device
+
+    try:
+        parse_device(text)
+    except DeviceError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+    return text
+
+
 def _fmt(value: float | None) -> str:
     return "  -  " if value is None else f"{value:.3f}"
 
@@ -46,7 +56,9 @@ def _score_model(model: Path, args: argparse.Namespace, dataset, problems):  # -
     from eval.predict import PredictOptions
     from eval.score import score
 
-    detector = OnnxDetector(model, args.format, args.names, args.imgsz, threads=args.threads)
+    detector = OnnxDetector(model, args.format, args.names, args.imgsz, threads=args.threads, device=args.device)
+    if detector.device_notice:
+        print(detector.device_notice, file=sys.stderr)
     options = PredictOptions(args.conf, args.iou, args.max_det, args.batch, args.workers)
     return score(detector, dataset, options, problems)
 
@@ -172,6 +184,12 @@ def _add_scoring_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--batch", type=int, default=16, help="images per onnxruntime call (default 16)")
     p.add_argument("--workers", type=int, default=2, help="image decoding threads (default 2)")
     p.add_argument("--threads", type=int, default=0, help="onnxruntime threads (default 0 = all cores)")
+    p.add_argument(
+        "--device",
+        default="auto",
+        type=_device,
+        help="auto | cpu | cuda | cuda:N (default auto: onnxruntime's CUDA provider when installed, else the CPU)",
+    )
     p.add_argument("--seed", type=int, default=0, help="bootstrap seed (default 0)")
 
 

@@ -155,7 +155,8 @@ class OnnxDetector:
 
     ``fmt`` is ``auto`` or one of :data:`LAYOUTS`; ``names`` overrides the metadata's class names;
     ``image_size`` ``(width, height)`` is needed only when the model's input size is dynamic and its
-    metadata does not say. ``threads`` = 0 lets onnxruntime use every core.
+    metadata does not say. ``threads`` = 0 lets onnxruntime use every core. ``device`` picks onnxruntime's
+    provider (:func:`execution_providers`); ``device_notice`` says when a GPU was asked for and the CPU is used.
     """
 
     def __init__(
@@ -165,11 +166,12 @@ class OnnxDetector:
         names: Sequence[str] | None = None,
         image_size: tuple[int, int] | None = None,
         threads: int = 0,
-        providers: Sequence[str] = ("CPUExecutionProvider",),
+        device: str = "cpu",
     ) -> None:
         if fmt not in FORMATS:
             raise ValueError(f"unknown model format {fmt!r}; choose one of {', '.join(FORMATS)}")
         self.path = Path(path)
+        providers, self.device_notice = execution_providers(device)
         self.session = _open_session(self.path, threads, providers)
         self._output = _detection_output(self.session, self.path)
         self.spec = self._build_spec(fmt, names, image_size)
@@ -240,7 +242,28 @@ class OnnxDetector:
         return self._decode(self.raw(batch))
 
 
-def _open_session(path: Path, threads: int, providers: Sequence[str]):  # -> onnxruntime.InferenceSession
+def execution_providers(device: str, available: Sequence[str] | None = None) -> tuple[list, str | None]:
+    """onnxruntime providers for ``device`` (``auto | cpu | cuda | cuda:N``) and a one-line notice when a GPU
+    was asked for but onnxruntime has no CUDA provider here (then the CPU is used). ``auto`` takes CUDA when the
+    provider is there (``pip install onnxruntime-gpu``), else the CPU without a word."""
+    from curate.device import parse_device
+
+    kind, index = parse_device(device)
+    if available is None:
+        import onnxruntime as ort
+
+        available = ort.get_available_providers()
+    cpu = ["CPUExecutionProvider"]
+    if kind == "cpu":
+        return cpu, None
+    if "CUDAExecutionProvider" in available:
+        return [("CUDAExecutionProvider", {"device_id": index or 0}), *cpu], None
+    if kind == "auto":
+        return cpu, None
+    return cpu, "notice: onnxruntime has no CUDA provider here (pip install onnxruntime-gpu); scoring on the CPU"
+
+
+def _open_session(path: Path, threads: int, providers: Sequence):  # -> onnxruntime.InferenceSession
     import onnxruntime as ort
 
     if not path.is_file():

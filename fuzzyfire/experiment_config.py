@@ -117,6 +117,7 @@ class ScoreConfig:
     batch: int = 16  # images per onnxruntime call
     workers: int = 2  # image decoding threads
     threads: int = 0  # onnxruntime threads; 0 = every core the run may use
+    device: str = "auto"  # auto | cpu | cuda | cuda:N; auto = onnxruntime's CUDA provider when installed
 
 
 @dataclass(frozen=True)

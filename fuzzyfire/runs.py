@@ -105,7 +105,9 @@ def score_run(spec: RunSpec, model: Path) -> dict[str, dict[str, Any]]:
     from eval.score import score, write_outputs
 
     s = spec.score
-    detector = OnnxDetector(model, threads=s.threads)
+    detector = OnnxDetector(model, threads=s.threads, device=s.device)
+    if detector.device_notice:
+        print(detector.device_notice, flush=True)
     options = PredictOptions(s.conf, s.iou, s.max_det, s.batch, s.workers)
     out = {}
     for test in spec.tests:

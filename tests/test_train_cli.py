@@ -35,3 +35,20 @@ def test_bad_arguments_are_errors(folders, tmp_path: Path) -> None:
     same = ["train", "--train", str(train), "--val", str(train), "--out", str(tmp_path / "r")]
     assert main(same) == 2  # same images for training and validation
     assert main([*same[:4], str(folders[1]), "--out", str(tmp_path / "r"), "--imgsz", "100"]) == 2
+
+
+def test_device_flag(folders, tmp_path: Path, capsys) -> None:
+    import torch
+
+    train, val = folders
+    args = ["train", "--train", str(train), "--val", str(val), "--epochs", "1", "--imgsz", "64", "--batch", "4"]
+    assert main([*args, "--out", str(tmp_path / "cpu"), "--device", "cpu", "--backbone", "cspdarknet"]) == 0
+    assert json.loads((tmp_path / "cpu" / "results.json").read_text())["device"] == "cpu"
+    capsys.readouterr()
+    assert main([*args, "--out", str(tmp_path / "bad"), "--device", "gpu0"]) == 2
+    assert "expected auto | cpu | cuda | cuda:N" in capsys.readouterr().err
+    if not torch.cuda.is_available():
+        assert main([*args, "--out", str(tmp_path / "cuda"), "--device", "cuda"]) == 2
+        err = capsys.readouterr().err.strip()
+        assert "no CUDA GPU is available" in err and len(err.splitlines()) == 1
+        assert not (tmp_path / "cuda").exists()

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import shutil
+from dataclasses import replace
 from pathlib import Path
 
 import pytest
@@ -11,7 +12,7 @@ import torch
 from factories_train import painted_dataset
 
 import train.loop as loop
-from train.config import OptimConfig, TrainConfig
+from train.config import ModelConfig, OptimConfig, TrainConfig
 
 TIMING = ("train_images_per_s", "val_seconds")
 CFG = TrainConfig(epochs=2, imgsz=64, batch=8, seed=5, optim=OptimConfig(warmup_min_iters=2, nominal_batch=16))
@@ -92,3 +93,37 @@ def test_resume_refuses_another_config(data, reference_run: Path, tmp_path: Path
     other = TrainConfig(epochs=2, imgsz=64, batch=8, seed=6)
     with pytest.raises(loop.ResumeError, match="another config"):
         loop.fit(other, *data, tmp_path / "copy")
+
+
+FROZEN = replace(
+    CFG,
+    epochs=3,
+    model=ModelConfig(backbone="efficientnet-lite0", freeze=3),
+    feature_views=2,
+    optim=OptimConfig(optimizer="adamw", lr0=0.002, momentum=0.9, warmup_min_iters=2, nominal_batch=16),
+)
+
+
+@pytest.mark.parametrize("cfg", [CFG, FROZEN], ids=["cspdarknet", "lite0-frozen"])
+def test_best_epoch_ap_equals_scoring_best_onnx(data, cfg: TrainConfig, tmp_path: Path) -> None:
+    """The AP that chose the best epoch is the AP ``fuzzyfire score`` reports for best.onnx on the same images."""
+    from eval.onnx_model import OnnxDetector
+    from eval.score import score
+
+    results = loop.fit(cfg, *data, tmp_path / "run")
+    scored = score(OnnxDetector(tmp_path / "run" / "best.onnx"), data[1]).metrics.summary
+    assert results["best"]["AP50"] > 0.0  # something was learnt, so the comparison means something
+    assert scored["AP"] == pytest.approx(results["best"]["AP"], abs=2e-3)
+    assert scored["AP50"] == pytest.approx(results["best"]["AP50"], abs=2e-3)
+
+
+def test_frozen_run_is_deterministic_and_keeps_imagenet_weights(data, tmp_path: Path) -> None:
+    from curate.effnet import efficientnet_lite0
+
+    loop.fit(FROZEN, *data, tmp_path / "a")
+    loop.fit(FROZEN, *data, tmp_path / "b")
+    a, b = _weights(tmp_path / "a"), _weights(tmp_path / "b")
+    assert all(torch.equal(a[k], b[k]) for k in a) and _metrics(tmp_path / "a") == _metrics(tmp_path / "b")
+    reference = efficientnet_lite0().state_dict()
+    assert torch.equal(a["backbone.blocks.2._depthwise_conv.weight"], reference["_blocks.2._depthwise_conv.weight"])
+    assert not torch.equal(a["backbone.blocks.9._depthwise_conv.weight"], reference["_blocks.9._depthwise_conv.weight"])

@@ -49,12 +49,29 @@ def _read(path: str, fmt: str, split: str | None, defaults: tuple[str, ...], dro
 
 
 def build_config(args: argparse.Namespace):
-    from train.config import ModelConfig, TrainConfig
+    """The run's TrainConfig: the defaults (the study's detector) with the flags given on the command line."""
+    from train.config import TrainConfig
+    from train.device import resolve_device
 
-    cfg = TrainConfig(epochs=args.epochs, imgsz=args.imgsz, batch=args.batch, seed=args.seed, threads=args.threads)
-    if args.imgsz % 32:
-        raise ValueError(f"--imgsz must be a multiple of 32, got {args.imgsz}")
-    return replace(cfg, model=ModelConfig(size=args.size, autoanchor=not args.no_autoanchor, backbone=args.backbone))
+    cfg = TrainConfig()
+    given = {k: getattr(args, k) for k in ("epochs", "imgsz", "batch", "seed", "threads", "device", "workers")}
+    cfg = replace(cfg, **{k: v for k, v in given.items() if v is not None})
+    if args.views is not None:
+        cfg = replace(cfg, feature_views=args.views)
+    model = {k: getattr(args, k) for k in ("size", "backbone", "freeze")}
+    model = {k: v for k, v in model.items() if v is not None}
+    if args.backbone == "cspdarknet" and args.freeze is None:
+        model["freeze"] = 0  # nothing to freeze in a network trained from scratch
+    if args.no_autoanchor:
+        model["autoanchor"] = False
+    cfg = replace(cfg, model=replace(cfg.model, **model))
+    if args.optimizer is not None or args.lr0 is not None:
+        optim = {"optimizer": args.optimizer, "lr0": args.lr0}
+        cfg = replace(cfg, optim=replace(cfg.optim, **{k: v for k, v in optim.items() if v is not None}))
+    if cfg.imgsz % 32:
+        raise ValueError(f"--imgsz must be a multiple of 32, got {cfg.imgsz}")
+    resolve_device(cfg.device)  # a device this machine lacks fails here, before any data is read
+    return cfg
 
 
 def cmd_train(args: argparse.Namespace) -> int:
@@ -82,6 +99,12 @@ def cmd_train(args: argparse.Namespace) -> int:
     return 0
 
 
+def _defaults():
+    from train.config import TrainConfig
+
+    return TrainConfig()
+
+
 def register(sub: argparse._SubParsersAction) -> None:
     """Add ``train`` to the ``fuzzyfire`` parser."""
     p = sub.add_parser(
@@ -94,18 +117,34 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--train", required=True, help="training dataset folder or COCO .json")
     p.add_argument("--val", required=True, help="validation dataset folder or COCO .json")
     p.add_argument("--out", required=True, type=Path, help="run folder (an existing run there is resumed)")
-    p.add_argument("--epochs", type=int, default=30, help="epochs (default 30)")
-    p.add_argument("--imgsz", type=int, default=320, help="square input size, multiple of 32 (default 320)")
-    p.add_argument("--batch", type=int, default=16, help="images per step; gradients accumulate to 64 (default 16)")
-    p.add_argument("--seed", type=int, default=0, help="seed of weights, shuffles and augmentations (default 0)")
-    p.add_argument("--size", choices=("n", "s", "m"), default="n", help="model width/depth (default n)")
+    defaults = _defaults()
+    p.add_argument("--epochs", type=int, help=f"epochs (default {defaults.epochs})")
+    p.add_argument("--imgsz", type=int, help=f"square input size, multiple of 32 (default {defaults.imgsz})")
+    p.add_argument("--batch", type=int, help=f"images per forward/backward pass (default {defaults.batch})")
+    p.add_argument("--seed", type=int, help="seed of weights, shuffles and augmentations (default 0)")
+    p.add_argument("--size", choices=("n", "s", "m"), help=f"neck/head width and depth (default {defaults.model.size})")
     p.add_argument(
         "--backbone",
         choices=("cspdarknet", "efficientnet-lite0"),
-        default="cspdarknet",
-        help="cspdarknet (YOLOv5, CPU-friendly) or efficientnet-lite0 (ImageNet weights; ~8x slower on CPU)",
+        help="efficientnet-lite0 (ImageNet weights from the installed package) or cspdarknet (YOLOv5, from "
+        f"scratch); default {defaults.model.backbone}",
     )
-    p.add_argument("--threads", type=int, default=0, help="torch threads (default: torch's choice)")
+    p.add_argument(
+        "--freeze",
+        type=int,
+        help=f"efficientnet-lite0 stages kept at their ImageNet weights, 0..7 (default {defaults.model.freeze})",
+    )
+    p.add_argument(
+        "--views",
+        type=int,
+        help="augmented views per image whose frozen features are computed once (default "
+        f"{defaults.feature_views}; 0 = fresh augmentation every epoch)",
+    )
+    p.add_argument("--optimizer", choices=("sgd", "adamw"), help=f"default {defaults.optim.optimizer}")
+    p.add_argument("--lr0", type=float, help=f"initial learning rate (default {defaults.optim.lr0:g})")
+    p.add_argument("--device", help="auto | cpu | cuda | cuda:N (default auto: the first GPU, else the CPU)")
+    p.add_argument("--workers", type=int, help="data-loading processes (default: none on the CPU, 8 on a GPU)")
+    p.add_argument("--threads", type=int, help="torch threads (default: torch's choice)")
     p.add_argument("--train-split", help="split of --train to use (default: train when present, else all)")
     p.add_argument("--val-split", help="split of --val to use (default: valid/val when present, else all)")
     p.add_argument("--train-format", default="auto", help="format of --train (default: detect)")

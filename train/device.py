@@ -8,24 +8,11 @@ picks the GPU a run was given.
 
 from __future__ import annotations
 
-import re
-
 import torch
 
-DEVICE_CHOICES = "auto | cpu | cuda | cuda:N"
-_PATTERN = re.compile(r"^(auto|cpu|cuda)(?::(\d+))?$")
+from curate.device import DeviceError, parse_device
 
-
-class DeviceError(ValueError):
-    """A device string we do not understand, or a device this machine does not have."""
-
-
-def parse_device(spec: str) -> tuple[str, int | None]:
-    """``"cuda:1"`` -> ``("cuda", 1)``; ``"auto"`` -> ``("auto", None)``. Raises :class:`DeviceError`."""
-    match = _PATTERN.match(spec.strip().lower()) if isinstance(spec, str) else None
-    if match is None or (match.group(2) is not None and match.group(1) != "cuda"):
-        raise DeviceError(f"device {spec!r}: expected {DEVICE_CHOICES}")
-    return match.group(1), None if match.group(2) is None else int(match.group(2))
+__all__ = ["DeviceError", "parse_device", "resolve_device", "uses_amp"]
 
 
 def resolve_device(spec: str) -> torch.device:

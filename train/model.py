@@ -20,10 +20,23 @@ import torch
 from torch import Tensor, nn
 
 from train.backbones import build_backbone
-from train.blocks import C3, Conv, scaled_depth
+from train.blocks import C3, Conv, scaled_depth, scaled_width
 from train.config import DEFAULT_ANCHORS, MODEL_SIZES, ModelConfig
 
 STRIDES: tuple[int, ...] = (8, 16, 32)
+
+
+class Lateral(nn.Module):
+    """1x1 Conv from each backbone level's channels to the neck's; the identity where they already agree
+    (cspdarknet), so a pretrained backbone of any width feeds a neck of the family's width."""
+
+    def __init__(self, c_in: Sequence[int], c_out: Sequence[int]) -> None:
+        super().__init__()
+        self.m = nn.ModuleList(nn.Identity() if a == b else Conv(a, b, 1) for a, b in zip(c_in, c_out))
+
+    def forward(self, feats: Sequence[Tensor]) -> tuple[Tensor, Tensor, Tensor]:
+        p3, p4, p5 = (m(f) for m, f in zip(self.m, feats))
+        return p3, p4, p5
 
 
 class PAN(nn.Module):
@@ -114,11 +127,13 @@ class Detector(nn.Module):
         cfg = cfg or ModelConfig()
         depth, width = MODEL_SIZES[cfg.size]
         self.backbone = build_backbone(cfg.backbone, depth, width, imgsz, cfg.pretrained, cfg.freeze)
-        self.neck = PAN(self.backbone.channels, depth)
+        channels = tuple(scaled_width(c, width) for c in (256, 512, 1024))  # the family's P3-P5 widths
+        self.lateral = Lateral(self.backbone.channels, channels)
+        self.neck = PAN(channels, depth)
         anchors = torch.tensor(cfg.anchors or DEFAULT_ANCHORS, dtype=torch.float32)
         if anchors.shape != (3, 3, 2):
             raise ValueError(f"anchors must be 3 levels x 3 anchors x (w, h), got shape {tuple(anchors.shape)}")
-        self.head = Detect(num_classes, self.backbone.channels, anchors)
+        self.head = Detect(num_classes, channels, anchors)
         self.head.init_biases()
 
     @property
@@ -132,7 +147,7 @@ class Detector(nn.Module):
 
     def forward(self, images: Tensor) -> list[Tensor]:
         """images (B, 3, H, W) float RGB in [0, 1], H and W multiples of 32 -> per-level (B, 3, H/s, W/s, 5+C)."""
-        return self.head(self.neck(self.backbone(images)))
+        return self.head(self.neck(self.lateral(self.backbone(images))))
 
     def predict(self, images: Tensor) -> Tensor:
         return self.head.decode(self.forward(images))
@@ -144,7 +159,7 @@ class Detector(nn.Module):
 
     def forward_frozen(self, frozen: Sequence[Tensor]) -> list[Tensor]:
         """:meth:`forward` from the frozen features of the images."""
-        return self.head(self.neck(self.backbone.trainable_forward(frozen)))
+        return self.head(self.neck(self.lateral(self.backbone.trainable_forward(frozen))))
 
     def predict_frozen(self, frozen: Sequence[Tensor]) -> Tensor:
         return self.head.decode(self.forward_frozen(frozen))
