@@ -76,7 +76,7 @@ def train_one_epoch(t: Trainer, epoch: int) -> dict[str, float]:
         iteration = epoch * nb + i
         t.schedule.apply(t.optimizer, iteration, epoch)
         with torch.autocast(t.device.type, enabled=amp):
-            raw = t.model.forward_frozen(feats)
+            raw = t.model.forward_frozen(channels_last(feats))
         loss, parts = t.loss_fn([r.float() for r in raw], targets)
         t.scaler.scale(loss).backward()
         pending += 1
@@ -92,6 +92,11 @@ def train_one_epoch(t: Trainer, epoch: int) -> dict[str, float]:
         "lr": float(t.optimizer.param_groups[0]["lr"]),
         "train_images_per_s": seen / elapsed,
     }
+
+
+def channels_last(feats: tuple[torch.Tensor, ...]) -> tuple[torch.Tensor, ...]:
+    """4-D tensors in channels-last memory order (values unchanged)."""
+    return tuple(f.contiguous(memory_format=torch.channels_last) if f.ndim == 4 else f for f in feats)
 
 
 def _step(t: Trainer) -> None:
@@ -116,7 +121,8 @@ def build_trainer(cfg: TrainConfig, train_ds: Dataset) -> Trainer:
         anchors, report = check_anchors(wh, anchors, np.random.default_rng(cfg.seed), cfg.loss.anchor_t)
     model_cfg = replace(cfg.model, anchors=_nested(anchors), autoanchor=False)
     names = train_ds.category_names
-    model = build_model(len(names), model_cfg, cfg.imgsz).to(device)
+    # channels-last: torch's CPU (oneDNN) and GPU convolutions run 1.2-2x faster on it (bench_train_throughput)
+    model = build_model(len(names), model_cfg, cfg.imgsz).to(device, memory_format=torch.channels_last)
     workers = cfg.workers if cfg.workers is not None else (GPU_WORKERS if device.type == "cuda" else 0)
     samples = TrainBatches(cache, cfg.imgsz, cfg.batch, cfg.augment, cfg.seed, workers)
     runner = FrozenRunner(model, cfg.imgsz, device, cfg.threads)
@@ -193,6 +199,7 @@ def fit(cfg: TrainConfig, train_ds: Dataset, val_ds: Dataset, out: Path | str) -
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     torch.set_flush_denormal(True)
+    keep_freed_memory()
     if cfg.threads > 0:
         torch.set_num_threads(cfg.threads)
     val_ds = val_ds.with_categories(train_ds.category_names)
@@ -214,6 +221,23 @@ def fit(cfg: TrainConfig, train_ds: Dataset, val_ds: Dataset, out: Path | str) -
         _save(out / "last.pt", _checkpoint(t, epoch, best))
         print(_epoch_line(record, cfg.epochs))
     return _finish(t, out, best)
+
+
+def keep_freed_memory() -> None:
+    """Ask glibc to keep freed blocks instead of unmapping them: every batch allocates and frees the same large
+    activations, and returning them to the kernel costs page faults on each step (~9 % of a CPU step). A no-op
+    where the C library is not glibc."""
+    import ctypes
+    import ctypes.util
+
+    name = ctypes.util.find_library("c")
+    try:
+        libc = ctypes.CDLL(name) if name else None
+        if libc is not None and hasattr(libc, "mallopt"):
+            libc.mallopt(-3, 1 << 30)  # M_MMAP_THRESHOLD: allocations below 1 GiB come from the heap
+            libc.mallopt(-1, 1 << 30)  # M_TRIM_THRESHOLD: keep up to 1 GiB of free heap
+    except OSError:
+        pass
 
 
 def _best_weights(t: Trainer) -> dict[str, Any]:

@@ -32,6 +32,7 @@ def predictions(
     model.eval()
     with torch.no_grad():
         for records, feats in inputs:
+            feats = tuple(f.contiguous(memory_format=torch.channels_last) for f in feats)
             decoded = model.predict_frozen(feats).float().cpu().numpy()
             for record, pred in zip(records, decoded):
                 det = postprocess(pred[:, :4], pred[:, 4:5] * pred[:, 5:], conf, iou, max_det)
