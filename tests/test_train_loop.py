@@ -127,3 +127,15 @@ def test_frozen_run_is_deterministic_and_keeps_imagenet_weights(data, tmp_path: 
     reference = efficientnet_lite0().state_dict()
     assert torch.equal(a["backbone.blocks.2._depthwise_conv.weight"], reference["_blocks.2._depthwise_conv.weight"])
     assert not torch.equal(a["backbone.blocks.9._depthwise_conv.weight"], reference["_blocks.9._depthwise_conv.weight"])
+
+
+def test_mixed_precision_path_runs_and_resumes(data, tmp_path: Path, monkeypatch) -> None:
+    """The CUDA path (autocast + gradient scaler) exercised on the CPU: the same code, bfloat16 autocast."""
+    monkeypatch.setattr(loop, "uses_amp", lambda device: True)
+    cfg = replace(CFG, epochs=1)
+    results = loop.fit(cfg, *data, tmp_path / "amp")
+    state = torch.load(tmp_path / "amp" / "last.pt", weights_only=False)
+    assert state["scaler"] and results["onnx"] == "best.onnx"
+    assert all(torch.isfinite(v).all() for v in state["model"].values() if v.is_floating_point())
+    again = loop.fit(cfg, *data, tmp_path / "amp")  # resumes from last.pt, scaler state included: nothing to do
+    assert again["best"] == results["best"]
