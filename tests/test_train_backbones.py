@@ -67,7 +67,10 @@ def test_frozen_stages_stay_in_inference_mode() -> None:
 
 def test_freeze_needs_pretrained_lite0() -> None:
     with pytest.raises(ValueError, match="only efficientnet-lite0"):
-        build_model(1, ModelConfig(freeze=3), imgsz=64)
+        build_model(1, ModelConfig(backbone="cspdarknet", freeze=3), imgsz=64)
+    assert not build_model(1, ModelConfig(backbone="cspdarknet"), imgsz=64).has_frozen
+    assert build_model(1, ModelConfig(), imgsz=64).backbone.freeze == 7  # the default: every Lite0 stage
+    assert build_model(1, ModelConfig(pretrained=False), imgsz=64).backbone.freeze == 0
     with pytest.raises(ValueError, match="pretrained is false"):
         build_model(1, ModelConfig(backbone="efficientnet-lite0", freeze=3, pretrained=False), imgsz=64)
     with pytest.raises(ValueError, match="freeze must be 0..7"):

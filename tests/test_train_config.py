@@ -8,15 +8,27 @@ from fuzzyfire.config import ConfigError, build_config, to_dict
 from train.config import MODEL_SIZES, TrainConfig
 
 
-def test_defaults_are_the_published_recipe() -> None:
+def test_defaults_are_the_measured_detector_on_the_published_recipe() -> None:
     cfg = TrainConfig()
-    assert (cfg.optim.lr0, cfg.optim.lrf, cfg.optim.momentum, cfg.optim.weight_decay) == (0.01, 0.01, 0.937, 5e-4)
-    assert cfg.optim.nominal_batch == 64 and cfg.loss.anchor_t == 4.0 and cfg.loss.balance == (4.0, 1.0, 0.4)
+    assert (cfg.model.backbone, cfg.model.freeze, cfg.feature_views, cfg.imgsz) == ("efficientnet-lite0", None, 20, 416)
+    assert (cfg.optim.optimizer, cfg.optim.lr0, cfg.optim.momentum, cfg.optim.nominal_batch) == (
+        "adamw",
+        0.002,
+        0.9,
+        16,
+    )
+    assert (cfg.ema_decay, cfg.ema_tau, cfg.device) == (0.99, 100.0, "auto")
+    assert (cfg.optim.lrf, cfg.optim.weight_decay, cfg.loss.anchor_t, cfg.loss.balance) == (
+        0.01,
+        5e-4,
+        4.0,
+        (4.0, 1.0, 0.4),
+    )
     a = cfg.augment
     assert (a.mosaic, a.translate, a.scale, a.hsv_h, a.hsv_s, a.hsv_v, a.fliplr) == (
-        1.0,
-        0.1,
         0.5,
+        0.1,
+        0.3,
         0.015,
         0.7,
         0.4,

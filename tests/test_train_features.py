@@ -38,7 +38,7 @@ def test_onnxruntime_equals_torch(model) -> None:
 
 
 def test_nothing_frozen_passes_images_through() -> None:
-    runner = FrozenRunner(build_model(1, ModelConfig(), imgsz=64), 64, CPU)
+    runner = FrozenRunner(build_model(1, ModelConfig(backbone="cspdarknet"), imgsz=64), 64, CPU)
     x = torch.rand(2, 3, 64, 64)
     assert runner.identity and runner.session is None and torch.equal(runner(x)[0], x)
 
@@ -88,7 +88,9 @@ def test_validation_inputs_are_the_scorer_preprocessing(dataset, model) -> None:
     first = images[0]
     expected = letterbox_image(read_image(dataset.image_path(first.record)), 64, 64)
     assert np.array_equal(first.image, expected)
-    plain = ValidationInputs(images, FrozenRunner(build_model(2, ModelConfig(), imgsz=64), 64, CPU), batch=4)
+    plain = ValidationInputs(
+        images, FrozenRunner(build_model(2, ModelConfig(backbone="cspdarknet"), imgsz=64), 64, CPU), batch=4
+    )
     records, (x,) = next(iter(plain))
     assert [r.id for r in records] == [i.record.id for i in images[:4]]
     assert torch.equal(x, torch.from_numpy(to_nchw_float([i.image for i in images[:4]])))

@@ -107,25 +107,30 @@ class EfficientLite0Backbone(nn.Module):
         return self.trainable_forward(self.frozen_forward(x))
 
 
-def _cspdarknet(depth: float, width: float, imgsz: int, pretrained: bool, freeze: int) -> nn.Module:
+def _cspdarknet(depth: float, width: float, imgsz: int, pretrained: bool, freeze: int | None) -> nn.Module:
     if freeze:
         raise ValueError("model.freeze needs pretrained weights: only efficientnet-lite0 has them")
     return CSPDarknet(depth, width)
 
 
-def _lite0(depth: float, width: float, imgsz: int, pretrained: bool, freeze: int) -> nn.Module:
+def _lite0(depth: float, width: float, imgsz: int, pretrained: bool, freeze: int | None) -> nn.Module:
     if freeze and not pretrained:
         raise ValueError("model.freeze keeps random weights when model.pretrained is false")
+    if freeze is None:
+        freeze = len(LITE0_STAGE_ENDS) if pretrained else 0  # every stage: the measured default (README)
     return EfficientLite0Backbone(imgsz, pretrained, freeze)
 
 
-BACKBONES: dict[str, Callable[[float, float, int, bool, int], nn.Module]] = {
+BACKBONES: dict[str, Callable[[float, float, int, bool, int | None], nn.Module]] = {
     "cspdarknet": _cspdarknet,
     "efficientnet-lite0": _lite0,
 }
 
 
-def build_backbone(name: str, depth: float, width: float, imgsz: int, pretrained: bool, freeze: int = 0) -> nn.Module:
+def build_backbone(
+    name: str, depth: float, width: float, imgsz: int, pretrained: bool, freeze: int | None = None
+) -> nn.Module:
+    """The backbone ``name``; ``freeze`` None is the backbone's default (all Lite0 stages when pretrained, else 0)."""
     if name not in BACKBONES:
         raise ValueError(f"unknown backbone {name!r}; choose one of {', '.join(BACKBONES)}")
     return BACKBONES[name](depth, width, imgsz, pretrained, freeze)

@@ -60,8 +60,6 @@ def build_config(args: argparse.Namespace):
         cfg = replace(cfg, feature_views=args.views)
     model = {k: getattr(args, k) for k in ("size", "backbone", "freeze")}
     model = {k: v for k, v in model.items() if v is not None}
-    if args.backbone == "cspdarknet" and args.freeze is None:
-        model["freeze"] = 0  # nothing to freeze in a network trained from scratch
     if args.no_autoanchor:
         model["autoanchor"] = False
     cfg = replace(cfg, model=replace(cfg.model, **model))
@@ -132,7 +130,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--freeze",
         type=int,
-        help=f"efficientnet-lite0 stages kept at their ImageNet weights, 0..7 (default {defaults.model.freeze})",
+        help="efficientnet-lite0 stages kept at their ImageNet weights, 0..7 (default: all 7)",
     )
     p.add_argument(
         "--views",
