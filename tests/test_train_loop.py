@@ -12,7 +12,7 @@ import torch
 from factories_train import painted_dataset
 
 import train.loop as loop
-from train.config import ModelConfig, OptimConfig, TrainConfig
+from train.config import ModelConfig, OptimConfig, TrainConfig, UnfreezeConfig
 
 TIMING = ("train_images_per_s", "val_seconds")
 CFG = TrainConfig(epochs=2, imgsz=64, batch=8, seed=5, optim=OptimConfig(warmup_min_iters=2, nominal_batch=16))
@@ -139,3 +139,31 @@ def test_mixed_precision_path_runs_and_resumes(data, tmp_path: Path, monkeypatch
     assert all(torch.isfinite(v).all() for v in state["model"].values() if v.is_floating_point())
     again = loop.fit(cfg, *data, tmp_path / "amp")  # resumes from last.pt, scaler state included: nothing to do
     assert again["best"] == results["best"]
+
+
+def test_unfreezing_late_trains_later_stages_and_resumes_across_the_switch(data, tmp_path: Path, monkeypatch) -> None:
+    from curate.effnet import efficientnet_lite0
+
+    cfg = replace(FROZEN, model=ModelConfig(), unfreeze=UnfreezeConfig(epochs=2, freeze=3))  # epochs 1 and 2
+    loop.fit(cfg, *data, tmp_path / "whole")
+    weights = _weights(tmp_path / "whole")
+    reference = efficientnet_lite0().state_dict()
+    assert torch.equal(weights["backbone.blocks.4._project_conv.weight"], reference["_blocks.4._project_conv.weight"])
+    assert not torch.equal(
+        weights["backbone.blocks.8._project_conv.weight"], reference["_blocks.8._project_conv.weight"]
+    )
+    real_evaluate, calls = loop.evaluate, {"n": 0}
+
+    def crash_in_last_epoch(*args, **kwargs):  # last.pt then holds epoch 1, saved after unfreezing
+        calls["n"] += 1
+        if calls["n"] == 3:
+            raise KeyboardInterrupt
+        return real_evaluate(*args, **kwargs)
+
+    monkeypatch.setattr(loop, "evaluate", crash_in_last_epoch)
+    with pytest.raises(KeyboardInterrupt):
+        loop.fit(cfg, *data, tmp_path / "run")
+    monkeypatch.setattr(loop, "evaluate", real_evaluate)
+    loop.fit(cfg, *data, tmp_path / "run")
+    resumed = _weights(tmp_path / "run")
+    assert all(torch.equal(weights[k], resumed[k]) for k in weights)

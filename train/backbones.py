@@ -50,11 +50,27 @@ class EfficientLite0Backbone(nn.Module):
         self.stem, self.stem_bn = net._conv_stem, net._bn0
         self.blocks = net._blocks
         self.channels = tuple(int(self.blocks[i]._bn2.num_features) for i in _LITE0_TAPS)
+        self.freeze, self.split = 0, 0
+        self.set_freeze(freeze)
+
+    def set_freeze(self, freeze: int, trainable: bool = True) -> None:
+        """Freeze stages 1..``freeze`` (and the stem); the others get gradients when ``trainable``. Used at the
+        start and when a run unfreezes late stages (``TrainConfig.unfreeze``)."""
+        if not 0 <= freeze <= len(LITE0_STAGE_ENDS):
+            raise ValueError(f"freeze must be 0..{len(LITE0_STAGE_ENDS)} stages, got {freeze}")
         self.freeze = freeze
         self.split = LITE0_STAGE_ENDS[freeze - 1] + 1 if freeze else 0  # first trainable block
-        for module in self._frozen_modules():
-            module.requires_grad_(False)
-        self._set_frozen_eval()
+        frozen = {id(m) for m in self._frozen_modules()}
+        for module in (self.stem, self.stem_bn, *self.blocks):
+            module.requires_grad_(trainable and id(module) not in frozen)
+            module.train(self.training and id(module) not in frozen)
+
+    @property
+    def frozen_outputs(self) -> int:
+        """How many tensors :meth:`frozen_forward` returns."""
+        if not self.freeze:
+            return 1
+        return sum(1 for i in _LITE0_TAPS if i < self.split - 1) + 1
 
     def _frozen_modules(self) -> list[nn.Module]:
         if not self.freeze:
@@ -90,7 +106,14 @@ class EfficientLite0Backbone(nn.Module):
         return (*taps, y)
 
     def trainable_forward(self, frozen: Sequence[Tensor]) -> tuple[Tensor, Tensor, Tensor]:
-        """The frozen features -> (P3, P4, P5)."""
+        """The frozen features -> (P3, P4, P5). When the split ends a feature level (``freeze`` 3, 5 or 7), the
+        frozen features of a deeper split are accepted too (its first entries are this split's): a run that
+        unfreezes late stages keeps training on the features it cached."""
+        n = self.frozen_outputs
+        if len(frozen) > n:
+            if not self.freeze or self.split - 1 not in _LITE0_TAPS:
+                raise ValueError(f"freeze {self.freeze} does not end a feature level: it needs its own frozen features")
+            frozen = frozen[:n]
         *taps, y = frozen
         taps = list(taps)
         if not self.freeze:

@@ -80,6 +80,13 @@ class AugmentConfig:
 
 
 @dataclass(frozen=True)
+class UnfreezeConfig:
+    epochs: int = 0  # the last N epochs also train the stages after `freeze` (0 = never); see train/unfreeze.py
+    freeze: int = 3  # stages kept frozen then: 3 or 5 (a split ending a feature level, so cached features serve)
+    lr_scale: float = 0.1  # their learning rate, as a fraction of the scheduled one
+
+
+@dataclass(frozen=True)
 class TrainConfig:
     epochs: int = 40
     imgsz: int = 416  # square training and validation size (multiple of 32)
@@ -103,3 +110,4 @@ class TrainConfig:
     optim: OptimConfig = field(default_factory=OptimConfig)
     loss: LossConfig = field(default_factory=LossConfig)
     augment: AugmentConfig = field(default_factory=AugmentConfig)
+    unfreeze: UnfreezeConfig = field(default_factory=UnfreezeConfig)

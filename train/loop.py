@@ -33,6 +33,7 @@ from train.loss import DetectionLoss
 from train.model import STRIDES, Detector, build_model
 from train.optim import Schedule, build_optimizer
 from train.plots import plot_curves, read_metrics
+from train.unfreeze import check_unfreeze, enter_unfreeze, unfreeze_epoch
 from train.validate import evaluate
 
 #: Data-loading worker processes on a GPU when ``workers`` is not set.
@@ -123,6 +124,7 @@ def build_trainer(cfg: TrainConfig, train_ds: Dataset) -> Trainer:
     names = train_ds.category_names
     # channels-last: torch's CPU (oneDNN) and GPU convolutions run 1.2-2x faster on it (bench_train_throughput)
     model = build_model(len(names), model_cfg, cfg.imgsz).to(device, memory_format=torch.channels_last)
+    check_unfreeze(cfg, model)
     workers = cfg.workers if cfg.workers is not None else (GPU_WORKERS if device.type == "cuda" else 0)
     samples = TrainBatches(cache, cfg.imgsz, cfg.batch, cfg.augment, cfg.seed, workers)
     runner = FrozenRunner(model, cfg.imgsz, device, cfg.threads)
@@ -171,6 +173,9 @@ def _resume(t: Trainer, out: Path) -> tuple[int, dict[str, Any]]:
     state = torch.load(last, map_location=t.device, weights_only=False)
     if state["config"] != asdict(t.cfg) or state["class_names"] != t.class_names:
         raise ResumeError(f"{last}: the run there used another config or classes; choose another --out")
+    start = unfreeze_epoch(t.cfg)
+    if start is not None and int(state["epoch"]) >= start:  # saved after unfreezing: same groups and split
+        enter_unfreeze(t.cfg, t.model, t.ema.ema, t.optimizer)
     t.model.load_state_dict(state["model"])
     t.ema.load_state_dict(state["ema"])
     t.optimizer.load_state_dict(state["optimizer"])
@@ -209,6 +214,8 @@ def fit(cfg: TrainConfig, train_ds: Dataset, val_ds: Dataset, out: Path | str) -
     first, best = _resume(t, out)
     _truncate_metrics(out, first)
     for epoch in range(first, cfg.epochs):
+        if epoch == unfreeze_epoch(cfg):
+            enter_unfreeze(cfg, t.model, t.ema.ema, t.optimizer)
         record = {"epoch": epoch, **train_one_epoch(t, epoch)}
         start = time.perf_counter()
         args = (t.class_names, cfg.imgsz, cfg.val_conf, cfg.val_iou, cfg.max_det)
