@@ -66,6 +66,13 @@ class RayExecutor:
             ray.init(address=address, ignore_reinit_error=True)
         else:
             ray.init(num_cpus=local_cpus, include_dashboard=False, ignore_reinit_error=True)
+        gpus = float(ray.cluster_resources().get("GPU", 0))
+        if num_gpus > gpus:
+            ray.shutdown()
+            raise ExecutorError(
+                f"executor.num_gpus={num_gpus:g} but the Ray cluster has {gpus:g} GPU(s): no run could be scheduled; "
+                "set executor.num_gpus=0 to train on CPUs"
+            )
 
     def map(self, fn: Callable[[Any], Any], items: Sequence[Any]) -> Iterator[Outcome]:
         ray = self._ray

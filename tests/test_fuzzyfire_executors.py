@@ -57,3 +57,12 @@ def test_ray_gives_the_same_results_as_local(toy_specs, tmp_path: Path) -> None:
     assert all(o.result["skipped"] is False for o in outcomes)
     for a, b in zip(local, remote):
         assert (a.out / RESULTS_FILE).read_bytes() == (b.out / RESULTS_FILE).read_bytes()
+
+
+def test_ray_refuses_gpus_the_cluster_does_not_have() -> None:
+    import torch
+
+    if torch.cuda.is_available():
+        pytest.skip("this machine has a GPU")
+    with pytest.raises(ExecutorError, match="num_gpus=1 but the Ray cluster has 0 GPU"):
+        build_executor("ray", num_cpus=1, num_gpus=1, local_cpus=1)

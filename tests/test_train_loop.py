@@ -67,22 +67,26 @@ def test_same_seed_same_run(data, reference_run: Path, tmp_path: Path) -> None:
     assert _metrics(reference_run) == _metrics(tmp_path / "again")
 
 
-def test_resume_equals_uninterrupted(data, reference_run: Path, tmp_path: Path, monkeypatch) -> None:
-    real_evaluate = loop.evaluate
-    calls = {"n": 0}
+def _interrupted_then_resumed(cfg: TrainConfig, data, out: Path, monkeypatch, crash_at: int) -> None:
+    """``fit`` stopped in validation number ``crash_at`` (1-based), then run again to the end."""
+    real_evaluate, calls = loop.evaluate, {"n": 0}
 
-    def crash_in_second_epoch(*args, **kwargs):
+    def crash(*args, **kwargs):
         calls["n"] += 1
-        if calls["n"] == 2:
+        if calls["n"] == crash_at:
             raise KeyboardInterrupt
         return real_evaluate(*args, **kwargs)
 
-    monkeypatch.setattr(loop, "evaluate", crash_in_second_epoch)
+    monkeypatch.setattr(loop, "evaluate", crash)
     with pytest.raises(KeyboardInterrupt):
-        loop.fit(CFG, *data, tmp_path / "run")
-    assert [r["epoch"] for r in _metrics(tmp_path / "run")] == [0]
+        loop.fit(cfg, *data, out)
+    assert [r["epoch"] for r in _metrics(out)] == list(range(crash_at - 1))
     monkeypatch.setattr(loop, "evaluate", real_evaluate)
-    loop.fit(CFG, *data, tmp_path / "run")
+    loop.fit(cfg, *data, out)
+
+
+def test_resume_equals_uninterrupted(data, reference_run: Path, tmp_path: Path, monkeypatch) -> None:
+    _interrupted_then_resumed(CFG, data, tmp_path / "run", monkeypatch, crash_at=2)
     a, b = _weights(reference_run), _weights(tmp_path / "run")
     assert all(torch.equal(a[k], b[k]) for k in a)
     assert _metrics(reference_run) == _metrics(tmp_path / "run")
@@ -152,18 +156,7 @@ def test_unfreezing_late_trains_later_stages_and_resumes_across_the_switch(data,
     assert not torch.equal(
         weights["backbone.blocks.8._project_conv.weight"], reference["_blocks.8._project_conv.weight"]
     )
-    real_evaluate, calls = loop.evaluate, {"n": 0}
-
-    def crash_in_last_epoch(*args, **kwargs):  # last.pt then holds epoch 1, saved after unfreezing
-        calls["n"] += 1
-        if calls["n"] == 3:
-            raise KeyboardInterrupt
-        return real_evaluate(*args, **kwargs)
-
-    monkeypatch.setattr(loop, "evaluate", crash_in_last_epoch)
-    with pytest.raises(KeyboardInterrupt):
-        loop.fit(cfg, *data, tmp_path / "run")
-    monkeypatch.setattr(loop, "evaluate", real_evaluate)
-    loop.fit(cfg, *data, tmp_path / "run")
+    # stopped in the last epoch: last.pt holds epoch 1, saved after unfreezing
+    _interrupted_then_resumed(cfg, data, tmp_path / "run", monkeypatch, crash_at=3)
     resumed = _weights(tmp_path / "run")
     assert all(torch.equal(weights[k], resumed[k]) for k in weights)
