@@ -9,7 +9,7 @@ pipeline (cached by config hash): rerunning resumes. Skips cleanly without ../sh
 
 Lines printed (AP in %, mean and std over seeds): ``detector_<name>_<test>_AP50_mean``, ``..._AP50_std``,
 ``..._AP_mean``, ``..._AP_std``, ``detector_<name>_minutes_per_run``, ``detector_<name>_train_images_per_s``,
-``detector_<name>_epochs``.
+``detector_<name>_epochs``, ``detector_pretrained_peak_rss`` (when the pretrained runs trained here).
 
 .venv/bin/python bench/bench_detector_quality.py [--out out/bench-detector-quality] [--seeds 0,1,2]
 """
@@ -19,6 +19,7 @@ from __future__ import annotations
 import argparse
 import contextlib
 import json
+import resource
 import sys
 import tempfile
 import time
@@ -100,6 +101,8 @@ def main() -> int:
     seeds = [int(s) for s in args.seeds.split(",")]
     pretrained = _run(_config(seeds, []), args.out / "pretrained")
     _print("pretrained", pretrained)
+    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024**2
+    print(f"detector_pretrained_peak_rss: {peak:.1f} GB (this process, views cached in RAM)")
     budget = float(np.mean([r["train_s"] for r in pretrained]))
     scratch_overrides = ["train.model.backbone=cspdarknet", "train.model.freeze=0"]
     epochs = _scratch_epochs(budget, _config(seeds[:1], scratch_overrides), args.out / "scratch")

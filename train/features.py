@@ -108,7 +108,8 @@ class FeatureBatches:
             self.views = cache_views(views, len(samples.cache), per_view, max_gb)
             if self.views < views:
                 need = len(samples.cache) * per_view * views / 1e9
-                print(f"feature cache: {views} views need {need:.1f} GB > {max_gb:g} GB; keeping {self.views}")
+                kept = f"keeping {self.views}" if self.views else "none kept: a fresh view every epoch"
+                print(f"feature cache: {views} views need {need:.1f} GB > {max_gb:g} GB (feature_cache_gb); {kept}")
             self._shapes = shapes
         self._store: dict[int, tuple[list[NDArray[np.float16]], list[NDArray[np.float32]]]] = {}
 
@@ -120,14 +121,14 @@ class FeatureBatches:
         return epoch % self.views if self.views else epoch
 
     def epoch(self, epoch: int, start: int = 0) -> Iterator[tuple[Features, Tensor]]:
-        chunks = self.samples.chunks(epoch, start)
+        """The batches of ``epoch`` from batch number ``start`` (its view's features computed on first use)."""
         device = self.runner.device
         if not self.views:
             for images, targets in self.samples.epoch(epoch, start):
                 yield self.runner(images), targets.to(device, non_blocking=True)
             return
         arrays, targets = self._view(self.draw(epoch))
-        for chunk in chunks:
+        for chunk in self.samples.chunks(epoch, start):
             feats = tuple(torch.from_numpy(a[chunk]).to(device).float() for a in arrays)
             rows = [
                 np.concatenate((np.full((len(t), 1), k, np.float32), t), 1)

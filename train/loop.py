@@ -53,7 +53,7 @@ class Trainer:
     cfg: TrainConfig
     model: Detector
     ema: ModelEMA
-    optimizer: torch.optim.SGD
+    optimizer: torch.optim.Optimizer
     loss_fn: DetectionLoss
     schedule: Schedule
     batches: FeatureBatches
