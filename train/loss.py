@@ -88,7 +88,7 @@ class DetectionLoss:
                 tobj = tobj.view(-1).scatter_reduce(0, flat, iou.detach().clamp(min=0), "amax").view(tobj.shape)
                 if self.nc > 1:
                     tcls = torch.zeros_like(ps[:, 5:])
-                    tcls[torch.arange(len(m.cls)), m.cls] = 1.0
+                    tcls[torch.arange(len(m.cls), device=ps.device), m.cls] = 1.0
                     lcls = lcls + self.bce(ps[:, 5:], tcls)
             lobj = lobj + self.bce(p[..., 4], tobj) * self.cfg.balance[level]
         lbox, lobj, lcls = lbox * self.gains["box"], lobj * self.gains["obj"], lcls * self.gains["cls"]
