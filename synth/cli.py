@@ -1,4 +1,4 @@
-"""``fuzzyfire synth`` subcommands: flames, scenes, method1, method2, audit (registered by ``fuzzyfire.cli``)."""
+"""``fuzzyfire synth`` subcommands: flames, scenes, method1, method2, audit, gap (registered by ``fuzzyfire.cli``)."""
 
 from __future__ import annotations
 
@@ -107,6 +107,29 @@ def cmd_audit(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_gap(args: argparse.Namespace) -> int:
+    import sys
+
+    import numpy as np
+
+    from curate.cli import print_problems
+    from curate.cli_curation import load_model_from_args
+    from synth.gap import dataset_images, embed_set, measure_gap
+
+    sides = [
+        (args.synthetic, dataset_images(args.synthetic, args.synthetic_split, args.format)),
+        (args.real, dataset_images(args.real, args.real_split, args.real_format)),
+    ]
+    embedder, cache = load_model_from_args(args)
+    synthetic, real = (embed_set(str(path), paths, embedder, cache, args.workers) for path, paths in sides)
+    problems = [*synthetic.problems, *real.problems]
+    if problems:
+        print_problems(problems, sys.stderr, limit=20)
+    report = measure_gap(synthetic, real, embedder.model_id, np.random.default_rng(args.seed), args.draws, args.size)
+    print(json.dumps(report.to_json()) if args.json else "\n".join(report.lines()))
+    return 0
+
+
 def _register_flames(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "flames",
@@ -197,15 +220,51 @@ def _register_audit(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=cmd_audit)
 
 
+def _register_gap(sub: argparse._SubParsersAction) -> None:
+    from curate.cli_curation import add_model_args
+
+    p = sub.add_parser(
+        "gap",
+        help="realism gap: Fréchet distance of CNN embeddings, synthetic vs real, with the real-vs-real floor",
+        formatter_class=FMT,
+        description="How far a synthetic set is from a real one: the Fréchet distance between the Gaussians of\n"
+        "their CNN embeddings (ImageNet EfficientNet-Lite0 unless --model), at equal sizes against half of the\n"
+        "real set, next to the distance of the real set's other half (the floor). Median and 2.5-97.5 % range\n"
+        "over --draws random splits; embeddings are cached like curation's.\n\n"
+        "example:\n  fuzzyfire synth gap out/m2 ../shared/data/fire-cctv-416 --real-split train\n"
+        "  fuzzyfire synth gap renders/ photos/ --format images --real-format images --json",
+    )
+    p.add_argument("synthetic", type=Path, help="synthetic dataset (or image folder with --format images)")
+    p.add_argument("real", type=Path, help="real dataset (or image folder with --real-format images)")
+    formats = ["auto", "coco", "yolo", "voc", "dfire", "images"]
+    p.add_argument("--format", default="auto", choices=formats, help="layout of SYNTHETIC (default auto)")
+    p.add_argument("--real-format", default="auto", choices=formats, help="layout of REAL (default auto)")
+    p.add_argument("--synthetic-split", help="only this split of SYNTHETIC (default: every image)")
+    p.add_argument("--real-split", help="only this split of REAL (default: every image)")
+    p.add_argument("--draws", type=int, default=200, help="random equal-size draws (default 200)")
+    p.add_argument("--size", type=int, help="images per side (default min(synthetic, real / 2))")
+    p.add_argument("--seed", type=int, default=0, help="seed of the draws (default 0)")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    add_model_args(p)
+    p.set_defaults(func=cmd_gap)
+
+
 def register(sub: argparse._SubParsersAction) -> None:
     """Add ``fuzzyfire synth ...`` to the ``fuzzyfire`` parser."""
     synth = sub.add_parser(
         "synth",
         help="procedural flames, environments and synthetic datasets",
         formatter_class=FMT,
-        description="Synthetic data: flames, scenes, Method 1, Method 2, audit.\n\n"
+        description="Synthetic data: flames, scenes, Method 1, Method 2, audit, realism gap.\n\n"
         "example:\n  fuzzyfire synth method2 --n 200 --out out/m2 --size 320x240",
     )
     inner = synth.add_subparsers(dest="synth_command", metavar="SUBCOMMAND")
-    for add in (_register_flames, _register_scenes, _register_method1, _register_method2, _register_audit):
+    for add in (
+        _register_flames,
+        _register_scenes,
+        _register_method1,
+        _register_method2,
+        _register_audit,
+        _register_gap,
+    ):
         add(inner)

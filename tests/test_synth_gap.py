@@ -1,0 +1,69 @@
+"""The realism gap: real embeddings of small generated image sets, compared at equal sizes."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+from curate_helpers import save, scene, transformed, use_session_cache, write_scene_dataset
+
+from curate.embed import load_embedder
+from fuzzyfire.cli import main
+from synth.gap import dataset_images, embed_set, measure_gap
+
+
+@pytest.fixture
+def folders(tmp_path: Path, tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
+    """``real``: 24 scenes; ``alike``: 12 other scenes of the same kind; ``flat``: 12 flat grey-ish images
+    (plus one broken file)."""
+    use_session_cache(tmp_path_factory)
+    for i in range(24):
+        save(scene(100 + i), tmp_path / "real" / f"r{i}.jpg")
+    for i in range(12):
+        save(transformed(scene(200 + i), "hflip"), tmp_path / "alike" / f"a{i}.jpg")
+        grey = np.full((120, 160, 3), 90 + 3 * i, np.uint8)
+        save(grey, tmp_path / "flat" / f"f{i}.png")
+    (tmp_path / "flat" / "broken.png").write_bytes(b"not a png")
+    return {k: tmp_path / k for k in ("real", "alike", "flat")}
+
+
+def test_a_set_like_the_real_one_is_closer_than_a_flat_one(folders) -> None:
+    embedder = load_embedder()
+    real = embed_set("real", dataset_images(folders["real"], fmt="images"), embedder, None)
+    alike = embed_set("alike", dataset_images(folders["alike"], fmt="images"), embedder, None)
+    flat = embed_set("flat", dataset_images(folders["flat"], fmt="images"), embedder, None)
+    assert len(real.vectors) == 24 and real.vectors.shape[1] == flat.vectors.shape[1] and not real.problems
+    assert len(flat.vectors) == 12 and [Path(p.path).name for p in flat.problems] == ["broken.png"]
+    near = measure_gap(alike, real, embedder.model_id, np.random.default_rng(0), draws=30)
+    far = measure_gap(flat, real, embedder.model_id, np.random.default_rng(0), draws=30)
+    assert near.gap.size == far.gap.size == 12
+    assert near.gap.floor == far.gap.floor  # same seed: the same real halves
+    assert far.gap.synthetic.low > near.gap.synthetic.high
+    assert far.gap.ratio.median > 2 * near.gap.ratio.median
+    assert near.to_json()["sets"]["synthetic"] == {"path": "alike", "images": 12}
+
+
+def test_dataset_layouts_and_errors(tmp_path: Path, folders) -> None:
+    ds = write_scene_dataset(tmp_path / "ds", {f"s{i}": (i, None) for i in range(4)})
+    assert len(dataset_images(ds)) == 4 and len(dataset_images(ds, "train")) == 4
+    with pytest.raises(ValueError, match="no images in split 'test'"):
+        dataset_images(ds, "test")
+    with pytest.raises(ValueError, match="'images' for a plain folder"):
+        dataset_images(folders["real"])
+    with pytest.raises(ValueError, match="split needs a dataset"):
+        dataset_images(folders["real"], "train", "images")
+
+
+def test_gap_command(folders, capsys) -> None:
+    args = ["synth", "gap", str(folders["alike"]), str(folders["real"]), "--format", "images"]
+    assert main([*args, "--real-format", "images", "--draws", "20", "--no-cache", "--json"]) == 0
+    report = json.loads(capsys.readouterr().out)
+    assert report["size"] == 12 and report["draws"] == 20 and report["sets"]["real"]["images"] == 24
+    floor = report["frechet"]["floor"]
+    assert floor["low"] <= floor["median"] <= floor["high"]
+    assert main([*args, "--real-format", "images", "--draws", "20", "--no-cache"]) == 0
+    assert "real vs real" in capsys.readouterr().out
+    assert main([*args, "--draws", "20"]) == 2  # REAL's layout unknown without --real-format images
+    assert "plain folder of images" in capsys.readouterr().err
