@@ -63,7 +63,7 @@ def prepare_data(cfg: ExperimentConfig, base: Path, out: Path) -> Prepared:
         rare_ref = _stage("rare (stand-in)", standin_stage, root, "rare-standin", rare.standin)
     pools = {}
     for method in needed_methods(cfg):
-        pools[method] = _stage(method, synth_stage, root, method, getattr(cfg.synth, method))
+        pools[method] = _stage(method, synth_stage, root, method, getattr(cfg.synth, method), base)
     return Prepared(real_ref, rare_ref, pools)
 
 

@@ -12,7 +12,7 @@ import hashlib
 import json
 import shutil
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -111,15 +111,20 @@ def standin_stage(root: Path, name: str, cfg: Any) -> tuple[Stage, DataRef]:
     return stage, DataRef(stage.folder, {"kind": "standin", "hash": stage.hash}, "coco", standin=True)
 
 
-def synth_stage(root: Path, method: str, cfg: Any) -> tuple[Stage, DataRef]:
-    """A Method 1 or Method 2 pool, its flame library built from ``cfg.flames``."""
+def synth_stage(root: Path, method: str, cfg: Any, base: Path) -> tuple[Stage, DataRef]:
+    """A Method 1 or Method 2 pool, its flame library built from ``cfg.flames``; ``cfg.environments`` resolve
+    against ``base``."""
     from synth.library import build_library
     from synth.method1 import run_method1
     from synth.method2 import run_method2
 
     runner = {"method1": run_method1, "method2": run_method2}[method]
+    cfg = replace(cfg, environments=tuple(_absolute(Path(p), base) for p in cfg.environments))
+    config = to_dict(cfg)
+    if not cfg.environments:
+        del config["environments"]  # pools made before environments existed keep their identity
     stage = cached_stage(
-        root, method, {"kind": method, "config": to_dict(cfg)}, lambda out: runner(cfg, build_library(cfg.flames), out)
+        root, method, {"kind": method, "config": config}, lambda out: runner(cfg, build_library(cfg.flames), out)
     )
     return stage, DataRef(stage.folder, {"kind": method, "hash": stage.hash}, "coco")
 

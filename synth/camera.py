@@ -1,8 +1,11 @@
 """Camera rules (after the paper's Method 2 set-up): the camera moves in an area of the floor plane, within a
 height range, looks towards one of the scene's targets with limited pitch and no roll (the horizon stays
-horizontal); views blocked by a nearby wall (too many pixels closer than ``min_clearance``) are rejected.
+horizontal); views blocked by a nearby wall (too many pixels closer than ``min_clearance``), showing mostly
+nothing (``max_empty``) or only a flat surface (depth spread below ``min_depth_spread``) are rejected.
 
-World frame: +Y up, floor at y = 0; ``area`` is ``(x_min, x_max, z_min, z_max)`` in metres.
+World frame: +Y up, floor at y = 0; ``area`` is ``(x_min, x_max, z_min, z_max)`` in metres. A rule may instead
+list free floor ``positions`` ((x, z) centres of ``cell``-metre squares, found by :mod:`synth.freespace`): the
+camera then stands in one of those squares.
 """
 
 from __future__ import annotations
@@ -24,6 +27,10 @@ class CameraRule:
     yfov_deg: tuple[float, float] = (50.0, 70.0)
     min_clearance: float = 0.7  # metres
     max_blocked: float = 0.3  # fraction of pixels allowed closer than min_clearance
+    min_depth_spread: float = 0.0  # metres between the 10th and 90th depth percentile (0 = no check)
+    max_empty: float = 1.0  # fraction of pixels allowed to show nothing (sky, void)
+    positions: tuple[tuple[float, float], ...] = ()  # free (x, z) squares; empty = anywhere in ``area``
+    cell: float = 0.0  # side of a position's square, metres
 
     def __post_init__(self) -> None:
         x0, x1, z0, z1 = self.area
@@ -53,8 +60,13 @@ def pose_from_angles(eye: NDArray[np.float64], yaw: float, pitch: float) -> NDAr
 
 def sample_view(rule: CameraRule, rng: np.random.Generator) -> CameraView:
     """A random view obeying ``rule`` (not yet checked for blocking)."""
-    x0, x1, z0, z1 = rule.area
-    eye = np.array([rng.uniform(x0, x1), rng.uniform(*rule.height), rng.uniform(z0, z1)])
+    if rule.positions:
+        x, z = rule.positions[int(rng.integers(len(rule.positions)))]
+        jitter = rng.uniform(-0.5, 0.5, 2) * rule.cell
+        eye = np.array([x + jitter[0], rng.uniform(*rule.height), z + jitter[1]])
+    else:
+        x0, x1, z0, z1 = rule.area
+        eye = np.array([rng.uniform(x0, x1), rng.uniform(*rule.height), rng.uniform(z0, z1)])
     target = np.asarray(rule.targets[int(rng.integers(len(rule.targets)))], float)
     d = target - eye
     yaw = np.arctan2(-d[0], -d[2]) + np.deg2rad(rng.uniform(-rule.yaw_jitter_deg, rule.yaw_jitter_deg))
@@ -64,9 +76,21 @@ def sample_view(rule: CameraRule, rng: np.random.Generator) -> CameraView:
 
 
 def view_blocked(depth: NDArray[np.float32], rule: CameraRule) -> bool:
-    """True when more than ``max_blocked`` of the (H, W) depth pixels lie closer than ``min_clearance``."""
+    """True when more than ``max_blocked`` of the (H, W) depth pixels lie closer than ``min_clearance``, more
+    than ``max_empty`` show nothing, or the drawn pixels' depths spread less than ``min_depth_spread`` (a view of
+    one wall)."""
     near = (depth > 0) & (depth < rule.min_clearance)
-    return float(near.mean()) > rule.max_blocked
+    if float(near.mean()) > rule.max_blocked:
+        return True
+    drawn = depth[depth > 0]
+    if rule.max_empty < 1.0 and len(drawn) < (1.0 - rule.max_empty) * depth.size:
+        return True
+    if rule.min_depth_spread > 0:
+        if not len(drawn):
+            return True
+        low, high = np.percentile(drawn, [10, 90])
+        return float(high - low) < rule.min_depth_spread
+    return False
 
 
 def pitch_roll_deg(pose: NDArray[np.float64]) -> tuple[float, float]:

@@ -64,6 +64,7 @@ def _dataset_config(args: argparse.Namespace) -> dict:
         "width": w,
         "height": h,
         "scenes": args.scenes,
+        "environments": tuple(args.environments or ()),
         "smoke_class": args.smoke,
         "flames": flames,
     }
@@ -168,7 +169,14 @@ def _dataset_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--n", type=int, default=100)
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--size", type=parse_size, default=(640, 480))
-    p.add_argument("--scenes", type=int, default=48, help="number of environments")
+    p.add_argument("--scenes", type=int, default=48, help="procedural environments (0 = only --environments)")
+    p.add_argument(
+        "--environments",
+        type=Path,
+        nargs="+",
+        metavar="PATH",
+        help="3D environments: glTF/GLB/OBJ/PLY files, folders of them, or sidecar YAMLs (see synth/envfile.py)",
+    )
     p.add_argument("--flames", type=Path, nargs="*", help="sequence folders (synth flames output, or RGBA PNGs)")
     p.add_argument("--library", type=int, default=12, help="procedural sequences to make when --flames is absent")
     p.add_argument("--overwrite", action="store_true")

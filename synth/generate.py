@@ -11,6 +11,7 @@ from typing import Any
 from curate.progress import progress
 from curate.writer import WriteResult
 from synth import render
+from synth.envfile import find_environment_files
 from synth.output import Staging, finish
 from synth.schema import to_json
 from synth.sprites import SpriteSequence
@@ -31,14 +32,15 @@ def generate(
     """Generate (or resume) ``cfg.n`` images with ``make_image(cfg, i, library, views)`` and write ``out``.
 
     ``method`` names the source tag (``synth:<method>``) and the command in the manifest; ``cfg`` is a
-    Method1Config or Method2Config (``n``, ``seed``, ``scenes``, ``width``, ``height``, ``smoke_class``).
+    Method1Config or Method2Config (``n``, ``seed``, ``scenes``, ``environments``, ``width``, ``height``, ``smoke_class``).
     """
     if not library or not all(seq.sprites for seq in library):
         raise ValueError("the flame library is empty")
     staging = Staging(out)
     todo = [i for i in range(cfg.n) if not staging.done(i)]
     with render.Renderer(cfg.width, cfg.height, platform) as renderer:
-        views = ViewCache(cfg.seed, cfg.scenes, renderer)
+        files = find_environment_files(cfg.environments) if cfg.environments else []
+        views = ViewCache(cfg.seed, cfg.scenes, renderer, files)
         for i in progress(todo, total=len(todo), desc=f"{method} images"):
             staging.save(i, *make_image(cfg, i, library, views))
     args = {**to_json(cfg), "flame_sequences": [s.name for s in library]}

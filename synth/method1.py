@@ -52,7 +52,9 @@ class Method1Config:
     seed: int = 0
     width: int = 640
     height: int = 480
-    scenes: int = 48  # environments (view v shows environment v % scenes)
+    scenes: int = 48  # procedural environments (0 = only the files of ``environments``)
+    environments: tuple[Path, ...] = ()  # mesh files / folders / sidecars (synth.envfile); view v shows
+    # environment v % (files + scenes), the files first
     images_per_view: int = 1  # images (different planes) per camera view
     max_flames: int = 3  # planes per image: uniform in 1..max_flames
     negatives: float = 0.1  # fraction of images without flames
@@ -69,8 +71,10 @@ class Method1Config:
     def __post_init__(self) -> None:
         if self.box_mode not in BOX_MODES:
             raise ValueError(f"unknown box mode {self.box_mode!r}; choose one of {', '.join(BOX_MODES)}")
-        if self.n < 1 or self.scenes < 1 or self.images_per_view < 1 or self.width < 16 or self.height < 16:
+        if self.n < 1 or self.scenes < 0 or self.images_per_view < 1 or self.width < 16 or self.height < 16:
             raise ValueError(f"invalid Method 1 config: {self}")
+        if self.scenes == 0 and not self.environments:
+            raise ValueError("scenes is 0 and no environments are given: nothing to render")
         if self.max_flames < 1 or not 0.0 <= self.negatives <= 1.0 or self.min_box_px < 1:
             raise ValueError(f"invalid Method 1 config: {self}")
         check_range("flame_height_m", self.flame_height_m, 0.01)

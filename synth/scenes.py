@@ -3,16 +3,16 @@
 An :class:`Environment` is plain data (parts, lights, camera rule); :func:`to_pyrender` turns it into a
 ``pyrender.Scene`` (without camera). Environment ``i`` of a run belongs to family ``FAMILIES[i % 7]`` and is
 built from ``np.random.default_rng([seed, i])``, so any number of distinct, reproducible environments exist.
-User meshes (OBJ/GLB/PLY, anything trimesh loads) become environments via :func:`load_user_environment`.
+Mesh files (glTF/GLB, OBJ, PLY: anything trimesh loads) become environments via :func:`file_environment`.
 
 World frame: metres, +Y up, floor at y = 0.
 """
 
 from __future__ import annotations
 
+import logging
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -21,7 +21,9 @@ from numpy.typing import NDArray
 
 from synth.camera import CameraRule
 from synth.colour import blackbody_rgb
-from synth.render import rgba_opaque, textured_quad
+from synth.envfile import EnvironmentFile, footprint, load_meshes
+from synth.freespace import free_space, spread_points
+from synth.render import Renderer, rgba_opaque, textured_quad
 from synth.textures import make_texture
 
 Pose = NDArray[np.float64]
@@ -61,6 +63,7 @@ class Environment:
     solids: list[Solid] = field(default_factory=list)
     panels: list[Panel] = field(default_factory=list)
     lights: list[Light] = field(default_factory=list)
+    meshes: list[tuple[trimesh.Trimesh, Pose]] = field(default_factory=list)  # file meshes, visuals as loaded
     ambient: float = 0.15
     sky: tuple[float, float, float] = (0.0, 0.0, 0.0)
     seed: int = 0
@@ -265,22 +268,40 @@ def build_environment(index: int, seed: int = 0) -> Environment:
     return env
 
 
-def load_user_environment(path: Path, kelvin: float = 4500.0) -> Environment:
-    """An environment from a user's mesh file; the camera moves inside the central 60 % of its footprint."""
-    try:
-        loaded = trimesh.load(str(path), force="mesh")
-    except Exception as exc:  # trimesh raises many types for bad files
-        raise ValueError(f"{path}: cannot be loaded as a mesh ({exc})") from exc
-    if not isinstance(loaded, trimesh.Trimesh) or len(loaded.faces) == 0:
-        raise ValueError(f"{path}: no triangles")
-    (x0, y0, z0), (x1, y1, z1) = loaded.bounds
-    cx, cz = (x0 + x1) / 2, (z0 + z1) / 2
-    area = (cx - 0.3 * (x1 - x0), cx + 0.3 * (x1 - x0), cz - 0.3 * (z1 - z0), cz + 0.3 * (z1 - z0))
-    rule = CameraRule(area, (y0 + 1.2, y0 + 2.5), ((cx, y0 + 0.5, cz),))
-    env = Environment(Path(path).stem, "user", rule, [Solid(loaded, (0.7, 0.7, 0.7), np.eye(4))])
-    env.lights.append(Light("point", kelvin, 20.0, translate(cx, y1 - 0.2, cz)))
-    env.lights.append(Light("directional", 6000.0, 2.0, translate(0, 0, 0, 30, -50)))
-    return env
+def file_environment(spec: EnvironmentFile, renderer: Renderer) -> tuple[Environment, Any]:
+    """An environment from a mesh file (see :mod:`synth.envfile`) and its pyrender scene: textures and
+    materials as the file has them, moved so the floor is at y = 0, the camera rule derived from its free floor
+    (:mod:`synth.freespace`) unless the sidecar gives ``camera.area``, and (``lights: auto``) a warm lamp over
+    every ~20 m2 of free floor (at most 4) plus a sun."""
+    meshes = load_meshes(spec)
+    bounds = footprint(meshes)
+    pr = renderer.pyrender
+    env = Environment(spec.name, "file", CameraRule((0, 0, 0, 0)), ambient=0.25, sky=(0.75, 0.8, 0.85))
+    env.meshes = meshes
+    scene = to_pyrender(env, pr)
+    cam = spec.camera
+    space = free_space(renderer, scene, bounds, cam.height[0], cam.min_clearance, spec.floor, spec.outdoor)
+    shift = translate(0.0, -space.floor, 0.0)
+    for node in list(scene.mesh_nodes):
+        node.matrix = shift @ node.matrix
+    env.meshes = [(mesh, shift @ pose) for mesh, pose in meshes]
+    targets = cam.targets or tuple((float(x), float(y - space.floor), float(z)) for x, y, z in space.targets)
+    rule = dict(height=cam.height, targets=targets, max_pitch_deg=cam.max_pitch_deg, yfov_deg=cam.yfov_deg)
+    rule |= dict(min_clearance=cam.min_clearance, min_depth_spread=0.5, max_empty=0.8 if spec.outdoor else 0.5)
+    if cam.area is not None:
+        env.camera = CameraRule(cam.area, **rule)
+    else:
+        positions = tuple((float(x), float(z)) for x, z in space.positions)
+        (x0, z0), (x1, z1) = space.positions.min(0), space.positions.max(0)
+        env.camera = CameraRule((x0, x1, z0, z1), **rule, positions=positions, cell=space.cell)
+    if spec.lights == "auto":
+        lamps = max(1, min(4, int(space.area_m2 // 20)))
+        for x, z in spread_points(space.positions, lamps):  # over free floor
+            _lamp(env, (float(x), 2.3, float(z)), spec.kelvin, 20.0 / lamps**0.5)
+        env.lights.append(Light("directional", 6000.0, 2.0, translate(0, 0, 0, 30, -50)))
+        for light in env.lights:
+            scene.add(_pyrender_light(light, pr), pose=light.pose)
+    return env, scene
 
 
 #: How much of a light's colour cast the camera's auto white balance removes (0: none, 1: all lights white).
@@ -313,8 +334,25 @@ def to_pyrender(env: Environment, pr: Any, texture_size: int = 128) -> Any:
     for solid in env.solids:
         mat = pr.MetallicRoughnessMaterial(baseColorFactor=(*solid.color, 1.0), metallicFactor=0.0, roughnessFactor=0.8)
         scene.add(pr.Mesh.from_trimesh(solid.mesh, material=mat, smooth=False), pose=solid.pose)
+    for mesh, pose in env.meshes:
+        scene.add(_pyrender_mesh(mesh, pr), pose=pose)
     for light in env.lights:
-        colour = white_balanced(light.kelvin)
-        cls = pr.PointLight if light.kind == "point" else pr.DirectionalLight
-        scene.add(cls(color=colour, intensity=light.intensity), pose=light.pose)
+        scene.add(_pyrender_light(light, pr), pose=light.pose)
     return scene
+
+
+def _pyrender_mesh(mesh: trimesh.Trimesh, pr: Any) -> Any:
+    """A file mesh as pyrender draws it (its own material and textures). Without scipy, trimesh logs a
+    traceback each time it computes vertex normals the slow way; that is not a problem worth showing."""
+    log = logging.getLogger("trimesh")
+    level = log.level
+    log.setLevel(logging.ERROR)
+    try:
+        return pr.Mesh.from_trimesh(mesh)
+    finally:
+        log.setLevel(level)
+
+
+def _pyrender_light(light: Light, pr: Any) -> Any:
+    cls = pr.PointLight if light.kind == "point" else pr.DirectionalLight
+    return cls(color=white_balanced(light.kelvin), intensity=light.intensity)

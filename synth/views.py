@@ -1,12 +1,13 @@
 """Camera views of the procedural environments, shared by Method 1 and Method 2.
 
-View ``v`` of a run seeded ``seed`` looks at environment ``v % scenes`` from a camera drawn by the
-environment's camera rules with ``default_rng([seed, 1, v])`` (blocked views rejected), so a view can be
+View ``v`` of a run seeded ``seed`` looks at environment ``v % (files + scenes)`` (the mesh files first, then
+the procedural environments) from a camera drawn by the environment's camera rules with ``default_rng([seed, 1, v])`` (blocked views rejected), so a view can be
 (re)made alone: runs resume and are byte-reproducible.
 """
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -14,6 +15,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from synth import camera, render, scenes
+from synth.envfile import EnvironmentFile
 
 
 @dataclass(frozen=True)
@@ -33,10 +35,12 @@ class View:
 class ViewCache:
     """Builds each environment's pyrender scene once and remembers the last view (and background) made."""
 
-    def __init__(self, seed: int, scenes_count: int, renderer: render.Renderer) -> None:
-        if scenes_count < 1:
+    def __init__(
+        self, seed: int, scenes_count: int, renderer: render.Renderer, files: Sequence[EnvironmentFile] = ()
+    ) -> None:
+        if scenes_count + len(files) < 1:
             raise ValueError("at least one environment is needed")
-        self.seed, self.scenes, self.renderer = seed, scenes_count, renderer
+        self.seed, self.scenes, self.renderer, self.files = seed, scenes_count, renderer, tuple(files)
         self._scenes: dict[int, tuple[scenes.Environment, Any]] = {}
         self._view: View | None = None
         self._view_index = -1
@@ -44,15 +48,18 @@ class ViewCache:
 
     def environment(self, env_index: int) -> tuple[scenes.Environment, Any]:
         if env_index not in self._scenes:
-            env = scenes.build_environment(env_index, self.seed)
-            self._scenes[env_index] = (env, scenes.to_pyrender(env, self.renderer.pyrender))
+            if env_index < len(self.files):
+                self._scenes[env_index] = scenes.file_environment(self.files[env_index], self.renderer)
+            else:
+                env = scenes.build_environment(env_index - len(self.files), self.seed)
+                self._scenes[env_index] = (env, scenes.to_pyrender(env, self.renderer.pyrender))
         return self._scenes[env_index]
 
     def view(self, view_index: int) -> View:
         """View ``view_index`` (see the module docstring); its depth is the accepted depth-only render."""
         if self._view is not None and self._view_index == view_index:
             return self._view
-        env, scene = self.environment(view_index % self.scenes)
+        env, scene = self.environment(view_index % (len(self.files) + self.scenes))
         rng = np.random.default_rng([self.seed, 1, view_index])
         depths: list[NDArray[np.float32]] = []
 

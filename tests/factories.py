@@ -49,3 +49,46 @@ def write_yolo_dataset(root: Path, names: tuple[str, ...] = ("fire", "smoke")) -
         f"train: ../train/images\nval: ../valid/images\nnc: {len(names)}\nnames: [{', '.join(names)}]\n"
     )
     return rows
+
+
+def write_textured_room(path: Path, up: str = "+y", scale: float = 1.0, table: bool = True, walls: bool = True) -> Path:
+    """A 6 x 3 x 6 m room as a glTF/GLB/OBJ file (by ``path``'s suffix): walls and ceiling of one inward-facing
+    box, a 1 cm high floor quad with a striped base-colour texture (u, v repeat 4x), and a 1.2 x 0.8 x 1.2 m
+    table box centred at (x, z) = (1.5, 1.5). Written with ``up`` (``+y`` or ``+z``) as the up axis and in
+    units of ``1 / scale`` metres (``scale=0.01``: centimetres)."""
+    import trimesh
+
+    def solid(mesh: trimesh.Trimesh, rgba: tuple[int, int, int, int]) -> trimesh.Trimesh:
+        material = trimesh.visual.material.PBRMaterial(baseColorFactor=rgba, metallicFactor=0.0, roughnessFactor=0.9)
+        mesh.visual = trimesh.visual.TextureVisuals(material=material)
+        return mesh
+
+    scene = trimesh.Scene()
+    if walls:
+        room = trimesh.creation.box((6, 3, 6))
+        room.invert()
+        room.apply_translation((0, 1.5, 0))
+        scene.add_geometry(solid(room, (200, 190, 170, 255)), "room")
+    stripes = (np.indices((64, 64)).sum(0) // 8 % 2 * 180 + 40).astype(np.uint8)
+    texture = Image.fromarray(np.dstack([stripes, stripes // 2, stripes // 4]))
+    floor = trimesh.Trimesh(
+        np.array([[-3, 0.01, -3], [3, 0.01, -3], [3, 0.01, 3], [-3, 0.01, 3]], float),
+        np.array([[0, 2, 1], [0, 3, 2]]),
+        process=False,
+    )
+    material = trimesh.visual.material.PBRMaterial(baseColorTexture=texture, metallicFactor=0.0, roughnessFactor=0.9)
+    uv = np.array([[0, 0], [4, 0], [4, 4], [0, 4]], float)
+    floor.visual = trimesh.visual.TextureVisuals(uv=uv, material=material)
+    scene.add_geometry(floor, "floor")
+    if table:
+        box = trimesh.creation.box((1.2, 0.8, 1.2))
+        box.apply_translation((1.5, 0.4, 1.5))
+        scene.add_geometry(solid(box, (120, 70, 30, 255)), "table")
+    frame = np.eye(4)
+    if up == "+z":
+        frame = trimesh.transformations.rotation_matrix(np.pi / 2, (1, 0, 0))  # file +Z = world +Y
+    frame[:3, :3] /= scale
+    scene.apply_transform(frame)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    scene.export(path)
+    return path

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import pytest
@@ -72,3 +73,24 @@ def test_folder_ref_resolves_against_the_config_folder(split_folder: Path) -> No
     with pytest.raises(FileNotFoundError):
         folder_ref(Path("missing"), split_folder.parent, "auto", {}, ())
     assert isinstance(ref.with_split("test"), DataRef) and ref.with_split("test").split == "test"
+
+
+def test_synth_stage_resolves_environments_and_keeps_old_identities(tmp_path: Path) -> None:
+    from dataclasses import replace
+
+    from factories import write_textured_room
+
+    from fuzzyfire.stages import synth_stage
+    from synth.library import FlameLibraryConfig
+    from synth.method2 import Method2Config
+
+    flames = FlameLibraryConfig(sequences=1, frames=60, keep_every=30)
+    cfg = Method2Config(n=2, width=64, height=48, scenes=1, images_per_view=2, flames=flames)
+    stage, _ = synth_stage(tmp_path / "data", "method2", cfg, tmp_path)
+    identity = json.loads((stage.folder / "stage.json").read_text())["identity"]
+    assert "environments" not in identity["config"]  # pools made before environments existed are still found
+    write_textured_room(tmp_path / "scenes" / "den.glb")
+    files = replace(cfg, scenes=0, environments=(Path("scenes"),))
+    stage, _ = synth_stage(tmp_path / "data", "method2", files, tmp_path)
+    identity = json.loads((stage.folder / "stage.json").read_text())["identity"]
+    assert identity["config"]["environments"] == [(tmp_path / "scenes").resolve().as_posix()]

@@ -51,3 +51,22 @@ def test_method1_command_writes_both_box_modes(tmp_path, capsys):
     report = json.loads(capsys.readouterr().out)
     assert report["images"] == 3 and set(report["modes"]) == {"paper", "visible"}
     assert report["modes"]["visible"]["mean_iou"] == 1.0
+
+
+def test_method1_and_method2_in_a_file_environment(tmp_path, capsys):
+    from factories import write_textured_room
+
+    room = write_textured_room(tmp_path / "rooms" / "den.glb")
+    flames = ["synth", "flames", "--out", str(tmp_path / "fl"), "--n", "1", "--frames", "60", "--keep-every", "30"]
+    assert main(flames) == 0
+    for method in ("method1", "method2"):
+        out = tmp_path / method
+        args = ["synth", method, "--n", "4", "--out", str(out), "--size", "96x64", "--scenes", "0"]
+        assert main([*args, "--environments", str(room.parent), "--flames", str(tmp_path / "fl")]) == 0
+        manifest = json.loads((out / "manifest.json").read_text())
+        assert {img["environment"] for img in manifest["args"]["per_image"]} == {"den"}
+        capsys.readouterr()
+        assert main(["synth", "audit", str(out), "--json"]) == 0
+        report = json.loads(capsys.readouterr().out)
+        iou = report["modes"]["visible"]["mean_iou"] if method == "method1" else report["mean_iou"]
+        assert report["images"] == 4 and iou == 1.0

@@ -19,6 +19,7 @@ class TinyConfig:
     n: int = 4
     seed: int = 0
     scenes: int = 1
+    environments: tuple = ()
     width: int = 32
     height: int = 24
     smoke_class: bool = False

@@ -1,10 +1,12 @@
 import numpy as np
 import pytest
 import trimesh
+from factories import write_textured_room
 
 from synth import camera as C
 from synth import render as R
 from synth import scenes as S
+from synth.envfile import environment_file
 
 
 def test_48_distinct_environments_from_7_families():
@@ -51,20 +53,28 @@ def test_wall_in_front_blocks_the_view(renderer):
         )
 
 
-def test_user_mesh_environment(tmp_path, renderer):
-    room = trimesh.creation.box((6, 3, 6))
-    room.invert()
-    room.apply_translation((0, 1.5, 0))
-    room.export(tmp_path / "room.ply")
-    env = S.load_user_environment(tmp_path / "room.ply")
-    scene = S.to_pyrender(env, renderer.pyrender)
-    view = C.find_view(
-        env.camera, np.random.default_rng(0), lambda v: R.render_view(renderer, scene, v.pose, v.yfov, True)[1]
-    )
-    assert (R.render_view(renderer, scene, view.pose, view.yfov)[1] > 0).all()
-    (tmp_path / "bad.obj").write_text("not a mesh")
-    with pytest.raises(ValueError, match="bad.obj"):
-        S.load_user_environment(tmp_path / "bad.obj")
+def test_file_environment_is_normalised_lit_and_viewable(tmp_path, renderer):
+    mesh = write_textured_room(tmp_path / "room.glb", up="+z", scale=0.01)
+    (tmp_path / "room.yaml").write_text("scale: 0.01\nup: +z\n")
+    env, scene = S.file_environment(environment_file(mesh), renderer)
+    assert env.family == "file" and env.name == "room" and env.camera.positions and env.camera.cell > 0
+    assert [light.kind for light in env.lights] == ["point", "directional"]  # ~23 m2 of free floor: one lamp
+    lowest = min(trimesh.transform_points(m.vertices, pose)[:, 1].min() for m, pose in env.meshes)
+    assert lowest == pytest.approx(-0.01, abs=0.012)  # the floor quad (1 cm up in the file) is now at y = 0
+    views = [
+        C.find_view(
+            env.camera, np.random.default_rng(k), lambda v: R.render_view(renderer, scene, v.pose, v.yfov, True)[1]
+        )
+        for k in range(3)
+    ]
+    for view in views:
+        eye = view.pose[:3, 3]
+        assert 1.3 <= eye[1] <= 2.2 and (np.abs(eye[[0, 2]]) < 3).all()
+        rgb, depth = R.render_view(renderer, scene, view.pose, view.yfov)
+        assert (depth > 0).all() and rgb.std() > 10  # inside the walls, textured, lit
+    (tmp_path / "room.yaml").write_text("scale: 0.01\nup: +z\nlights: none\ncamera: {area: [-1, 1, -1, 1]}\n")
+    bare, _ = S.file_environment(environment_file(mesh), renderer)
+    assert not bare.lights and bare.camera.area == (-1, 1, -1, 1) and not bare.camera.positions
 
 
 def test_textures_tile_and_reject_unknown():

@@ -38,3 +38,19 @@ def test_background_matches_a_fresh_render(renderer):
     assert meta == v.meta() and {"environment", "family", "camera"} <= set(meta)
     with pytest.raises(ValueError):
         ViewCache(0, 0, renderer)
+
+
+def test_file_environments_come_first_then_procedural(renderer, tmp_path):
+    from factories import write_textured_room
+
+    from synth.envfile import environment_file
+
+    spec = environment_file(write_textured_room(tmp_path / "den.glb"))
+    views = ViewCache(0, 2, renderer, [spec])
+    assert [views.view(v).env.family for v in range(3)][0] == "file"
+    assert views.view(0).env.name == "den" and views.view(3).env.name == "den"  # view % (1 file + 2 procedural)
+    assert views.view(1).env.name == ViewCache(0, 2, renderer).view(0).env.name  # procedural 0 after the file
+    only_files = ViewCache(0, 0, renderer, [spec])
+    assert only_files.view(5).env.name == "den"
+    with pytest.raises(ValueError, match="at least one environment"):
+        ViewCache(0, 0, renderer)
