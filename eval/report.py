@@ -118,6 +118,30 @@ def write_table_files(table: Table, out_dir: Path, stem: str) -> dict[str, Path]
     return files
 
 
+def gaps_html(rows: Sequence[Mapping[str, Any]]) -> str:
+    """The realism gap of each synthetic pool: rows as :meth:`synth.gap.GapReport.to_json` gives them (plus
+    ``method``); Fréchet distances with their 2.5–97.5 % range, and the ratio to the real-vs-real floor."""
+    head = (
+        "<tr><th>pool</th><th>images per side</th><th>synthetic vs real</th><th>real vs real (floor)</th>"
+        "<th>ratio</th></tr>"
+    )
+    body = []
+    for r in rows:
+        f = r["frechet"]
+        cells = [f"{f[k]['median']:.3f} [{f[k]['low']:.3f}, {f[k]['high']:.3f}]" for k in ("synthetic", "floor")]
+        ratio = f"{f['ratio']['median']:.2f} [{f['ratio']['low']:.2f}, {f['ratio']['high']:.2f}]"
+        body.append(
+            f"<tr><td>{html.escape(str(r['method']))}</td><td>{r['size']}</td><td>{cells[0]}</td>"
+            f"<td>{cells[1]}</td><td>{ratio}</td></tr>"
+        )
+    caption = (
+        "<caption>Fréchet distance between CNN embeddings (ImageNet EfficientNet-Lite0) of each synthetic pool and "
+        "half of the real training split, next to the other half's (the floor a perfect generator reaches); "
+        "median and 2.5–97.5 % range over random equal-size draws. Lower is closer to real.</caption>"
+    )
+    return f"<table>{caption}{head}{''.join(body)}</table>"
+
+
 def comparisons_html(rows: Sequence[Mapping[str, Any]]) -> str:
     """Paired comparisons: rows with ``test_set``, ``mixture``, ``baseline``, ``metric`` and a
     :meth:`eval.stats.PairedDelta.to_dict` (``value``, ``low``, ``high``, ``p_value``), in AP points."""
@@ -140,6 +164,7 @@ def write_study_report(
     rng: np.random.Generator,
     *,
     method_results: Sequence[Mapping[str, Any]] = (),
+    gaps: Sequence[Mapping[str, Any]] = (),
     comparisons: Sequence[Mapping[str, Any]] = (),
     samples: Mapping[str, Dataset] | None = None,
     run_columns: Sequence[str] = ("mixture", "seed", "test_set", "AP", "AP50"),
@@ -150,7 +175,8 @@ def write_study_report(
     thumbnails and ``out/report.html``; returns the page's path.
 
     ``results``: one mapping per (run, test set) as :func:`eval.tables.table2` takes (also the run list);
-    ``method_results``: Table 1 rows (with ``method``); ``comparisons``: see :func:`comparisons_html`;
+    ``method_results``: Table 1 rows (with ``method``); ``gaps``: see :func:`gaps_html` (also written as
+    ``out/tables/gap.json``); ``comparisons``: see :func:`comparisons_html`;
     ``samples``: datasets to show a few images of, by label; ``notice``: shown at the top of the page."""
     from eval.plots import plot_figure5
     from eval.tables import table1, table2
@@ -160,6 +186,8 @@ def write_study_report(
         t1 = table1(method_results)
         write_table_files(t1, out / "tables", "table1")
         sections.append(("Table 1 — Method 1 vs Method 2", table_html(t1)))
+    if gaps:
+        sections.append(("Realism gap of the synthetic pools", gaps_html(gaps)))
     if results:
         t2 = table2(results)
         write_table_files(t2, out / "tables", "table2")

@@ -135,6 +135,7 @@ class ReportConfig:
     bootstrap: int = 1000  # paired image-level bootstrap resamples per comparison (0 = no comparisons)
     baseline: Optional[str] = None  # mixture the others are compared with (default: largest real-only one)
     samples: bool = True  # sample thumbnails with boxes (8 per dataset) in report.html
+    gap_draws: int = 200  # realism gap of each synthetic pool (synth gap) over this many draws; 0 = none
 
 
 @dataclass(frozen=True)

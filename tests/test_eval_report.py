@@ -75,6 +75,17 @@ def test_write_study_report_writes_tables_figures_and_page(tmp_path):
         results,
         np.random.default_rng(0),
         method_results=methods,
+        gaps=[
+            {
+                "method": "method2",
+                "size": 200,
+                "frechet": {
+                    "synthetic": {"median": 0.853, "low": 0.836, "high": 0.875},
+                    "floor": {"median": 0.162, "low": 0.148, "high": 0.178},
+                    "ratio": {"median": 5.27, "low": 4.8, "high": 5.79},
+                },
+            }
+        ],
         comparisons=comparisons,
         samples={"common (stand-in)": ds},
         notice="STAND-IN DATA",
@@ -85,4 +96,5 @@ def test_write_study_report_writes_tables_figures_and_page(tmp_path):
     assert {p.name for p in (out / "figures").iterdir()} == {"figure5_AP.png", "figure5_AP50.png"}
     text = page.read_text()
     assert "STAND-IN DATA" in text and 'src="figures/figure5_AP.png"' in text and "<td>+5.0</td>" in text
+    assert "Realism gap" in text and "<td>0.853 [0.836, 0.875]</td>" in text and "<td>5.27 [4.80, 5.79]</td>" in text
     assert text.count('src="samples/common__stand_in/') == 6 and text.count("<td>R0_S1000</td>") >= 4

@@ -63,6 +63,9 @@ def test_report_files_exist_and_say_stand_in(full_run: tuple[Path, str]) -> None
     assert {p.name for p in (out / "figures").iterdir()} == {"figure5_AP.png", "figure5_AP50.png"}
     page = (out / "report.html").read_text()
     assert "STAND-IN DATA" in page and "Paired comparisons" in page and "R6_S6" in page
+    gaps = json.loads((out / "tables" / "gap.json").read_text())["gaps"]
+    assert [g["method"] for g in gaps] == ["method1", "method2"] and "Realism gap" in page
+    assert all(g["frechet"]["synthetic"]["median"] > 0 for g in gaps)
     assert "STAND-IN DATA" in printed and f"report: {out.resolve() / 'report.html'}" in printed
     assert "**Table 2" in printed and "common (stand-in) AP" in printed
     summary = json.loads((out / "experiment.json").read_text())
