@@ -3,7 +3,8 @@
 Per sprite, in order: the ``over`` layer (smoke) is alpha-blended and the background behind the flame dimmed by
 its luminous coverage (``opacity`` x emission brightness: a bright flame outshines a bright wall, as a camera
 exposed for the fire sees it), then the emission is added (``add``) or screened (``screen``), plus a soft glow
-(blurred emission). A flame pixel stays visible unless a later sprite is
+(blurred emission) and a warm cast: the surroundings lit in the flame's mean colour with a Gaussian falloff
+around its base (light on the floor and walls; never part of the flame's mask or box). A flame pixel stays visible unless a later sprite is
 opaque there (its smoke alpha >= 0.5 or its own flame mask); a smoke pixel (see ``synth.sprites.SMOKE_ALPHA``)
 likewise, and also where a later sprite has smoke (so smoke masks stay disjoint). Boxes come from these final
 masks.
@@ -81,6 +82,27 @@ def _glow(img: NDArray[np.float32], emission: NDArray[np.float32], p: Placement,
         img[c[0], c[1]] = _add_light(img[c[0], c[1]], blurred[c[2], c[3]], p.blend)
 
 
+def _cast(img: NDArray[np.float32], emission: NDArray[np.float32], mask: NDArray[np.bool_], p: Placement) -> None:
+    """Multiply the image by ``1 + strength * falloff * colour``, in place: ``colour`` the flame's mean emission
+    (scaled to max 1), ``falloff`` a Gaussian of 1.2 x the sprite's larger side around the base of the flame,
+    ``strength`` 0.8 x ``glow``."""
+    if not mask.any():
+        return
+    colour = emission[mask].mean(axis=0)
+    colour = colour / max(float(colour.max()), 1e-6)
+    h, w = img.shape[:2]
+    sigma = 1.2 * max(p.width, p.height)
+    cx, cy = p.x + p.width / 2, p.y + 0.85 * p.height
+    x0, x1 = int(max(cx - 3 * sigma, 0)), int(min(cx + 3 * sigma + 1, w))
+    y0, y1 = int(max(cy - 3 * sigma, 0)), int(min(cy + 3 * sigma + 1, h))
+    if x0 >= x1 or y0 >= y1:
+        return
+    gx = np.exp(-0.5 * ((np.arange(x0, x1, dtype=np.float32) - cx) / sigma) ** 2)
+    gy = np.exp(-0.5 * ((np.arange(y0, y1, dtype=np.float32) - cy) / sigma) ** 2)
+    light = 1.0 + (0.8 * p.glow) * (gy[:, None, None] * gx[None, :, None]) * colour.astype(np.float32)
+    img[y0:y1, x0:x1] = np.minimum(img[y0:y1, x0:x1] * light, 1.0)
+
+
 @dataclass(frozen=True)
 class Composited:
     """The composite: (H, W, 3) uint8 image and, per placement, its final visible (H, W) bool flame and smoke masks
@@ -109,6 +131,7 @@ def composite(background: NDArray[np.uint8], placements: Sequence[Placement]) ->
             img[ys, xs] = img[ys, xs] * (1.0 - cover) + over[sy, sx, :3] * a
             img[ys, xs] = _add_light(img[ys, xs], light, p.blend)
             if p.glow > 0:
+                _cast(img, emission, mask, p)
                 _glow(img, emission, p, c)
             full[ys, xs], full_smoke[ys, xs] = mask[sy, sx], smoke_mask[sy, sx]
             opaque = (over[sy, sx, 3] >= 0.5) | mask[sy, sx]

@@ -31,7 +31,7 @@ from numpy.typing import NDArray
 
 from curate.boxes import clip_xyxy, mask_to_xywh, points_to_xyxy, xyxy_to_xywh
 from synth import render
-from synth.effects import Effects, apply_effects, sample_effects
+from synth.effects import CameraConfig, Effects, apply_effects, expose, sample_effects
 from synth.generate import generate
 from synth.library import FlameLibraryConfig
 from synth.output import boxes_from_masks
@@ -66,6 +66,7 @@ class Method1Config:
     min_box_px: int = 4  # boxes smaller than this (either side) are not annotated
     effects: bool = True  # camera effects (white balance, blur, noise, JPEG) as in Method 2
     smoke_class: bool = False
+    camera: CameraConfig = field(default_factory=CameraConfig)  # probabilities of the stronger camera effects
     flames: FlameLibraryConfig = field(default_factory=FlameLibraryConfig)
 
     def __post_init__(self) -> None:
@@ -103,6 +104,9 @@ class Plane:
             "width_m": round(self.width, 6),
             "height_m": round(self.height, 6),
         }
+
+
+FLAME_LIGHT = 6.0  # point-light intensity per metre of flame height at full brightness
 
 
 def _stand(cfg: Method1Config, view: View, k: NDArray[np.float64], rng: np.random.Generator):
@@ -157,10 +161,13 @@ def render_planes(renderer: render.Renderer, view: View, planes: Sequence[Plane]
     (and only it) occludes it; its depth is valid where it is covered."""
     pr = renderer.pyrender
     scene, cam = view.scene, view.camera
-    nodes = []
+    nodes, lights = [], []
     for p in planes:
         quad = render.textured_quad(pr, p.width, p.height, render.rgba_material(pr, flatten_rgba(p.sprite)))
         nodes.append(scene.add(quad, pose=p.pose))
+        colour, intensity = flame_light(p)
+        at = p.pose @ translate(0.0, 0.4 * p.height, 0.1)  # inside the flame, just in front of its plane
+        lights.append(scene.add(pr.PointLight(color=colour, intensity=intensity), pose=at))
     try:
         with render.camera_at(renderer, scene, cam.pose, cam.yfov):
             rgb, _ = renderer.color_depth(scene)
@@ -171,9 +178,20 @@ def render_planes(renderer: render.Renderer, view: View, planes: Sequence[Plane]
                 ids, depth = renderer.segment_depth(scene, {node: 1})
                 passes.append((ids == 1, depth))
     finally:
-        for node in nodes:
+        for node in nodes + lights:
             scene.remove_node(node)
     return rgb, passes
+
+
+def flame_light(plane: Plane) -> tuple[NDArray[np.float64], float]:
+    """The point light a flame casts on its surroundings: (RGB colour with max 1, intensity). Colour is the
+    sprite's mean emission over its flame mask; intensity grows with the flame's height and with this frame's
+    brightness, so a sequence's frames flicker."""
+    sprite = plane.sprite
+    emission = sprite.emission[sprite.mask] if sprite.mask.any() else sprite.emission.reshape(-1, 3)
+    mean = emission.astype(np.float64).mean(axis=0) / 255.0
+    colour = mean / max(float(mean.max()), 1e-6)
+    return colour, float(FLAME_LIGHT * plane.height * mean.max())
 
 
 def plane_layers(plane: Plane, corners_uv: NDArray[np.float64], width: int, height: int) -> NDArray[np.bool_]:
@@ -251,8 +269,10 @@ def make_image(cfg: Method1Config, i: int, library: Sequence[SpriteSequence], vi
     masks = visible_masks(layers, passes)
     paper = [paper_box(c, cfg.width, cfg.height) for c in corners]
     kept, fields = annotate(cfg, planes, paper, masks)
-    effects = sample_effects(rng) if cfg.effects else Effects()
-    image = apply_effects(rgb, effects)
+    effects = sample_effects(rng, cfg.camera) if cfg.effects else Effects()
+    drawn = [cover & layer[..., 1] for (cover, _), layer in zip(passes, layers)]  # visible opaque flame parts
+    flames_drawn = np.logical_or.reduce(drawn) if drawn else None
+    image = apply_effects(expose(rgb, effects, flames_drawn), effects)
     meta: dict[str, Any] = {**view.meta(), "flames": fields["flames"], "box_mode": cfg.box_mode}
     meta["effects"] = effects.to_json()
     record = {"width": cfg.width, "height": cfg.height, "boxes": fields["boxes"], "box_modes": fields["box_modes"]}

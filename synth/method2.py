@@ -16,7 +16,7 @@ from numpy.typing import NDArray
 
 from synth import render
 from synth.composite import BLEND_MODES, Placement, composite
-from synth.effects import apply_effects, sample_effects
+from synth.effects import CameraConfig, apply_effects, expose, sample_effects
 from synth.generate import generate
 from synth.library import FlameLibraryConfig
 from synth.output import boxes_from_masks
@@ -43,6 +43,7 @@ class Method2Config:
     flame_height_m: tuple[float, float] = (0.3, 2.5)  # flame height in the scene, metres
     min_box_px: int = 4  # visible flames smaller than this (either side) are dropped
     smoke_class: bool = False
+    camera: CameraConfig = field(default_factory=CameraConfig)  # probabilities of the stronger camera effects
     flames: FlameLibraryConfig = field(default_factory=FlameLibraryConfig)
 
     def __post_init__(self) -> None:
@@ -89,8 +90,8 @@ def make_image(cfg: Method2Config, i: int, library: Sequence[SpriteSequence], vi
     background, depth, view_meta = views.background(i // cfg.images_per_view)
     rng = np.random.default_rng([cfg.seed, 2, i])
     planned = plan_flames(cfg, library, depth, view_meta["camera"]["yfov"], rng)
-    result = composite(background, [p for p, _ in planned])
-    effects = sample_effects(rng)
+    effects = sample_effects(rng, cfg.camera)
+    result = composite(expose(background, effects), [p for p, _ in planned])
     image = apply_effects(result.image, effects)
     kept, boxes, index = boxes_from_masks(result.flames, cfg.min_box_px)
     flames = [

@@ -18,6 +18,10 @@ pyrender traps handled here, each with a test in ``tests/test_synth_render.py``:
    multiple of 4 shears the image into diagonal colour stripes. Textures made here are RGBA (always aligned).
 7. EGL displays are per-device singletons: pyrender's ``delete`` calls ``eglTerminate``, which breaks every other
    open renderer of the process (``EGL_BAD_DISPLAY``). :meth:`Renderer.close` terminates only with the last one.
+8. ``Scene.light_nodes`` is a set: lights reach the shader in hash (memory address) order, and with three or
+   more lights the float sum of their contributions differs between runs. :func:`import_pyrender` makes it a
+   list sorted by each light's type, pose, colour and intensity (Method 1 adds and removes flame lights image
+   after image; ``test_same_seed_gives_byte_identical_output_and_resume_matches`` fails without this).
 
 Coordinates: world +Y is up; a camera looks down its local -Z with +Y up (OpenGL / pyrender convention).
 Images are (H, W, 3) uint8 RGB, row 0 at the top; depth is (H, W) float32 metres along the view axis, 0 where
@@ -87,7 +91,26 @@ def import_pyrender(platform: str | None = None) -> ModuleType:
     os.environ["PYOPENGL_PLATFORM"] = name
     import pyrender
 
+    if not getattr(pyrender.Scene, "_lights_sorted", False):  # trap 8
+        pyrender.Scene.light_nodes = property(_sorted_light_nodes)
+        pyrender.Scene._lights_sorted = True
     return pyrender
+
+
+def _light_key(node: Any) -> tuple:
+    light = node.light
+    return (
+        type(light).__name__,
+        tuple(np.round(np.asarray(node.matrix, float), 9).ravel()),
+        tuple(np.round(np.asarray(light.color, float), 9)),
+        round(float(light.intensity), 9),
+    )
+
+
+def _sorted_light_nodes(scene: Any) -> list[Any]:
+    """Every light node of ``scene`` in a run-independent order (trap 8)."""
+    nodes = scene.point_light_nodes | scene.spot_light_nodes | scene.directional_light_nodes
+    return sorted(nodes, key=_light_key)
 
 
 def _stable_program_cache_class(pyrender: ModuleType) -> type:

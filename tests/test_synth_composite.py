@@ -67,3 +67,16 @@ def test_bright_flames_outshine_bright_walls():
     assert np.abs(lit[5, 5].astype(int) - (255, 150, 30)).max() <= 1  # the flame's colour, not white
     washed = composite(white, [Placement(sprite, 0, 0, 10, 10, "screen", glow=0.0, opacity=0.0)]).image
     assert washed[5, 5].min() == 255
+
+
+def test_a_flame_casts_warm_light_around_its_base_outside_its_mask():
+    sprite = _flame(value=0)
+    sprite.emission[:] = (255, 150, 30)
+    grey = np.full((80, 80, 3), 100, np.uint8)
+    p = Placement(sprite, 35, 30, 10, 10, "screen", glow=0.5, opacity=0.8)
+    lit = composite(grey, [p])
+    dark = composite(grey, [Placement(sprite, 35, 30, 10, 10, "screen", glow=0.0, opacity=0.8)])
+    below = lit.image[50, 40].astype(int)  # on the floor under the flame, outside the sprite and its glow ring
+    assert below[0] > 110 and below[0] > below[1] > below[2] >= 100  # warmer, red most
+    assert tuple(lit.image[2, 2]) == (100, 100, 100)  # far away: untouched
+    assert np.array_equal(lit.flames[0], dark.flames[0])  # the light is never part of the box
