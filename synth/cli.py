@@ -84,7 +84,8 @@ def cmd_method2(args: argparse.Namespace) -> int:
     from synth.library import build_library
     from synth.method2 import Method2Config, run_method2
 
-    cfg = Method2Config(**_dataset_config(args))
+    photos = {"backgrounds": tuple(args.backgrounds or ()), "photo_share": args.photo_share}
+    cfg = Method2Config(**_dataset_config(args), **photos)
     result = run_method2(cfg, build_library(cfg.flames), args.out, overwrite=args.overwrite)
     print(f"wrote {args.out}: {args.n} images ({', '.join(result.files.values())})")
     return 0
@@ -207,11 +208,18 @@ def _register_method2(sub: argparse._SubParsersAction) -> None:
         help="Method 2: composite flames on rendered views (exact boxes)",
         formatter_class=FMT,
         description="Render environment views once and composite flame sprites on them; boxes come\n"
-        "from each flame's final visible mask. Resumes an interrupted run.\n\n"
+        "from each flame's final visible mask. Backgrounds: procedural scenes, 3D files (--environments)\n"
+        "and/or your fire-free photos (--backgrounds). Resumes an interrupted run.\n\n"
         "example:\n  fuzzyfire synth method2 --n 1000 --seed 0 --out out/m2 --size 640x480 --scenes 48\n"
+        "  fuzzyfire synth method2 --n 200 --out out/m2-rooms --scenes 0 --environments configs/scenes\n"
+        "  fuzzyfire synth method2 --n 200 --out out/m2-photos --scenes 0 --backgrounds my/negatives\n"
         "  fuzzyfire synth audit out/m2 --json",
     )
     _dataset_arguments(p)
+    p.add_argument("--backgrounds", type=Path, nargs="+", metavar="PATH", help="fire-free photos (files or folders)")
+    p.add_argument(
+        "--photo-share", type=float, default=0.5, help="share of views on a photo when 3D scenes are also used (0.5)"
+    )
     p.set_defaults(func=cmd_method2)
 
 

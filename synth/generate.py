@@ -4,6 +4,7 @@
 
 from __future__ import annotations
 
+import sys
 from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
@@ -13,6 +14,7 @@ from curate.writer import WriteResult
 from synth import render
 from synth.envfile import find_environment_files
 from synth.output import Staging, finish
+from synth.photos import PhotoBackgrounds, list_photos
 from synth.schema import to_json
 from synth.sprites import SpriteSequence
 from synth.views import ViewCache
@@ -40,8 +42,12 @@ def generate(
     todo = [i for i in range(cfg.n) if not staging.done(i)]
     with render.Renderer(cfg.width, cfg.height, platform) as renderer:
         files = find_environment_files(cfg.environments) if cfg.environments else []
-        views = ViewCache(cfg.seed, cfg.scenes, renderer, files)
+        backgrounds = getattr(cfg, "backgrounds", ())  # Method 2 only
+        photos = PhotoBackgrounds(list_photos(backgrounds), cfg.width, cfg.height, cfg.seed) if backgrounds else None
+        views = ViewCache(cfg.seed, cfg.scenes, renderer, files, photos, getattr(cfg, "photo_share", 0.0))
         for i in progress(todo, total=len(todo), desc=f"{method} images"):
             staging.save(i, *make_image(cfg, i, library, views))
+    for path, reason in (photos.problems if photos else {}).items():
+        print(f"{path}: skipped background photo ({reason})", file=sys.stderr)
     args = {**to_json(cfg), "flame_sequences": [s.name for s in library]}
     return finish(staging, out, cfg.n, f"synth:{method}", f"synth {method}", args, cfg.smoke_class, overwrite)

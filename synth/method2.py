@@ -37,6 +37,8 @@ class Method2Config:
     scenes: int = 48  # procedural environments (0 = only the files of ``environments``)
     environments: tuple[Path, ...] = ()  # mesh files / folders / sidecars (synth.envfile); view v shows
     # environment v % (files + scenes), the files first
+    backgrounds: tuple[Path, ...] = ()  # fire-free photos (files / folders) composited on instead of renders
+    photo_share: float = 0.5  # fraction of views on a photo when there are also 3D environments
     images_per_view: int = 8  # images composited on each rendered view
     max_flames: int = 3  # flames per image: uniform in 1..max_flames
     negatives: float = 0.1  # fraction of images without flames
@@ -49,8 +51,10 @@ class Method2Config:
     def __post_init__(self) -> None:
         if self.n < 1 or self.scenes < 0 or self.images_per_view < 1 or self.width < 16 or self.height < 16:
             raise ValueError(f"invalid Method 2 config: {self}")
-        if self.scenes == 0 and not self.environments:
-            raise ValueError("scenes is 0 and no environments are given: nothing to render")
+        if self.scenes == 0 and not self.environments and not self.backgrounds:
+            raise ValueError("scenes is 0 and no environments or backgrounds are given: nothing to composite on")
+        if not 0.0 <= self.photo_share <= 1.0:
+            raise ValueError(f"photo_share must be in 0..1, got {self.photo_share}")
         if self.max_flames < 1 or not 0.0 <= self.negatives <= 1.0 or self.min_box_px < 1:
             raise ValueError(f"invalid Method 2 config: {self}")
         check_range("flame_height_m", self.flame_height_m, 0.01)

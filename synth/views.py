@@ -16,6 +16,7 @@ from numpy.typing import NDArray
 
 from synth import camera, render, scenes
 from synth.envfile import EnvironmentFile
+from synth.photos import PhotoBackgrounds
 
 
 @dataclass(frozen=True)
@@ -36,11 +37,18 @@ class ViewCache:
     """Builds each environment's pyrender scene once and remembers the last view (and background) made."""
 
     def __init__(
-        self, seed: int, scenes_count: int, renderer: render.Renderer, files: Sequence[EnvironmentFile] = ()
+        self,
+        seed: int,
+        scenes_count: int,
+        renderer: render.Renderer,
+        files: Sequence[EnvironmentFile] = (),
+        photos: PhotoBackgrounds | None = None,
+        photo_share: float = 0.5,
     ) -> None:
-        if scenes_count + len(files) < 1:
+        if scenes_count + len(files) < 1 and photos is None:
             raise ValueError("at least one environment is needed")
         self.seed, self.scenes, self.renderer, self.files = seed, scenes_count, renderer, tuple(files)
+        self.photos, self.photo_share = photos, photo_share
         self._scenes: dict[int, tuple[scenes.Environment, Any]] = {}
         self._view: View | None = None
         self._view_index = -1
@@ -72,10 +80,19 @@ class ViewCache:
         return self._view
 
     def background(self, view_index: int) -> tuple[NDArray[np.uint8], NDArray[np.float32], dict]:
-        """The rendered view: ((H, W, 3) uint8 RGB, (H, W) float32 depth, metadata), cached for reuse."""
+        """The background of view ``view_index``: ((H, W, 3) uint8 RGB, (H, W) float32 depth, metadata), cached
+        for reuse. With photos it is a photo (:mod:`synth.photos`) when there are no 3D environments, else with
+        probability ``photo_share`` (drawn from ``default_rng([seed, 6, view_index])``); otherwise a render."""
         if self._background and self._background[0] == view_index:
             return self._background[1]
-        v = self.view(view_index)
-        rgb, depth = render.render_view(self.renderer, v.scene, v.camera.pose, v.camera.yfov)
-        self._background = (view_index, (rgb, depth, v.meta()))
-        return self._background[1]
+        if self.photos is not None and (
+            self.scenes + len(self.files) == 0
+            or np.random.default_rng([self.seed, 6, view_index]).random() < self.photo_share
+        ):
+            made = self.photos.background(view_index)
+        else:
+            v = self.view(view_index)
+            rgb, depth = render.render_view(self.renderer, v.scene, v.camera.pose, v.camera.yfov)
+            made = (rgb, depth, v.meta())
+        self._background = (view_index, made)
+        return made
