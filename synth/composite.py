@@ -36,6 +36,7 @@ class Placement:
     blend: str = "screen"
     glow: float = 0.3
     opacity: float = 0.8  # luminous coverage: the background behind the flame dims by opacity x its brightness
+    cast: bool = True  # light the surroundings warm (with ``glow`` > 0)
 
     def __post_init__(self) -> None:
         if self.blend not in BLEND_MODES:
@@ -131,7 +132,8 @@ def composite(background: NDArray[np.uint8], placements: Sequence[Placement]) ->
             img[ys, xs] = img[ys, xs] * (1.0 - cover) + over[sy, sx, :3] * a
             img[ys, xs] = _add_light(img[ys, xs], light, p.blend)
             if p.glow > 0:
-                _cast(img, emission, mask, p)
+                if p.cast:
+                    _cast(img, emission, mask, p)
                 _glow(img, emission, p, c)
             full[ys, xs], full_smoke[ys, xs] = mask[sy, sx], smoke_mask[sy, sx]
             opaque = (over[sy, sx, 3] >= 0.5) | mask[sy, sx]

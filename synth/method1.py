@@ -66,6 +66,7 @@ class Method1Config:
     min_box_px: int = 4  # boxes smaller than this (either side) are not annotated
     effects: bool = True  # camera effects (white balance, blur, noise, JPEG) as in Method 2
     smoke_class: bool = False
+    light: bool = True  # flames light their surroundings (a point light per flame)
     camera: CameraConfig = field(default_factory=CameraConfig)  # probabilities of the stronger camera effects
     flames: FlameLibraryConfig = field(default_factory=FlameLibraryConfig)
 
@@ -155,19 +156,21 @@ def place_planes(cfg: Method1Config, library: Sequence[SpriteSequence], view: Vi
     return planes
 
 
-def render_planes(renderer: render.Renderer, view: View, planes: Sequence[Plane]):
+def render_planes(renderer: render.Renderer, view: View, planes: Sequence[Plane], light: bool = True):
     """Render the view with the planes: ((H, W, 3) uint8 RGB, per plane ((H, W) bool coverage, (H, W) float32
     depth)). A plane's coverage comes from a segmentation pass with the other planes hidden, so scene geometry
-    (and only it) occludes it; its depth is valid where it is covered."""
+    (and only it) occludes it; its depth is valid where it is covered. With ``light`` each plane is also a point
+    light (:func:`flame_light`)."""
     pr = renderer.pyrender
     scene, cam = view.scene, view.camera
     nodes, lights = [], []
     for p in planes:
         quad = render.textured_quad(pr, p.width, p.height, render.rgba_material(pr, flatten_rgba(p.sprite)))
         nodes.append(scene.add(quad, pose=p.pose))
-        colour, intensity = flame_light(p)
-        at = p.pose @ translate(0.0, 0.4 * p.height, 0.1)  # inside the flame, just in front of its plane
-        lights.append(scene.add(pr.PointLight(color=colour, intensity=intensity), pose=at))
+        if light:
+            colour, intensity = flame_light(p)
+            at = p.pose @ translate(0.0, 0.4 * p.height, 0.1)  # inside the flame, just in front of its plane
+            lights.append(scene.add(pr.PointLight(color=colour, intensity=intensity), pose=at))
     try:
         with render.camera_at(renderer, scene, cam.pose, cam.yfov):
             rgb, _ = renderer.color_depth(scene)
@@ -262,7 +265,7 @@ def make_image(cfg: Method1Config, i: int, library: Sequence[SpriteSequence], vi
     view = views.view(i // cfg.images_per_view)
     rng = np.random.default_rng([cfg.seed, 3, i])
     planes = place_planes(cfg, library, view, rng)
-    rgb, passes = render_planes(views.renderer, view, planes)
+    rgb, passes = render_planes(views.renderer, view, planes, cfg.light)
     k = render.intrinsics(view.camera.yfov, cfg.width, cfg.height)
     corners = [render.project(p.corners(), view.camera.pose, k)[:, :2] for p in planes]
     layers = [plane_layers(p, c, cfg.width, cfg.height) for p, c in zip(planes, corners)]

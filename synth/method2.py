@@ -45,6 +45,7 @@ class Method2Config:
     flame_height_m: tuple[float, float] = (0.3, 2.5)  # flame height in the scene, metres
     min_box_px: int = 4  # visible flames smaller than this (either side) are dropped
     smoke_class: bool = False
+    light: bool = True  # flames light their surroundings (a warm cast around each flame)
     camera: CameraConfig = field(default_factory=CameraConfig)  # probabilities of the stronger camera effects
     flames: FlameLibraryConfig = field(default_factory=FlameLibraryConfig)
 
@@ -83,7 +84,7 @@ def plan_flames(
         wpx = max(int(round(hpx * sw / sh)), 2)
         blend = str(rng.choice(BLEND_MODES))
         glow, opacity = float(rng.uniform(0.1, 0.5)), float(rng.uniform(0.5, 0.95))
-        place = Placement(sprite, bx - wpx // 2, by - hpx, wpx, hpx, blend, glow, opacity)
+        place = Placement(sprite, bx - wpx // 2, by - hpx, wpx, hpx, blend, glow, opacity, cfg.light)
         out.append((place, f"{seq.name}/{frame}"))
     return out
 

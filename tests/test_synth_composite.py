@@ -80,3 +80,5 @@ def test_a_flame_casts_warm_light_around_its_base_outside_its_mask():
     assert below[0] > 110 and below[0] > below[1] > below[2] >= 100  # warmer, red most
     assert tuple(lit.image[2, 2]) == (100, 100, 100)  # far away: untouched
     assert np.array_equal(lit.flames[0], dark.flames[0])  # the light is never part of the box
+    unlit = composite(grey, [Placement(sprite, 35, 30, 10, 10, "screen", glow=0.5, opacity=0.8, cast=False)])
+    assert tuple(unlit.image[50, 40]) == (100, 100, 100)  # light: false
