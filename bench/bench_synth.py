@@ -9,7 +9,10 @@
   environment's pyrender scene once built (48 here; Method 2 builds its last one at ~38 % of a 1,000-image run,
   Method 1 at ~5 %), so growth before that is the scene cache; a leak shows as growth in the second half.
 
-Usage: ``python bench/bench_synth.py [--n 1000] [--only flames,composite,method2,method1]``.
+With ``--environments PATH`` (e.g. ``configs/scenes``) the Method runs use those 3D files instead of the 48
+procedural environments (the issue's file-scene targets: Method 2 <= 3 min, Method 1 <= 6 min, RSS flat).
+
+Usage: ``python bench/bench_synth.py [--n 1000] [--only flames,composite,method2,method1] [--environments P]``.
 Figures depend on the machine and on other load: take them on an otherwise idle machine.
 """
 
@@ -102,7 +105,10 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--n", type=int, default=1000, help="images per Method run")
     ap.add_argument("--only", default="flames,composite,method2,method1")
+    ap.add_argument("--environments", type=Path, help="3D files / folders / sidecars instead of procedural scenes")
     args = ap.parse_args()
+    scenes = {"scenes": 0, "environments": (args.environments,)} if args.environments else {"scenes": 48}
+    tag = "_files" if args.environments else ""
     only = set(args.only.split(","))
     if "flames" in only:
         bench_flames()
@@ -112,11 +118,11 @@ def main() -> None:
     if "composite" in only:
         bench_composite(library)
     if "method2" in only:
-        cfg2 = Method2Config(n=args.n, width=640, height=480, scenes=48)
-        bench_run("method2", lambda out: run_method2(cfg2, library, out), args.n)
+        cfg2 = Method2Config(n=args.n, width=640, height=480, **scenes)
+        bench_run(f"method2{tag}", lambda out: run_method2(cfg2, library, out), args.n)
     if "method1" in only:
-        cfg1 = Method1Config(n=args.n, width=640, height=480, scenes=48)
-        bench_run("method1", lambda out: run_method1(cfg1, library, out), args.n)
+        cfg1 = Method1Config(n=args.n, width=640, height=480, **scenes)
+        bench_run(f"method1{tag}", lambda out: run_method1(cfg1, library, out), args.n)
 
 
 if __name__ == "__main__":
