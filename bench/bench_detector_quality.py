@@ -9,7 +9,8 @@ pipeline (cached by config hash): rerunning resumes. Skips cleanly without ../sh
 
 Lines printed (AP in %, mean and std over seeds): ``detector_<name>_<test>_AP50_mean``, ``..._AP50_std``,
 ``..._AP_mean``, ``..._AP_std``, ``detector_<name>_minutes_per_run``, ``detector_<name>_train_images_per_s``,
-``detector_<name>_epochs``, ``detector_pretrained_peak_rss`` (when the pretrained runs trained here).
+``detector_<name>_epochs``, ``detector_<name>_reused_runs`` (runs finished before, e.g. by an interrupted
+bench), ``detector_pretrained_peak_rss`` (when the pretrained runs trained here).
 
 .venv/bin/python bench/bench_detector_quality.py [--out out/bench-detector-quality] [--seeds 0,1,2]
 """
@@ -47,6 +48,7 @@ def _run(cfg, out: Path) -> list[dict]:
     from fuzzyfire.executors import LocalExecutor
     from fuzzyfire.experiment import run_experiment
 
+    start = time.time()
     with contextlib.redirect_stdout(sys.stderr):
         result = run_experiment(cfg, CONFIG.parent, out, LocalExecutor())
     if result.failed:
@@ -57,7 +59,8 @@ def _run(cfg, out: Path) -> list[dict]:
         results = json.loads((folder / "results.json").read_text())
         timing = json.loads((folder / "timing.json").read_text())
         metrics = [json.loads(line) for line in (folder / "train" / "metrics.jsonl").read_text().splitlines()]
-        runs.append({**results, "train_s": timing["train_s"], "epochs": len(metrics),
+        reused = (folder / "results.json").stat().st_mtime < start  # finished before this bench started
+        runs.append({**results, "train_s": timing["train_s"], "epochs": len(metrics), "reused": reused,
                      "images_per_s": float(np.mean([m["train_images_per_s"] for m in metrics]))})  # fmt: skip
     return runs
 
@@ -88,6 +91,9 @@ def _print(name: str, runs: list[dict]) -> None:
     print(f"detector_{name}_minutes_per_run: {np.mean([r['train_s'] for r in runs]) / 60:.1f} min (training)")
     print(f"detector_{name}_train_images_per_s: {np.mean([r['images_per_s'] for r in runs]):.1f} img/s")
     print(f"detector_{name}_epochs: {runs[0]['epochs']} epochs")
+    reused = sum(r["reused"] for r in runs)
+    if reused:
+        print(f"detector_{name}_reused_runs: {reused} runs (finished before this bench; times are from then)")
 
 
 def main() -> int:
@@ -101,8 +107,9 @@ def main() -> int:
     seeds = [int(s) for s in args.seeds.split(",")]
     pretrained = _run(_config(seeds, []), args.out / "pretrained")
     _print("pretrained", pretrained)
-    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024**2
-    print(f"detector_pretrained_peak_rss: {peak:.1f} GB (this process, views cached in RAM)")
+    if not all(r["reused"] for r in pretrained):
+        peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024**2
+        print(f"detector_pretrained_peak_rss: {peak:.1f} GB (this process, views cached in RAM)")
     budget = float(np.mean([r["train_s"] for r in pretrained]))
     scratch_overrides = ["train.model.backbone=cspdarknet", "train.model.freeze=0"]
     epochs = _scratch_epochs(budget, _config(seeds[:1], scratch_overrides), args.out / "scratch")
