@@ -44,7 +44,8 @@ def generate(
         files = find_environment_files(cfg.environments) if cfg.environments else []
         backgrounds = getattr(cfg, "backgrounds", ())  # Method 2 only
         photos = PhotoBackgrounds(list_photos(backgrounds), cfg.width, cfg.height, cfg.seed) if backgrounds else None
-        views = ViewCache(cfg.seed, cfg.scenes, renderer, files, photos, getattr(cfg, "photo_share", 0.0))
+        share, count = getattr(cfg, "photo_share", 0.0), -(-cfg.n // cfg.images_per_view)  # views of the run
+        views = ViewCache(cfg.seed, cfg.scenes, renderer, files, photos, share, count)
         for i in progress(todo, total=len(todo), desc=f"{method} images"):
             staging.save(i, *make_image(cfg, i, library, views))
     for path, reason in (photos.problems if photos else {}).items():

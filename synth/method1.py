@@ -53,8 +53,8 @@ class Method1Config:
     width: int = 640
     height: int = 480
     scenes: int = 48  # procedural environments (0 = only the files of ``environments``)
-    environments: tuple[Path, ...] = ()  # mesh files / folders / sidecars (synth.envfile); view v shows
-    # environment v % (files + scenes), the files first
+    environments: tuple[Path, ...] = ()  # mesh files / folders / sidecars (synth.envfile), rendered first; with
+    # files the views go to the environments in consecutive blocks (synth.views)
     images_per_view: int = 1  # images (different planes) per camera view
     max_flames: int = 3  # planes per image: uniform in 1..max_flames
     negatives: float = 0.1  # fraction of images without flames

@@ -35,8 +35,8 @@ class Method2Config:
     width: int = 640
     height: int = 480
     scenes: int = 48  # procedural environments (0 = only the files of ``environments``)
-    environments: tuple[Path, ...] = ()  # mesh files / folders / sidecars (synth.envfile); view v shows
-    # environment v % (files + scenes), the files first
+    environments: tuple[Path, ...] = ()  # mesh files / folders / sidecars (synth.envfile), rendered first; with
+    # files the views go to the environments in consecutive blocks (synth.views)
     backgrounds: tuple[Path, ...] = ()  # fire-free photos (files / folders) composited on instead of renders
     photo_share: float = 0.5  # fraction of views on a photo when there are also 3D environments
     images_per_view: int = 8  # images composited on each rendered view

@@ -1,7 +1,9 @@
 """Camera views of the procedural environments, shared by Method 1 and Method 2.
 
-View ``v`` of a run seeded ``seed`` looks at environment ``v % (files + scenes)`` (the mesh files first, then
-the procedural environments) from a camera drawn by the environment's camera rules with ``default_rng([seed, 1, v])`` (blocked views rejected), so a view can be
+View ``v`` of a run seeded ``seed`` looks at environment ``v % scenes`` when all environments are procedural.
+With mesh files (first, then the procedural environments) the ``views`` views of a run go to the environments in
+equal consecutive blocks (``v * environments // views``), so each file scene is loaded, searched and kept in
+memory once, then released. The camera is drawn by the environment's camera rules with ``default_rng([seed, 1, v])`` (blocked views rejected), so a view can be
 (re)made alone: runs resume and are byte-reproducible.
 """
 
@@ -44,19 +46,33 @@ class ViewCache:
         files: Sequence[EnvironmentFile] = (),
         photos: PhotoBackgrounds | None = None,
         photo_share: float = 0.5,
+        views: int = 0,
     ) -> None:
         if scenes_count + len(files) < 1 and photos is None:
             raise ValueError("at least one environment is needed")
         self.seed, self.scenes, self.renderer, self.files = seed, scenes_count, renderer, tuple(files)
         self.photos, self.photo_share = photos, photo_share
+        if self.files and views < 1:
+            raise ValueError("with mesh files the number of views of the run is needed (views >= 1)")
+        self.views = views
         self._scenes: dict[int, tuple[scenes.Environment, Any]] = {}
         self._view: View | None = None
         self._view_index = -1
         self._background: tuple[int, Any] | None = None
 
+    def environment_index(self, view_index: int) -> int:
+        """The environment view ``view_index`` looks at (module docstring)."""
+        total = len(self.files) + self.scenes
+        if not self.files:
+            return view_index % total
+        return min(view_index * total // self.views, total - 1)
+
     def environment(self, env_index: int) -> tuple[scenes.Environment, Any]:
+        """Environment ``env_index`` and its pyrender scene; a file scene replaces the previous one in memory."""
         if env_index not in self._scenes:
             if env_index < len(self.files):
+                for old in [k for k in self._scenes if k < len(self.files)]:
+                    del self._scenes[old]
                 self._scenes[env_index] = scenes.file_environment(self.files[env_index], self.renderer)
             else:
                 env = scenes.build_environment(env_index - len(self.files), self.seed)
@@ -67,7 +83,7 @@ class ViewCache:
         """View ``view_index`` (see the module docstring); its depth is the accepted depth-only render."""
         if self._view is not None and self._view_index == view_index:
             return self._view
-        env, scene = self.environment(view_index % (len(self.files) + self.scenes))
+        env, scene = self.environment(self.environment_index(view_index))
         rng = np.random.default_rng([self.seed, 1, view_index])
         depths: list[NDArray[np.float32]] = []
 

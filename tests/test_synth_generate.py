@@ -20,6 +20,7 @@ class TinyConfig:
     seed: int = 0
     scenes: int = 1
     environments: tuple = ()
+    images_per_view: int = 1
     width: int = 32
     height: int = 24
     smoke_class: bool = False

@@ -40,17 +40,22 @@ def test_background_matches_a_fresh_render(renderer):
         ViewCache(0, 0, renderer)
 
 
-def test_file_environments_come_first_then_procedural(renderer, tmp_path):
+def test_file_environments_come_first_in_blocks_then_procedural(renderer, tmp_path):
     from factories import write_textured_room
 
     from synth.envfile import environment_file
 
     spec = environment_file(write_textured_room(tmp_path / "den.glb"))
-    views = ViewCache(0, 2, renderer, [spec])
-    assert [views.view(v).env.family for v in range(3)][0] == "file"
-    assert views.view(0).env.name == "den" and views.view(3).env.name == "den"  # view % (1 file + 2 procedural)
-    assert views.view(1).env.name == ViewCache(0, 2, renderer).view(0).env.name  # procedural 0 after the file
-    only_files = ViewCache(0, 0, renderer, [spec])
-    assert only_files.view(5).env.name == "den"
+    views = ViewCache(0, 2, renderer, [spec], views=6)  # 3 environments, 2 views each
+    assert [views.environment_index(v) for v in range(6)] == [0, 0, 1, 1, 2, 2]
+    assert views.view(0).env.family == "file" and views.view(1).env.name == "den"
+    assert views.view(2).env.name == ViewCache(0, 2, renderer).view(0).env.name  # procedural 0 after the file
+    assert views.view(5).env.name == ViewCache(0, 2, renderer).view(1).env.name
+    two = ViewCache(0, 0, renderer, [spec, spec], views=4)
+    two.view(0)
+    two.view(3)
+    assert list(two._scenes) == [1]  # the first file scene was released when the second was needed
     with pytest.raises(ValueError, match="at least one environment"):
         ViewCache(0, 0, renderer)
+    with pytest.raises(ValueError, match="number of views"):
+        ViewCache(0, 0, renderer, [spec])
