@@ -91,3 +91,21 @@ def test_footprint_ignores_a_ground_plane(tmp_path: Path) -> None:
     box = footprint([*meshes, (ground, np.eye(4))])
     assert np.allclose(box[:, 0], [-3, 3]) and np.allclose(box[:, 2], [-3, 3])
     assert np.isclose(box[0, 1], -0.05)  # heights still span everything
+
+
+def test_large_textures_are_scaled_down_once(tmp_path: Path) -> None:
+    from PIL import Image
+
+    from synth.envfile import MAX_TEXTURE
+
+    big = Image.fromarray(np.random.default_rng(0).integers(0, 256, (1536, 3072, 3), dtype=np.uint8))
+    material = trimesh.visual.material.PBRMaterial(baseColorTexture=big)
+    scene = trimesh.Scene()
+    for k in range(3):  # three meshes sharing one material, as exporters do
+        quad = trimesh.Trimesh([[k, 0, 0], [k + 1, 0, 0], [k + 1, 1, 0]], [[0, 1, 2]], process=False)
+        quad.visual = trimesh.visual.TextureVisuals(uv=[[0, 0], [1, 0], [1, 1]], material=material)
+        scene.add_geometry(quad, f"q{k}")
+    scene.export(tmp_path / "big.glb")
+    meshes = load_meshes(environment_file(tmp_path / "big.glb"))
+    textures = {id(m.visual.material.baseColorTexture): m.visual.material.baseColorTexture for m, _ in meshes}
+    assert [t.size for t in textures.values()] == [(MAX_TEXTURE, MAX_TEXTURE // 2)]
