@@ -6,7 +6,7 @@ compression. Each is present with a probability of :class:`CameraConfig`; random
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 
 import cv2
 import numpy as np
@@ -64,12 +64,10 @@ def sample_effects(rng: np.random.Generator, camera: CameraConfig | None = None)
     u = rng.random(5)  # one draw per effect, then its parameters: adding an effect later keeps the others
     low = u[0] < camera.low_light
     cctv = u[4] < camera.cctv
-    return Effects(
-        wb_gains=mild.wb_gains,
-        blur_sigma=mild.blur_sigma,
+    return replace(
+        mild,
         noise_sigma=max(mild.noise_sigma, float(rng.uniform(4.0, 10.0))) if low else mild.noise_sigma,
         jpeg_quality=int(rng.integers(25, 55)) if cctv else mild.jpeg_quality,
-        noise_seed=mild.noise_seed,
         exposure=float(rng.uniform(0.15, 0.45)) if low else 1.0,
         defocus_px=float(rng.uniform(1.5, 4.0)) if u[1] < camera.defocus else 0.0,
         motion_px=int(rng.integers(5, 16)) if u[2] < camera.motion_blur else 0,

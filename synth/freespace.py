@@ -115,6 +115,12 @@ def probe(renderer: Renderer, scene: Any, eye: NDArray[np.float64]) -> tuple[flo
     return open_share, near
 
 
+def _nearest(points: NDArray[np.float64], probes: NDArray[np.float64]) -> NDArray[np.int64]:
+    """For each of ``points`` (N, 2), the index of its nearest row of ``probes`` (P, 2): the probe whose inside /
+    outside verdict it takes."""
+    return np.argmin(((points[:, None, :] - probes[None, :, :]) ** 2).sum(-1), axis=1)
+
+
 def spread_points(points: NDArray[np.float64], k: int) -> NDArray[np.float64]:
     """Up to ``k`` rows of ``points`` (N, D) far from each other: greedy farthest-point sampling from the row
     farthest from their mean (deterministic)."""
@@ -160,7 +166,7 @@ def free_space(
         open_share, near = probe(renderer, scene, np.array([x, floor + eye_height, z]))
         verdicts.append((outdoor or open_share <= MAX_OPEN) and near >= clearance / 2)
     if len(cells):
-        nearest = np.argmin(((cells[:, None, :] - probes[None, :, :]) ** 2).sum(-1), axis=1)
+        nearest = _nearest(cells, probes)
         keep = np.asarray(verdicts, bool)[nearest]
         rows, cols = rows[keep], cols[keep]
         clear_m2 *= float(keep.mean())
@@ -190,6 +196,6 @@ def _furniture(
     xz = eye.world(rows, cols)
     if not len(xz) or not inside.any():
         return np.zeros((0, 3))
-    nearest = np.argmin(((xz[:, None, :] - probes[None, :, :]) ** 2).sum(-1), axis=1)
+    nearest = _nearest(xz, probes)
     keep = inside[nearest]
     return np.column_stack([xz[keep, 0], eye.heights[rows[keep], cols[keep]], xz[keep, 1]])
