@@ -94,26 +94,35 @@ def cmd_convert(args: argparse.Namespace) -> int:
 
 
 def cmd_validate(args: argparse.Namespace) -> int:
-    ds, problems = validate(
-        args.src, args.fmt, names=args.names, aliases=_aliases(args.alias), decode=not args.no_decode
-    )
+    result = validate(args.src, args.fmt, names=args.names, aliases=_aliases(args.alias), decode=not args.no_decode)
+    ds, problems = result.dataset, result.problems
+    stats = dataset_stats(ds, result.unlabelled)
     if args.json:
         doc = {
             "images": len(ds.images),
             "boxes": len(ds.annotations),
+            "negatives": stats["negatives"],
+            "negatives_by_origin": stats["negatives_by_origin"],
             "counts": count_levels(problems),
             "problems": [p.to_dict() for p in problems],
         }
         print(json.dumps(doc, indent=1, ensure_ascii=False))
     else:
         print_problems(problems)
+        origin = stats["negatives_by_origin"]
+        print(
+            f"{len(ds.images)} images, {len(ds.annotations)} boxes, {stats['negatives']} negatives "
+            f"({origin['no_label_file']} without a label file, {origin['empty_labels']} with an empty one)",
+            file=sys.stderr,
+        )
     return 1 if has_errors(problems) else 0
 
 
 def cmd_stats(args: argparse.Namespace) -> int:
     result = read_dataset(args.src, args.fmt, names=args.names, source=args.source, aliases=_aliases(args.alias))
-    ds = result.drop_classes(args.drop_class).dataset
-    stats = dataset_stats(ds)
+    result = result.drop_classes(args.drop_class)
+    ds = result.dataset
+    stats = dataset_stats(ds, result.unlabelled)
     png = Path(args.png) if args.png else None
     if png is not None:
         plot_box_sizes(ds, png, title=f"{Path(args.src).name}: {stats['images']} images, {stats['boxes']} boxes")
@@ -121,7 +130,11 @@ def cmd_stats(args: argparse.Namespace) -> int:
     if args.json:
         print(json.dumps(stats, indent=1, ensure_ascii=False))
         return 0
-    print(f"images     {stats['images']}  (negatives {stats['negatives']})")
+    origin = stats["negatives_by_origin"]
+    print(
+        f"images     {stats['images']}  (negatives {stats['negatives']}: {origin['no_label_file']} without a label "
+        f"file, {origin['empty_labels']} with an empty one)"
+    )
     print(f"boxes      {stats['boxes']}  " + "  ".join(f"{k} {v}" for k, v in stats["boxes_per_class"].items()))
     print("sizes      " + "  ".join(f"{k} {v}" for k, v in stats["box_sizes"].items()) + "  (COCO area buckets)")
     for split, entry in stats["per_split"].items():

@@ -1,7 +1,7 @@
 """A persistent cache of per-file facts and embeddings, keyed by the file's content hash (sha256).
 
 Renamed or moved files hit the cache; an edited file misses it. One SQLite file holds two tables:
-``files`` (size, decoded width/height, decoded-pixel hash, sharpness) and ``vectors`` (one float32 row per
+``files_v2`` (size, width/height, decoded-pixel hash, sharpness) and ``vectors_v2`` (one float32 row per
 ``(model id, sha256)``). Safe for several processes (SQLite locking); used from one thread.
 """
 
@@ -16,10 +16,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 _SCHEMA = """
-CREATE TABLE IF NOT EXISTS files (
+CREATE TABLE IF NOT EXISTS files_v2 (
     sha256 TEXT PRIMARY KEY, bytes INTEGER, width INTEGER, height INTEGER, pixel_hash TEXT, sharpness REAL
 );
-CREATE TABLE IF NOT EXISTS vectors (
+CREATE TABLE IF NOT EXISTS vectors_v2 (
     model TEXT, sha256 TEXT, dim INTEGER, data BLOB, PRIMARY KEY (model, sha256)
 );
 """
@@ -61,7 +61,7 @@ class EmbeddingCache:
         out = {}
         for chunk in _chunks(sorted(set(shas))):
             marks = ",".join("?" * len(chunk))
-            rows = self._db.execute(f"SELECT * FROM files WHERE sha256 IN ({marks})", chunk)
+            rows = self._db.execute(f"SELECT * FROM files_v2 WHERE sha256 IN ({marks})", chunk)
             for row in rows:
                 out[row[0]] = FileFacts(*row)
         return out
@@ -71,7 +71,7 @@ class EmbeddingCache:
         out = {}
         for chunk in _chunks(sorted(set(shas))):
             marks = ",".join("?" * len(chunk))
-            query = f"SELECT sha256, dim, data FROM vectors WHERE model = ? AND sha256 IN ({marks})"
+            query = f"SELECT sha256, dim, data FROM vectors_v2 WHERE model = ? AND sha256 IN ({marks})"
             for sha, dim, data in self._db.execute(query, [model, *chunk]):
                 vec = np.frombuffer(data, np.float32)
                 if vec.shape == (dim,):
@@ -83,11 +83,11 @@ class EmbeddingCache:
         facts = list(facts)
         assert len(facts) == len(vectors), "one vector per file"
         self._db.executemany(
-            "INSERT OR REPLACE INTO files VALUES (?, ?, ?, ?, ?, ?)",
+            "INSERT OR REPLACE INTO files_v2 VALUES (?, ?, ?, ?, ?, ?)",
             [(f.sha256, f.bytes, f.width, f.height, f.pixel_hash, f.sharpness) for f in facts],
         )
         rows = [(model, f.sha256, int(v.shape[0]), np.asarray(v, np.float32).tobytes()) for f, v in zip(facts, vectors)]
-        self._db.executemany("INSERT OR REPLACE INTO vectors VALUES (?, ?, ?, ?)", rows)
+        self._db.executemany("INSERT OR REPLACE INTO vectors_v2 VALUES (?, ?, ?, ?)", rows)
         self._db.commit()
 
 

@@ -50,7 +50,7 @@ def make_thumbs(items: Sequence[tuple[str, str]], folder: Path, workers: int = 3
         out = folder / f"{sha[:16]}.jpg"
         if not out.is_file():
             try:
-                img = read_small(Path(path), THUMB)
+                img = read_image(path, min_side=THUMB)  # a big JPEG decodes at 1/2..1/8
             except ImageError:
                 return path, None
             scale = THUMB / max(img.shape[:2])
@@ -61,23 +61,6 @@ def make_thumbs(items: Sequence[tuple[str, str]], folder: Path, workers: int = 3
 
     with ThreadPoolExecutor(workers) as pool:
         return {p: t for p, t in pool.map(one, list(dict.fromkeys(items))) if t is not None}
-
-
-def read_small(path: Path, side: int) -> NDArray[np.uint8]:
-    """(H, W, 3) uint8 RGB with its long side >= ``side`` when possible, decoded at 1/2, 1/4 or 1/8 scale
-    (JPEG DCT scaling, several times faster than a full decode); full decode as fallback."""
-    data = np.fromfile(path, np.uint8)
-    img = cv2.imdecode(data, cv2.IMREAD_REDUCED_COLOR_2)
-    for flag in (cv2.IMREAD_REDUCED_COLOR_4, cv2.IMREAD_REDUCED_COLOR_8):
-        if img is None or max(img.shape[:2]) < 2 * side:
-            break
-        smaller = cv2.imdecode(data, flag)
-        if smaller is None or max(smaller.shape[:2]) < side:
-            break
-        img = smaller
-    if img is None or img.ndim != 3:
-        return read_image(path)
-    return np.ascontiguousarray(img[:, :, ::-1])
 
 
 def _figure(path: str, thumb: str | None, caption: str, keep: bool) -> str:

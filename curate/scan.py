@@ -22,9 +22,10 @@ from numpy.typing import NDArray
 
 from curate.embed import OnnxEmbedder, Preprocess, l2_normalize
 from curate.embedcache import EmbeddingCache, FileFacts
-from curate.imageio import ImageError, decode_image, is_image_file
+from curate.imageio import ImageError, decode_sized, is_image_file
 from curate.problems import Problem
 from curate.progress import progress
+from curate.walk import walk_files
 
 T = TypeVar("T")
 R = TypeVar("R")
@@ -51,12 +52,13 @@ class ScanResult:
 
 
 def list_image_files(inputs: Iterable[Path | str]) -> list[Path]:
-    """Image files under the given folders (recursive) or given directly; absolute, unique, sorted."""
+    """Image files under the given folders (recursive, linked folders followed, hidden entries skipped) or given
+    directly; absolute, unique, sorted."""
     found: set[Path] = set()
     for item in inputs:
-        path = Path(item).resolve()
+        path = Path(item).absolute()
         if path.is_dir():
-            found.update(p for p in path.rglob("*") if p.is_file() and is_image_file(p))
+            found.update(walk_files(path, is_image_file))
         elif path.is_file():
             found.add(path)
         else:
@@ -101,10 +103,14 @@ def sharpness(image: NDArray[np.uint8]) -> float:
 
 
 def decode_facts(path: Path, preprocess: Preprocess | None) -> tuple[FileFacts, NDArray[np.uint8] | None] | Problem:
-    """Decode one file: its facts and the (2, S, S, 3) model inputs of its two views (None without ``preprocess``)."""
+    """Decode one file: its facts and the (2, S, S, 3) model inputs of its two views (None without ``preprocess``).
+
+    With ``preprocess`` a large JPEG is decoded at reduced size (short side >= 2 S, see
+    :func:`curate.imageio.decode_image`); width and height are the full size, the pixel hash and sharpness are of
+    the decoded image (the same decode for the same file, so equal pictures still hash equal)."""
     try:
         data = path.read_bytes()
-        image = decode_image(data, path)
+        image, (width, height) = decode_sized(data, path, 2 * preprocess.size if preprocess else 0)
     except ImageError as exc:
         return Problem(path.as_posix(), exc.reason)
     except OSError as exc:
@@ -112,8 +118,8 @@ def decode_facts(path: Path, preprocess: Preprocess | None) -> tuple[FileFacts, 
     facts = FileFacts(
         hashlib.sha256(data).hexdigest(),
         len(data),
-        int(image.shape[1]),
-        int(image.shape[0]),
+        width,
+        height,
         pixel_hash(image),
         sharpness(image),
     )

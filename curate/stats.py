@@ -16,21 +16,33 @@ SMALL_AREA = 32.0**2
 LARGE_AREA = 96.0**2
 
 
-def dataset_stats(ds: Dataset) -> dict[str, Any]:
-    """Counts as a JSON-able dict: images, boxes, negatives, per split, per class, per COCO size bucket."""
+def dataset_stats(ds: Dataset, unlabelled: frozenset[int] = frozenset()) -> dict[str, Any]:
+    """Counts as a JSON-able dict: images, boxes, negatives, per split, per class, per COCO size bucket.
+
+    ``unlabelled``: ids of images without any label file (:attr:`ReadResult.unlabelled`); negatives are counted
+    by origin, ``no_label_file`` (absent) vs ``empty_labels`` (a label file or annotation list without boxes)."""
     names = {c.id: c.name for c in ds.categories}
     areas = np.array([a.area for a in ds.annotations], dtype=np.float64)
     per_split: dict[str, dict[str, int]] = {}
     by_image = ds.annotations_by_image()
     for img in ds.images:
-        entry = per_split.setdefault(img.split or "(none)", {"images": 0, "boxes": 0, "negatives": 0})
+        entry = per_split.setdefault(
+            img.split or "(none)", {"images": 0, "boxes": 0, "negatives": 0, "no_label_file": 0, "empty_labels": 0}
+        )
         entry["images"] += 1
         entry["boxes"] += len(by_image[img.id])
-        entry["negatives"] += int(not by_image[img.id])
+        negative = not by_image[img.id]
+        entry["negatives"] += int(negative)
+        entry["no_label_file"] += int(negative and img.id in unlabelled)
+        entry["empty_labels"] += int(negative and img.id not in unlabelled)
     return {
         "images": len(ds.images),
         "boxes": len(ds.annotations),
         "negatives": ds.num_negatives(),
+        "negatives_by_origin": {
+            "no_label_file": sum(e["no_label_file"] for e in per_split.values()),
+            "empty_labels": sum(e["empty_labels"] for e in per_split.values()),
+        },
         "boxes_per_class": {n: Counter(names[a.category_id] for a in ds.annotations).get(n, 0) for n in names.values()},
         "per_split": per_split,
         "sources": dict(Counter(img.source for img in ds.images)),

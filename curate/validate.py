@@ -8,6 +8,7 @@ from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 from curate.dataset import Dataset
+from curate.formats.common import ReadResult
 from curate.formats.registry import read_dataset
 from curate.imageio import ImageError, read_image
 from curate.problems import LEVELS, Problem
@@ -36,11 +37,11 @@ def validate(
     names: Sequence[str] | None = None,
     aliases: Mapping[str, str] | None = None,
     decode: bool = True,
-) -> tuple[Dataset, list[Problem]]:
-    """Read ``path`` and check it; returns the dataset that could be read and every problem, sorted."""
+) -> ReadResult:
+    """Read ``path`` and check it; returns what could be read with every problem, sorted by level."""
     result = read_dataset(path, fmt, names=names, aliases=aliases)
     problems = list(result.problems)
     if decode:
         problems += decode_problems(result.dataset)
     order = {level: i for i, level in enumerate(LEVELS)}
-    return result.dataset, sorted(problems, key=lambda p: order[p.level])
+    return ReadResult(result.dataset, sorted(problems, key=lambda p: order[p.level]), result.unlabelled)

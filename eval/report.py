@@ -82,11 +82,12 @@ def samples_html(
     for i in sorted(int(j) for j in pick):
         img = dataset.images[i]
         try:
-            pixels = read_image(dataset.image_path(img))
+            pixels = read_image(dataset.image_path(img), min_side=height)  # a big JPEG decodes at 1/2..1/8
         except ImageError:
             continue
         anns = by_image[img.id]
-        drawn = draw_boxes(pixels, [a.bbox for a in anns])
+        f = pixels.shape[0] / img.height  # decoded pixels per image pixel
+        drawn = draw_boxes(pixels, [[v * f for v in a.bbox] for a in anns])
         scale = height / drawn.shape[0]
         thumb = cv2.resize(drawn, (max(1, round(drawn.shape[1] * scale)), height), interpolation=cv2.INTER_AREA)
         path = out_dir / f"sample_{img.id}.jpg"

@@ -31,8 +31,10 @@ def test_reads_roboflow_layout_with_splits_and_negatives(tmp_path):
     boxes = {ann.bbox for ann in ds.annotations if ann.image_id == a.id}
     assert (24.0, 12.0, 16.0, 24.0) in boxes  # 0.5 0.5 0.25 0.5 of 64x48
     assert all(img.source == "real:ds" for img in ds.images)
-    assert [p.level for p in result.problems] == ["info"]  # d.png has no label file
-    assert "image without label file" in result.problems[0].reason
+    # data.yaml's Roboflow entries (../train/images) point outside: the folder layout decides, said as info
+    assert "splits taken from the folder layout" in result.problems[0].reason
+    assert [p.level for p in result.problems[1:]] == ["info"]  # d.png has no label file
+    assert "image without label file" in result.problems[1].reason
 
 
 def test_ultralytics_layout_and_flat_layout(tmp_path):

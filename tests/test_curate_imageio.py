@@ -101,3 +101,63 @@ def test_header_errors(tmp_path):
 def test_decode_bytes_matches_file(tmp_path):
     path = write_image(tmp_path / "x.png", 10, 10, seed=3)
     np.testing.assert_array_equal(decode_image(path.read_bytes()), read_image(path))
+
+
+def _jpeg(tmp_path, w=64, h=48):
+    path = write_image(tmp_path / "src.jpg", w, h, seed=5)
+    return path.read_bytes()
+
+
+@pytest.mark.parametrize("extra", [b"\x00" * 25_000, b"trailing metadata written by a tool" * 30, b"\r\n"])
+def test_padding_and_trailing_bytes_after_the_end_marker_are_fine(tmp_path, extra):
+    data = _jpeg(tmp_path)
+    path = tmp_path / "padded.jpg"
+    path.write_bytes(data + extra)
+    np.testing.assert_array_equal(read_image(path), decode_image(data))
+    png = write_image(tmp_path / "x.png", 20, 10, seed=1).read_bytes()
+    (tmp_path / "padded.png").write_bytes(png + extra)
+    np.testing.assert_array_equal(read_image(tmp_path / "padded.png"), decode_image(png))
+
+
+def test_end_marker_before_the_scan_does_not_make_a_truncated_jpeg_complete(tmp_path):
+    data = _jpeg(tmp_path)
+    comment = b"thumbnail \xff\xd9 inside"  # like an EXIF thumbnail's own end marker
+    segment = b"\xff\xfe" + (len(comment) + 2).to_bytes(2, "big") + comment
+    spliced = data[:2] + segment + data[2:]
+    np.testing.assert_array_equal(decode_image(spliced), decode_image(data))  # the comment changes nothing
+    with pytest.raises(ImageError, match="truncated JPEG"):
+        decode_image(spliced[: len(spliced) * 2 // 3], "cut.jpg")
+    with pytest.raises(ImageError, match="ends inside its headers"):
+        decode_image(spliced[:40], "cut.jpg")
+
+
+def test_reduced_decoding_keeps_min_side_and_reports_the_full_size(tmp_path):
+    from curate.imageio import decode_sized
+
+    path = write_image(tmp_path / "big.jpg", 1600, 1200, seed=2)
+    data = path.read_bytes()
+    full = decode_image(data)
+    small, size = decode_sized(data, path, min_side=300)
+    assert size == (1600, 1200) and small.shape == (300, 400, 3)  # 1/4: 1200 / 4 = 300 >= 300
+    assert decode_sized(data, path, min_side=301)[0].shape == (600, 800, 3)  # 1/2
+    assert decode_sized(data, path, min_side=2000)[0].shape == full.shape
+    # the DCT-scaled decode is the picture, not something else: close to an area resize of the full decode
+    import cv2
+
+    area = cv2.resize(full, (400, 300), interpolation=cv2.INTER_AREA).astype(int)
+    assert np.abs(small.astype(int) - area).mean() < 4.0
+    png = write_image(tmp_path / "big.png", 800, 600, seed=2)
+    assert read_image(png, min_side=100).shape == (600, 800, 3)  # PNG has no reduced decoding
+
+
+def test_images_over_the_pixel_budget_are_refused(tmp_path, monkeypatch):
+    import curate.imageio as io_
+
+    path = write_image(tmp_path / "wide.png", 400, 300)
+    monkeypatch.setattr(io_, "MAX_PIXELS", 100_000)
+    with pytest.raises(ImageError, match=r"400x300 image .* over the 0.1 MP decoding budget"):
+        read_image(path)
+    jpg = write_image(tmp_path / "wide.jpg", 800, 600)
+    assert read_image(jpg, min_side=150).shape == (150, 200, 3)  # decoded at 1/4: 30,000 pixels, within
+    with pytest.raises(ImageError, match="decoding budget"):
+        read_image(jpg)

@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 from curate_helpers import save, scene
 
-from curate.report import make_thumbs, read_small, write_histogram, write_html
+from curate.report import make_thumbs, write_histogram, write_html
 
 
 def test_histogram_png(tmp_path: Path) -> None:
@@ -19,8 +19,6 @@ def test_histogram_png(tmp_path: Path) -> None:
 
 def test_thumbnails_small_and_cached(tmp_path: Path) -> None:
     big = save(np.ascontiguousarray(np.tile(scene(1), (8, 8, 1))), tmp_path / "big.jpg")  # 1280 x 960
-    small = read_small(big, 160)
-    assert 160 <= max(small.shape[:2]) < 1280 and small.shape[2] == 3
     (tmp_path / "bad.jpg").write_bytes(b"not an image")
     thumbs = make_thumbs([(str(big), "ab" * 32), (str(tmp_path / "bad.jpg"), "cd" * 32)], tmp_path / "thumbs")
     assert list(thumbs) == [str(big)] and (tmp_path / thumbs[str(big)]).is_file()

@@ -6,12 +6,15 @@ from curate.stats import dataset_stats, plot_box_sizes, relative_box_sizes
 
 def test_counts(tmp_path):
     write_yolo_dataset(tmp_path / "ds")
-    stats = dataset_stats(read_yolo(tmp_path / "ds").dataset)
+    result = read_yolo(tmp_path / "ds")
+    stats = dataset_stats(result.dataset, result.unlabelled)
     assert stats["images"] == 4 and stats["boxes"] == 3 and stats["negatives"] == 2
     assert stats["boxes_per_class"] == {"fire": 2, "smoke": 1}
+    # valid: c.jpg has an empty label file, d.png none
+    assert stats["negatives_by_origin"] == {"no_label_file": 1, "empty_labels": 1}
     assert stats["per_split"] == {
-        "train": {"images": 2, "boxes": 3, "negatives": 0},
-        "valid": {"images": 2, "boxes": 0, "negatives": 2},
+        "train": {"images": 2, "boxes": 3, "negatives": 0, "no_label_file": 0, "empty_labels": 0},
+        "valid": {"images": 2, "boxes": 0, "negatives": 2, "no_label_file": 1, "empty_labels": 1},
     }
     assert sum(stats["box_sizes"].values()) == 3
 

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import math
-import os
 from collections import Counter
 from collections.abc import Iterable, Mapping, Sequence
 from concurrent.futures import ThreadPoolExecutor
@@ -16,14 +15,17 @@ from curate.dataset import Dataset
 from curate.imageio import ImageError, image_size, is_image_file
 from curate.problems import Problem
 from curate.progress import progress
+from curate.walk import walk_files
 
 
 @dataclass
 class ReadResult:
-    """What a reader found: the dataset it could build and every problem on the way."""
+    """What a reader found: the dataset it could build and every problem on the way. ``unlabelled``: ids of the
+    images that have no label/annotation file at all (negatives by absence, as opposed to an empty label file)."""
 
     dataset: Dataset
     problems: list[Problem] = field(default_factory=list)
+    unlabelled: frozenset[int] = frozenset()
 
     def drop_classes(self, names: Iterable[str]) -> ReadResult:
         """Without the boxes of the classes ``names`` (any spelling; their images stay, maybe as negatives).
@@ -41,20 +43,17 @@ class ReadResult:
             for n in sorted(asked - drop)
         ]
         if not drop:
-            return ReadResult(ds, [*self.problems, *absent]) if absent else self
+            return ReadResult(ds, [*self.problems, *absent], self.unlabelled) if absent else self
         counts = Counter(ds.categories[a.category_id - 1].name for a in ds.annotations)
         problems = [p for p in self.problems if p.code not in {f"unknown-class:{n}" for n in drop}]
         problems += [Problem(where, f"dropped {counts[n]} boxes of class {n!r} as asked", "info") for n in sorted(drop)]
-        return ReadResult(ds.drop_categories(drop), problems + absent)
+        return ReadResult(ds.drop_categories(drop), problems + absent, self.unlabelled)
 
 
 def list_images(folder: Path) -> list[Path]:
-    """Image files below ``folder`` (recursive, hidden entries skipped), sorted by POSIX path."""
-    found: list[Path] = []
-    for dirpath, dirnames, filenames in os.walk(folder):
-        dirnames[:] = sorted(d for d in dirnames if not d.startswith("."))
-        found.extend(Path(dirpath) / f for f in filenames if not f.startswith(".") and is_image_file(Path(f)))
-    return sorted(found, key=lambda p: p.as_posix())
+    """Image files below ``folder`` (recursive, linked folders followed, hidden entries skipped), sorted by POSIX
+    path (see :mod:`curate.walk`)."""
+    return walk_files(folder, is_image_file)
 
 
 def probe_sizes(

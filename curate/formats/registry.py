@@ -9,6 +9,7 @@ from curate.formats.coco import ANNOTATIONS_FILE, read_coco
 from curate.formats.common import ReadResult
 from curate.formats.voc import read_voc
 from curate.formats.yolo import read_dfire, read_yolo
+from curate.walk import walk_dirs, walk_files
 
 FORMATS: tuple[str, ...] = ("coco", "yolo", "voc", "dfire")
 
@@ -27,11 +28,12 @@ def detect_format(path: Path | str) -> str:
         return "coco"
     if (path / "Annotations").is_dir() or next(path.glob("*.xml"), None) is not None:
         return "voc"
-    if (path / "data.yaml").is_file() or next(path.rglob("labels"), None) is not None:
+    if (path / "data.yaml").is_file() or walk_dirs(path, lambda n: n.lower() in ("labels", "label")):
         return "yolo"
-    if next(path.rglob("*.txt"), None) is not None:
+    files = walk_files(path, lambda n: n.lower().endswith((".txt", ".xml")))
+    if any(f.suffix.lower() == ".txt" for f in files):
         return "yolo"
-    if next(path.rglob("*.xml"), None) is not None:
+    if files:
         return "voc"
     raise ValueError(f"{path}: cannot tell the dataset format; pass --from coco|yolo|voc|dfire")
 

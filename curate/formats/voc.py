@@ -16,6 +16,7 @@ from curate.dataset import DatasetBuilder
 from curate.formats.common import ClassResolver, ReadResult, list_images, probe_sizes, sanitize_box, source_tag
 from curate.imageio import ImageError
 from curate.problems import Problem
+from curate.walk import walk_files
 
 _SPLITS = ("train", "val", "test")
 
@@ -27,7 +28,7 @@ def read_voc(root: Path | str, source: str | None = None, aliases: Mapping[str, 
         raise FileNotFoundError(f"{root}: not a folder")
     problems: list[Problem] = []
     resolver = ClassResolver(str(root), aliases)
-    xmls = sorted(root.rglob("*.xml"), key=lambda p: p.as_posix())
+    xmls = walk_files(root, lambda name: name.lower().endswith(".xml"))
     parsed = [(x, _parse_xml(x, problems)) for x in xmls]
     entries = []
     claimed: set[Path] = set()
@@ -52,6 +53,7 @@ def read_voc(root: Path | str, source: str | None = None, aliases: Mapping[str, 
     sizes = probe_sizes([e[0] for e in entries])
     builder = DatasetBuilder(root)
     tag = source_tag(root, source)
+    unlabelled: set[int] = set()
     for (image, xml_path, doc), size in zip(entries, sizes):
         if isinstance(size, ImageError):
             problems.append(Problem(str(image), f"unreadable image: {size.reason} (skipped)"))
@@ -60,6 +62,7 @@ def read_voc(root: Path | str, source: str | None = None, aliases: Mapping[str, 
         split = splits.get(image.stem, "")
         image_id = builder.add_image(image.relative_to(root).as_posix(), width, height, tag, split)
         if doc is None:
+            unlabelled.add(image_id)
             continue
         if doc["size"] not in (None, (width, height)):
             problems.append(
@@ -74,7 +77,8 @@ def read_voc(root: Path | str, source: str | None = None, aliases: Mapping[str, 
             box = sanitize_box(boxes.voc_to_xywh(voc_box), width, height, where, problems)
             if box is not None:
                 builder.add_box(image_id, resolver.resolve(name, problems), box, iscrowd=int(difficult))
-    return ReadResult(builder.build({"format": "voc", "source_root": str(root.resolve())}), problems)
+    dataset = builder.build({"format": "voc", "source_root": str(root.resolve())})
+    return ReadResult(dataset, problems, frozenset(unlabelled))
 
 
 def _parse_xml(path: Path, problems: list[Problem]) -> dict | None:

@@ -1,14 +1,11 @@
 """YOLO txt datasets (ultralytics, Roboflow exports, D-Fire): read into a :class:`Dataset`, write back.
 
-Layouts read (label path = image path with the last ``images`` folder replaced by ``labels``, suffix ``.txt``):
-
-- ``<split>/images/*.jpg`` + ``<split>/labels/*.txt`` (Roboflow, D-Fire)
-- ``images/<split>/*.jpg`` + ``labels/<split>/*.txt`` (ultralytics)
-- ``images/`` + ``labels/`` (one split), or images and ``.txt`` side by side.
+Layouts read: see :mod:`curate.formats.yolo_layout` (Roboflow, ultralytics, singular ``image``/``label``,
+``JPEGImages``/``labels``, flat folders, ``data.yaml`` split entries; linked folders followed).
 
 A label row is ``class cx cy w h`` normalised to [0, 1] (a polygon ``class x1 y1 x2 y2 ...`` becomes its
-bounding box). Class names come from ``data.yaml`` (its relative paths are not trusted), ``classes.txt``,
-or the caller.
+bounding box). Label files may start with a UTF-8 BOM and end lines with CRLF. Class names come from
+``data.yaml`` (or another ``*.yaml`` with ``names``), ``classes.txt``, or the caller.
 """
 
 from __future__ import annotations
@@ -23,11 +20,10 @@ import yaml
 from curate import boxes
 from curate.classes import DFIRE_NAMES
 from curate.dataset import Dataset, DatasetBuilder
-from curate.formats.common import ClassResolver, ReadResult, list_images, probe_sizes, sanitize_box, source_tag
+from curate.formats.common import ClassResolver, ReadResult, probe_sizes, sanitize_box, source_tag
+from curate.formats.yolo_layout import Pair, pair_images
 from curate.imageio import ImageError
 from curate.problems import Problem
-
-_NOT_LABELS = frozenset({"classes.txt", "notes.txt", "readme.txt"})
 
 
 def read_yolo(
@@ -41,26 +37,68 @@ def read_yolo(
     problems: list[Problem] = []
     if not root.is_dir():
         raise FileNotFoundError(f"{root}: not a folder")
+    doc = _data_yaml(root, problems)
     if names is None:
         names = find_class_names(root, problems)
     resolver = ClassResolver(str(root), aliases)
     class_names = [resolver.resolve(n, problems) for n in names] if names else None
-    pairs = _pair_images_with_labels(root, problems)
-    sizes = probe_sizes([img for img, _, _ in pairs])
+    pairs = pair_images(root, doc, problems)
+    sizes = probe_sizes([p.image for p in pairs])
     builder = DatasetBuilder(root, class_names or ())
     tag = source_tag(root, source)
-    for (img_path, label_path, split), size in zip(pairs, sizes):
+    problems += _missing_label_problems(root, pairs)
+    unlabelled: set[int] = set()
+    for pair, size in zip(pairs, sizes):
         if isinstance(size, ImageError):
-            problems.append(Problem(str(img_path), f"unreadable image: {size.reason} (skipped)"))
+            problems.append(Problem(str(pair.image), f"unreadable image: {size.reason} (skipped)"))
             continue
         width, height = size
-        image_id = builder.add_image(img_path.relative_to(root).as_posix(), width, height, tag, split)
-        if not label_path.exists():
-            problems.append(Problem(str(img_path), "image without label file (kept as a negative)", "info"))
+        image_id = builder.add_image(pair.image.relative_to(root).as_posix(), width, height, tag, pair.split)
+        if not pair.label.is_file():
+            unlabelled.add(image_id)
             continue
-        for category, xywh in _parse_label_file(label_path, width, height, class_names, problems):
+        for category, xywh in _parse_label_file(pair.label, width, height, class_names, problems):
             builder.add_box(image_id, category if class_names else resolver.resolve(category, problems), xywh)
-    return ReadResult(builder.build({"format": "yolo", "source_root": str(root.resolve())}), problems)
+    dataset = builder.build({"format": "yolo", "source_root": str(root.resolve())})
+    return ReadResult(dataset, problems, frozenset(unlabelled))
+
+
+def _missing_label_problems(root: Path, pairs: list[Pair]) -> list[Problem]:
+    """An info line per image without a label file (a negative); one warning instead for a split where no image
+    has one (labels elsewhere, or a split of unlabelled images: say it, not 200 times)."""
+    by_split: dict[str, list[Pair]] = {}
+    for pair in pairs:
+        by_split.setdefault(pair.split, []).append(pair)
+    out = []
+    for split, members in by_split.items():
+        missing = [p for p in members if not p.label.is_file()]
+        if missing and len(missing) == len(members) and len(members) > 1:
+            folders = sorted({str(p.label.parent) for p in missing})
+            out.append(
+                Problem(
+                    str(root),
+                    f"split {split or '(none)'!r}: none of its {len(members)} images has a label file (looked for "
+                    f"in {', '.join(folders[:3])}{', ...' if len(folders) > 3 else ''}): all read as negatives",
+                    "warning",
+                    code="no-labels",
+                )
+            )
+            continue
+        out += [Problem(str(p.image), "image without label file (kept as a negative)", "info") for p in missing]
+    return out
+
+
+def _data_yaml(root: Path, problems: list[Problem]) -> dict[str, Any] | None:
+    """The parsed ``data.yaml`` of ``root`` (None when absent or unreadable, the latter reported)."""
+    path = root / "data.yaml"
+    if not path.is_file():
+        return None
+    try:
+        doc = yaml.safe_load(path.read_text(encoding="utf-8-sig"))
+    except (yaml.YAMLError, UnicodeDecodeError) as exc:
+        problems.append(Problem(str(path), f"unreadable YAML ({exc.__class__.__name__})"))
+        return None
+    return doc if isinstance(doc, dict) else None
 
 
 def read_dfire(root: Path | str, source: str | None = None) -> ReadResult:
@@ -75,15 +113,16 @@ def find_class_names(root: Path, problems: list[Problem]) -> list[str] | None:
         if not path.is_file():
             continue
         try:
-            doc = yaml.safe_load(path.read_text(encoding="utf-8"))
+            doc = yaml.safe_load(path.read_text(encoding="utf-8-sig"))
         except (yaml.YAMLError, UnicodeDecodeError) as exc:
-            problems.append(Problem(str(path), f"unreadable YAML ({exc.__class__.__name__})"))
+            if path.name != "data.yaml":  # data.yaml's is reported once by _data_yaml
+                problems.append(Problem(str(path), f"unreadable YAML ({exc.__class__.__name__})"))
             continue
         if isinstance(doc, dict) and "names" in doc:
             return _names_from_yaml(doc, path, problems)
     classes_txt = root / "classes.txt"
     if classes_txt.is_file():
-        return [line.strip() for line in classes_txt.read_text(encoding="utf-8").splitlines() if line.strip()]
+        return [line.strip() for line in classes_txt.read_text(encoding="utf-8-sig").splitlines() if line.strip()]
     problems.append(
         Problem(
             str(root),
@@ -107,48 +146,11 @@ def _names_from_yaml(doc: dict[str, Any], path: Path, problems: list[Problem]) -
     return names
 
 
-def _last_images_folder(parts: Sequence[str]) -> int | None:
-    """Index in a path's ``parts`` of the last folder (not the file) called ``images``; None when there is none."""
-    folders = list(parts[:-1])
-    return len(folders) - 1 - folders[::-1].index("images") if "images" in folders else None
-
-
-def _label_path_for(root: Path, image: Path) -> tuple[Path, str]:
-    """The label file of ``image`` and its split name."""
-    parts = image.relative_to(root).parts
-    i = _last_images_folder(parts)
-    if i is not None:
-        label = root.joinpath(*parts[:i], "labels", *parts[i + 1 :]).with_suffix(".txt")
-        split = parts[i - 1] if i > 0 else (parts[i + 1] if len(parts) > i + 2 else "")
-        return label, split
-    return image.with_suffix(".txt"), (parts[0] if len(parts) > 1 else "")
-
-
-def _pair_images_with_labels(root: Path, problems: list[Problem]) -> list[tuple[Path, Path, str]]:
-    pairs: list[tuple[Path, Path, str]] = []
-    owner: dict[Path, Path] = {}
-    for image in list_images(root):
-        label, split = _label_path_for(root, image)
-        if label in owner:
-            problems.append(
-                Problem(str(image), f"duplicate file stem: {owner[label].name} and {image.name} share {label.name}")
-            )
-            continue
-        owner[label] = image
-        pairs.append((image, label, split))
-    label_dirs = {lbl.parent for lbl in owner} | {p for p in root.rglob("labels") if p.is_dir()}
-    for folder in sorted(label_dirs):
-        for txt in sorted(folder.glob("*.txt")):
-            if txt not in owner and txt.name.lower() not in _NOT_LABELS and not txt.name.lower().startswith("readme"):
-                problems.append(Problem(str(txt), "label file without an image"))
-    return pairs
-
-
 def _parse_label_file(
     path: Path, width: int, height: int, class_names: Sequence[str] | None, problems: list[Problem]
 ) -> list[tuple[str, tuple[float, float, float, float]]]:
     try:
-        text = path.read_text(encoding="utf-8")
+        text = path.read_text(encoding="utf-8-sig")  # a BOM (Windows editors) is not part of the first row
     except (OSError, UnicodeDecodeError) as exc:
         problems.append(Problem(str(path), f"unreadable label file ({exc.__class__.__name__})"))
         return []
@@ -226,7 +228,7 @@ def ultralytics_label_path(image: Path) -> Path | None:
     """Where ultralytics looks for the label file of ``image``: the last ``images`` folder of the path replaced by
     ``labels``, suffix ``.txt``; None when no folder of the path is called ``images`` (ultralytics finds none)."""
     parts = image.parts
-    i = _last_images_folder(parts)
+    i = next((k for k in range(len(parts) - 2, -1, -1) if parts[k] == "images"), None)  # case-sensitive, as there
     return None if i is None else Path(*parts[:i], "labels", *parts[i + 1 :]).with_suffix(".txt")
 
 

@@ -1,0 +1,216 @@
+"""Where the label file of each image of a YOLO dataset is, and which split the image belongs to.
+
+Layouts understood (folder names case-insensitive; links to folders and files are followed, see
+:mod:`curate.walk`):
+
+- ``<split>/images/*.jpg`` + ``<split>/labels/*.txt`` (Roboflow, D-Fire); ``image/`` + ``label/`` (singular)
+  and ``JPEGImages/`` + ``labels/`` (darknet's VOC conversion) the same way;
+- ``images/<split>/*.jpg`` + ``labels/<split>/*.txt`` (ultralytics);
+- ``images/`` + ``labels/`` (one split), or images with their ``.txt`` side by side (flat folders);
+- ``data.yaml`` whose ``train`` / ``val`` / ``test`` entries (a folder, a ``.txt`` list of images, or a list of
+  either; relative to its ``path:`` or to the file's folder) all resolve inside the dataset folder: then those
+  entries decide the splits. Otherwise (Roboflow's ``../train/images`` entries point elsewhere) the folder
+  layout does.
+
+Label files that pair with no image are reported per folder; when their names match images that have no label
+file, the error names both folders (a layout we do not understand is never read as "no labels").
+"""
+
+from __future__ import annotations
+
+import os
+from collections import defaultdict
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from curate.imageio import is_image_file
+from curate.problems import Problem
+from curate.walk import walk_files
+
+IMAGE_FOLDERS = frozenset({"images", "image", "jpegimages", "imgs"})  # lower case
+LABEL_FOLDERS = ("labels", "label", "Labels", "Label", "LABELS")  # tried in this order beside the image folder
+_LABEL_FOLDERS_LOWER = frozenset(n.lower() for n in LABEL_FOLDERS)
+YAML_SPLITS = ("train", "val", "valid", "test")
+NOT_LABELS = frozenset({"classes.txt", "notes.txt", "readme.txt", "labels.txt", "license.txt"})
+_EXAMPLES = 3  # file names quoted per grouped problem
+
+
+@dataclass(frozen=True)
+class Pair:
+    """An image, where its label file is (it may not exist) and its split ('' = none)."""
+
+    image: Path
+    label: Path
+    split: str
+
+
+def last_image_folder(parts: Sequence[str], names: frozenset[str] = IMAGE_FOLDERS) -> int | None:
+    """Index in a path's ``parts`` of the last folder (not the file) whose lower-case name is in ``names``."""
+    for i in range(len(parts) - 2, -1, -1):
+        if parts[i].lower() in names:
+            return i
+    return None
+
+
+class LabelLocator:
+    """The label path and split of an image below ``root`` (module docstring); folder lookups are cached."""
+
+    def __init__(self, root: Path) -> None:
+        self.root = root
+        self._label_dir: dict[Path, str] = {}
+
+    def label_folder(self, base: Path) -> str:
+        """Name of the label folder beside an image folder inside ``base``: the first of :data:`LABEL_FOLDERS`
+        that exists, else ``labels``."""
+        if base not in self._label_dir:
+            self._label_dir[base] = next((n for n in LABEL_FOLDERS if (base / n).is_dir()), "labels")
+        return self._label_dir[base]
+
+    def locate(self, image: Path) -> tuple[Path, str]:
+        """(label file, split from the folder layout) of ``image`` (a path below ``root``)."""
+        parts = image.relative_to(self.root).parts
+        i = last_image_folder(parts)
+        if i is None:
+            return image.with_suffix(".txt"), (parts[0] if len(parts) > 1 else "")
+        base = self.root.joinpath(*parts[:i])
+        label = base.joinpath(self.label_folder(base), *parts[i + 1 :]).with_suffix(".txt")
+        split = parts[i - 1] if i > 0 else (parts[i + 1] if len(parts) > i + 2 else "")
+        return label, split
+
+
+def pair_images(root: Path, doc: Mapping[str, Any] | None, problems: list[Problem]) -> list[Pair]:
+    """Every image of the dataset with its label path and split, sorted by image path; duplicate stems (two
+    images claiming one label file) and unpaired label files are reported in ``problems``."""
+    locator = LabelLocator(root)
+    listed = yaml_splits(root, doc, problems) if doc else None
+    images = listed if listed is not None else [(p, "") for p in walk_files(root, is_image_file)]
+    pairs: list[Pair] = []
+    owner: dict[Path, Path] = {}
+    for image, yaml_split in images:
+        label, split = locator.locate(image)
+        if label in owner:
+            problems.append(
+                Problem(str(image), f"duplicate file stem: {owner[label].name} and {image.name} share {label.name}")
+            )
+            continue
+        owner[label] = image
+        pairs.append(Pair(image, label, yaml_split or split))
+    problems += unpaired_labels(root, pairs, set(owner))
+    return pairs
+
+
+def yaml_splits(root: Path, doc: Mapping[str, Any], problems: list[Problem]) -> list[tuple[Path, str]] | None:
+    """(image, split) for the images the split entries of a ``data.yaml`` name, when every entry resolves to a
+    folder or image-list file inside ``root``; None (folder layout decides) otherwise, with an info line."""
+    entries = {k: doc[k] for k in YAML_SPLITS if doc.get(k)}
+    if not entries:
+        return None
+    base = _yaml_base(root, doc.get("path"))
+    out: dict[Path, str] = {}
+    for split, value in entries.items():
+        for entry in value if isinstance(value, list) else [value]:
+            images = _entry_images(root, base, str(entry))
+            if images is None:
+                problems.append(
+                    Problem(
+                        str(root / "data.yaml"),
+                        f"its {split}: {entry!r} is not a folder or image list inside {root}: "
+                        "splits taken from the folder layout",
+                        "info",
+                    )
+                )
+                return None
+            for image in images:
+                out.setdefault(image, split)
+    return sorted(out.items(), key=lambda kv: kv[0].as_posix())
+
+
+def _yaml_base(root: Path, path: Any) -> Path:
+    """The folder a data.yaml's relative split entries start from: its ``path:`` when that exists here."""
+    if path:
+        candidate = Path(str(path))
+        candidate = candidate if candidate.is_absolute() else root / candidate
+        if candidate.is_dir():
+            return candidate
+    return root
+
+
+def _entry_images(root: Path, base: Path, entry: str) -> list[Path] | None:
+    """The images of one split entry (folder or ``.txt`` list), as paths below ``root``; None when the entry does
+    not resolve to something inside ``root``."""
+    target = Path(entry) if Path(entry).is_absolute() else base / entry
+    inside = _inside(root, target)
+    if inside is None:
+        return None
+    if inside.is_dir():
+        return walk_files(inside, is_image_file)
+    if inside.is_file() and inside.suffix.lower() == ".txt":
+        lines = inside.read_text(encoding="utf-8-sig").splitlines()
+        listed = [
+            _inside(root, Path(s) if Path(s).is_absolute() else inside.parent / s) for s in map(str.strip, lines) if s
+        ]
+        return None if any(p is None for p in listed) else [p for p in listed if p is not None]
+    return None
+
+
+def _inside(root: Path, path: Path) -> Path | None:
+    """``path`` written below ``root`` (lexically normalised, links not resolved), or None when it is outside."""
+    norm = Path(os.path.normpath(path.absolute()))
+    try:
+        return root.absolute() / norm.relative_to(Path(os.path.normpath(root.absolute())))
+    except ValueError:
+        return None
+
+
+def unpaired_labels(root: Path, pairs: Sequence[Pair], owned: set[Path]) -> list[Problem]:
+    """One error per folder holding ``.txt`` files that pair with no image. Only folders where labels are looked
+    for count, plus any folder whose file names match images without a label file (a layout we did not
+    understand: the error names the image folder)."""
+    unlabelled: dict[str, list[Path]] = defaultdict(list)
+    for pair in pairs:
+        if pair.label not in owned or not pair.label.is_file():
+            unlabelled[pair.image.stem].append(pair.image)
+    by_folder: dict[Path, list[Path]] = defaultdict(list)
+    for txt in walk_files(root, _maybe_label):
+        if txt not in owned:
+            by_folder[txt.parent].append(txt)
+    looked_in = {p.label.parent for p in pairs}
+    problems = []
+    for folder, files in sorted(by_folder.items()):
+        matches = [unlabelled[f.stem][0] for f in files if f.stem in unlabelled]
+        if folder not in looked_in and folder.name.lower() not in _LABEL_FOLDERS_LOWER and not matches:
+            continue  # other text files (split lists, notes): not labels
+        where = files[0] if len(files) == 1 else folder
+        problems.append(Problem(str(where), _unpaired_message(root, files, matches)))
+    return problems
+
+
+def _maybe_label(name: str) -> bool:
+    low = name.lower()
+    return low.endswith(".txt") and low not in NOT_LABELS and not low.startswith("readme")
+
+
+def _unpaired_message(root: Path, files: Sequence[Path], matches: Sequence[Path]) -> str:
+    if len(files) == 1:
+        what = "label file without an image"
+    else:
+        names = ", ".join(f.name for f in files[:_EXAMPLES]) + (", ..." if len(files) > _EXAMPLES else "")
+        what = f"{len(files)} label files ({names}) match no image"
+    if not matches:
+        return what
+    image_dirs = sorted({m.parent for m in matches})
+    where = ", ".join(_rel(root, d) for d in image_dirs[:_EXAMPLES])
+    return (
+        f"{what} where labels are looked for, but {len(matches)} share their names with images without "
+        f"a label file in {where}: did you mean them as their labels? Name the folder 'labels' beside 'images' "
+        "(<split>/images + <split>/labels, or images/<split> + labels/<split>), or put each .txt beside its image"
+    )
+
+
+def _rel(root: Path, path: Path) -> str:
+    try:
+        return path.relative_to(root).as_posix() or "."
+    except ValueError:
+        return str(path)
