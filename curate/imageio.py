@@ -70,6 +70,8 @@ def header_size(data: bytes, path: Path | str = "<bytes>") -> tuple[int, int]:
             with Image.open(io.BytesIO(data)) as im:
                 width, height = im.size
                 orientation = _orientation(im)
+    except Image.DecompressionBombError as exc:  # Pillow's own limit (2 x 89 MP), met before ours
+        raise ImageError(path, f"over the {MAX_PIXELS / 1e6:g} MP decoding budget ({exc})") from None
     except (UnidentifiedImageError, OSError, ValueError, SyntaxError) as exc:
         raise ImageError(path, f"not a readable image ({exc.__class__.__name__}: {exc})") from None
     if width <= 0 or height <= 0:

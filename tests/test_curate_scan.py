@@ -84,3 +84,31 @@ def test_bounded_map_keeps_order() -> None:
 
     with ThreadPoolExecutor(3) as pool:
         assert list(bounded_map(lambda x: x * x, list(range(50)), pool, ahead=4)) == [x * x for x in range(50)]
+
+
+def test_big_jpegs_decode_reduced_with_the_same_near_duplicates(embedder: OnnxEmbedder, tmp_path: Path) -> None:
+    """Photos decoded at 1/4 (DCT scaling) embed within tolerance of the full decode and give the same
+    near-duplicate pairs; facts keep the full size."""
+    import cv2
+
+    from curate.imageio import read_image
+
+    def pairs(v: np.ndarray, threshold: float) -> set[tuple[int, int]]:
+        d = np.linalg.norm(v[:, None] - v[None], axis=2)
+        return {(i, j) for i in range(len(v)) for j in range(i + 1, len(v)) if d[i, j] < threshold}
+
+    paths = []
+    for i in range(4):
+        big = cv2.resize(scene(i), (1600, 1200), interpolation=cv2.INTER_CUBIC)
+        paths.append(save(big, tmp_path / f"p{i}.jpg"))
+        shifted = np.roll(big, 12, axis=1)  # a near duplicate: the same picture moved a little
+        paths.append(save(shifted, tmp_path / f"p{i}_moved.jpg"))
+    result = scan_images(paths, embedder)
+    assert all((im.facts.width, im.facts.height) == (1600, 1200) for im in result.images)
+    full = np.stack([embedder.embed(embedder.preprocess.views(read_image(p)))[0] for p in paths])
+    full /= np.linalg.norm(full, axis=1, keepdims=True)
+    cosine = np.sum(full * result.vectors, axis=1)
+    assert cosine.min() > 0.995, cosine  # reduced vs full decode
+    for threshold in (0.3, 0.45, 0.6):
+        assert pairs(result.vectors, threshold) == pairs(full, threshold)
+    assert pairs(full, 0.45) >= {(0, 1), (2, 3), (4, 5), (6, 7)}  # the moved copies are found

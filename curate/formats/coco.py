@@ -40,7 +40,7 @@ def read_coco(
     json_path = find_coco_file(Path(path))
     problems: list[Problem] = []
     try:
-        doc = json.loads(json_path.read_text(encoding="utf-8"))
+        doc = json.loads(json_path.read_text(encoding="utf-8-sig"))
     except (json.JSONDecodeError, UnicodeDecodeError) as exc:
         raise ValueError(f"{json_path}: not valid JSON ({exc})") from None
     if not isinstance(doc, dict) or not isinstance(doc.get("images"), list):
@@ -56,6 +56,18 @@ def read_coco(
     return ReadResult(builder.build(info), problems)
 
 
+def id_key(value: Any) -> Any:
+    """A COCO id as a lookup key: ``3``, ``"3"`` and ``3.0`` are the same id (exports write either); any other
+    value is kept as it is (ids are renumbered from 1 anyway)."""
+    if isinstance(value, bool):
+        return value
+    if isinstance(value, (int, float)) and float(value).is_integer():
+        return int(value)
+    if isinstance(value, str) and value.strip().lstrip("-").isdigit():
+        return int(value.strip())
+    return value
+
+
 def _read_categories(
     doc: dict[str, Any], where: Path, resolver: ClassResolver, problems: list[Problem]
 ) -> dict[Any, str]:
@@ -64,7 +76,7 @@ def _read_categories(
         if not isinstance(cat, dict) or "id" not in cat or "name" not in cat:
             problems.append(Problem(str(where), f"category entry {cat!r} lacks id or name (ignored)"))
             continue
-        categories[cat["id"]] = resolver.resolve(str(cat["name"]), problems)
+        categories[id_key(cat["id"])] = resolver.resolve(str(cat["name"]), problems)
     return categories
 
 
@@ -95,10 +107,11 @@ def _read_images(
     new_ids: dict[Any, tuple[int, int, int]] = {}
     seen: set[Any] = set()
     for entry, path, size in zip(valid, paths, sizes):
-        if entry["id"] in seen:
+        key = id_key(entry["id"])
+        if key in seen:
             problems.append(Problem(str(where), f"duplicate image id {entry['id']} (second entry ignored)"))
             continue
-        seen.add(entry["id"])
+        seen.add(key)
         if isinstance(size, ImageError):
             problems.append(Problem(str(path), f"unreadable image: {size.reason} (skipped with its boxes)"))
             continue
@@ -115,7 +128,7 @@ def _read_images(
         rel = path.relative_to(root).as_posix() if path.is_relative_to(root) else path.resolve().as_posix()
         source = default_source if force_source else str(entry.get("source") or default_source)
         new_id = builder.add_image(rel, width, height, source, str(entry.get("split") or ""))
-        new_ids[entry["id"]] = (new_id, width, height)
+        new_ids[key] = (new_id, width, height)
     return new_ids
 
 
@@ -132,15 +145,16 @@ def _read_annotations(
         if not isinstance(ann, dict) or not isinstance(ann.get("bbox"), (list, tuple)) or len(ann["bbox"]) != 4:
             problems.append(Problem(label, "annotation without a 4-number bbox (dropped)"))
             continue
-        if ann.get("image_id") not in new_ids:
+        image_key, category_key = id_key(ann.get("image_id")), id_key(ann.get("category_id"))
+        if image_key not in new_ids:
             problems.append(
                 Problem(label, f"annotation for unknown or unreadable image id {ann.get('image_id')} (dropped)")
             )
             continue
-        if ann.get("category_id") not in categories:
+        if category_key not in categories:
             problems.append(Problem(label, f"category id {ann.get('category_id')} out of range (dropped)"))
             continue
-        image_id, width, height = new_ids[ann["image_id"]]
+        image_id, width, height = new_ids[image_key]
         try:
             raw = [float(v) for v in ann["bbox"]]
         except (TypeError, ValueError):
@@ -148,7 +162,7 @@ def _read_annotations(
             continue
         box = sanitize_box(raw, width, height, label, problems)
         if box is not None:
-            builder.add_box(image_id, categories[ann["category_id"]], box, int(bool(ann.get("iscrowd", 0))))
+            builder.add_box(image_id, categories[category_key], box, int(bool(ann.get("iscrowd", 0))))
 
 
 def write_coco(ds: Dataset, out: Path) -> Path:

@@ -46,12 +46,13 @@ def read_yolo(
     sizes = probe_sizes([p.image for p in pairs])
     builder = DatasetBuilder(root, class_names or ())
     tag = source_tag(root, source)
-    problems += _missing_label_problems(root, pairs)
     unlabelled: set[int] = set()
+    readable: list[Pair] = []
     for pair, size in zip(pairs, sizes):
         if isinstance(size, ImageError):
             problems.append(Problem(str(pair.image), f"unreadable image: {size.reason} (skipped)"))
             continue
+        readable.append(pair)
         width, height = size
         image_id = builder.add_image(pair.image.relative_to(root).as_posix(), width, height, tag, pair.split)
         if not pair.label.is_file():
@@ -59,6 +60,7 @@ def read_yolo(
             continue
         for category, xywh in _parse_label_file(pair.label, width, height, class_names, problems):
             builder.add_box(image_id, category if class_names else resolver.resolve(category, problems), xywh)
+    problems += _missing_label_problems(root, readable)
     dataset = builder.build({"format": "yolo", "source_root": str(root.resolve())})
     return ReadResult(dataset, problems, frozenset(unlabelled))
 

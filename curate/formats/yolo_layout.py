@@ -84,8 +84,19 @@ def pair_images(root: Path, doc: Mapping[str, Any] | None, problems: list[Proble
     """Every image of the dataset with its label path and split, sorted by image path; duplicate stems (two
     images claiming one label file) and unpaired label files are reported in ``problems``."""
     locator = LabelLocator(root)
+    found = walk_files(root, is_image_file)
     listed = yaml_splits(root, doc, problems) if doc else None
-    images = listed if listed is not None else [(p, "") for p in walk_files(root, is_image_file)]
+    images = listed if listed is not None else [(p, "") for p in found]
+    if listed is not None and len(found) > len(listed):
+        left = sorted(set(found) - {p for p, _ in listed})
+        problems.append(
+            Problem(
+                str(root / "data.yaml"),
+                f"{len(left)} images below {root} are in none of its splits and are not read "
+                f"(e.g. {_rel(root, left[0])})",
+                "warning",
+            )
+        )
     pairs: list[Pair] = []
     owner: dict[Path, Path] = {}
     for image, yaml_split in images:
@@ -203,9 +214,9 @@ def _unpaired_message(root: Path, files: Sequence[Path], matches: Sequence[Path]
     image_dirs = sorted({m.parent for m in matches})
     where = ", ".join(_rel(root, d) for d in image_dirs[:_EXAMPLES])
     return (
-        f"{what} where labels are looked for, but {len(matches)} share their names with images without "
-        f"a label file in {where}: did you mean them as their labels? Name the folder 'labels' beside 'images' "
-        "(<split>/images + <split>/labels, or images/<split> + labels/<split>), or put each .txt beside its image"
+        f"{what}, but {len(matches)} share their names with images that have no label file, in {where}: if they "
+        "are their labels, name the folder 'labels' beside 'images' (<split>/images + <split>/labels, or "
+        "images/<split> + labels/<split>), or put each .txt beside its image"
     )
 
 
