@@ -17,6 +17,9 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
+#: Split names that mean the same split, tried in this order.
+SPLIT_ALIASES: tuple[tuple[str, ...], ...] = (("val", "valid", "validation"),)
+
 
 @dataclass(frozen=True)
 class ImageRecord:
@@ -98,9 +101,19 @@ class Dataset:
         return sum(1 for img in self.images if img.id not in with_boxes)
 
     # -- transformations -------------------------------------------------------------------------------
+    def resolve_split(self, name: str) -> str | None:
+        """This dataset's split called ``name``, where ``val``, ``valid`` and ``validation`` name the same split
+        (ultralytics says val, Roboflow valid); None when it has none."""
+        if name in self.splits:
+            return name
+        group = next((g for g in SPLIT_ALIASES if name in g), ())
+        return next((s for s in group if s in self.splits), None)
+
     def select_split(self, split: str) -> Dataset:
-        """A dataset of the images of one split (ids kept)."""
-        return self.filter_images(lambda img: img.split == split)
+        """A dataset of the images of one split (ids kept; aliases as in :meth:`resolve_split`; empty when there
+        is no such split)."""
+        name = self.resolve_split(split)
+        return self.filter_images(lambda img: name is not None and img.split == name)
 
     def filter_images(self, keep: Any) -> Dataset:
         """A dataset of the images for which ``keep(image)`` is true, with their annotations (ids kept)."""

@@ -14,18 +14,23 @@ from curate.boxes import letterbox_params
 
 #: Padding grey of YOLO-family detectors (114 of 255).
 PAD_VALUE = 114
+#: How the image is resized: ``area`` = area averaging when shrinking, bilinear when enlarging (ours and
+#: YOLOv5's); ``linear`` = always bilinear (ultralytics 8.x).
+RESIZE_MODES = ("area", "linear")
 
 
 def letterbox_image(
-    image: NDArray[np.uint8], out_width: int, out_height: int, pad_value: int = PAD_VALUE
+    image: NDArray[np.uint8], out_width: int, out_height: int, pad_value: int = PAD_VALUE, resize: str = "area"
 ) -> NDArray[np.uint8]:
-    """(H, W, 3) uint8 -> (out_height, out_width, 3) uint8: resized (bilinear; area when shrinking) and
-    centred on a ``pad_value`` canvas. Channel order is kept."""
+    """(H, W, 3) uint8 -> (out_height, out_width, 3) uint8: resized (see :data:`RESIZE_MODES`) and centred on a
+    ``pad_value`` canvas. Channel order is kept."""
+    if resize not in RESIZE_MODES:
+        raise ValueError(f"unknown resize {resize!r}; choose one of {', '.join(RESIZE_MODES)}")
     height, width = image.shape[:2]
     new_w, new_h, pad_x, pad_y = letterbox_params(width, height, out_width, out_height)
     if (new_w, new_h) != (width, height):
-        shrink = new_w < width and new_h < height
-        image = cv2.resize(image, (new_w, new_h), interpolation=cv2.INTER_AREA if shrink else cv2.INTER_LINEAR)
+        area = resize == "area" and new_w < width and new_h < height
+        image = cv2.resize(image, (new_w, new_h), interpolation=cv2.INTER_AREA if area else cv2.INTER_LINEAR)
     canvas = np.full((out_height, out_width, 3), pad_value, dtype=np.uint8)
     canvas[pad_y : pad_y + new_h, pad_x : pad_x + new_w] = image
     return canvas

@@ -59,8 +59,23 @@ def _score_model(model: Path, args: argparse.Namespace, dataset, problems):  # -
     detector = OnnxDetector(model, args.format, args.names, args.imgsz, threads=args.threads, device=args.device)
     if detector.device_notice:
         print(detector.device_notice, file=sys.stderr)
-    options = PredictOptions(args.conf, args.iou, args.max_det, args.batch, args.workers)
+    options = PredictOptions(args.conf, args.iou, args.max_det, args.batch, args.workers, resize=args.resize)
     return score(detector, dataset, options, problems)
+
+
+def _load(args: argparse.Namespace):  # -> eval.score.TestSet
+    """The test set of ``--data`` / ``--split``; says on stderr which split is scored when none was named."""
+    from eval.score import ALL_SPLITS, load_test_set
+
+    test = load_test_set(args.data, args.data_format, args.split, _aliases(args.alias), args.drop_class)
+    if args.split is None and test.split != ALL_SPLITS:
+        others = [s for s in test.splits if s != test.split]
+        print(
+            f"scoring split {test.split!r} of {args.data} ({len(test.dataset.images)} images; other splits: "
+            f"{', '.join(others) or 'none'}; --split NAME or --split all to choose)",
+            file=sys.stderr,
+        )
+    return test
 
 
 def _report_problems(result) -> None:
@@ -74,13 +89,11 @@ def _report_problems(result) -> None:
 def cmd_score(args: argparse.Namespace) -> int:
     from curate.cocoeval import ClassMatchError
     from eval.onnx_model import ModelError
-    from eval.score import ScoreError, load_test_set, write_outputs
+    from eval.score import ScoreError, write_outputs
 
     try:
-        dataset, problems = load_test_set(
-            args.data, args.data_format, args.split, _aliases(args.alias), args.drop_class
-        )
-        result = _score_model(args.model, args, dataset, problems)
+        test = _load(args)
+        result = _score_model(args.model, args, test.dataset, test.problems)
     except (ModelError, ScoreError, ClassMatchError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
@@ -101,14 +114,12 @@ def cmd_compare(args: argparse.Namespace) -> int:
 
     from curate.cocoeval import ClassMatchError
     from eval.onnx_model import ModelError
-    from eval.score import ScoreError, load_test_set
+    from eval.score import ScoreError
     from eval.stats import MatchTable, paired_bootstrap
 
     try:
-        dataset, problems = load_test_set(
-            args.data, args.data_format, args.split, _aliases(args.alias), args.drop_class
-        )
-        results = [_score_model(m, args, dataset, problems) for m in (args.model_a, args.model_b)]
+        test = _load(args)
+        results = [_score_model(m, args, test.dataset, test.problems) for m in (args.model_a, args.model_b)]
     except (ModelError, ScoreError, ClassMatchError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
@@ -162,8 +173,14 @@ def _aliases(items: list[str]) -> dict[str, str]:
 
 def _add_scoring_args(p: argparse.ArgumentParser) -> None:
     """Test-set and model options shared by ``score`` and ``compare``."""
-    p.add_argument("--data", required=True, help="test set: folder or COCO .json in any format fuzzyfire reads")
-    p.add_argument("--split", help="score only this split of the test set (e.g. test); default: every image")
+    p.add_argument(
+        "--data", required=True, help="test set: folder, COCO .json or data.yaml, in any format fuzzyfire reads"
+    )
+    p.add_argument(
+        "--split",
+        help="split to score (val and valid are one name); default: test, else val/valid, else the whole set "
+        "when it has no splits; 'all' = every image",
+    )
     p.add_argument("--from", dest="data_format", default="auto", help="test-set format (default: detect)")
     p.add_argument(
         "--alias", action="append", default=[], metavar="NAME=CLASS", help="map a test-set class, e.g. Flame=fire"
@@ -178,6 +195,13 @@ def _add_scoring_args(p: argparse.ArgumentParser) -> None:
         "--names", type=_names, help="model class names in output order, e.g. fire,smoke (default: metadata)"
     )
     p.add_argument("--imgsz", type=_size, help="input size N or WxH for models with a dynamic input size")
+    p.add_argument(
+        "--resize",
+        default="area",
+        choices=("area", "linear"),
+        help="letterbox resize: area when shrinking (default; ours and YOLOv5's) or always bilinear "
+        "(ultralytics 8.x's: use it to reproduce ultralytics' own numbers)",
+    )
     p.add_argument("--conf", type=float, default=0.001, help="confidence threshold (default 0.001)")
     p.add_argument("--iou", type=float, default=0.6, help="NMS IoU threshold (default 0.6)")
     p.add_argument("--max-det", type=int, default=300, help="detections kept per image (default 300)")

@@ -146,6 +146,23 @@ def infer_format(out_shape: Sequence[int], num_classes: int | None, path: Path |
     return "yolov5" if fits_v5 else "yolov8"
 
 
+def _layout_mismatch(chosen: str, asked: str, out_shape: Sequence[int], class_names: Sequence[str]) -> str:
+    """Why the output does not fit layout ``chosen`` with ``class_names``, and what would fit."""
+    shape, c = tuple(int(d) for d in out_shape), len(class_names)
+    expected = f"(B, N, 5+{c}) = (B, N, {5 + c})" if chosen != "yolov8" else f"(B, 4+{c}, N) = (B, {4 + c}, N)"
+    how = "as asked with --format" if asked != "auto" else "from the model's metadata"
+    fits = [
+        name
+        for name, ok in (("yolov5", shape[2] == 5 + c), ("yolov8", shape[1] == 4 + c))
+        if ok and name != ("yolov5" if chosen == "fuzzyfire" else chosen)
+    ]
+    hint = f"; it fits --format {fits[0]}" if fits else f"; check --names (the model's has {c} classes?)"
+    return (
+        f"output shape {shape} does not fit the {chosen} layout {how}: for the {c} class names {list(class_names)} "
+        f"it expects {expected}{hint}"
+    )
+
+
 def _static(dim: object) -> int | None:
     return dim if isinstance(dim, int) and dim > 0 else None
 
@@ -194,7 +211,7 @@ class OnnxDetector:
         if not class_names:
             raise ModelError(self.path, "the model's metadata has no class names; pass --names fire,smoke")
         if len(class_names) != num_classes:
-            raise ModelError(self.path, f"{len(class_names)} class names {class_names} for {num_classes} outputs")
+            raise ModelError(self.path, _layout_mismatch(chosen, fmt, out_shape, class_names))
         return ModelSpec(
             path=self.path,
             input_name=inp.name,

@@ -34,7 +34,8 @@ Loaded = tuple[NDArray[np.uint8], tuple[int, int]] | ImageError
 @dataclass(frozen=True)
 class PredictOptions:
     """Post-processing and batching: ``conf`` and ``iou`` thresholds, ``max_det`` per image, ``batch`` images
-    per onnxruntime call, ``workers`` decoding threads."""
+    per onnxruntime call, ``workers`` decoding threads, ``resize`` how images are letterboxed
+    (:data:`curate.letterbox.RESIZE_MODES`: ``area`` ours and YOLOv5's, ``linear`` ultralytics 8.x's)."""
 
     conf: float = CONF_THRESHOLD
     iou: float = IOU_THRESHOLD
@@ -42,15 +43,16 @@ class PredictOptions:
     batch: int = 16
     workers: int = 2
     multi_label: bool = True
+    resize: str = "area"
 
 
-def _loader(width: int, height: int, pad: int) -> Callable[[str], Loaded]:
+def _loader(width: int, height: int, pad: int, resize: str) -> Callable[[str], Loaded]:
     def load(path: str) -> Loaded:
         try:
             image = read_image(path)
         except ImageError as exc:
             return exc
-        return letterbox_image(image, width, height, pad), (image.shape[1], image.shape[0])
+        return letterbox_image(image, width, height, pad, resize), (image.shape[1], image.shape[0])
 
     return load
 
@@ -86,7 +88,7 @@ def predict_dataset(detector: OnnxDetector, dataset: Dataset, options: PredictOp
     images: list[ImageRecord] = list(dataset.images)
     paths = [str(dataset.image_path(img)) for img in images]
     out = Predictions(spec.class_names, {}, [])
-    load = _loader(spec.input_width, spec.input_height, spec.pad_value)
+    load = _loader(spec.input_width, spec.input_height, spec.pad_value, opt.resize)
     done = 0
     pending: list[tuple[int, Future]] = []
     with ThreadPoolExecutor(max_workers=max(1, opt.workers)) as pool:

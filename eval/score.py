@@ -6,7 +6,7 @@ import json
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, NamedTuple
 
 from pycocotools.cocoeval import COCOeval
 
@@ -38,24 +38,61 @@ class ScoreResult:
     problems: list[Problem]
 
 
+ALL_SPLITS = "all"  # --split all: every image of every split
+
+
+class TestSet(NamedTuple):
+    """A test set as scored: its dataset, the reader's problems, the split scored (:data:`ALL_SPLITS` for
+    every image) and every split the source has."""
+
+    dataset: Dataset
+    problems: list[Problem]
+    split: str
+    splits: list[str]
+
+
 def load_test_set(
     path: Path | str,
     fmt: str = "auto",
     split: str | None = None,
     aliases: Mapping[str, str] | None = None,
     drop: Sequence[str] = (),
-) -> tuple[Dataset, list[Problem]]:
-    """Read any dataset :func:`curate.formats.registry.read_dataset` reads, optionally one split of it,
-    with class ``aliases`` (source name -> class) and the boxes of classes ``drop`` removed."""
+) -> TestSet:
+    """Read any dataset :func:`curate.formats.registry.read_dataset` reads (a folder, a COCO .json, a
+    ``data.yaml``), one split of it (``val`` and ``valid`` are one name; None = :func:`default_split`;
+    :data:`ALL_SPLITS` = every image), with class ``aliases`` (source name -> class) and the boxes of classes
+    ``drop`` removed."""
     result = read_dataset(path, fmt, aliases=aliases).drop_classes(drop)
     ds = result.dataset
-    if split:
-        if split not in ds.splits:
-            raise ScoreError(f"{path}: no split {split!r} (splits: {', '.join(s or '(none)' for s in ds.splits)})")
-        ds = ds.select_split(split)
+    splits = ds.splits
+    split = default_split(ds, path) if split is None else split
+    if split != ALL_SPLITS:
+        found = ds.resolve_split(split)
+        if found is None:
+            raise ScoreError(f"{path}: no split {split!r} (splits: {_shown(ds)}; --split all for every image)")
+        ds, split = ds.select_split(found), found
     if not ds.images:
         raise ScoreError(f"{path}: no images to score")
-    return ds, list(result.problems)
+    return TestSet(ds, list(result.problems), split, splits)
+
+
+def default_split(ds: Dataset, where: Path | str = "") -> str:
+    """The split scored when none is named: ``test``, else the validation split (``val`` / ``valid``); a
+    dataset without splits is scored whole (:data:`ALL_SPLITS`). Training images are never scored silently:
+    a dataset with splits but neither of these raises :class:`ScoreError`."""
+    if ds.splits == [""]:
+        return ALL_SPLITS
+    for name in ("test", "val"):
+        found = ds.resolve_split(name)
+        if found is not None:
+            return found
+    raise ScoreError(
+        f"{where}: no test or validation split (splits: {_shown(ds)}): name one with --split, or --split all"
+    )
+
+
+def _shown(ds: Dataset) -> str:
+    return ", ".join(s or "(none)" for s in ds.splits)
 
 
 def score(

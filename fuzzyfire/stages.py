@@ -58,7 +58,7 @@ def load_data(ref: DataRef, classes: Sequence[str]) -> Dataset:
     Raises ValueError when the split is missing or empty."""
     ds = read_dataset(ref.path, ref.format, aliases=dict(ref.aliases) or None).dataset
     if ref.split is not None:
-        if ref.split not in ds.splits:
+        if ds.resolve_split(ref.split) is None:
             shown = ", ".join(repr(s) for s in ds.splits)
             raise ValueError(f"{ref.path}: no split {ref.split!r} (splits: {shown}); curate it (real.curate) first")
         ds = ds.select_split(ref.split)

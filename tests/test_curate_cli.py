@@ -76,3 +76,29 @@ def test_convert_fire_cctv_416(shared_data, tmp_path, capsys):
     doc = json.loads((tmp_path / "c" / "annotations.json").read_text())
     assert len(doc["images"]) == 3996
     assert len(list((tmp_path / "c" / "labels").rglob("*.txt"))) == 3996
+
+
+def test_an_ultralytics_data_yaml_is_its_dataset_in_every_command(tmp_path, capsys):
+    import yaml
+    from factories import write_image
+
+    from eval.score import load_test_set
+
+    root = tmp_path / "ds"
+    for split, n in (("train", 3), ("val", 2)):
+        for k in range(n):
+            write_image(root / "images" / split / f"{split}{k}.jpg", 32, 24, seed=k)
+            (root / "labels" / split).mkdir(parents=True, exist_ok=True)
+            (root / "labels" / split / f"{split}{k}.txt").write_text("0 0.5 0.5 0.5 0.5\n")
+    data_yaml = root / "data.yaml"
+    data_yaml.write_text(
+        yaml.safe_dump({"path": str(root), "train": "images/train", "val": "images/val", "names": ["fire"]})
+    )
+    assert main(["stats", str(data_yaml), "--json"]) == 0
+    stats = json.loads(capsys.readouterr().out)
+    assert stats["images"] == 5 and set(stats["per_split"]) == {"train", "val"}
+    assert main(["validate", str(data_yaml)]) == 0
+    assert main(["convert", str(data_yaml), "--to", "coco", "--out", str(tmp_path / "c")]) == 0
+    test = load_test_set(data_yaml, split="valid")  # valid and val are one name
+    assert test.split == "val" and len(test.dataset.images) == 2
+    assert load_test_set(data_yaml).split == "val"  # no test split: the validation split, never train

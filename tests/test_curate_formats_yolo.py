@@ -187,3 +187,34 @@ def test_ultralytics_label_path_replaces_the_last_images_folder():
     assert ultralytics_label_path(Path("/d/images/valid/images/a.b.jpg")) == Path("/d/images/valid/labels/a.b.txt")
     assert ultralytics_label_path(Path("/d/valid/images/x.png")) == Path("/d/valid/labels/x.txt")
     assert ultralytics_label_path(Path("/d/images.jpg")) is None
+
+
+@pytest.mark.parametrize("path_entry", ["absolute", "relative", "none", "elsewhere"])
+def test_a_data_yaml_file_means_its_dataset(tmp_path, path_entry):
+    from curate.formats.registry import detect_format, read_dataset
+
+    root = tmp_path / "datasets" / "fire"
+    for split in ("train", "val"):
+        write_image(root / "images" / split / f"{split}0.jpg", 20, 10)
+        (root / "labels" / split).mkdir(parents=True)
+        (root / "labels" / split / f"{split}0.txt").write_text("0 0.5 0.5 1 1\n")
+    doc = {"train": "images/train", "val": ["images/val"], "names": {0: "fire"}}
+    if path_entry == "none":
+        yaml_file = root / "fire.yaml"
+    else:
+        yaml_file = tmp_path / "configs" / "fire.yaml"
+        doc["path"] = {"absolute": str(root), "relative": "../datasets/fire", "elsewhere": "/nowhere/fire"}[path_entry]
+    yaml_file.parent.mkdir(parents=True, exist_ok=True)
+    yaml_file.write_text(yaml.safe_dump(doc))
+    assert detect_format(yaml_file) == "yolo"
+    result = read_dataset(yaml_file)
+    if path_entry == "elsewhere":  # path: does not exist here: the file's folder is the root, said as a warning
+        assert "not a folder here" in result.problems[0].reason and not result.dataset.images
+        return
+    ds = result.dataset
+    assert {img.file_name: img.split for img in ds.images} == {
+        "images/train/train0.jpg": "train",
+        "images/val/val0.jpg": "val",
+    }
+    assert ds.category_names == ["fire"] and len(ds.annotations) == 2
+    assert ds.root == root or ds.root.resolve() == root.resolve()

@@ -111,3 +111,15 @@ def test_execution_providers_fall_back_to_the_cpu_with_a_notice() -> None:
     assert execution_providers("auto", ["CPUExecutionProvider"]) == (["CPUExecutionProvider"], None)
     providers, notice = execution_providers("cuda", ["CPUExecutionProvider"])
     assert providers == ["CPUExecutionProvider"] and "no CUDA provider" in notice and "\n" not in notice
+
+
+def test_a_forced_wrong_format_names_the_layout_shape_and_classes(tmp_path):
+    model = oracle_model(tmp_path / "v5.onnx", layout="yolov5")
+    with pytest.raises(ModelError) as info:
+        OnnxDetector(model, "yolov8")
+    text = str(info.value)
+    assert "does not fit the yolov8 layout as asked with --format" in text
+    assert "for the 2 class names ['fire', 'smoke'] it expects (B, 4+2, N) = (B, 6, N)" in text
+    assert "output shape (1, " in text and text.endswith("it fits --format yolov5")
+    with pytest.raises(ModelError, match=r"yolov5 layout as asked .* check --names"):
+        OnnxDetector(model, "yolov5", names=["fire"])

@@ -19,15 +19,36 @@ def work(tmp_path_factory):
 
 def test_split_selection(work):
     _, test, _ = work
-    ds, problems = load_test_set(test, split="test")
-    assert len(ds.images) == 6 and problems == []
+    ds, problems, split, splits = load_test_set(test, split="test")
+    assert len(ds.images) == 6 and problems == [] and split == "test" and splits == ["test"]
     with pytest.raises(ScoreError, match="no split 'valid'"):
         load_test_set(test, split="valid")
 
 
+def test_default_split_is_test_then_val_never_train_silently(tmp_path):
+    from curate.dataset import DatasetBuilder
+    from eval.score import default_split
+
+    def dataset(splits: tuple[str, ...]):
+        builder = DatasetBuilder(tmp_path, ["fire"])
+        for k, split in enumerate(splits):
+            builder.add_image(f"{split}/{k}.jpg", 10, 10, "real:x", split)
+        return builder.build({})
+
+    assert default_split(dataset(("train", "valid", "test"))) == "test"
+    assert default_split(dataset(("train", "valid"))) == "valid"
+    assert default_split(dataset(("train", "val"))) == "val"
+    assert default_split(dataset(("",))) == "all"
+    with pytest.raises(ScoreError, match="no test or validation split .* --split all"):
+        default_split(dataset(("train", "extra")))
+    ds = dataset(("train", "valid"))
+    assert ds.resolve_split("val") == "valid" and len(ds.select_split("val").images) == 1
+    assert dataset(("val",)).resolve_split("valid") == "val" and ds.resolve_split("test") is None
+
+
 def test_unreadable_image_is_left_out_and_reported(work, tmp_path):
     root, test, det = work
-    ds, _ = load_test_set(test)
+    ds = load_test_set(test).dataset
     (tmp_path / "images").mkdir()
     for img in ds.images:
         src = ds.image_path(img)

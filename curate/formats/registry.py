@@ -16,14 +16,16 @@ FORMATS: tuple[str, ...] = ("coco", "yolo", "voc", "dfire")
 
 def detect_format(path: Path | str) -> str:
     """``coco`` for a .json file or a folder with ``annotations.json``; ``voc`` for XML annotations;
-    ``yolo`` for ``labels`` folders, ``data.yaml`` or ``.txt`` beside images. Raises ValueError otherwise."""
+    ``yolo`` for a ``data.yaml`` file, ``labels`` folders, ``data.yaml`` or ``.txt`` beside images. Raises ValueError otherwise."""
     path = Path(path)
     if not path.exists():
         raise FileNotFoundError(f"{path}: no such file or folder")
     if path.is_file():
         if path.suffix.lower() == ".json":
             return "coco"
-        raise ValueError(f"{path}: a single file must be a COCO .json")
+        if path.suffix.lower() in (".yaml", ".yml"):
+            return "yolo"
+        raise ValueError(f"{path}: a single file must be a COCO .json or an ultralytics data.yaml")
     if (path / ANNOTATIONS_FILE).is_file():
         return "coco"
     if (path / "Annotations").is_dir() or next(path.glob("*.xml"), None) is not None:

@@ -32,14 +32,13 @@ def read_yolo(
     source: str | None = None,
     aliases: Mapping[str, str] | None = None,
 ) -> ReadResult:
-    """Read a YOLO dataset folder (all splits). ``names`` overrides the class names found on disk."""
-    root = Path(root)
+    """Read a YOLO dataset (all splits): a folder, or an ultralytics dataset file (``data.yaml``, any name)
+    whose ``path:`` (absolute, or relative to the file's folder; the file's folder when absent or missing here)
+    is the dataset folder. ``names`` overrides the class names found on disk."""
     problems: list[Problem] = []
-    if not root.is_dir():
-        raise FileNotFoundError(f"{root}: not a folder")
-    doc = _data_yaml(root, problems)
+    root, doc = dataset_root(Path(root), problems)
     if names is None:
-        names = find_class_names(root, problems)
+        names = _names_from_yaml(doc, root, problems) if doc and "names" in doc else find_class_names(root, problems)
     resolver = ClassResolver(str(root), aliases)
     class_names = [resolver.resolve(n, problems) for n in names] if names else None
     pairs = pair_images(root, doc, problems)
@@ -90,9 +89,27 @@ def _missing_label_problems(root: Path, pairs: list[Pair]) -> list[Problem]:
     return out
 
 
-def _data_yaml(root: Path, problems: list[Problem]) -> dict[str, Any] | None:
-    """The parsed ``data.yaml`` of ``root`` (None when absent or unreadable, the latter reported)."""
-    path = root / "data.yaml"
+def dataset_root(path: Path, problems: list[Problem]) -> tuple[Path, dict[str, Any] | None]:
+    """(dataset folder, parsed dataset YAML or None) of a YOLO dataset given as a folder (its ``data.yaml``) or as
+    a dataset YAML file. Raises FileNotFoundError / ValueError when ``path`` is neither."""
+    if path.is_dir():
+        return path, _data_yaml(path / "data.yaml", problems)
+    if not path.is_file():
+        raise FileNotFoundError(f"{path}: no such folder or dataset file")
+    doc = _data_yaml(path, problems)
+    if doc is None:
+        raise ValueError(f"{path}: not an ultralytics dataset file (a YAML mapping with train/val/names)")
+    base = doc.get("path")
+    if base:
+        folder = Path(str(base)) if Path(str(base)).is_absolute() else path.parent / str(base)
+        if folder.is_dir():
+            return folder, doc
+        problems.append(Problem(str(path), f"its path: {base!r} is not a folder here; {path.parent} used", "warning"))
+    return path.parent, doc
+
+
+def _data_yaml(path: Path, problems: list[Problem]) -> dict[str, Any] | None:
+    """The parsed dataset YAML ``path`` (None when absent or unreadable, the latter reported)."""
     if not path.is_file():
         return None
     try:
@@ -137,6 +154,7 @@ def find_class_names(root: Path, problems: list[Problem]) -> list[str] | None:
 
 
 def _names_from_yaml(doc: dict[str, Any], path: Path, problems: list[Problem]) -> list[str]:
+    """Class names of a dataset YAML ``doc`` (a list, or an id -> name mapping), checked against ``nc``."""
     raw = doc["names"]
     if isinstance(raw, dict):
         names = [str(raw[k]) for k in sorted(raw, key=int)]

@@ -8,8 +8,8 @@ Layouts understood (folder names case-insensitive; links to folders and files ar
 - ``images/<split>/*.jpg`` + ``labels/<split>/*.txt`` (ultralytics);
 - ``images/`` + ``labels/`` (one split), or images with their ``.txt`` side by side (flat folders);
 - ``data.yaml`` whose ``train`` / ``val`` / ``test`` entries (a folder, a ``.txt`` list of images, or a list of
-  either; relative to its ``path:`` or to the file's folder) all resolve inside the dataset folder: then those
-  entries decide the splits. Otherwise (Roboflow's ``../train/images`` entries point elsewhere) the folder
+  either; relative to the dataset folder, see :func:`curate.formats.yolo.dataset_root`) all resolve inside the
+  dataset folder: then those entries decide the splits. Otherwise (Roboflow's ``../train/images`` entries point elsewhere) the folder
   layout does.
 
 Label files that pair with no image are reported per folder; when their names match images that have no label
@@ -118,11 +118,10 @@ def yaml_splits(root: Path, doc: Mapping[str, Any], problems: list[Problem]) -> 
     entries = {k: doc[k] for k in YAML_SPLITS if doc.get(k)}
     if not entries:
         return None
-    base = _yaml_base(root, doc.get("path"))
     out: dict[Path, str] = {}
     for split, value in entries.items():
         for entry in value if isinstance(value, list) else [value]:
-            images = _entry_images(root, base, str(entry))
+            images = _entry_images(root, str(entry))
             if images is None:
                 problems.append(
                     Problem(
@@ -138,20 +137,10 @@ def yaml_splits(root: Path, doc: Mapping[str, Any], problems: list[Problem]) -> 
     return sorted(out.items(), key=lambda kv: kv[0].as_posix())
 
 
-def _yaml_base(root: Path, path: Any) -> Path:
-    """The folder a data.yaml's relative split entries start from: its ``path:`` when that exists here."""
-    if path:
-        candidate = Path(str(path))
-        candidate = candidate if candidate.is_absolute() else root / candidate
-        if candidate.is_dir():
-            return candidate
-    return root
-
-
-def _entry_images(root: Path, base: Path, entry: str) -> list[Path] | None:
-    """The images of one split entry (folder or ``.txt`` list), as paths below ``root``; None when the entry does
-    not resolve to something inside ``root``."""
-    target = Path(entry) if Path(entry).is_absolute() else base / entry
+def _entry_images(root: Path, entry: str) -> list[Path] | None:
+    """The images of one split entry (folder or ``.txt`` list, relative to ``root``), as paths below ``root``;
+    None when the entry does not resolve to something inside ``root``."""
+    target = Path(entry) if Path(entry).is_absolute() else root / entry
     inside = _inside(root, target)
     if inside is None:
         return None
