@@ -99,14 +99,39 @@ def cmd_score(args: argparse.Namespace) -> int:
         return 2
     _report_problems(result)
     intervals = _intervals(result, args.ci, args.seed) if args.ci else {}
+    errors = _errors(result, args.alarm_conf) if args.errors else None
     if args.out:
         files = write_outputs(result, args.out, intervals)
+        if errors is not None:
+            files["errors"] = args.out / "errors.json"
+            files["errors"].write_text(json.dumps(errors.to_dict(), indent=1) + "\n", encoding="utf-8")
         print(f"wrote {', '.join(str(p) for p in files.values())}", file=sys.stderr)
     if args.json:
-        print(json.dumps({**result.metrics.to_dict(), **intervals}, indent=1))
+        extra = {"errors": errors.to_dict()} if errors is not None else {}
+        print(json.dumps({**result.metrics.to_dict(), **intervals, **extra}, indent=1))
     else:
         _print_text(result, intervals)
+        if errors is not None:
+            _print_errors(errors)
     return 0
+
+
+def _errors(result, alarm_conf: float):  # -> eval.errors.ErrorBreakdown
+    from eval.errors import error_breakdown
+
+    scored = result.dataset.filter_images(lambda img: img.id in result.predictions.by_image)
+    return error_breakdown(scored, result.records, list(result.evaluation.params.catIds), alarm_conf)
+
+
+def _print_errors(errors) -> None:  # errors: eval.errors.ErrorBreakdown
+    print("errors (TIDE): AP50 gained when each kind is fixed alone, in points")
+    for kind, delta in errors.delta_ap50.items():
+        print(f"       {kind:<15} {100 * delta:>5.1f}  ({errors.counts[kind]})")
+    if errors.false_alarms_per_100 is not None:
+        print(
+            f"alarms {errors.false_alarms_per_100:.1f} detections >= {errors.alarm_conf:g} per 100 images without "
+            f"fire ({100 * errors.alarm_image_share:.0f}% of the {errors.negatives} such images raise one)"
+        )
 
 
 def cmd_compare(args: argparse.Namespace) -> int:
@@ -227,15 +252,27 @@ def register(sub: argparse._SubParsersAction) -> None:
         "original pixels) and report COCO AP, AP50, AP75, small/medium/large and per class (pycocotools;\n"
         "negative images count). Classes are matched by name between the model's metadata and the test set.\n\n"
         "example:\n  fuzzyfire score runs/R500_S500/seed0/best.onnx --data ../shared/data/fire-smoke-608 --split test\n"
-        "  fuzzyfire score yolov8n.onnx --data out/test --format yolov8 --names fire --json --out out/score",
+        "  fuzzyfire score yolov8n.onnx --data out/test --format yolov8 --names fire --json --out out/score\n"
+        "  fuzzyfire score best.onnx --data ds/data.yaml --split val --resize linear --errors",
     )
     p.add_argument("model", type=Path, help="detector .onnx file")
     _add_scoring_args(p)
     p.add_argument(
         "--ci", type=int, default=0, metavar="N", help="95%% bootstrap interval of AP from N image resamples"
     )
+    p.add_argument(
+        "--errors",
+        action="store_true",
+        help="TIDE-style breakdown: AP50 lost to classification, localisation, both, duplicate, background and "
+        "missed errors, and false alarms on images without fire",
+    )
+    p.add_argument(
+        "--alarm-conf", type=float, default=0.25, help="confidence of a false alarm for --errors (default 0.25)"
+    )
     p.add_argument("--json", action="store_true", help='print {"AP", "AP50", "images", "boxes", "per_class", ...}')
-    p.add_argument("--out", type=Path, help="also write predictions.json, metrics.json, pr_curve.png, matches.npz")
+    p.add_argument(
+        "--out", type=Path, help="also write predictions.json, metrics.json, pr_curve.png, matches.npz (errors.json)"
+    )
     p.set_defaults(func=cmd_score)
 
     p = sub.add_parser(

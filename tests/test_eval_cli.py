@@ -151,3 +151,14 @@ def test_compare_gives_the_paired_delta(work, capsys):
     assert doc["delta"]["AP"]["low"] <= doc["delta"]["AP"]["value"] <= doc["delta"]["AP"]["high"] < 0
     assert main(["compare", str(good), str(good), "--data", str(work["test"]), "--samples", "50"]) == 0
     assert "B - A  AP +0.0 points, 95% CI [+0.0, +0.0], p = 1.000" in capsys.readouterr().out
+
+
+def test_errors_breakdown_from_the_cli(work, tmp_path):
+    model = oracle_model(work["root"] / "errs.onnx")
+    doc = run_json(model, "--data", work["test"], "--errors", "--out", tmp_path / "o")
+    errors = doc["errors"]
+    assert errors["AP50"] == pytest.approx(doc["AP50"])  # the breakdown's AP50 is the scored AP50
+    assert set(errors["delta_AP50"]) == {"classification", "localisation", "both", "duplicate", "background", "missed"}
+    assert all(v == pytest.approx(0.0) for v in errors["delta_AP50"].values())  # the oracle makes no error
+    assert errors["negatives"] >= 1 and errors["false_alarms_per_100_negatives"] == 0.0
+    assert json.loads((tmp_path / "o" / "errors.json").read_text()) == errors

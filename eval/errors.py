@@ -1,0 +1,224 @@
+"""Where a detector's AP50 goes: a TIDE-style error breakdown (Bolya et al., "TIDE: A General Toolbox for
+Identifying Object Detection Errors", ECCV 2020), written from the paper's definitions, plus the false alarms on
+images without fire that a fire-alarm user asks about first.
+
+Detections are matched to ground truth per (image, class) in descending score order at IoU >= ``T_FG`` (0.5),
+each ground-truth box once, as COCO does (crowd boxes absorb the detections they match, which are then no
+error). Every unmatched detection gets the first error type it fits, with ``iou_same`` / ``iou_other`` its
+best IoU with a ground-truth box of its own / of another class:
+
+- ``duplicate``: iou_same >= T_FG (its box was already taken by a higher-scoring detection);
+- ``classification``: iou_other >= T_FG;
+- ``localisation``: T_BG <= iou_same < T_FG (T_BG = 0.1);
+- ``both``: T_BG <= iou_other < T_FG;
+- ``background``: every IoU < T_BG.
+
+A ground-truth box no detection matched and no classification or localisation error points at is ``missed``.
+Each type's weight is dAP50 = AP50 with that type fixed - AP50, every type fixed alone, AP50 by pycocotools
+(:func:`curate.cocoeval.run_cocoeval`): a classification error takes the class of its box and a localisation
+error the box itself (dropped if that box is already detected), duplicates, "both" and background errors are
+dropped, missed boxes are removed from the ground truth.
+"""
+
+from __future__ import annotations
+
+from collections import defaultdict
+from collections.abc import Sequence
+from dataclasses import dataclass, replace
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+from pycocotools.cocoeval import Params
+
+from curate.boxes import box_iou_xyxy, xywh_to_xyxy
+from curate.cocoeval import run_cocoeval, top_records
+from curate.dataset import Dataset
+
+T_FG = 0.5  # foreground IoU: a detection at or above it is on its object
+T_BG = 0.1  # background IoU: a detection below it with every box is on nothing
+ALARM_CONF = 0.25  # confidence at which a detection would raise an alarm (ultralytics' predict default)
+ERROR_TYPES = ("classification", "localisation", "both", "duplicate", "background", "missed")
+
+
+@dataclass(frozen=True)
+class ErrorBreakdown:
+    """AP50 (0..1), each error type's count and dAP50 when fixed (0..1 points of AP50), and false alarms at
+    ``alarm_conf`` on the ``negatives`` images without ground truth: detections per 100 such images and the
+    share (0..1) of them with at least one."""
+
+    ap50: float
+    counts: dict[str, int]
+    delta_ap50: dict[str, float]
+    negatives: int
+    alarm_conf: float
+    false_alarms_per_100: float | None
+    alarm_image_share: float | None
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "AP50": self.ap50,
+            "counts": self.counts,
+            "delta_AP50": self.delta_ap50,
+            "negatives": self.negatives,
+            "alarm_conf": self.alarm_conf,
+            "false_alarms_per_100_negatives": self.false_alarms_per_100,
+            "negatives_with_alarm": self.alarm_image_share,
+        }
+
+
+@dataclass
+class _Error:
+    record: int  # index into the records
+    kind: str
+    target: int | None  # annotation id of the box it is on (classification, localisation), else None
+
+
+def error_breakdown(
+    dataset: Dataset, records: Sequence[dict[str, Any]], cat_ids: Sequence[int], alarm_conf: float = ALARM_CONF
+) -> ErrorBreakdown:
+    """The breakdown of COCO result ``records`` ({image_id, category_id, bbox xywh px, score}) on ``dataset``
+    (its scored images), over the categories ``cat_ids`` (module docstring)."""
+    records = top_records(list(records), Params(iouType="bbox").maxDets[-1])
+    cats = set(cat_ids)
+    errors, matched = _classify(dataset, records, cats)
+    missed = _missed(dataset, cats, matched, errors)
+    base = _ap50(dataset, records, cat_ids)
+    counts = {kind: sum(e.kind == kind for e in errors) for kind in ERROR_TYPES}
+    counts["missed"] = len(missed)
+    delta = {}
+    for kind in ERROR_TYPES:
+        if kind == "missed":
+            fixed_ds = replace(dataset, annotations=tuple(a for a in dataset.annotations if a.id not in missed))
+            fixed_ap = _ap50(fixed_ds, records, cat_ids) if missed else base
+        else:
+            fixed_ap = (
+                _ap50(dataset, _fixed(dataset, records, errors, matched, kind), cat_ids) if counts[kind] else base
+            )
+        delta[kind] = fixed_ap - base
+    negatives, per_100, share = _false_alarms(dataset, records, cats, alarm_conf)
+    return ErrorBreakdown(base, counts, delta, negatives, alarm_conf, per_100, share)
+
+
+def _ap50(dataset: Dataset, records: Sequence[dict[str, Any]], cat_ids: Sequence[int]) -> float:
+    ap = float(run_cocoeval(dataset, records, cat_ids).stats[1])
+    return max(ap, 0.0)  # -1 = undefined (no ground truth): nothing to gain
+
+
+def _classify(dataset: Dataset, records: Sequence[dict[str, Any]], cats: set[int]) -> tuple[list[_Error], set[int]]:
+    """Errors of the unmatched detections, in descending score order, and the ids of the matched boxes."""
+    gts = defaultdict(list)
+    for a in dataset.annotations:
+        if a.category_id in cats:
+            gts[a.image_id].append(a)
+    by_image = defaultdict(list)
+    for i, r in enumerate(records):
+        by_image[r["image_id"]].append(i)
+    errors: list[_Error] = []
+    matched: set[int] = set()
+    for image_id, idx in by_image.items():
+        idx = sorted(idx, key=lambda i: -records[i]["score"])  # stable: ties keep record order, as COCOeval
+        anns = gts.get(image_id, [])
+        boxes = np.array([a.bbox for a in anns], dtype=np.float64).reshape(-1, 4)
+        dets = np.array([records[i]["bbox"] for i in idx], dtype=np.float64).reshape(-1, 4)
+        iou = box_iou_xyxy(xywh_to_xyxy(dets), xywh_to_xyxy(boxes)) if len(anns) else np.zeros((len(idx), 0))
+        crowd = np.array([a.iscrowd for a in anns], dtype=bool)
+        ioa = _ioa(dets, boxes) if crowd.any() else iou
+        for row, i in enumerate(idx):
+            error = _one(row, records[i]["category_id"], anns, iou, ioa, crowd, matched)
+            if error is not None:
+                errors.append(_Error(i, *error))
+    errors.sort(key=lambda e: -records[e.record]["score"])
+    return errors, matched
+
+
+def _one(
+    row: int,
+    cat: int,
+    anns: Sequence[Any],
+    iou: NDArray[np.float64],
+    ioa: NDArray[np.float64],
+    crowd: NDArray[np.bool_],
+    matched: set[int],
+) -> tuple[str, int | None] | None:
+    """Match detection ``row`` (class ``cat``) to a free box of its class, or name its error; None when it is
+    a true positive or lies on a crowd box (both update ``matched`` as needed)."""
+    same = np.array([a.category_id == cat for a in anns], dtype=bool)
+    free = same & ~crowd & np.array([a.id not in matched for a in anns], dtype=bool)
+    if free.any():
+        k = int(np.argmax(np.where(free, iou[row], -1.0)))
+        if iou[row, k] >= T_FG:
+            matched.add(anns[k].id)
+            return None
+    if (same & crowd).any() and np.where(same & crowd, ioa[row], 0.0).max() >= T_FG:
+        return None
+    real = ~crowd
+    iou_same = np.where(same & real, iou[row], 0.0)
+    iou_other = np.where(~same & real, iou[row], 0.0)
+    best_same = float(iou_same.max(initial=0.0))
+    best_other = float(iou_other.max(initial=0.0))
+    if best_same >= T_FG:
+        return "duplicate", None
+    if best_other >= T_FG:
+        return "classification", anns[int(np.argmax(iou_other))].id
+    if best_same >= T_BG:
+        return "localisation", anns[int(np.argmax(iou_same))].id
+    if best_other >= T_BG:
+        return "both", None
+    return "background", None
+
+
+def _ioa(dets: NDArray[np.float64], boxes: NDArray[np.float64]) -> NDArray[np.float64]:
+    """(D, G) intersection over the detection's area: how COCO matches a detection to a crowd box."""
+    x0 = np.maximum(dets[:, None, 0], boxes[None, :, 0])
+    y0 = np.maximum(dets[:, None, 1], boxes[None, :, 1])
+    x1 = np.minimum(dets[:, None, 0] + dets[:, None, 2], boxes[None, :, 0] + boxes[None, :, 2])
+    y1 = np.minimum(dets[:, None, 1] + dets[:, None, 3], boxes[None, :, 1] + boxes[None, :, 3])
+    inter = np.clip(x1 - x0, 0, None) * np.clip(y1 - y0, 0, None)
+    return inter / np.maximum(dets[:, None, 2] * dets[:, None, 3], 1e-12)
+
+
+def _missed(dataset: Dataset, cats: set[int], matched: set[int], errors: Sequence[_Error]) -> set[int]:
+    """Ids of the boxes nothing found: unmatched, not crowd, and no classification or localisation error on them."""
+    targeted = {e.target for e in errors if e.target is not None}
+    return {
+        a.id
+        for a in dataset.annotations
+        if a.category_id in cats and not a.iscrowd and a.id not in matched and a.id not in targeted
+    }
+
+
+def _fixed(
+    dataset: Dataset, records: Sequence[dict[str, Any]], errors: Sequence[_Error], matched: set[int], kind: str
+) -> list[dict[str, Any]]:
+    """``records`` with the errors of ``kind`` fixed (module docstring); errors are in descending score order, so
+    of two fixes landing on one box the higher-scoring keeps it and the other is dropped."""
+    anns = {a.id: a for a in dataset.annotations}
+    drop: set[int] = set()
+    changed: dict[int, dict[str, Any]] = {}
+    taken = set(matched)
+    for e in errors:
+        if e.kind != kind:
+            continue
+        if e.target is None or e.target in taken:
+            drop.add(e.record)
+            continue
+        taken.add(e.target)
+        gt = anns[e.target]
+        if kind == "classification":
+            changed[e.record] = {**records[e.record], "category_id": gt.category_id}
+        else:
+            changed[e.record] = {**records[e.record], "bbox": list(gt.bbox)}
+    return [changed.get(i, r) for i, r in enumerate(records) if i not in drop]
+
+
+def _false_alarms(
+    dataset: Dataset, records: Sequence[dict[str, Any]], cats: set[int], conf: float
+) -> tuple[int, float | None, float | None]:
+    """(negative images, detections >= ``conf`` per 100 of them, share of them with one or more)."""
+    with_boxes = {a.image_id for a in dataset.annotations if a.category_id in cats and not a.iscrowd}
+    negatives = {img.id for img in dataset.images} - with_boxes
+    if not negatives:
+        return 0, None, None
+    alarms = [r["image_id"] for r in records if r["image_id"] in negatives and r["score"] >= conf]
+    return len(negatives), 100.0 * len(alarms) / len(negatives), len(set(alarms)) / len(negatives)

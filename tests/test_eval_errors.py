@@ -1,0 +1,89 @@
+"""TIDE-style error breakdown on planted errors: each type counted where it was planted, its dAP50 what
+pycocotools gives with it fixed by hand, nothing on a perfect detector, false alarms on negatives."""
+
+from __future__ import annotations
+
+import pytest
+
+from curate.cocoeval import run_cocoeval
+from curate.dataset import DatasetBuilder
+from eval.errors import ERROR_TYPES, error_breakdown
+
+FIRE, SMOKE = 1, 2
+
+
+def _dataset(tmp_path, gts):
+    """``gts``: per image a list of (category id, xywh); an empty list is a negative image."""
+    builder = DatasetBuilder(tmp_path, ["fire", "smoke"])
+    for k, boxes in enumerate(gts):
+        image_id = builder.add_image(f"{k}.jpg", 100, 100, "real:x", "test")
+        for cat, box in boxes:
+            builder.add_box(image_id, ["fire", "smoke"][cat - 1], box)
+    return builder.build({})
+
+
+def _rec(image_id, cat, box, score):
+    return {"image_id": image_id, "category_id": cat, "bbox": list(box), "score": score}
+
+
+def test_each_planted_error_is_found_where_it_was_planted(tmp_path):
+    ds = _dataset(
+        tmp_path,
+        [
+            [(FIRE, (10, 10, 20, 20))],  # 1: found, then found again (duplicate)
+            [(FIRE, (10, 10, 20, 20))],  # 2: seen as smoke (classification)
+            [(FIRE, (0, 0, 20, 20))],  # 3: box shifted by half (localisation, IoU 1/3)
+            [(SMOKE, (0, 0, 20, 20))],  # 4: shifted and seen as fire (both); the smoke is missed
+            [(FIRE, (30, 30, 10, 10))],  # 5: missed; a detection on nothing (background)
+            [],  # 6: no fire: one alarm over 0.25, one below
+            [(FIRE, (40, 40, 30, 30))],  # 7: found last, so every error above costs precision there
+        ],
+    )
+    records = [
+        _rec(1, FIRE, (10, 10, 20, 20), 0.9),
+        _rec(1, FIRE, (11, 10, 20, 20), 0.8),
+        _rec(2, SMOKE, (10, 10, 20, 20), 0.7),
+        _rec(3, FIRE, (10, 0, 20, 20), 0.6),
+        _rec(4, FIRE, (10, 0, 20, 20), 0.5),
+        _rec(5, FIRE, (70, 70, 5, 5), 0.4),
+        _rec(6, FIRE, (50, 50, 10, 10), 0.3),
+        _rec(6, FIRE, (20, 50, 10, 10), 0.1),
+        _rec(7, FIRE, (40, 40, 30, 30), 0.05),
+    ]
+    out = error_breakdown(ds, records, [FIRE, SMOKE])
+    assert out.counts == {
+        "classification": 1,
+        "localisation": 1,
+        "both": 1,
+        "duplicate": 1,
+        "background": 3,
+        "missed": 2,
+    }
+    assert out.ap50 == pytest.approx(run_cocoeval(ds, records, [FIRE, SMOKE]).stats[1])
+    assert all(out.delta_ap50[k] > 0 for k in ERROR_TYPES), out.delta_ap50
+    assert out.negatives == 1 and out.false_alarms_per_100 == pytest.approx(100.0)
+    assert out.alarm_image_share == pytest.approx(1.0)
+
+
+def test_delta_is_the_ap_with_the_error_fixed_by_hand(tmp_path):
+    ds = _dataset(tmp_path, [[(FIRE, (10, 10, 20, 20))], [(FIRE, (0, 0, 20, 20))]])
+    records = [_rec(1, FIRE, (10, 10, 20, 20), 0.9), _rec(2, FIRE, (10, 0, 20, 20), 0.8)]
+    out = error_breakdown(ds, records, [FIRE])
+    by_hand = [records[0], _rec(2, FIRE, (0, 0, 20, 20), 0.8)]  # the shifted box put on its object
+    fixed = run_cocoeval(ds, by_hand, [FIRE]).stats[1]
+    assert fixed == pytest.approx(1.0) and out.ap50 == pytest.approx(51 / 101)  # 101-point: recall 0..0.5
+    assert out.delta_ap50["localisation"] == pytest.approx(fixed - out.ap50)
+    assert {k: v for k, v in out.counts.items() if v} == {"localisation": 1}
+    assert out.negatives == 0 and out.false_alarms_per_100 is None
+
+
+def test_a_perfect_detector_has_no_errors_and_crowd_boxes_absorb(tmp_path):
+    builder = DatasetBuilder(tmp_path, ["fire"])
+    image = builder.add_image("a.jpg", 100, 100, "real:x", "test")
+    builder.add_box(image, "fire", (10, 10, 20, 20))
+    builder.add_box(image, "fire", (50, 50, 40, 40), iscrowd=1)
+    ds = builder.build({})
+    records = [_rec(image, FIRE, (10, 10, 20, 20), 0.9), _rec(image, FIRE, (55, 55, 20, 20), 0.8)]
+    out = error_breakdown(ds, records, [FIRE])
+    assert out.ap50 == pytest.approx(1.0)
+    assert all(v == 0 for v in out.counts.values()) and all(v == 0 for v in out.delta_ap50.values())
