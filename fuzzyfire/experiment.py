@@ -159,11 +159,12 @@ def plan_runs(
     train = cfg.train if cfg.train.threads else replace(cfg.train, threads=threads)
     score = cfg.score if cfg.score.threads else replace(cfg.score, threads=threads)
     val = data.real.with_split(cfg.real.val_split)
+    engine = cfg.engine if cfg.engine.name == "command" else None
     specs = []
     for seed in cfg.grid.seeds:
         for name, method in grid_entries(cfg):
             spec = RunSpec(name, method, seed, mixtures[(name, method, seed)], val, tuple(tests), cfg.classes,
-                           train, score, out)  # fmt: skip
+                           train, score, out, engine)  # fmt: skip
             specs.append(replace(spec, out=out / "runs" / spec.label / f"seed{seed}-{spec.hash()[:8]}"))
     return specs
 

@@ -14,6 +14,7 @@ from typing import Literal, Optional
 
 from curate.curation import CurateConfig
 from curate.sources import SourceConfig
+from fuzzyfire.engine import EngineConfig, EngineError
 from synth.method1 import Method1Config
 from synth.method2 import Method2Config
 from synth.standin import StandInConfig
@@ -146,6 +147,7 @@ class ExperimentConfig:
     synth: SynthConfig = field(default_factory=SynthConfig)
     grid: GridConfig = field(default_factory=GridConfig)
     train: TrainConfig = field(default_factory=TrainConfig)
+    engine: EngineConfig = field(default_factory=EngineConfig)  # who trains: fuzzyfire or a command (engine.py)
     score: ScoreConfig = field(default_factory=ScoreConfig)
     executor: ExecutorConfig = field(default_factory=ExecutorConfig)
     report: ReportConfig = field(default_factory=ReportConfig)
@@ -166,3 +168,7 @@ class ExperimentConfig:
             raise ExperimentConfigError("grid.mixtures and grid.table1 are both empty: nothing to train")
         if not self.classes:
             raise ExperimentConfigError("classes is empty")
+        try:
+            self.engine.check()
+        except EngineError as exc:
+            raise ExperimentConfigError(str(exc)) from None

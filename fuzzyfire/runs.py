@@ -18,9 +18,11 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from fuzzyfire.config import to_dict
+from fuzzyfire.engine import command_train
 from fuzzyfire.stages import DataRef, digest, load_data
 
 if TYPE_CHECKING:
+    from fuzzyfire.engine import EngineConfig
     from fuzzyfire.experiment_config import ScoreConfig
     from train.config import TrainConfig
 
@@ -40,7 +42,8 @@ class EvalSet:
 
 @dataclass(frozen=True)
 class RunSpec:
-    """Everything a run needs. ``method`` is the synthetic pool (None for real-only mixtures)."""
+    """Everything a run needs. ``method`` is the synthetic pool (None for real-only mixtures); ``engine`` an
+    external trainer (:mod:`fuzzyfire.engine`; None = our detector, trained with ``train``)."""
 
     mixture: str
     method: str | None
@@ -52,13 +55,16 @@ class RunSpec:
     train: TrainConfig  # its seed is replaced by ``seed``
     score: ScoreConfig
     out: Path
+    engine: EngineConfig | None = None
 
     @property
     def label(self) -> str:
         return self.mixture if self.method is None else f"{self.mixture}-{self.method}"
 
     def identity(self) -> dict[str, Any]:
+        engine = {"engine": to_dict(self.engine)} if self.engine is not None else {}
         return {
+            **engine,
             "mixture": self.mixture,
             "method": self.method,
             "seed": self.seed,
@@ -139,11 +145,15 @@ def execute_run(spec: RunSpec) -> dict[str, Any]:
     spec.out.mkdir(parents=True, exist_ok=True)
     _write_json(spec.out / "run.json", {"hash": spec.hash(), "identity": spec.identity()})
     start = time.perf_counter()
-    trained = train_run(spec)
-    if not trained.get("onnx"):
-        raise RunError(f"{spec.out}: training produced no best.onnx (no epoch finished)")
+    if spec.engine is not None:
+        model, best = command_train(spec, spec.engine), {"engine": spec.engine.name}
+    else:
+        trained = train_run(spec)
+        if not trained.get("onnx"):
+            raise RunError(f"{spec.out}: training produced no best.onnx (no epoch finished)")
+        model, best = spec.out / "train" / trained["onnx"], trained["best"]
     trained_at = time.perf_counter()
-    tests = score_run(spec, spec.out / "train" / trained["onnx"])
+    tests = score_run(spec, model)
     _write_json(spec.out / "timing.json", {"train_s": trained_at - start, "score_s": time.perf_counter() - trained_at})
     results = {
         "hash": spec.hash(),
@@ -151,7 +161,7 @@ def execute_run(spec: RunSpec) -> dict[str, Any]:
         "mixture": spec.mixture,
         "method": spec.method,
         "seed": spec.seed,
-        "best": trained["best"],
+        "best": best,
         "tests": tests,
     }
     _write_json(spec.out / RESULTS_FILE, results)

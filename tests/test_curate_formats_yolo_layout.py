@@ -90,3 +90,29 @@ def test_locator_and_image_folder_names(tmp_path):
     locator = LabelLocator(tmp_path)
     assert locator.locate(tmp_path / "s" / "image" / "a.b.jpg") == (tmp_path / "s" / "label" / "a.b.txt", "s")
     assert locator.locate(tmp_path / "flat" / "x.png") == (tmp_path / "flat" / "x.txt", "flat")
+
+
+def test_data_yaml_entries_may_point_outside_the_folder(tmp_path):
+    """As fuzzyfire mix writes them: val names the real set's validation images by absolute path."""
+    _dataset(tmp_path / "real", "valid/images", "valid/labels", n=2)
+    mix = tmp_path / "mix"
+    _dataset(mix, "images/train", "labels/train", n=3)
+    doc = {
+        "path": str(mix),
+        "train": "images/train",
+        "val": str(tmp_path / "real" / "valid" / "images"),
+        "names": ["fire"],
+    }
+    (mix / "data.yaml").write_text(yaml.safe_dump(doc))
+    result = read_yolo(mix / "data.yaml")
+    splits = {i.file_name: i.split for i in result.dataset.images}
+    outside = (tmp_path / "real" / "valid" / "images").as_posix()
+    assert splits == {
+        "images/train/i0.jpg": "train",
+        "images/train/i1.jpg": "train",
+        "images/train/i2.jpg": "train",
+        f"{outside}/i0.jpg": "val",
+        f"{outside}/i1.jpg": "val",
+    }
+    assert len(result.dataset.annotations) == 5 and not result.problems
+    assert result.dataset.image_path(result.dataset.images[-1]).is_file()

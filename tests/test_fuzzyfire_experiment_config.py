@@ -29,7 +29,7 @@ def test_shipped_configs_load(name: str) -> None:
 
 def test_every_key_of_the_shipped_configs_is_commented() -> None:
     for path in CONFIGS.glob("*.yaml"):
-        if path.name not in ("demo.yaml", "paper.yaml", "shared-data.yaml"):
+        if path.name not in ("demo.yaml", "paper.yaml", "paper-ultralytics.yaml", "shared-data.yaml"):
             continue
         text = path.read_text()
         assert text.lstrip().startswith("#") and text.count("#") > 30, path
@@ -54,6 +54,15 @@ def test_paper_is_the_papers_protocol() -> None:
     cur = cfg.real.curate_config()
     assert cur.rank.top == 1400 and cur.split.sizes == {"train": 1000, "valid": 200, "test": 200}
     assert cur.sources[0].path == cfg.real.path and cfg.rare.path is not None
+
+
+def test_paper_ultralytics_is_the_same_protocol_trained_by_a_command() -> None:
+    yolo, ours = _load("paper-ultralytics.yaml"), _load("paper.yaml")
+    yolo.check()
+    assert yolo.engine.name == "command" and ours.engine.name == "fuzzyfire"
+    assert yolo.engine.train.startswith("yolo detect train data={data_yaml}") and "{seed}" in yolo.engine.train
+    assert "format=onnx" in yolo.engine.export and yolo.engine.onnx == "train/weights/best.onnx"
+    assert (yolo.grid, yolo.real, yolo.rare, yolo.synth) == (ours.grid, ours.real, ours.rare, ours.synth)
 
 
 def test_overrides_go_through_the_schema() -> None:

@@ -10,6 +10,7 @@ bounding box). Label files may start with a UTF-8 BOM and end lines with CRLF. C
 
 from __future__ import annotations
 
+import os
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
@@ -53,7 +54,8 @@ def read_yolo(
             continue
         readable.append(pair)
         width, height = size
-        image_id = builder.add_image(pair.image.relative_to(root).as_posix(), width, height, tag, pair.split)
+        name = pair.image.relative_to(root).as_posix() if pair.image.is_relative_to(root) else pair.image.as_posix()
+        image_id = builder.add_image(name, width, height, tag, pair.split)
         if not pair.label.is_file():
             unlabelled.add(image_id)
             continue
@@ -101,7 +103,7 @@ def dataset_root(path: Path, problems: list[Problem]) -> tuple[Path, dict[str, A
         raise ValueError(f"{path}: not an ultralytics dataset file (a YAML mapping with train/val/names)")
     base = doc.get("path")
     if base:
-        folder = Path(str(base)) if Path(str(base)).is_absolute() else path.parent / str(base)
+        folder = Path(os.path.normpath(Path(str(base)) if Path(str(base)).is_absolute() else path.parent / str(base)))
         if folder.is_dir():
             return folder, doc
         problems.append(Problem(str(path), f"its path: {base!r} is not a folder here; {path.parent} used", "warning"))

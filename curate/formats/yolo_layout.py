@@ -69,12 +69,15 @@ class LabelLocator:
         return self._label_dir[base]
 
     def locate(self, image: Path) -> tuple[Path, str]:
-        """(label file, split from the folder layout) of ``image`` (a path below ``root``)."""
-        parts = image.relative_to(self.root).parts
+        """(label file, split from the folder layout) of ``image`` (below ``root``, or elsewhere when a data.yaml
+        entry points there: then the layout is read from its absolute path)."""
+        inside = image.is_relative_to(self.root)
+        top = self.root if inside else Path(image.anchor)
+        parts = image.relative_to(top).parts
         i = last_image_folder(parts)
         if i is None:
-            return image.with_suffix(".txt"), (parts[0] if len(parts) > 1 else "")
-        base = self.root.joinpath(*parts[:i])
+            return image.with_suffix(".txt"), (parts[0] if len(parts) > 1 and inside else "")
+        base = top.joinpath(*parts[:i])
         label = base.joinpath(self.label_folder(base), *parts[i + 1 :]).with_suffix(".txt")
         split = parts[i - 1] if i > 0 else (parts[i + 1] if len(parts) > i + 2 else "")
         return label, split
@@ -113,8 +116,9 @@ def pair_images(root: Path, doc: Mapping[str, Any] | None, problems: list[Proble
 
 
 def yaml_splits(root: Path, doc: Mapping[str, Any], problems: list[Problem]) -> list[tuple[Path, str]] | None:
-    """(image, split) for the images the split entries of a ``data.yaml`` name, when every entry resolves to a
-    folder or image-list file inside ``root``; None (folder layout decides) otherwise, with an info line."""
+    """(image, split) for the images the split entries of a ``data.yaml`` name, when every entry resolves to an
+    existing folder or image-list file (relative entries against ``root``, absolute ones anywhere, as ultralytics
+    reads them); None (folder layout decides) otherwise, with an info line."""
     entries = {k: doc[k] for k in YAML_SPLITS if doc.get(k)}
     if not entries:
         return None
@@ -126,8 +130,8 @@ def yaml_splits(root: Path, doc: Mapping[str, Any], problems: list[Problem]) -> 
                 problems.append(
                     Problem(
                         str(root / "data.yaml"),
-                        f"its {split}: {entry!r} is not a folder or image list inside {root}: "
-                        "splits taken from the folder layout",
+                        f"its {split}: {entry!r} is not a folder or image list here: splits taken from the "
+                        "folder layout",
                         "info",
                     )
                 )
@@ -138,30 +142,20 @@ def yaml_splits(root: Path, doc: Mapping[str, Any], problems: list[Problem]) -> 
 
 
 def _entry_images(root: Path, entry: str) -> list[Path] | None:
-    """The images of one split entry (folder or ``.txt`` list, relative to ``root``), as paths below ``root``;
-    None when the entry does not resolve to something inside ``root``."""
-    target = Path(entry) if Path(entry).is_absolute() else root / entry
-    inside = _inside(root, target)
-    if inside is None:
-        return None
-    if inside.is_dir():
-        return walk_files(inside, is_image_file)
-    if inside.is_file() and inside.suffix.lower() == ".txt":
-        lines = inside.read_text(encoding="utf-8-sig").splitlines()
-        listed = [
-            _inside(root, Path(s) if Path(s).is_absolute() else inside.parent / s) for s in map(str.strip, lines) if s
-        ]
-        return None if any(p is None for p in listed) else [p for p in listed if p is not None]
+    """The images of one split entry (folder or ``.txt`` list, relative to ``root`` unless absolute); paths below
+    ``root`` keep the route through ``root``. None when the entry does not exist."""
+    target = _normal(root, Path(entry))
+    if target.is_dir():
+        return walk_files(target, is_image_file)
+    if target.is_file() and target.suffix.lower() == ".txt":
+        lines = target.read_text(encoding="utf-8-sig").splitlines()
+        return [_normal(target.parent, Path(s)) for s in map(str.strip, lines) if s]
     return None
 
 
-def _inside(root: Path, path: Path) -> Path | None:
-    """``path`` written below ``root`` (lexically normalised, links not resolved), or None when it is outside."""
-    norm = Path(os.path.normpath(path.absolute()))
-    try:
-        return root.absolute() / norm.relative_to(Path(os.path.normpath(root.absolute())))
-    except ValueError:
-        return None
+def _normal(base: Path, path: Path) -> Path:
+    """``path`` (absolute, or relative to ``base``) lexically normalised, links not resolved."""
+    return Path(os.path.normpath(path if path.is_absolute() else base / path))
 
 
 def unpaired_labels(root: Path, pairs: Sequence[Pair], owned: set[Path]) -> list[Problem]:

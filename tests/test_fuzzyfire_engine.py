@@ -1,0 +1,103 @@
+"""External trainers in the grid: a fake ``yolo`` (tests/fake_trainer.py) trains and exports through the command
+engine; its ONNX is scored like our runs (the same AP as ``fuzzyfire score``), logs are kept, a failing command
+fails only its run, local and Ray executors give the same bytes, and bad templates are refused at load."""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import json
+from dataclasses import replace
+from pathlib import Path
+
+import pytest
+from factories_experiment import toy_dict
+
+from fuzzyfire.cli import main
+from fuzzyfire.config import build_config
+from fuzzyfire.engine import EngineConfig, EngineError
+from fuzzyfire.executors import LocalExecutor, build_executor
+from fuzzyfire.experiment import plan_runs, prepare_data, write_mixtures
+from fuzzyfire.experiment_config import ExperimentConfig, ExperimentConfigError
+from fuzzyfire.runs import RESULTS_FILE, execute_run
+
+FAKE = Path(__file__).with_name("fake_trainer.py")
+TRAIN = f"{{python}} {FAKE} train data={{data_yaml}} seed={{seed}} project={{run_dir}}/train name=yolo"
+EXPORT = f"{{python}} {FAKE} export model={{run_dir}}/train/yolo/weights/best.pt"
+
+
+def _config(**engine) -> ExperimentConfig:
+    doc = toy_dict(mixtures=["R12_S0", "R6_S6"], table1=[])
+    doc["engine"] = {
+        "name": "command",
+        "train": TRAIN,
+        "export": EXPORT,
+        "onnx": "train/yolo/weights/best.onnx",
+        **engine,
+    }
+    return build_config(doc, ExperimentConfig)
+
+
+@pytest.fixture(scope="module")
+def grid(tmp_path_factory: pytest.TempPathFactory):
+    out = tmp_path_factory.mktemp("engine")
+    cfg = _config()
+    cfg.check()
+    data = prepare_data(cfg, out, out)
+    return cfg, plan_runs(cfg, data, write_mixtures(cfg, data, out), out), out
+
+
+def test_command_runs_are_scored_like_ours_and_keep_their_logs(grid, tmp_path: Path) -> None:
+    _, specs, _ = grid
+    runs = [replace(s, out=tmp_path / s.label) for s in specs]
+    outcomes = list(LocalExecutor().map(execute_run, runs))
+    assert [o.error for o in outcomes] == [None, None]
+    spec, result = runs[0], outcomes[0].result
+    log = (spec.out / "train" / "command.log").read_text()
+    assert "$ " in log and "training on" in log and "exported" in log
+    assert result["best"] == {"engine": "command"} and set(result["tests"]) == {"common (stand-in)", "rare (stand-in)"}
+    common = spec.tests[0].data
+    out = io.StringIO()
+    with contextlib.redirect_stdout(out):
+        onnx = spec.out / "train" / "yolo" / "weights" / "best.onnx"
+        assert main(["score", str(onnx), "--data", str(common.path), "--split", common.split, "--json"]) == 0
+    scored = json.loads(out.getvalue())
+    assert result["tests"]["common (stand-in)"]["AP50"] == pytest.approx(scored["AP50"])
+    again = execute_run(spec)  # finished: skipped, nothing trained again
+    assert again["skipped"] is True
+
+
+def test_a_failing_command_fails_its_run_with_the_log_tail(grid, tmp_path: Path) -> None:
+    _, specs, _ = grid
+    failing = replace(specs[0].engine, train=TRAIN + " fail=1")
+    runs = [replace(specs[0], engine=failing, out=tmp_path / "bad"), replace(specs[1], out=tmp_path / "good")]
+    outcomes = list(LocalExecutor().map(execute_run, runs))
+    assert outcomes[1].error is None
+    assert "engine.train command exited with 3" in outcomes[0].error
+    assert "CUDA out of memory (pretend)" in (tmp_path / "bad" / "train" / "command.log").read_text()
+    assert not (tmp_path / "bad" / RESULTS_FILE).exists()
+
+
+def test_engine_config_is_checked_when_loaded() -> None:
+    with pytest.raises(ExperimentConfigError, match=r"unknown placeholder \{epoch\}"):
+        _config(train="yolo train epochs={epoch}").check()
+    with pytest.raises(ExperimentConfigError, match="engine.train .* is empty"):
+        _config(train="").check()
+    with pytest.raises(EngineError, match="choose fuzzyfire or command"):
+        EngineConfig(name="other").check()  # type: ignore[arg-type]
+
+
+@pytest.mark.slow
+def test_ray_runs_the_command_engine_like_local(grid, tmp_path: Path) -> None:
+    _, specs, _ = grid
+    local = [replace(s, out=tmp_path / "local" / s.label) for s in specs]
+    remote = [replace(s, out=tmp_path / "ray" / s.label) for s in specs]
+    assert [o.error for o in LocalExecutor().map(execute_run, local)] == [None, None]
+    executor = build_executor("ray", num_cpus=1, local_cpus=2)
+    try:
+        outcomes = list(executor.map(execute_run, remote))
+    finally:
+        executor.close()
+    assert all(o.error is None for o in outcomes)
+    for a, b in zip(local, remote):
+        assert (a.out / RESULTS_FILE).read_bytes() == (b.out / RESULTS_FILE).read_bytes()
