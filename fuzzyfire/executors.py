@@ -9,9 +9,12 @@ fuzzyfire installed.
 
 from __future__ import annotations
 
+import os
+import sys
 import traceback
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 
@@ -56,6 +59,8 @@ class RayExecutor:
     def __init__(
         self, address: str | None = None, num_cpus: float = 1, num_gpus: float = 0, local_cpus: int | None = None
     ) -> None:
+        if address:
+            _token_mode()  # before Ray is imported: its core reads the mode once
         try:
             import ray
         except ImportError as exc:  # pragma: no cover - ray is a dependency
@@ -63,7 +68,7 @@ class RayExecutor:
         self._ray = ray
         self.num_cpus, self.num_gpus = num_cpus, num_gpus
         if address:
-            ray.init(address=address, ignore_reinit_error=True)
+            _join(ray, address)
         else:
             ray.init(num_cpus=local_cpus, include_dashboard=False, ignore_reinit_error=True)
         gpus = float(ray.cluster_resources().get("GPU", 0))
@@ -89,6 +94,52 @@ class RayExecutor:
 
     def close(self) -> None:
         self._ray.shutdown()
+
+
+def _token_mode() -> None:
+    """Clusters started by ``ray start --head`` (Ray >= 2.59) check a token, which a client sends only in token
+    mode (``RAY_AUTH_MODE=token``; the token comes from ``RAY_AUTH_TOKEN``, ``RAY_AUTH_TOKEN_PATH`` or
+    ``~/.ray/auth_token``). Switch token mode on when a token is at hand and the mode is not set (a cluster
+    without authentication accepts it too). Ray reads the mode when it is first imported: this must run before."""
+    if "RAY_AUTH_MODE" not in os.environ and _token_available() and "ray" not in sys.modules:
+        os.environ["RAY_AUTH_MODE"] = "token"
+
+
+def _join(ray: Any, address: str) -> None:
+    """Join the cluster at ``address``; an unreachable or refusing cluster becomes one :class:`ExecutorError`
+    line instead of Ray's minutes of retries and its traceback."""
+    _check_reachable(address)
+    try:
+        ray.init(address=address, ignore_reinit_error=True, logging_level="ERROR")
+    except ConnectionError as exc:
+        mode = os.environ.get("RAY_AUTH_MODE", "disabled")
+        raise ExecutorError(
+            f"cannot join the Ray cluster at {address} ({exc}); is it running (ray status)? Clusters with token "
+            f"authentication need RAY_AUTH_MODE=token and the cluster's token in RAY_AUTH_TOKEN or ~/.ray/auth_token "
+            f"(here: RAY_AUTH_MODE={mode}, token {'found' if _token_available() else 'not found'})"
+        ) from None
+
+
+def _check_reachable(address: str) -> None:
+    """Raise :class:`ExecutorError` at once when nothing accepts connections at ``address`` (``host:port`` or
+    ``ray://host:port``); Ray itself would retry for minutes."""
+    import socket
+
+    host, _, port = address.removeprefix("ray://").rpartition(":")
+    if not host or not port.isdigit():
+        return  # not host:port (e.g. "auto"): Ray resolves it
+    try:
+        socket.create_connection((host, int(port)), timeout=5).close()
+    except OSError as exc:
+        raise ExecutorError(
+            f"cannot join the Ray cluster at {address}: {exc.strerror or exc}; is it running (ray status on the "
+            "head)? The address is the head's GCS port (ray start --head --port, default 6379) or ray://HOST:10001"
+        ) from None
+
+
+def _token_available() -> bool:
+    path = os.environ.get("RAY_AUTH_TOKEN_PATH") or str(Path.home() / ".ray" / "auth_token")
+    return bool(os.environ.get("RAY_AUTH_TOKEN")) or Path(path).is_file()
 
 
 EXECUTORS: dict[str, type] = {"local": LocalExecutor, "ray": RayExecutor}

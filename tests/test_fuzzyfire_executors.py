@@ -66,3 +66,59 @@ def test_ray_refuses_gpus_the_cluster_does_not_have() -> None:
         pytest.skip("this machine has a GPU")
     with pytest.raises(ExecutorError, match="num_gpus=1 but the Ray cluster has 0 GPU"):
         build_executor("ray", num_cpus=1, num_gpus=1, local_cpus=1)
+
+
+@pytest.mark.slow
+def test_a_real_ray_head_started_with_ray_start_runs_the_grid(tmp_path: Path) -> None:
+    """``ray start --head`` on loopback (token authentication by default since Ray 2.59), then ``fuzzyfire
+    experiment --executor ray --address`` in a fresh process without RAY_AUTH_MODE, as a user runs it: the same
+    results.json bytes as the local executor; the head is stopped at the end."""
+    import os
+    import shutil
+    import socket
+    import subprocess
+    import sys
+
+    from factories_experiment import write_toy_config
+
+    ray_bin = shutil.which("ray") or str(Path(sys.executable).with_name("ray"))
+    with socket.socket() as sock:
+        sock.bind(("127.0.0.1", 0))
+        port = sock.getsockname()[1]
+    config = write_toy_config(tmp_path / "toy.yaml", mixtures=["R12_S0", "R6_S6"], table1=[])
+    env = {k: v for k, v in os.environ.items() if k != "RAY_AUTH_MODE"}
+    cli = [sys.executable, "-m", "fuzzyfire.cli", "experiment", str(config)]
+    head = [ray_bin, "start", "--head", f"--port={port}", "--num-cpus=2", "--include-dashboard=false"]
+    subprocess.run(
+        [*head, "--node-ip-address=127.0.0.1", "--disable-usage-stats"], check=True, capture_output=True, env=env
+    )
+    try:
+        joined = subprocess.run(
+            [*cli, "--out", str(tmp_path / "cluster"), "--executor", "ray", "--address", f"127.0.0.1:{port}"],
+            capture_output=True,
+            text=True,
+            env=env,
+            timeout=600,
+        )
+    finally:
+        subprocess.run([ray_bin, "stop", "--force"], check=False, capture_output=True)
+    assert joined.returncode == 0, joined.stderr[-2000:]
+    assert "InvalidAuthToken" not in joined.stderr
+    local = subprocess.run([*cli, "--out", str(tmp_path / "local")], capture_output=True, text=True, env=env)
+    assert local.returncode == 0, local.stderr[-2000:]
+    results = {
+        name: {p.parent.parent.name: p.read_bytes() for p in (tmp_path / name / "runs").glob("*/*/results.json")}
+        for name in ("cluster", "local")
+    }
+    assert len(results["local"]) == 2 and results["cluster"] == results["local"]
+
+
+def test_an_unreachable_cluster_is_one_clear_error(monkeypatch) -> None:
+    import socket
+
+    with socket.socket() as sock:
+        sock.bind(("127.0.0.1", 0))
+        port = sock.getsockname()[1]  # nothing listens there
+    monkeypatch.setenv("RAY_AUTH_MODE", "token")
+    with pytest.raises(ExecutorError, match=f"cannot join the Ray cluster at 127.0.0.1:{port}"):
+        build_executor("ray", address=f"127.0.0.1:{port}", num_cpus=1)
