@@ -89,7 +89,7 @@ def _report_problems(result) -> None:
 def cmd_score(args: argparse.Namespace) -> int:
     from curate.cocoeval import ClassMatchError
     from eval.onnx_model import ModelError
-    from eval.score import ScoreError, write_outputs
+    from eval.score import ScoreError, score_errors, write_outputs
 
     try:
         test = _load(args)
@@ -99,7 +99,7 @@ def cmd_score(args: argparse.Namespace) -> int:
         return 2
     _report_problems(result)
     intervals = _intervals(result, args.ci, args.seed) if args.ci else {}
-    errors = _errors(result, args.alarm_conf) if args.errors else None
+    errors = score_errors(result, args.alarm_conf) if args.errors else None
     if args.out:
         files = write_outputs(result, args.out, intervals)
         if errors is not None:
@@ -114,13 +114,6 @@ def cmd_score(args: argparse.Namespace) -> int:
         if errors is not None:
             _print_errors(errors)
     return 0
-
-
-def _errors(result, alarm_conf: float):  # -> eval.errors.ErrorBreakdown
-    from eval.errors import error_breakdown
-
-    scored = result.dataset.filter_images(lambda img: img.id in result.predictions.by_image)
-    return error_breakdown(scored, result.records, list(result.evaluation.params.catIds), alarm_conf)
 
 
 def _print_errors(errors) -> None:  # errors: eval.errors.ErrorBreakdown

@@ -101,7 +101,7 @@ def error_breakdown(
 
 
 def _ap50(dataset: Dataset, records: Sequence[dict[str, Any]], cat_ids: Sequence[int]) -> float:
-    ap = float(run_cocoeval(dataset, records, cat_ids).stats[1])
+    ap = float(run_cocoeval(dataset, records, cat_ids, iou_thresholds=[T_FG]).stats[1])
     return max(ap, 0.0)  # -1 = undefined (no ground truth): nothing to gain
 
 

@@ -143,6 +143,37 @@ def gaps_html(rows: Sequence[Mapping[str, Any]]) -> str:
     return f"<table>{caption}{head}{''.join(body)}</table>"
 
 
+def errors_html(rows: Sequence[Mapping[str, Any]]) -> str:
+    """Where AP50 goes, per test set and mixture: rows with ``test_set``, ``label`` (mixture and pool), ``seed``
+    and an :meth:`eval.errors.ErrorBreakdown.to_dict`; means over seeds, in AP50 points (false alarms per 100
+    images without fire at the breakdown's alarm confidence)."""
+    from eval.errors import ERROR_TYPES
+
+    groups: dict[tuple[str, str], list[Mapping[str, Any]]] = {}
+    for r in rows:
+        groups.setdefault((r["test_set"], r["label"]), []).append(r["errors"])
+    head = "<tr><th>test set</th><th>mixture</th><th>AP50</th>" + "".join(f"<th>{k}</th>" for k in ERROR_TYPES)
+    head += "<th>false alarms / 100 negatives</th><th>seeds</th></tr>"
+    body = []
+    for (test, name), docs in groups.items():
+        mean = {k: 100 * float(np.mean([d["delta_AP50"][k] for d in docs])) for k in ERROR_TYPES}
+        alarms = [d["false_alarms_per_100_negatives"] for d in docs if d["false_alarms_per_100_negatives"] is not None]
+        cells = "".join(f"<td>{mean[k]:.1f}</td>" for k in ERROR_TYPES)
+        alarm = f"{np.mean(alarms):.1f}" if alarms else "–"
+        ap50 = 100 * float(np.mean([d["AP50"] for d in docs]))
+        body.append(
+            f"<tr><td>{html.escape(test)}</td><td>{html.escape(name)}</td><td>{ap50:.1f}</td>{cells}"
+            f"<td>{alarm}</td><td>{len(docs)}</td></tr>"
+        )
+    caption = (
+        "<caption>AP50 points gained if each kind of error were fixed alone (TIDE's definitions, eval/errors.py): "
+        "classification, localisation (IoU 0.1–0.5 with its box), both, duplicate, background (IoU &lt; 0.1 with "
+        "every box), missed boxes; and detections at confidence ≥ 0.25 per 100 test images without fire. Means "
+        "over seeds.</caption>"
+    )
+    return f"<table>{caption}{head}{''.join(body)}</table>"
+
+
 def comparisons_html(rows: Sequence[Mapping[str, Any]]) -> str:
     """Paired comparisons: rows with ``test_set``, ``mixture``, ``baseline``, ``metric`` and a
     :meth:`eval.stats.PairedDelta.to_dict` (``value``, ``low``, ``high``, ``p_value``), in AP points."""
@@ -167,6 +198,7 @@ def write_study_report(
     method_results: Sequence[Mapping[str, Any]] = (),
     gaps: Sequence[Mapping[str, Any]] = (),
     comparisons: Sequence[Mapping[str, Any]] = (),
+    errors: Sequence[Mapping[str, Any]] = (),
     samples: Mapping[str, Dataset] | None = None,
     run_columns: Sequence[str] = ("mixture", "seed", "test_set", "AP", "AP50"),
     notice: str = "",
@@ -177,7 +209,7 @@ def write_study_report(
 
     ``results``: one mapping per (run, test set) as :func:`eval.tables.table2` takes (also the run list);
     ``method_results``: Table 1 rows (with ``method``); ``gaps``: see :func:`gaps_html` (also written as
-    ``out/tables/gap.json``); ``comparisons``: see :func:`comparisons_html`;
+    ``out/tables/gap.json``); ``comparisons``: see :func:`comparisons_html`; ``errors``: see :func:`errors_html`;
     ``samples``: datasets to show a few images of, by label; ``notice``: shown at the top of the page."""
     from eval.plots import plot_figure5
     from eval.tables import table1, table2
@@ -197,6 +229,8 @@ def write_study_report(
         sections.append(("Figure 5", "".join(figure_html(f, out, f.stem) for f in figures)))
     if comparisons:
         sections.append(("Paired comparisons (image-level bootstrap)", comparisons_html(comparisons)))
+    if errors:
+        sections.append(("Where AP50 goes (error breakdown)", errors_html(errors)))
     for label, ds in (samples or {}).items():
         sections.append((f"Samples: {label}", samples_html(ds, out / "samples" / _slug(label), out, rng)))
     if results:

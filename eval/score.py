@@ -15,6 +15,7 @@ from curate.dataset import Dataset
 from curate.detections import Predictions
 from curate.formats.registry import read_dataset
 from curate.problems import Problem
+from eval.errors import ALARM_CONF, ErrorBreakdown, error_breakdown
 from eval.onnx_model import ModelSpec, OnnxDetector
 from eval.plots import plot_pr_curves, pr_curves_from_eval
 from eval.predict import PredictOptions, predict_dataset
@@ -104,6 +105,12 @@ def score(
         raise ScoreError(f"{dataset.root}: none of the {len(dataset.images)} images could be read")
     metrics, ev, records = evaluate_predictions(dataset, preds)
     return ScoreResult(metrics, ev, records, preds, detector.spec, dataset, [*problems, *preds.problems])
+
+
+def score_errors(result: ScoreResult, alarm_conf: float = ALARM_CONF) -> ErrorBreakdown:
+    """The error breakdown (:mod:`eval.errors`) of a scored result, over the images and classes it was scored on."""
+    scored = result.dataset.filter_images(lambda img: img.id in result.predictions.by_image)
+    return error_breakdown(scored, result.records, list(result.evaluation.params.catIds), alarm_conf)
 
 
 def write_outputs(result: ScoreResult, out: Path, extra: Mapping[str, Any] | None = None) -> dict[str, Path]:

@@ -7,6 +7,7 @@ from __future__ import annotations
 import json
 from collections.abc import Sequence
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -73,7 +74,14 @@ def comparisons(cfg: ExperimentConfig, rows: Sequence[dict]) -> list[dict]:
     return out
 
 
-def write_report(cfg: ExperimentConfig, data: Prepared, rows: Sequence[dict], out: Path) -> Path:
+def write_report(
+    cfg: ExperimentConfig,
+    data: Prepared,
+    rows: Sequence[dict],
+    out: Path,
+    specs: Sequence[RunSpec] = (),
+    results: Sequence[dict | None] = (),
+) -> Path:
     """Tables, Figure 5, comparisons, samples and the run list (:func:`eval.report.write_study_report`)."""
     from eval.report import write_study_report
 
@@ -88,9 +96,37 @@ def write_report(cfg: ExperimentConfig, data: Prepared, rows: Sequence[dict], ou
     title = cfg.report.title + (" — STAND-IN DATA" if data.standin else "")
     return write_study_report(
         out, t2, np.random.default_rng(0), method_results=t1, gaps=realism_gaps(cfg, data, out),
-        comparisons=comparisons(cfg, rows), samples=datasets, run_columns=columns,
-        notice=STANDIN_NOTICE if data.standin else "", title=title,
+        comparisons=comparisons(cfg, rows), errors=error_rows(cfg, specs, results), samples=datasets,
+        run_columns=columns, notice=STANDIN_NOTICE if data.standin else "", title=title,
     )  # fmt: skip
+
+
+def error_rows(cfg: ExperimentConfig, specs: Sequence[RunSpec], results: Sequence[dict | None]) -> list[dict]:
+    """The error breakdown (:mod:`eval.errors`) of every finished run on every test set, as rows with
+    ``test_set``, ``label``, ``seed`` and ``errors``. Each is kept in its run's ``scores/<test>/errors.json``;
+    runs scored before the breakdown existed get it from their ``predictions.json`` once (each test set is
+    loaded once for all of them)."""
+    from eval.errors import error_breakdown
+
+    loaded: dict[str, Any] = {}
+    rows = []
+    for spec, res in zip(specs, results):
+        for test in spec.tests if res is not None else ():
+            if test.name not in res["tests"]:
+                continue
+            folder = spec.out / res["tests"][test.name]["scores"]
+            path = folder / "errors.json"
+            if path.is_file():
+                doc = json.loads(path.read_text(encoding="utf-8"))
+            else:
+                if test.name not in loaded:
+                    loaded[test.name] = load_data(test.data, cfg.classes)
+                ds = loaded[test.name]
+                records = json.loads((folder / "predictions.json").read_text(encoding="utf-8"))
+                doc = error_breakdown(ds, records, [c.id for c in ds.categories]).to_dict()
+                path.write_text(json.dumps(doc, indent=1) + "\n", encoding="utf-8")
+            rows.append({"test_set": test.name, "label": spec.label, "seed": spec.seed, "errors": doc})
+    return rows
 
 
 def realism_gaps(cfg: ExperimentConfig, data: Prepared, out: Path) -> list[dict]:

@@ -222,6 +222,6 @@ def run_experiment(cfg: ExperimentConfig, base: Path, out: Path, executor=None) 
     results = run_grid(specs, executor) if executor is not None else finished_runs(specs)
     rows = result_rows(cfg, specs, results, out)
     write_summary(cfg, specs, results, rows, out, data.standin)
-    report = write_report(cfg, data, rows, out)
+    report = write_report(cfg, data, rows, out, specs, results)
     failed = [s for s, r in zip(specs, results) if r is None]
     return ExperimentResult(report, rows, failed, data.standin)

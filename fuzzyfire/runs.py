@@ -2,7 +2,8 @@
 
 A run is a pure function of its :class:`RunSpec` (config, mixture, seed and the identities of its data). It
 writes into ``spec.out``: ``run.json`` (the spec) first, ``train/`` (the training run folder, resumable from
-its ``last.pt``), ``scores/<test set>/`` (metrics.json, predictions.json, matches.npz, pr_curve.png), ``timing.json``
+its ``last.pt``), ``scores/<test set>/`` (metrics.json, predictions.json, matches.npz, pr_curve.png,
+errors.json), ``timing.json``
 and, last, ``results.json``. A run whose ``results.json`` carries the same identity hash is skipped, so a
 rerun does nothing and an interrupted grid resumes. ``results.json`` holds no timings or absolute paths: the
 same spec gives byte-identical files.
@@ -108,7 +109,7 @@ def score_run(spec: RunSpec, model: Path) -> dict[str, dict[str, Any]]:
     """Score ``model`` on every test set; writes ``scores/<name>/``; returns headline metrics per test set."""
     from eval.onnx_model import OnnxDetector
     from eval.predict import PredictOptions
-    from eval.score import score, write_outputs
+    from eval.score import score, score_errors, write_outputs
 
     s = spec.score
     detector = OnnxDetector(model, threads=s.threads, device=s.device)
@@ -118,7 +119,10 @@ def score_run(spec: RunSpec, model: Path) -> dict[str, dict[str, Any]]:
     out = {}
     for test in spec.tests:
         result = score(detector, load_data(test.data, spec.classes), options)
-        write_outputs(result, spec.out / "scores" / slug(test.name))
+        folder = spec.out / "scores" / slug(test.name)
+        write_outputs(result, folder)
+        errors = score_errors(result).to_dict()
+        (folder / "errors.json").write_text(json.dumps(errors, indent=1) + "\n", encoding="utf-8")
         m = result.metrics
         out[test.name] = {
             **{k: m.summary.get(k) for k in METRICS},

@@ -76,6 +76,21 @@ def test_report_files_exist_and_say_stand_in(full_run: tuple[Path, str]) -> None
     assert (out / "data").is_dir() and len(list((out / "data").glob("*/stage.json"))) == 4
     for data_yaml in (out / "mixtures").rglob("data.yaml"):  # ultralytics validates on the real valid split
         assert Path(yaml.safe_load(data_yaml.read_text())["val"]).parts[-2:] == ("images", "valid")
+    errors = sorted((out / "runs").glob("*/*/scores/*/errors.json"))
+    assert len(errors) == 8 and "Where AP50 goes" in page
+    first = json.loads(errors[0].read_text())
+    assert set(first["delta_AP50"]) == {"classification", "localisation", "both", "duplicate", "background", "missed"}
+
+
+@pytest.mark.slow
+def test_report_gives_runs_scored_before_the_breakdown_theirs(full_run: tuple[Path, str]) -> None:
+    """A run scored without errors.json gets it from its predictions.json: the same numbers as at run time."""
+    out, _ = full_run
+    path = sorted((out / "runs").glob("*/*/scores/*/errors.json"))[0]
+    at_run_time = json.loads(path.read_text())
+    path.unlink()
+    run_experiment(toy_config(), out.parent, out)  # report only
+    assert json.loads(path.read_text()) == at_run_time
 
 
 @pytest.mark.slow
