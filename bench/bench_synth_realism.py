@@ -7,7 +7,10 @@ Variants (400 images at 416x416, seed 0, each a cached pool of the experiment pi
 - ``procedural``: the 24 procedural rooms, no flame light, no strong camera effects (the previous generator);
 - ``files``: the 12 scenes of ../shared/data/scenes (configs/scenes sidecars), no light, no camera effects;
 - ``files_light``: + flames lighting their surroundings;
-- ``files_light_camera``: + camera effects (low light, defocus, motion blur, vignette, CCTV) - the default.
+- ``files_light_camera``: + camera effects (low light, defocus, motion blur, vignette, CCTV) - the default;
+- ``files_opaque``: + flames opaque (luminous coverage 0.85-1 instead of 0.5-0.95: real flames hide what is
+  behind them and outshine it);
+- ``files_opaque_dark``: + the scene at low exposure in 40 % of images (night, or a camera exposed for the fire).
 
 Lines: ``synth_<variant>_gap`` (Fréchet distance to half the real train split, median of 200 draws),
 ``synth_<variant>_gap_ratio`` (to the real-vs-real floor), ``synth_real_floor``, and with ``--train``
@@ -30,11 +33,15 @@ CONFIG = ROOT / "configs" / "shared-data.yaml"
 SHARED = ROOT.parent / "shared" / "data"
 NO_CAMERA = [f"synth.method2.camera.{k}=0" for k in ("low_light", "defocus", "motion_blur", "vignette", "cctv")]
 FILES = ["synth.method2.scenes=0", f"synth.method2.environments=[{(ROOT / 'configs' / 'scenes').as_posix()}]"]
+PROCEDURAL = ["synth.method2.scenes=24", "synth.method2.environments=[]"]
+OPAQUE = ["synth.method2.flame_opacity=[0.85,1.0]"]
 VARIANTS = {
-    "procedural": ["synth.method2.light=false", *NO_CAMERA],
+    "procedural": [*PROCEDURAL, "synth.method2.light=false", *NO_CAMERA],
     "files": [*FILES, "synth.method2.light=false", *NO_CAMERA],
     "files_light": [*FILES, *NO_CAMERA],
     "files_light_camera": FILES,
+    "files_opaque": [*FILES, *OPAQUE],
+    "files_opaque_dark": [*FILES, *OPAQUE, "synth.method2.camera.low_light=0.4"],
 }
 
 

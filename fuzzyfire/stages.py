@@ -111,6 +111,10 @@ def standin_stage(root: Path, name: str, cfg: Any) -> tuple[Stage, DataRef]:
     return stage, DataRef(stage.folder, {"kind": "standin", "hash": stage.hash}, "coco", standin=True)
 
 
+#: Synth config keys added after pools were made; left out of a pool's identity while at their default.
+LATER_KEYS = ("environments", "flame_opacity")
+
+
 def synth_stage(root: Path, method: str, cfg: Any, base: Path) -> tuple[Stage, DataRef]:
     """A Method 1 or Method 2 pool, its flame library built from ``cfg.flames``; ``cfg.environments`` resolve
     against ``base``."""
@@ -121,8 +125,10 @@ def synth_stage(root: Path, method: str, cfg: Any, base: Path) -> tuple[Stage, D
     runner = {"method1": run_method1, "method2": run_method2}[method]
     cfg = replace(cfg, environments=tuple(_absolute(Path(p), base) for p in cfg.environments))
     config = to_dict(cfg)
-    if not cfg.environments:
-        del config["environments"]  # pools made before environments existed keep their identity
+    default = to_dict(type(cfg)())
+    for key in LATER_KEYS:  # pools made before these keys existed keep their identity while they hold the default
+        if key in config and config[key] == default[key]:
+            del config[key]
     stage = cached_stage(
         root, method, {"kind": method, "config": config}, lambda out: runner(cfg, build_library(cfg.flames), out)
     )

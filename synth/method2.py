@@ -43,6 +43,7 @@ class Method2Config:
     max_flames: int = 3  # flames per image: uniform in 1..max_flames
     negatives: float = 0.1  # fraction of images without flames
     flame_height_m: tuple[float, float] = (0.3, 2.5)  # flame height in the scene, metres
+    flame_opacity: tuple[float, float] = (0.5, 0.95)  # luminous coverage of a flame (1 = hides what is behind)
     min_box_px: int = 4  # visible flames smaller than this (either side) are dropped
     smoke_class: bool = False
     light: bool = True  # flames light their surroundings (a warm cast around each flame)
@@ -59,6 +60,8 @@ class Method2Config:
         if self.max_flames < 1 or not 0.0 <= self.negatives <= 1.0 or self.min_box_px < 1:
             raise ValueError(f"invalid Method 2 config: {self}")
         check_range("flame_height_m", self.flame_height_m, 0.01)
+        if not 0.0 <= self.flame_opacity[0] <= self.flame_opacity[1] <= 1.0:
+            raise ValueError(f"flame_opacity must be a range in 0..1, got {self.flame_opacity}")
 
 
 def plan_flames(
@@ -83,7 +86,7 @@ def plan_flames(
         sw, sh = sprite.size
         wpx = max(int(round(hpx * sw / sh)), 2)
         blend = str(rng.choice(BLEND_MODES))
-        glow, opacity = float(rng.uniform(0.1, 0.5)), float(rng.uniform(0.5, 0.95))
+        glow, opacity = float(rng.uniform(0.1, 0.5)), float(rng.uniform(*cfg.flame_opacity))
         place = Placement(sprite, bx - wpx // 2, by - hpx, wpx, hpx, blend, glow, opacity, cfg.light)
         out.append((place, f"{seq.name}/{frame}"))
     return out
