@@ -10,7 +10,6 @@ bounding box). Label files may start with a UTF-8 BOM and end lines with CRLF. C
 
 from __future__ import annotations
 
-import os
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
@@ -22,7 +21,7 @@ from curate import boxes
 from curate.classes import DFIRE_NAMES
 from curate.dataset import Dataset, DatasetBuilder
 from curate.formats.common import ClassResolver, ReadResult, probe_sizes, sanitize_box, source_tag
-from curate.formats.yolo_layout import Pair, pair_images
+from curate.formats.yolo_layout import Pair, dataset_root, missing_label_problems, pair_images
 from curate.imageio import ImageError
 from curate.problems import Problem
 
@@ -61,65 +60,9 @@ def read_yolo(
             continue
         for category, xywh in _parse_label_file(pair.label, width, height, class_names, problems):
             builder.add_box(image_id, category if class_names else resolver.resolve(category, problems), xywh)
-    problems += _missing_label_problems(root, readable)
+    problems += missing_label_problems(root, readable)
     dataset = builder.build({"format": "yolo", "source_root": str(root.resolve())})
     return ReadResult(dataset, problems, frozenset(unlabelled))
-
-
-def _missing_label_problems(root: Path, pairs: list[Pair]) -> list[Problem]:
-    """An info line per image without a label file (a negative); one warning instead for a split where no image
-    has one (labels elsewhere, or a split of unlabelled images: say it, not 200 times)."""
-    by_split: dict[str, list[Pair]] = {}
-    for pair in pairs:
-        by_split.setdefault(pair.split, []).append(pair)
-    out = []
-    for split, members in by_split.items():
-        missing = [p for p in members if not p.label.is_file()]
-        if missing and len(missing) == len(members) and len(members) > 1:
-            folders = sorted({str(p.label.parent) for p in missing})
-            out.append(
-                Problem(
-                    str(root),
-                    f"split {split or '(none)'!r}: none of its {len(members)} images has a label file (looked for "
-                    f"in {', '.join(folders[:3])}{', ...' if len(folders) > 3 else ''}): all read as negatives",
-                    "warning",
-                    code="no-labels",
-                )
-            )
-            continue
-        out += [Problem(str(p.image), "image without label file (kept as a negative)", "info") for p in missing]
-    return out
-
-
-def dataset_root(path: Path, problems: list[Problem]) -> tuple[Path, dict[str, Any] | None]:
-    """(dataset folder, parsed dataset YAML or None) of a YOLO dataset given as a folder (its ``data.yaml``) or as
-    a dataset YAML file. Raises FileNotFoundError / ValueError when ``path`` is neither."""
-    if path.is_dir():
-        return path, _data_yaml(path / "data.yaml", problems)
-    if not path.is_file():
-        raise FileNotFoundError(f"{path}: no such folder or dataset file")
-    doc = _data_yaml(path, problems)
-    if doc is None:
-        raise ValueError(f"{path}: not an ultralytics dataset file (a YAML mapping with train/val/names)")
-    base = doc.get("path")
-    if base:
-        folder = Path(os.path.normpath(Path(str(base)) if Path(str(base)).is_absolute() else path.parent / str(base)))
-        if folder.is_dir():
-            return folder, doc
-        problems.append(Problem(str(path), f"its path: {base!r} is not a folder here; {path.parent} used", "warning"))
-    return path.parent, doc
-
-
-def _data_yaml(path: Path, problems: list[Problem]) -> dict[str, Any] | None:
-    """The parsed dataset YAML ``path`` (None when absent or unreadable, the latter reported)."""
-    if not path.is_file():
-        return None
-    try:
-        doc = yaml.safe_load(path.read_text(encoding="utf-8-sig"))
-    except (yaml.YAMLError, UnicodeDecodeError) as exc:
-        problems.append(Problem(str(path), f"unreadable YAML ({exc.__class__.__name__})"))
-        return None
-    return doc if isinstance(doc, dict) else None
 
 
 def read_dfire(root: Path | str, source: str | None = None) -> ReadResult:

@@ -1,4 +1,4 @@
-"""Where the label file of each image of a YOLO dataset is, and which split the image belongs to.
+"""Where a YOLO dataset is: its folder and dataset YAML, the label file of each image, and its split.
 
 Layouts understood (folder names case-insensitive; links to folders and files are followed, see
 :mod:`curate.walk`):
@@ -7,10 +7,10 @@ Layouts understood (folder names case-insensitive; links to folders and files ar
   and ``JPEGImages/`` + ``labels/`` (darknet's VOC conversion) the same way;
 - ``images/<split>/*.jpg`` + ``labels/<split>/*.txt`` (ultralytics);
 - ``images/`` + ``labels/`` (one split), or images with their ``.txt`` side by side (flat folders);
-- ``data.yaml`` whose ``train`` / ``val`` / ``test`` entries (a folder, a ``.txt`` list of images, or a list of
-  either; relative to the dataset folder, see :func:`curate.formats.yolo.dataset_root`) all resolve inside the
-  dataset folder: then those entries decide the splits. Otherwise (Roboflow's ``../train/images`` entries point elsewhere) the folder
-  layout does.
+- a dataset YAML (``data.yaml``, or any file passed in the folder's place; :func:`dataset_root`) whose
+  ``train`` / ``val`` / ``test`` entries (a folder, a ``.txt`` list of images, or a list of either; relative to
+  the dataset folder, or absolute) all exist: then those entries decide the splits, as ultralytics reads them.
+  Otherwise (Roboflow's ``../train/images`` entries point nowhere) the folder layout does.
 
 Label files that pair with no image are reported per folder; when their names match images that have no label
 file, the error names both folders (a layout we do not understand is never read as "no labels").
@@ -24,6 +24,8 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
+
+import yaml
 
 from curate.imageio import is_image_file
 from curate.problems import Problem
@@ -208,3 +210,59 @@ def _rel(root: Path, path: Path) -> str:
         return path.relative_to(root).as_posix() or "."
     except ValueError:
         return str(path)
+
+
+def dataset_root(path: Path, problems: list[Problem]) -> tuple[Path, dict[str, Any] | None]:
+    """(dataset folder, parsed dataset YAML or None) of a YOLO dataset given as a folder (its ``data.yaml``) or as
+    a dataset YAML file. Raises FileNotFoundError / ValueError when ``path`` is neither."""
+    if path.is_dir():
+        return path, _data_yaml(path / "data.yaml", problems)
+    if not path.is_file():
+        raise FileNotFoundError(f"{path}: no such folder or dataset file")
+    doc = _data_yaml(path, problems)
+    if doc is None:
+        raise ValueError(f"{path}: not an ultralytics dataset file (a YAML mapping with train/val/names)")
+    base = doc.get("path")
+    if base:
+        folder = Path(os.path.normpath(Path(str(base)) if Path(str(base)).is_absolute() else path.parent / str(base)))
+        if folder.is_dir():
+            return folder, doc
+        problems.append(Problem(str(path), f"its path: {base!r} is not a folder here; {path.parent} used", "warning"))
+    return path.parent, doc
+
+
+def _data_yaml(path: Path, problems: list[Problem]) -> dict[str, Any] | None:
+    """The parsed dataset YAML ``path`` (None when absent or unreadable, the latter reported)."""
+    if not path.is_file():
+        return None
+    try:
+        doc = yaml.safe_load(path.read_text(encoding="utf-8-sig"))
+    except (yaml.YAMLError, UnicodeDecodeError) as exc:
+        problems.append(Problem(str(path), f"unreadable YAML ({exc.__class__.__name__})"))
+        return None
+    return doc if isinstance(doc, dict) else None
+
+
+def missing_label_problems(root: Path, pairs: list[Pair]) -> list[Problem]:
+    """An info line per image without a label file (a negative); one warning instead for a split where no image
+    has one (labels elsewhere, or a split of unlabelled images: say it, not 200 times)."""
+    by_split: dict[str, list[Pair]] = {}
+    for pair in pairs:
+        by_split.setdefault(pair.split, []).append(pair)
+    out = []
+    for split, members in by_split.items():
+        missing = [p for p in members if not p.label.is_file()]
+        if missing and len(missing) == len(members) and len(members) > 1:
+            folders = sorted({str(p.label.parent) for p in missing})
+            out.append(
+                Problem(
+                    str(root),
+                    f"split {split or '(none)'!r}: none of its {len(members)} images has a label file (looked for "
+                    f"in {', '.join(folders[:3])}{', ...' if len(folders) > 3 else ''}): all read as negatives",
+                    "warning",
+                    code="no-labels",
+                )
+            )
+            continue
+        out += [Problem(str(p.image), "image without label file (kept as a negative)", "info") for p in missing]
+    return out
