@@ -89,6 +89,9 @@ def test_synth_stage_resolves_environments_and_keeps_old_identities(tmp_path: Pa
     stage, _ = synth_stage(tmp_path / "data", "method2", cfg, tmp_path)
     identity = json.loads((stage.folder / "stage.json").read_text())["identity"]
     assert "environments" not in identity["config"]  # pools made before environments existed are still found
+    assert "flame_opacity" not in identity["config"]  # nor flame_opacity, while it holds its default
+    opaque, _ = synth_stage(tmp_path / "data", "method2", replace(cfg, flame_opacity=(0.9, 1.0)), tmp_path)
+    assert opaque.hash != stage.hash
     write_textured_room(tmp_path / "scenes" / "den.glb")
     files = replace(cfg, scenes=0, environments=(Path("scenes"),))
     stage, _ = synth_stage(tmp_path / "data", "method2", files, tmp_path)
