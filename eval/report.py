@@ -153,13 +153,13 @@ def errors_html(rows: Sequence[Mapping[str, Any]]) -> str:
     for r in rows:
         groups.setdefault((r["test_set"], r["label"]), []).append(r["errors"])
     head = "<tr><th>test set</th><th>mixture</th><th>AP50</th>" + "".join(f"<th>{k}</th>" for k in ERROR_TYPES)
-    head += "<th>false alarms / 100 negatives</th><th>seeds</th></tr>"
+    head += "<th>false alarms / 100 negatives (of N)</th><th>seeds</th></tr>"
     body = []
     for (test, name), docs in groups.items():
         mean = {k: 100 * float(np.mean([d["delta_AP50"][k] for d in docs])) for k in ERROR_TYPES}
         alarms = [d["false_alarms_per_100_negatives"] for d in docs if d["false_alarms_per_100_negatives"] is not None]
         cells = "".join(f"<td>{mean[k]:.1f}</td>" for k in ERROR_TYPES)
-        alarm = f"{np.mean(alarms):.1f}" if alarms else "–"
+        alarm = f"{np.mean(alarms):.1f} (of {docs[0]['negatives']})" if alarms else "–"
         ap50 = 100 * float(np.mean([d["AP50"] for d in docs]))
         body.append(
             f"<tr><td>{html.escape(test)}</td><td>{html.escape(name)}</td><td>{ap50:.1f}</td>{cells}"
