@@ -98,3 +98,21 @@ def test_write_study_report_writes_tables_figures_and_page(tmp_path):
     assert "STAND-IN DATA" in text and 'src="figures/figure5_AP.png"' in text and "<td>+5.0</td>" in text
     assert "Realism gap" in text and "<td>0.853 [0.836, 0.875]</td>" in text and "<td>5.27 [4.80, 5.79]</td>" in text
     assert text.count('src="samples/common__stand_in/') == 6 and text.count("<td>R0_S1000</td>") >= 4
+
+
+def test_errors_table_means_over_seeds() -> None:
+    from eval.report import errors_html
+
+    def doc(loc: float, alarms: float | None) -> dict:
+        delta = dict.fromkeys(("classification", "localisation", "both", "duplicate", "background", "missed"), 0.0)
+        return {"AP50": 0.3, "delta_AP50": {**delta, "localisation": loc}, "negatives": 40,
+                "false_alarms_per_100_negatives": alarms}  # fmt: skip
+
+    rows = [
+        {"test_set": "rare", "label": "R400_S0", "seed": s, "errors": doc(loc, alarm)}
+        for s, (loc, alarm) in enumerate([(0.1, 10.0), (0.3, 20.0)])
+    ]
+    page = errors_html(rows)
+    assert "<td>rare</td><td>R400_S0</td><td>30.0</td>" in page
+    assert "<td>20.0</td>" in page  # localisation: mean of 10 and 30 points
+    assert "<td>15.0 (of 40)</td><td>2</td>" in page
