@@ -55,7 +55,7 @@ def read_yolo(
         width, height = size
         name = pair.image.relative_to(root).as_posix() if pair.image.is_relative_to(root) else pair.image.as_posix()
         image_id = builder.add_image(name, width, height, tag, pair.split)
-        if not pair.label.is_file():
+        if not pair.labelled:
             unlabelled.add(image_id)
             continue
         for category, xywh in _parse_label_file(pair.label, width, height, class_names, problems):

@@ -41,11 +41,12 @@ _EXAMPLES = 3  # file names quoted per grouped problem
 
 @dataclass(frozen=True)
 class Pair:
-    """An image, where its label file is (it may not exist) and its split ('' = none)."""
+    """An image, where its label file is, whether that file exists, and the image's split ('' = none)."""
 
     image: Path
     label: Path
     split: str
+    labelled: bool
 
 
 def last_image_folder(parts: Sequence[str], names: frozenset[str] = IMAGE_FOLDERS) -> int | None:
@@ -89,7 +90,8 @@ def pair_images(root: Path, doc: Mapping[str, Any] | None, problems: list[Proble
     """Every image of the dataset with its label path and split, sorted by image path; duplicate stems (two
     images claiming one label file) and unpaired label files are reported in ``problems``."""
     locator = LabelLocator(root)
-    found = walk_files(root, is_image_file)
+    files = walk_files(root)  # one walk: the images, and the text files that may be labels
+    found = [f for f in files if is_image_file(f.name)]
     listed = yaml_splits(root, doc, problems) if doc else None
     images = listed if listed is not None else [(p, "") for p in found]
     if listed is not None and len(found) > len(listed):
@@ -112,8 +114,8 @@ def pair_images(root: Path, doc: Mapping[str, Any] | None, problems: list[Proble
             )
             continue
         owner[label] = image
-        pairs.append(Pair(image, label, yaml_split or split))
-    problems += unpaired_labels(root, pairs, set(owner))
+        pairs.append(Pair(image, label, yaml_split or split, label.is_file()))
+    problems += unpaired_labels(root, pairs, [f for f in files if _maybe_label(f.name)])
     return pairs
 
 
@@ -160,16 +162,17 @@ def _normal(base: Path, path: Path) -> Path:
     return Path(os.path.normpath(path if path.is_absolute() else base / path))
 
 
-def unpaired_labels(root: Path, pairs: Sequence[Pair], owned: set[Path]) -> list[Problem]:
-    """One error per folder holding ``.txt`` files that pair with no image. Only folders where labels are looked
-    for count, plus any folder whose file names match images without a label file (a layout we did not
-    understand: the error names the image folder)."""
+def unpaired_labels(root: Path, pairs: Sequence[Pair], texts: Sequence[Path]) -> list[Problem]:
+    """One error per folder holding text files (``texts``, found below ``root``) that pair with no image. Only
+    folders where labels are looked for count, plus any folder whose file names match images without a label file
+    (a layout we did not understand: the error names the image folder)."""
     unlabelled: dict[str, list[Path]] = defaultdict(list)
     for pair in pairs:
-        if pair.label not in owned or not pair.label.is_file():
+        if not pair.labelled:
             unlabelled[pair.image.stem].append(pair.image)
+    owned = {pair.label for pair in pairs}
     by_folder: dict[Path, list[Path]] = defaultdict(list)
-    for txt in walk_files(root, _maybe_label):
+    for txt in texts:
         if txt not in owned:
             by_folder[txt.parent].append(txt)
     looked_in = {p.label.parent for p in pairs}
@@ -224,7 +227,7 @@ def dataset_root(path: Path, problems: list[Problem]) -> tuple[Path, dict[str, A
         raise ValueError(f"{path}: not an ultralytics dataset file (a YAML mapping with train/val/names)")
     base = doc.get("path")
     if base:
-        folder = Path(os.path.normpath(Path(str(base)) if Path(str(base)).is_absolute() else path.parent / str(base)))
+        folder = _normal(path.parent, Path(str(base)))
         if folder.is_dir():
             return folder, doc
         problems.append(Problem(str(path), f"its path: {base!r} is not a folder here; {path.parent} used", "warning"))
@@ -251,7 +254,7 @@ def missing_label_problems(root: Path, pairs: list[Pair]) -> list[Problem]:
         by_split.setdefault(pair.split, []).append(pair)
     out = []
     for split, members in by_split.items():
-        missing = [p for p in members if not p.label.is_file()]
+        missing = [p for p in members if not p.labelled]
         if missing and len(missing) == len(members) and len(members) > 1:
             folders = sorted({str(p.label.parent) for p in missing})
             out.append(
