@@ -29,9 +29,3 @@ def walk_files(root: Path | str, keep: Callable[[str], bool] = lambda name: True
     """Files below ``root`` whose name passes ``keep``, sorted by POSIX path (see the module docstring)."""
     found = [folder / f for folder, _, files in walk(root) for f in files if keep(f)]
     return sorted(found, key=lambda p: p.as_posix())
-
-
-def walk_dirs(root: Path | str, keep: Callable[[str], bool] = lambda name: True) -> list[Path]:
-    """Folders below ``root`` (``root`` excluded) whose name passes ``keep``, sorted by POSIX path."""
-    found = [folder / d for folder, dirs, _ in walk(root) for d in dirs if keep(d)]
-    return sorted(found, key=lambda p: p.as_posix())

@@ -1,6 +1,6 @@
 import os
 
-from curate.walk import walk_dirs, walk_files
+from curate.walk import walk, walk_files
 
 
 def test_links_followed_once_and_hidden_skipped(tmp_path):
@@ -18,5 +18,6 @@ def test_links_followed_once_and_hidden_skipped(tmp_path):
     (root / ".d.jpg").write_bytes(b"d")
     found = [p.relative_to(root).as_posix() for p in walk_files(root)]
     assert found == ["linked.jpg", "train/images/a.jpg", "train/images/deep/b.jpg"]
-    assert [p.relative_to(root).as_posix() for p in walk_dirs(root, lambda n: n == "deep")] == ["train/images/deep"]
+    folders = [folder.relative_to(root).as_posix() for folder, _, _ in walk(root)]
+    assert folders == [".", "train", "train/images", "train/images/deep"]  # the loop back to root is not entered
     assert walk_files(root, lambda n: n.endswith(".png")) == []

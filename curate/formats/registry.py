@@ -9,14 +9,15 @@ from curate.formats.coco import ANNOTATIONS_FILE, read_coco
 from curate.formats.common import ReadResult
 from curate.formats.voc import read_voc
 from curate.formats.yolo import read_dfire, read_yolo
-from curate.walk import walk_dirs, walk_files
+from curate.walk import walk
 
 FORMATS: tuple[str, ...] = ("coco", "yolo", "voc", "dfire")
 
 
 def detect_format(path: Path | str) -> str:
-    """``coco`` for a .json file or a folder with ``annotations.json``; ``voc`` for XML annotations;
-    ``yolo`` for a ``data.yaml`` file, ``labels`` folders, ``data.yaml`` or ``.txt`` beside images. Raises ValueError otherwise."""
+    """``coco`` for a .json file or a folder with ``annotations.json``; ``voc`` for ``Annotations/`` or XML files;
+    ``yolo`` for a dataset YAML file or a folder with ``data.yaml``, a ``label(s)`` folder or ``.txt`` files.
+    Raises ValueError otherwise."""
     path = Path(path)
     if not path.exists():
         raise FileNotFoundError(f"{path}: no such file or folder")
@@ -30,12 +31,14 @@ def detect_format(path: Path | str) -> str:
         return "coco"
     if (path / "Annotations").is_dir() or next(path.glob("*.xml"), None) is not None:
         return "voc"
-    if (path / "data.yaml").is_file() or walk_dirs(path, lambda n: n.lower() in ("labels", "label")):
+    if (path / "data.yaml").is_file():
         return "yolo"
-    files = walk_files(path, lambda n: n.lower().endswith((".txt", ".xml")))
-    if any(f.suffix.lower() == ".txt" for f in files):
-        return "yolo"
-    if files:
+    xml = False
+    for _, dirs, files in walk(path):  # one lazy walk: the first label folder or .txt file decides
+        if any(d.lower() in ("labels", "label") for d in dirs) or any(f.lower().endswith(".txt") for f in files):
+            return "yolo"
+        xml = xml or any(f.lower().endswith(".xml") for f in files)
+    if xml:
         return "voc"
     raise ValueError(f"{path}: cannot tell the dataset format; pass --from coco|yolo|voc|dfire")
 
