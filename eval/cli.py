@@ -103,8 +103,7 @@ def cmd_score(args: argparse.Namespace) -> int:
     if args.out:
         files = write_outputs(result, args.out, intervals)
         if errors is not None:
-            files["errors"] = args.out / "errors.json"
-            files["errors"].write_text(json.dumps(errors.to_dict(), indent=1) + "\n", encoding="utf-8")
+            files["errors"] = errors.write(args.out)
         print(f"wrote {', '.join(str(p) for p in files.values())}", file=sys.stderr)
     if args.json:
         extra = {"errors": errors.to_dict()} if errors is not None else {}

@@ -22,9 +22,11 @@ dropped, missed boxes are removed from the ground truth.
 
 from __future__ import annotations
 
+import json
 from collections import defaultdict
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -39,6 +41,7 @@ T_FG = 0.5  # foreground IoU: a detection at or above it is on its object
 T_BG = 0.1  # background IoU: a detection below it with every box is on nothing
 ALARM_CONF = 0.25  # confidence at which a detection would raise an alarm (ultralytics' predict default)
 ERROR_TYPES = ("classification", "localisation", "both", "duplicate", "background", "missed")
+ERRORS_FILE = "errors.json"  # where a breakdown is kept beside a scoring's other outputs
 
 
 @dataclass(frozen=True)
@@ -54,6 +57,12 @@ class ErrorBreakdown:
     alarm_conf: float
     false_alarms_per_100: float | None
     alarm_image_share: float | None
+
+    def write(self, folder: Path) -> Path:
+        """Write :meth:`to_dict` as ``folder/errors.json`` (:data:`ERRORS_FILE`); returns its path."""
+        path = folder / ERRORS_FILE
+        path.write_text(json.dumps(self.to_dict(), indent=1) + "\n", encoding="utf-8")
+        return path
 
     def to_dict(self) -> dict[str, Any]:
         return {

@@ -106,7 +106,7 @@ def error_rows(cfg: ExperimentConfig, specs: Sequence[RunSpec], results: Sequenc
     ``test_set``, ``label``, ``seed`` and ``errors``. Each is kept in its run's ``scores/<test>/errors.json``;
     runs scored before the breakdown existed get it from their ``predictions.json`` once (each test set is
     loaded once for all of them)."""
-    from eval.errors import error_breakdown
+    from eval.errors import ERRORS_FILE, error_breakdown
 
     loaded: dict[str, Any] = {}
     rows = []
@@ -115,7 +115,7 @@ def error_rows(cfg: ExperimentConfig, specs: Sequence[RunSpec], results: Sequenc
             if test.name not in res["tests"]:
                 continue
             folder = spec.out / res["tests"][test.name]["scores"]
-            path = folder / "errors.json"
+            path = folder / ERRORS_FILE
             if path.is_file():
                 doc = json.loads(path.read_text(encoding="utf-8"))
             else:
@@ -123,8 +123,9 @@ def error_rows(cfg: ExperimentConfig, specs: Sequence[RunSpec], results: Sequenc
                     loaded[test.name] = load_data(test.data, cfg.classes)
                 ds = loaded[test.name]
                 records = json.loads((folder / "predictions.json").read_text(encoding="utf-8"))
-                doc = error_breakdown(ds, records, [c.id for c in ds.categories]).to_dict()
-                path.write_text(json.dumps(doc, indent=1) + "\n", encoding="utf-8")
+                breakdown = error_breakdown(ds, records, [c.id for c in ds.categories])
+                breakdown.write(folder)
+                doc = breakdown.to_dict()
             rows.append({"test_set": test.name, "label": spec.label, "seed": spec.seed, "errors": doc})
     return rows
 

@@ -121,8 +121,7 @@ def score_run(spec: RunSpec, model: Path) -> dict[str, dict[str, Any]]:
         result = score(detector, load_data(test.data, spec.classes), options)
         folder = spec.out / "scores" / slug(test.name)
         write_outputs(result, folder)
-        errors = score_errors(result).to_dict()
-        (folder / "errors.json").write_text(json.dumps(errors, indent=1) + "\n", encoding="utf-8")
+        score_errors(result).write(folder)
         m = result.metrics
         out[test.name] = {
             **{k: m.summary.get(k) for k in METRICS},
