@@ -38,3 +38,26 @@ def toy_config(**grid: Any) -> ExperimentConfig:
 def write_toy_config(path: Path, **grid: Any) -> Path:
     path.write_text(yaml.safe_dump(toy_dict(**grid), sort_keys=False), encoding="utf-8")
     return path
+
+
+def run_local_and_ray(specs: list, folder: Path, num_cpus: float) -> list:
+    """Run ``specs`` with the local executor into ``folder/local`` and on a local Ray (``num_cpus`` per run) into
+    ``folder/ray``; asserts every run of both finished and each Ray run's results.json has the local run's bytes.
+    Returns the Ray outcomes (for further checks)."""
+    from dataclasses import replace
+
+    from fuzzyfire.executors import LocalExecutor, build_executor
+    from fuzzyfire.runs import RESULTS_FILE, execute_run
+
+    local = [replace(s, out=folder / "local" / s.label) for s in specs]
+    remote = [replace(s, out=folder / "ray" / s.label) for s in specs]
+    assert [o.error for o in LocalExecutor().map(execute_run, local)] == [None] * len(specs)
+    executor = build_executor("ray", num_cpus=num_cpus, local_cpus=2)
+    try:
+        outcomes = list(executor.map(execute_run, remote))
+    finally:
+        executor.close()
+    assert all(o.error is None for o in outcomes), [o.error for o in outcomes]
+    for a, b in zip(local, remote):
+        assert (a.out / RESULTS_FILE).read_bytes() == (b.out / RESULTS_FILE).read_bytes()
+    return outcomes

@@ -11,12 +11,12 @@ from dataclasses import replace
 from pathlib import Path
 
 import pytest
-from factories_experiment import toy_dict
+from factories_experiment import run_local_and_ray, toy_dict
 
 from fuzzyfire.cli import main
 from fuzzyfire.config import build_config
 from fuzzyfire.engine import EngineConfig, EngineError
-from fuzzyfire.executors import LocalExecutor, build_executor
+from fuzzyfire.executors import LocalExecutor
 from fuzzyfire.experiment import plan_runs, prepare_data, write_mixtures
 from fuzzyfire.experiment_config import ExperimentConfig, ExperimentConfigError
 from fuzzyfire.runs import RESULTS_FILE, execute_run
@@ -90,14 +90,4 @@ def test_engine_config_is_checked_when_loaded() -> None:
 @pytest.mark.slow
 def test_ray_runs_the_command_engine_like_local(grid, tmp_path: Path) -> None:
     _, specs, _ = grid
-    local = [replace(s, out=tmp_path / "local" / s.label) for s in specs]
-    remote = [replace(s, out=tmp_path / "ray" / s.label) for s in specs]
-    assert [o.error for o in LocalExecutor().map(execute_run, local)] == [None, None]
-    executor = build_executor("ray", num_cpus=1, local_cpus=2)
-    try:
-        outcomes = list(executor.map(execute_run, remote))
-    finally:
-        executor.close()
-    assert all(o.error is None for o in outcomes)
-    for a, b in zip(local, remote):
-        assert (a.out / RESULTS_FILE).read_bytes() == (b.out / RESULTS_FILE).read_bytes()
+    run_local_and_ray(specs, tmp_path, num_cpus=1)

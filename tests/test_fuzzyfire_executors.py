@@ -3,15 +3,13 @@ same results.json bytes as the local executor for the same seeds."""
 
 from __future__ import annotations
 
-from dataclasses import replace
 from pathlib import Path
 
 import pytest
-from factories_experiment import toy_config
+from factories_experiment import run_local_and_ray, toy_config
 
 from fuzzyfire.executors import EXECUTORS, ExecutorError, LocalExecutor, build_executor
 from fuzzyfire.experiment import plan_runs, prepare_data, write_mixtures
-from fuzzyfire.runs import RESULTS_FILE, execute_run
 
 
 def _square_or_fail(x: int) -> int:
@@ -45,18 +43,9 @@ def toy_specs(tmp_path_factory: pytest.TempPathFactory):
 @pytest.mark.slow
 def test_ray_gives_the_same_results_as_local(toy_specs, tmp_path: Path) -> None:
     specs, _ = toy_specs
-    local = [replace(s, out=tmp_path / "local" / s.label) for s in specs]
-    remote = [replace(s, out=tmp_path / "ray" / s.label) for s in specs]
-    assert [o.error for o in LocalExecutor().map(execute_run, local)] == [None, None]
-    ray_executor = build_executor("ray", num_cpus=2, local_cpus=2)
-    try:
-        outcomes = list(ray_executor.map(execute_run, remote))
-    finally:
-        ray_executor.close()
-    assert sorted(o.index for o in outcomes) == [0, 1] and all(o.error is None for o in outcomes)
+    outcomes = run_local_and_ray(specs, tmp_path, num_cpus=2)
+    assert sorted(o.index for o in outcomes) == [0, 1]
     assert all(o.result["skipped"] is False for o in outcomes)
-    for a, b in zip(local, remote):
-        assert (a.out / RESULTS_FILE).read_bytes() == (b.out / RESULTS_FILE).read_bytes()
 
 
 def test_ray_refuses_gpus_the_cluster_does_not_have() -> None:
