@@ -52,15 +52,14 @@ def _print_text(result, intervals: dict) -> None:  # result: eval.score.ScoreRes
 
 
 def _score_model(model: Path, args: argparse.Namespace, dataset, problems):  # -> eval.score.ScoreResult
-    from eval.onnx_model import OnnxDetector
-    from eval.predict import PredictOptions
-    from eval.score import score
+    from eval.score import ScoreConfig, score
 
-    detector = OnnxDetector(model, args.format, args.names, args.imgsz, threads=args.threads, device=args.device)
+    keys = ("conf", "iou", "max_det", "batch", "workers", "threads", "device")
+    cfg = ScoreConfig(**{k: getattr(args, k) for k in keys})
+    detector = cfg.detector(model, args.format, args.names, args.imgsz)
     if detector.device_notice:
         print(detector.device_notice, file=sys.stderr)
-    options = PredictOptions(args.conf, args.iou, args.max_det, args.batch, args.workers, resize=args.resize)
-    return score(detector, dataset, options, problems)
+    return score(detector, dataset, cfg.predict_options(args.resize), problems)
 
 
 def _load(args: argparse.Namespace):  # -> eval.score.TestSet

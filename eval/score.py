@@ -12,7 +12,7 @@ from pycocotools.cocoeval import COCOeval
 
 from curate.cocoeval import CocoMetrics, evaluate_predictions
 from curate.dataset import Dataset
-from curate.detections import Predictions
+from curate.detections import CONF_THRESHOLD, IOU_THRESHOLD, MAX_DETECTIONS, Predictions
 from curate.formats.registry import read_dataset
 from curate.problems import Problem
 from eval.errors import ALARM_CONF, ErrorBreakdown, error_breakdown
@@ -20,6 +20,35 @@ from eval.onnx_model import ModelSpec, OnnxDetector
 from eval.plots import plot_pr_curves, pr_curves_from_eval
 from eval.predict import PredictOptions, predict_dataset
 from eval.stats import MatchTable
+
+
+@dataclass(frozen=True)
+class ScoreConfig:
+    """How a model is scored (the ``score:`` section of an experiment; ``fuzzyfire score``'s flags)."""
+
+    conf: float = CONF_THRESHOLD  # score threshold before NMS, 0..1
+    iou: float = IOU_THRESHOLD  # NMS IoU threshold, 0..1
+    max_det: int = MAX_DETECTIONS  # detections kept per image
+    batch: int = 16  # images per onnxruntime call
+    workers: int = 2  # image decoding threads
+    threads: int = 0  # onnxruntime threads; 0 = every core the run may use
+    device: str = "auto"  # auto | cpu | cuda | cuda:N; auto = onnxruntime's CUDA provider when installed
+
+    def predict_options(self, resize: str = "area") -> PredictOptions:
+        """The post-processing and batching options of :func:`eval.predict.predict_dataset`."""
+        return PredictOptions(
+            conf=self.conf, iou=self.iou, max_det=self.max_det, batch=self.batch, workers=self.workers, resize=resize
+        )
+
+    def detector(
+        self,
+        model: Path | str,
+        fmt: str = "auto",
+        names: Sequence[str] | None = None,
+        image_size: tuple[int, int] | None = None,
+    ) -> OnnxDetector:
+        """``model`` on this config's device with its threads (:class:`eval.onnx_model.OnnxDetector`)."""
+        return OnnxDetector(model, fmt, names, image_size, threads=self.threads, device=self.device)
 
 
 class ScoreError(ValueError):

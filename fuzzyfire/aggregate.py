@@ -24,19 +24,14 @@ STANDIN_NOTICE = (
 )
 
 
-def result_rows(
-    cfg: ExperimentConfig, specs: Sequence[RunSpec], results: Sequence[dict | None], out: Path
-) -> list[dict]:
+def result_rows(specs: Sequence[RunSpec], results: Sequence[dict | None], out: Path) -> list[dict]:
     """One row per (finished run, test set): mixture, method, seed, test_set, AP, AP50, run folder (relative to
-    ``out``), the tables it belongs to and its matches file."""
-    table2 = {(n, None if parse_mixture(n).synth == 0 else cfg.grid.synthetic) for n in cfg.grid.mixtures}
+    ``out``), the tables it belongs to (as its spec says) and its matches file."""
     rows = []
     for spec, res in zip(specs, results):
         if res is None:
             continue
-        tables = (["table2"] if (spec.mixture, spec.method) in table2 else []) + (
-            ["table1"] if spec.mixture in cfg.grid.table1 and spec.method else []
-        )
+        tables = list(spec.tables)
         for test, m in res["tests"].items():
             rows.append({
                 "mixture": spec.mixture, "method": spec.method or "-", "seed": spec.seed, "test_set": test,

@@ -25,7 +25,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, Literal
 
 if TYPE_CHECKING:
-    from fuzzyfire.runs import RunSpec
+    from train.config import TrainConfig
 
 PLACEHOLDERS = (
     "data_yaml",
@@ -78,33 +78,45 @@ class EngineConfig:
                 )
 
 
-def values(spec: RunSpec) -> dict[str, str]:
+@dataclass(frozen=True)
+class CommandJob:
+    """What one run asks of the engine: ``train`` the run's resolved train config (its seed, threads, device),
+    ``data`` the mixture folder, ``out`` the run folder, ``key`` the run's identity hash (a finished job is
+    recognised by it)."""
+
+    train: TrainConfig
+    data: Path
+    out: Path
+    key: str
+
+
+def values(job: CommandJob) -> dict[str, str]:
     """The placeholder values of a run (module docstring)."""
-    device = spec.train.device
-    cuda = device.startswith("cuda")
+    t = job.train
+    cuda = t.device.startswith("cuda")
     return {
-        "data_yaml": str(Path(spec.train_data.path) / "data.yaml"),
-        "mixture_dir": str(spec.train_data.path),
-        "epochs": str(spec.train.epochs),
-        "imgsz": str(spec.train.imgsz),
-        "batch": str(spec.train.batch),
-        "seed": str(spec.seed),
-        "device": (device.partition(":")[2] or "0") if cuda else ("cpu" if device == "cpu" else ""),
-        "workers": str(max(1, spec.train.threads)),
-        "run_dir": str(spec.out),
+        "data_yaml": str(job.data / "data.yaml"),
+        "mixture_dir": str(job.data),
+        "epochs": str(t.epochs),
+        "imgsz": str(t.imgsz),
+        "batch": str(t.batch),
+        "seed": str(t.seed),
+        "device": (t.device.partition(":")[2] or "0") if cuda else ("cpu" if t.device == "cpu" else ""),
+        "workers": str(max(1, t.threads)),
+        "run_dir": str(job.out),
         "python": sys.executable,
     }
 
 
-def command_train(spec: RunSpec, engine: EngineConfig) -> Path:
-    """Run the engine's commands for ``spec`` (or find their finished output); returns the ONNX path.
+def command_train(job: CommandJob, engine: EngineConfig) -> Path:
+    """Run the engine's commands for ``job`` (or find their finished output); returns the ONNX path.
     Raises :class:`CommandError` naming the failed command with the tail of its log."""
-    filled = values(spec)
+    filled = values(job)
     steps = [(k, _argv(getattr(engine, k), filled)) for k in ("train", "export") if getattr(engine, k).strip()]
-    onnx = spec.out / engine.onnx.format(**filled)
-    folder = spec.out / "train"
+    onnx = job.out / engine.onnx.format(**filled)
+    folder = job.out / "train"
     folder.mkdir(parents=True, exist_ok=True)
-    record = {"hash": spec.hash(), "commands": [argv for _, argv in steps]}
+    record = {"hash": job.key, "commands": [argv for _, argv in steps]}
     done = folder / "command.json"
     if done.is_file() and json.loads(done.read_text(encoding="utf-8")) == record and onnx.is_file():
         return onnx
@@ -115,13 +127,13 @@ def command_train(spec: RunSpec, engine: EngineConfig) -> Path:
             out.write(f"$ {shlex.join(argv)}\n")
             out.flush()
             try:
-                code = subprocess.run(argv, cwd=spec.out, stdout=out, stderr=subprocess.STDOUT, env=env).returncode
+                code = subprocess.run(argv, cwd=job.out, stdout=out, stderr=subprocess.STDOUT, env=env).returncode
             except OSError as exc:
-                raise CommandError(f"{spec.out}: engine.{step} command {argv[0]!r} cannot start: {exc}") from None
+                raise CommandError(f"{job.out}: engine.{step} command {argv[0]!r} cannot start: {exc}") from None
             if code != 0:
-                raise CommandError(f"{spec.out}: engine.{step} command exited with {code}:\n{_tail(log)}")
+                raise CommandError(f"{job.out}: engine.{step} command exited with {code}:\n{_tail(log)}")
     if not onnx.is_file():
-        raise CommandError(f"{spec.out}: the engine's commands left no ONNX at {onnx} (engine.onnx):\n{_tail(log)}")
+        raise CommandError(f"{job.out}: the engine's commands left no ONNX at {onnx} (engine.onnx):\n{_tail(log)}")
     done.write_text(json.dumps(record, indent=1) + "\n", encoding="utf-8")
     return onnx
 

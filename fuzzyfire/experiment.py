@@ -45,8 +45,8 @@ def _say(message: str) -> None:
     print(message, flush=True)
 
 
-def prepare_data(cfg: ExperimentConfig, base: Path, out: Path) -> Prepared:
-    """Build (or reuse) every data stage."""
+def prepare_data(cfg: ExperimentConfig, base: Path, out: Path, methods: Sequence[str]) -> Prepared:
+    """Build (or reuse) every data stage: the real set, the rare set and the pools of ``methods``."""
     root = out / "data"
     real, rare = cfg.real, cfg.rare
     kind = real.source()
@@ -62,7 +62,7 @@ def prepare_data(cfg: ExperimentConfig, base: Path, out: Path) -> Prepared:
     elif rare is not None:
         rare_ref = _stage("rare (stand-in)", standin_stage, root, "rare-standin", rare.standin)
     pools = {}
-    for method in needed_methods(cfg):
+    for method in methods:
         pools[method] = _stage(method, synth_stage, root, method, getattr(cfg.synth, method), base)
     return Prepared(real_ref, rare_ref, pools)
 
@@ -75,42 +75,55 @@ def _stage(what: str, make, *args) -> DataRef:
     return ref
 
 
-def grid_entries(cfg: ExperimentConfig) -> list[tuple[str, str | None]]:
-    """(mixture, synthetic method or None) of every distinct run, Table 2 first, then Table 1."""
-    entries = []
+@dataclass(frozen=True)
+class GridEntry:
+    """One run of every seed: a mixture, its synthetic pool (None for real-only) and the tables it is in."""
+
+    mixture: str
+    method: str | None
+    tables: tuple[str, ...]
+
+
+def grid_entries(cfg: ExperimentConfig) -> list[GridEntry]:
+    """The distinct runs of one seed, Table 2 first, then Table 1 (a run in both tables is one run). This is the
+    one place that decides which runs exist and which tables they fill."""
+    tables: dict[tuple[str, str | None], list[str]] = {}
     for name in cfg.grid.mixtures:
-        entries.append((name, None if parse_mixture(name).synth == 0 else cfg.grid.synthetic))
+        method = None if parse_mixture(name).synth == 0 else cfg.grid.synthetic
+        tables.setdefault((name, method), []).append("table2")
     for name in cfg.grid.table1:
         if parse_mixture(name).real:
             raise ValueError(f"grid.table1: {name} has real images; Table 1 compares synthetic-only training")
-        entries += [(name, m) for m in METHODS if getattr(cfg.synth, m) is not None]
-    return list(dict.fromkeys(entries))
+        for method in (m for m in METHODS if getattr(cfg.synth, m) is not None):
+            tables.setdefault((name, method), []).append("table1")
+    return [GridEntry(name, method, tuple(dict.fromkeys(t))) for (name, method), t in tables.items()]
 
 
-def needed_methods(cfg: ExperimentConfig) -> list[str]:
-    return [m for m in METHODS if any(method == m for _, method in grid_entries(cfg))]
+def needed_methods(grid: Sequence[GridEntry]) -> list[str]:
+    """The synthetic pools the runs of ``grid`` draw from, in :data:`METHODS` order."""
+    return [m for m in METHODS if any(e.method == m for e in grid)]
 
 
 def _empty(root: Path, classes: Sequence[str]) -> Dataset:
     return DatasetBuilder(root, list(classes)).build()
 
 
-def write_mixtures(cfg: ExperimentConfig, data: Prepared, out: Path) -> dict[tuple[str, str | None, int], DataRef]:
-    """Write every (mixture, method, seed) training set; returns their references."""
+def write_mixtures(
+    cfg: ExperimentConfig, grid: Sequence[GridEntry], data: Prepared, out: Path
+) -> dict[tuple[str, str | None, int], DataRef]:
+    """Write every (mixture, method, seed) training set of ``grid``; returns their references."""
     real_train = data.real.with_split(cfg.real.train_split)
     real_pool = load_data(real_train, cfg.classes)
     val_ref = data.real.with_split(cfg.real.val_split)
     val = functools.cache(lambda: _yolo_validation(val_ref, cfg.classes))  # read only if a mixture is written
     refs = {}
-    for method in dict.fromkeys(m for _, m in grid_entries(cfg)):
+    for method in dict.fromkeys(e.method for e in grid):
         synth = data.pools[method].with_split(None) if method else None
         pool = load_data(synth, cfg.classes) if synth else _empty(real_pool.root, cfg.classes)
         key = {"real": real_train.key(), "synth": synth.key() if synth else None, "classes": list(cfg.classes)}
         root = out / "mixtures" / f"{method or 'real'}-{digest(key)}"
         for seed in cfg.grid.seeds:
-            for name, m in grid_entries(cfg):
-                if m != method:
-                    continue
+            for name in (e.mixture for e in grid if e.method == method):
                 folder = _write_mixture(cfg, real_pool, pool, name, seed, root, val)
                 identity = {"kind": "mixture", "mixture": name, "seed": seed, **key}
                 refs[(name, method, seed)] = DataRef(folder, identity, "coco")
@@ -149,24 +162,29 @@ def _write_mixture(
 
 
 def plan_runs(
-    cfg: ExperimentConfig, data: Prepared, mixtures: dict[tuple[str, str | None, int], DataRef], out: Path
+    cfg: ExperimentConfig,
+    grid: Sequence[GridEntry],
+    data: Prepared,
+    mixtures: dict[tuple[str, str | None, int], DataRef],
+    out: Path,
 ) -> list[RunSpec]:
-    """One spec per (seed, mixture, method): seed-major, so a partial grid has whole tables for early seeds."""
+    """One fully resolved spec per (seed, grid entry): seed-major, so a partial grid has whole tables for early
+    seeds. Each run's train config carries its seed and threads, its score config its threads (``0`` in the
+    config = the executor's CPUs per run)."""
     tests = [EvalSet(label(cfg.real.name, data.real.standin), data.real.with_split(cfg.real.test_split))]
     if data.rare is not None:
         tests.append(EvalSet(label(cfg.rare.name, data.rare.standin), data.rare))
     threads = max(1, int(cfg.executor.num_cpus))
-    train = cfg.train if cfg.train.threads else replace(cfg.train, threads=threads)
-    score = cfg.score if cfg.score.threads else replace(cfg.score, threads=threads)
+    train = replace(cfg.train, threads=cfg.train.threads or threads)
+    score = replace(cfg.score, threads=cfg.score.threads or threads)
     val = data.real.with_split(cfg.real.val_split)
     engine = cfg.engine if cfg.engine.name == "command" else None
-    specs = []
-    for seed in cfg.grid.seeds:
-        for name, method in grid_entries(cfg):
-            spec = RunSpec(name, method, seed, mixtures[(name, method, seed)], val, tuple(tests), cfg.classes,
-                           train, score, out, engine)  # fmt: skip
-            specs.append(replace(spec, out=out / "runs" / spec.label / f"seed{seed}-{spec.hash()[:8]}"))
-    return specs
+    return [
+        RunSpec(e.mixture, e.method, mixtures[(e.mixture, e.method, seed)], val, tuple(tests), cfg.classes,
+                replace(train, seed=seed), score, out, engine, e.tables)  # fmt: skip
+        for seed in cfg.grid.seeds
+        for e in grid
+    ]
 
 
 def run_grid(specs: Sequence[RunSpec], executor) -> list[dict[str, Any] | None]:
@@ -213,14 +231,15 @@ def run_experiment(cfg: ExperimentConfig, base: Path, out: Path, executor=None) 
     cfg.check()
     out = Path(out).resolve()
     out.mkdir(parents=True, exist_ok=True)
-    data = prepare_data(cfg, base, out)
+    grid = grid_entries(cfg)
+    data = prepare_data(cfg, base, out, needed_methods(grid))
     if data.standin:
         _say(STANDIN_NOTICE)
     for split in (cfg.real.val_split, cfg.real.test_split):  # fail now, not after the first training
         load_data(data.real.with_split(split), cfg.classes)
-    specs = plan_runs(cfg, data, write_mixtures(cfg, data, out), out)
+    specs = plan_runs(cfg, grid, data, write_mixtures(cfg, grid, data, out), out)
     results = run_grid(specs, executor) if executor is not None else finished_runs(specs)
-    rows = result_rows(cfg, specs, results, out)
+    rows = result_rows(specs, results, out)
     write_summary(cfg, specs, results, rows, out, data.standin)
     report = write_report(cfg, data, rows, out, specs, results)
     failed = [s for s, r in zip(specs, results) if r is None]

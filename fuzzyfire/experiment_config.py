@@ -3,7 +3,8 @@
 
 Component configs are the packages' own: :class:`curate.curation.CurateConfig`, :class:`synth.method1.
 Method1Config`, :class:`synth.method2.Method2Config`, :class:`synth.standin.StandInConfig`,
-:class:`train.config.TrainConfig`. Relative paths resolve against the config file's folder.
+:class:`train.config.TrainConfig`, :class:`eval.score.ScoreConfig`. Relative paths resolve against the config
+file's folder.
 """
 
 from __future__ import annotations
@@ -14,6 +15,7 @@ from typing import Literal, Optional
 
 from curate.curation import CurateConfig
 from curate.sources import SourceConfig
+from eval.score import ScoreConfig
 from fuzzyfire.engine import EngineConfig, EngineError
 from synth.method1 import Method1Config
 from synth.method2 import Method2Config
@@ -106,19 +108,6 @@ class GridConfig:
     synthetic: Literal["method1", "method2"] = "method2"
     table1: tuple[str, ...] = ("R0_S1000",)
     seeds: tuple[int, ...] = (0, 1, 2, 3, 4)
-
-
-@dataclass(frozen=True)
-class ScoreConfig:
-    """Scoring every run's ``best.onnx`` on every test set (as ``fuzzyfire score``)."""
-
-    conf: float = 0.001  # score threshold before NMS, 0..1
-    iou: float = 0.6  # NMS IoU threshold, 0..1
-    max_det: int = 300  # detections kept per image
-    batch: int = 16  # images per onnxruntime call
-    workers: int = 2  # image decoding threads
-    threads: int = 0  # onnxruntime threads; 0 = every core the run may use
-    device: str = "auto"  # auto | cpu | cuda | cuda:N; auto = onnxruntime's CUDA provider when installed
 
 
 @dataclass(frozen=True)

@@ -14,17 +14,17 @@ from __future__ import annotations
 import json
 import os
 import time
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from fuzzyfire.config import to_dict
-from fuzzyfire.engine import command_train
+from fuzzyfire.engine import CommandJob, command_train
 from fuzzyfire.stages import DataRef, digest, load_data
 
 if TYPE_CHECKING:
+    from eval.score import ScoreConfig
     from fuzzyfire.engine import EngineConfig
-    from fuzzyfire.experiment_config import ScoreConfig
     from train.config import TrainConfig
 
 RESULTS_FILE = "results.json"
@@ -43,26 +43,41 @@ class EvalSet:
 
 @dataclass(frozen=True)
 class RunSpec:
-    """Everything a run needs. ``method`` is the synthetic pool (None for real-only mixtures); ``engine`` an
-    external trainer (:mod:`fuzzyfire.engine`; None = our detector, trained with ``train``)."""
+    """Everything a run needs, resolved once by :func:`fuzzyfire.experiment.plan_runs` and never patched after.
+
+    ``method`` is the synthetic pool (None for real-only mixtures); ``train`` the final train config (its
+    ``seed`` is the run's seed, its ``threads`` resolved); ``score`` eval's own scoring options; ``engine`` an
+    external trainer (:mod:`fuzzyfire.engine`; None = our detector); ``tables`` the study tables the run's rows
+    belong to (``table1``, ``table2``); ``root`` the experiment folder (the run's own folder, :attr:`out`,
+    follows from its label, seed and identity hash)."""
 
     mixture: str
     method: str | None
-    seed: int
     train_data: DataRef  # the mixture folder
     val_data: DataRef
     tests: tuple[EvalSet, ...]
     classes: tuple[str, ...]
-    train: TrainConfig  # its seed is replaced by ``seed``
+    train: TrainConfig
     score: ScoreConfig
-    out: Path
+    root: Path
     engine: EngineConfig | None = None
+    tables: tuple[str, ...] = ()
+
+    @property
+    def seed(self) -> int:
+        return self.train.seed
 
     @property
     def label(self) -> str:
         return self.mixture if self.method is None else f"{self.mixture}-{self.method}"
 
+    @property
+    def out(self) -> Path:
+        """``root/runs/<label>/seed<S>-<first 8 hex digits of the hash>``."""
+        return self.root / "runs" / self.label / f"seed{self.seed}-{self.hash()[:8]}"
+
     def identity(self) -> dict[str, Any]:
+        """What makes the run (no paths of ours, no table membership): equal identities give equal results."""
         engine = {"engine": to_dict(self.engine)} if self.engine is not None else {}
         return {
             **engine,
@@ -73,12 +88,16 @@ class RunSpec:
             "val_data": self.val_data.key(),
             "tests": {t.name: t.data.key() for t in self.tests},
             "classes": list(self.classes),
-            "train": to_dict(replace(self.train, seed=self.seed)),
+            "train": to_dict(self.train),
             "score": to_dict(self.score),
         }
 
     def hash(self) -> str:
         return digest(self.identity())
+
+    def record(self) -> dict[str, Any]:
+        """The resolved spec as ``run.json`` and ``results.json`` keep it: identity, hash and tables."""
+        return {"hash": self.hash(), "identity": self.identity(), "tables": list(self.tables)}
 
 
 def finished(spec: RunSpec) -> dict[str, Any] | None:
@@ -102,20 +121,17 @@ def train_run(spec: RunSpec) -> dict[str, Any]:
 
     train_ds = load_data(spec.train_data, spec.classes)
     val_ds = load_data(spec.val_data, spec.classes)
-    return fit(replace(spec.train, seed=spec.seed), train_ds, val_ds, spec.out / "train")
+    return fit(spec.train, train_ds, val_ds, spec.out / "train")
 
 
 def score_run(spec: RunSpec, model: Path) -> dict[str, dict[str, Any]]:
     """Score ``model`` on every test set; writes ``scores/<name>/``; returns headline metrics per test set."""
-    from eval.onnx_model import OnnxDetector
-    from eval.predict import PredictOptions
     from eval.score import score, score_errors, write_outputs
 
-    s = spec.score
-    detector = OnnxDetector(model, threads=s.threads, device=s.device)
+    detector = spec.score.detector(model)
     if detector.device_notice:
         print(detector.device_notice, flush=True)
-    options = PredictOptions(s.conf, s.iou, s.max_det, s.batch, s.workers)
+    options = spec.score.predict_options()
     out = {}
     for test in spec.tests:
         result = score(detector, load_data(test.data, spec.classes), options)
@@ -146,10 +162,11 @@ def execute_run(spec: RunSpec) -> dict[str, Any]:
     if done is not None:
         return {**done, "skipped": True}
     spec.out.mkdir(parents=True, exist_ok=True)
-    _write_json(spec.out / "run.json", {"hash": spec.hash(), "identity": spec.identity()})
+    _write_json(spec.out / "run.json", spec.record())
     start = time.perf_counter()
     if spec.engine is not None:
-        model, best = command_train(spec, spec.engine), {"engine": spec.engine.name}
+        job = CommandJob(spec.train, Path(spec.train_data.path), spec.out, spec.hash())
+        model, best = command_train(job, spec.engine), {"engine": spec.engine.name}
     else:
         trained = train_run(spec)
         if not trained.get("onnx"):
@@ -166,6 +183,7 @@ def execute_run(spec: RunSpec) -> dict[str, Any]:
         "seed": spec.seed,
         "best": best,
         "tests": tests,
+        "spec": spec.record(),
     }
     _write_json(spec.out / RESULTS_FILE, results)
     return {**results, "skipped": False}

@@ -49,8 +49,8 @@ def run_local_and_ray(specs: list, folder: Path, num_cpus: float) -> list:
     from fuzzyfire.executors import LocalExecutor, build_executor
     from fuzzyfire.runs import RESULTS_FILE, execute_run
 
-    local = [replace(s, out=folder / "local" / s.label) for s in specs]
-    remote = [replace(s, out=folder / "ray" / s.label) for s in specs]
+    local = [replace(s, root=folder / "local") for s in specs]
+    remote = [replace(s, root=folder / "ray") for s in specs]
     assert [o.error for o in LocalExecutor().map(execute_run, local)] == [None] * len(specs)
     executor = build_executor("ray", num_cpus=num_cpus, local_cpus=2)
     try:

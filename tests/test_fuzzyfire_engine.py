@@ -17,7 +17,7 @@ from fuzzyfire.cli import main
 from fuzzyfire.config import build_config
 from fuzzyfire.engine import EngineConfig, EngineError
 from fuzzyfire.executors import LocalExecutor
-from fuzzyfire.experiment import plan_runs, prepare_data, write_mixtures
+from fuzzyfire.experiment import grid_entries, needed_methods, plan_runs, prepare_data, write_mixtures
 from fuzzyfire.experiment_config import ExperimentConfig, ExperimentConfigError
 from fuzzyfire.runs import RESULTS_FILE, execute_run
 
@@ -43,13 +43,14 @@ def grid(tmp_path_factory: pytest.TempPathFactory):
     out = tmp_path_factory.mktemp("engine")
     cfg = _config()
     cfg.check()
-    data = prepare_data(cfg, out, out)
-    return cfg, plan_runs(cfg, data, write_mixtures(cfg, data, out), out), out
+    grid = grid_entries(cfg)
+    data = prepare_data(cfg, out, out, needed_methods(grid))
+    return cfg, plan_runs(cfg, grid, data, write_mixtures(cfg, grid, data, out), out), out
 
 
 def test_command_runs_are_scored_like_ours_and_keep_their_logs(grid, tmp_path: Path) -> None:
     _, specs, _ = grid
-    runs = [replace(s, out=tmp_path / s.label) for s in specs]
+    runs = [replace(s, root=tmp_path / s.label) for s in specs]
     outcomes = list(LocalExecutor().map(execute_run, runs))
     assert [o.error for o in outcomes] == [None, None]
     spec, result = runs[0], outcomes[0].result
@@ -70,12 +71,12 @@ def test_command_runs_are_scored_like_ours_and_keep_their_logs(grid, tmp_path: P
 def test_a_failing_command_fails_its_run_with_the_log_tail(grid, tmp_path: Path) -> None:
     _, specs, _ = grid
     failing = replace(specs[0].engine, train=TRAIN + " fail=1")
-    runs = [replace(specs[0], engine=failing, out=tmp_path / "bad"), replace(specs[1], out=tmp_path / "good")]
+    runs = [replace(specs[0], engine=failing, root=tmp_path / "bad"), replace(specs[1], root=tmp_path / "good")]
     outcomes = list(LocalExecutor().map(execute_run, runs))
     assert outcomes[1].error is None
     assert "engine.train command exited with 3" in outcomes[0].error
-    assert "CUDA out of memory (pretend)" in (tmp_path / "bad" / "train" / "command.log").read_text()
-    assert not (tmp_path / "bad" / RESULTS_FILE).exists()
+    assert "CUDA out of memory (pretend)" in (runs[0].out / "train" / "command.log").read_text()
+    assert not (runs[0].out / RESULTS_FILE).exists()
 
 
 def test_engine_config_is_checked_when_loaded() -> None:

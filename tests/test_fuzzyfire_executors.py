@@ -9,7 +9,7 @@ import pytest
 from factories_experiment import run_local_and_ray, toy_config
 
 from fuzzyfire.executors import EXECUTORS, ExecutorError, LocalExecutor, build_executor
-from fuzzyfire.experiment import plan_runs, prepare_data, write_mixtures
+from fuzzyfire.experiment import grid_entries, needed_methods, plan_runs, prepare_data, write_mixtures
 
 
 def _square_or_fail(x: int) -> int:
@@ -36,8 +36,9 @@ def toy_specs(tmp_path_factory: pytest.TempPathFactory):
     """Two runs of a toy grid (one real-only, one mixed) with their data prepared once."""
     out = tmp_path_factory.mktemp("grid")
     cfg = toy_config(mixtures=["R12_S0", "R6_S6"], table1=[])
-    data = prepare_data(cfg, out, out)
-    return plan_runs(cfg, data, write_mixtures(cfg, data, out), out), out
+    grid = grid_entries(cfg)
+    data = prepare_data(cfg, out, out, needed_methods(grid))
+    return plan_runs(cfg, grid, data, write_mixtures(cfg, grid, data, out), out), out
 
 
 @pytest.mark.slow

@@ -13,17 +13,22 @@ from factories_experiment import toy_config, write_toy_config
 import fuzzyfire.experiment as experiment
 from fuzzyfire.cli import main
 from fuzzyfire.executors import LocalExecutor
-from fuzzyfire.experiment import grid_entries, needed_methods, run_experiment
+from fuzzyfire.experiment import GridEntry, grid_entries, needed_methods, run_experiment
 from fuzzyfire.stages import label
 
 RUNS = ["R12_S0", "R6_S6-method2", "R0_S12-method1", "R0_S12-method2"]
 
 
-def test_grid_entries_dedupe_and_need_only_used_methods() -> None:
+def test_grid_entries_dedupe_name_their_tables_and_need_only_used_methods() -> None:
     cfg = toy_config(mixtures=["R12_S0", "R6_S6", "R0_S12"], table1=["R0_S12"])
-    assert grid_entries(cfg) == [("R12_S0", None), ("R6_S6", "method2"), ("R0_S12", "method2"), ("R0_S12", "method1")]
-    assert needed_methods(cfg) == ["method1", "method2"]
-    assert needed_methods(toy_config(mixtures=["R12_S0"], table1=[])) == []
+    assert grid_entries(cfg) == [
+        GridEntry("R12_S0", None, ("table2",)),
+        GridEntry("R6_S6", "method2", ("table2",)),
+        GridEntry("R0_S12", "method2", ("table2", "table1")),  # Table 2's synthetic-only run is Method 2's Table 1 row
+        GridEntry("R0_S12", "method1", ("table1",)),
+    ]
+    assert needed_methods(grid_entries(cfg)) == ["method1", "method2"]
+    assert needed_methods(grid_entries(toy_config(mixtures=["R12_S0"], table1=[]))) == []
     with pytest.raises(ValueError, match="Table 1 compares synthetic-only"):
         grid_entries(toy_config(table1=["R6_S6"]))
 
