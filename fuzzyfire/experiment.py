@@ -180,8 +180,19 @@ def plan_runs(
     val = data.real.with_split(cfg.real.val_split)
     engine = cfg.engine if cfg.engine.name == "command" else None
     return [
-        RunSpec(e.mixture, e.method, mixtures[(e.mixture, e.method, seed)], val, tuple(tests), cfg.classes,
-                replace(train, seed=seed), score, out, engine, e.tables)  # fmt: skip
+        RunSpec(
+            e.mixture,
+            e.method,
+            mixtures[(e.mixture, e.method, seed)],
+            val,
+            tuple(tests),
+            cfg.classes,
+            replace(train, seed=seed),
+            score,
+            out,
+            engine,
+            e.tables,
+        )  # fmt: skip
         for seed in cfg.grid.seeds
         for e in grid
     ]

@@ -6,8 +6,8 @@ from pathlib import Path
 
 from factories_experiment import toy_config
 
-from fuzzyfire.aggregate import comparisons, result_rows
 from eval.score import ScoreConfig
+from fuzzyfire.aggregate import comparisons, result_rows
 from fuzzyfire.runs import RunSpec
 from fuzzyfire.stages import DataRef
 from train.config import TrainConfig

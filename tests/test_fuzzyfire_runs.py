@@ -16,7 +16,9 @@ def _spec(out: Path, seed: int = 0) -> RunSpec:
     data = DataRef(Path("/data/mix"), {"kind": "mixture", "mixture": "R2_S2"}, "coco")
     val = DataRef(Path("/data/real"), {"kind": "folder"}, "coco", "valid")
     tests = (EvalSet("common", val.with_split("test")),)
-    return RunSpec("R2_S2", "method2", data, val, tests, ("fire",), TrainConfig(epochs=1, seed=seed), ScoreConfig(), out)
+    return RunSpec(
+        "R2_S2", "method2", data, val, tests, ("fire",), TrainConfig(epochs=1, seed=seed), ScoreConfig(), out
+    )
 
 
 def test_identity_ignores_the_output_folder_and_uses_the_run_seed(tmp_path: Path) -> None:
