@@ -67,6 +67,7 @@ def _run(cfg, out: Path) -> list[dict]:
 
 def _scratch_epochs(budget_s: float, cfg, out: Path) -> int:
     """Epochs of the scratch detector that fit in ``budget_s`` seconds, from a 2-epoch probe run."""
+    from fuzzyfire.datasets import Datasets
     from fuzzyfire.experiment import grid_entries, needed_methods, plan_runs, prepare_data, write_mixtures
     from fuzzyfire.runs import train_run
 
@@ -74,9 +75,10 @@ def _scratch_epochs(budget_s: float, cfg, out: Path) -> int:
     with contextlib.redirect_stdout(sys.stderr), tempfile.TemporaryDirectory() as tmp:
         grid = grid_entries(probe)
         data = prepare_data(probe, CONFIG.parent, out, needed_methods(grid))
-        spec = plan_runs(probe, grid, data, write_mixtures(probe, grid, data, out), out)[0]
+        datasets = Datasets(probe.classes)
+        spec = plan_runs(probe, grid, data, write_mixtures(probe, grid, data, datasets, out), out)[0]
         start = time.perf_counter()
-        train_run(replace(spec, root=Path(tmp)))
+        train_run(replace(spec, root=Path(tmp)), datasets.get(spec.val_data))
         per_epoch = (time.perf_counter() - start) / 2
     return max(1, round(budget_s / per_epoch))
 

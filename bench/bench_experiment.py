@@ -33,9 +33,9 @@ def main() -> None:
     marks: dict[str, float] = {}
     run_grid = experiment.run_grid
 
-    def timed_grid(specs, executor):
+    def timed_grid(specs, datasets, executor):
         marks["runs_start"] = time.perf_counter()
-        results = run_grid(specs, executor)
+        results = run_grid(specs, datasets, executor)
         marks["runs_end"] = time.perf_counter()
         return results
 

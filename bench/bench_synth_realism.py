@@ -75,8 +75,9 @@ def main() -> int:
         print(f"synth_realism_skipped: {SHARED} not found", file=sys.stderr)
         return 0
     from fuzzyfire.aggregate import realism_gaps
+    from fuzzyfire.datasets import Datasets
     from fuzzyfire.executors import LocalExecutor
-    from fuzzyfire.experiment import prepare_data, run_experiment
+    from fuzzyfire.experiment import grid_entries, needed_methods, prepare_data, run_experiment
 
     seeds = [int(s) for s in args.seeds.split(",")]
     floor_printed = False
@@ -84,8 +85,8 @@ def main() -> int:
         cfg = _config(VARIANTS[name], seeds)
         out = args.out  # one curated real set; each variant's pool and runs have their own hash
         with contextlib.redirect_stdout(sys.stderr):
-            data = prepare_data(cfg, CONFIG.parent, out)
-            (gap,) = realism_gaps(cfg, data, out)
+            data = prepare_data(cfg, CONFIG.parent, out, needed_methods(grid_entries(cfg)))
+            (gap,) = realism_gaps(cfg, data, Datasets(cfg.classes), out)
         if not floor_printed:
             print(f"synth_real_floor: {gap['frechet']['floor']['median']:.3f} (real train split vs its other half)")
             floor_printed = True

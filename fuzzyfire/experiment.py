@@ -21,24 +21,15 @@ from pathlib import Path
 from typing import Any
 
 from curate.dataset import Dataset, DatasetBuilder
-from curate.formats.registry import read_dataset
 from curate.formats.yolo import ultralytics_val_folders
+from curate.load import SplitError
 from curate.mix import mixture_dir, parse_mixture, write_mixture
 from fuzzyfire.aggregate import STANDIN_NOTICE, result_rows, write_report, write_summary
+from fuzzyfire.datasets import DataRef, Datasets
 from fuzzyfire.executors import Outcome
 from fuzzyfire.experiment_config import METHODS, ExperimentConfig
-from fuzzyfire.runs import EvalSet, RunSpec, execute_run, finished
-from fuzzyfire.stages import (
-    DataRef,
-    Prepared,
-    curate_stage,
-    digest,
-    folder_ref,
-    label,
-    load_data,
-    standin_stage,
-    synth_stage,
-)
+from fuzzyfire.runs import EvalSet, RunData, RunSpec, RunTask, execute_task, finished
+from fuzzyfire.stages import Prepared, curate_stage, digest, folder_ref, label, standin_stage, synth_stage
 
 
 def _say(message: str) -> None:
@@ -109,17 +100,17 @@ def _empty(root: Path, classes: Sequence[str]) -> Dataset:
 
 
 def write_mixtures(
-    cfg: ExperimentConfig, grid: Sequence[GridEntry], data: Prepared, out: Path
+    cfg: ExperimentConfig, grid: Sequence[GridEntry], data: Prepared, datasets: Datasets, out: Path
 ) -> dict[tuple[str, str | None, int], DataRef]:
     """Write every (mixture, method, seed) training set of ``grid``; returns their references."""
     real_train = data.real.with_split(cfg.real.train_split)
-    real_pool = load_data(real_train, cfg.classes)
+    real_pool = datasets.get(real_train)
     val_ref = data.real.with_split(cfg.real.val_split)
-    val = functools.cache(lambda: _yolo_validation(val_ref, cfg.classes))  # read only if a mixture is written
+    val = functools.cache(lambda: _yolo_validation(datasets, val_ref, cfg.classes))  # only if a mixture is written
     refs = {}
     for method in dict.fromkeys(e.method for e in grid):
         synth = data.pools[method].with_split(None) if method else None
-        pool = load_data(synth, cfg.classes) if synth else _empty(real_pool.root, cfg.classes)
+        pool = datasets.get(synth) if synth else _empty(real_pool.root, cfg.classes)
         key = {"real": real_train.key(), "synth": synth.key() if synth else None, "classes": list(cfg.classes)}
         root = out / "mixtures" / f"{method or 'real'}-{digest(key)}"
         for seed in cfg.grid.seeds:
@@ -131,10 +122,10 @@ def write_mixtures(
     return refs
 
 
-def _yolo_validation(ref: DataRef, classes: Sequence[str]) -> Dataset | None:
+def _yolo_validation(datasets: Datasets, ref: DataRef, classes: Sequence[str]) -> Dataset | None:
     """The real validation split as read, when ultralytics can validate on it (the mixtures' ``data.yaml``
     then names it); else None and a line saying why (``data.yaml``'s val stays the training images)."""
-    ds = read_dataset(ref.path, ref.format, aliases=dict(ref.aliases) or None).dataset.select_split(ref.split)
+    ds = datasets.read(ref).select_split(ref.split)
     try:
         ultralytics_val_folders(ds, classes)
     except ValueError as exc:
@@ -198,11 +189,15 @@ def plan_runs(
     ]
 
 
-def run_grid(specs: Sequence[RunSpec], executor) -> list[dict[str, Any] | None]:
-    """Execute every spec; print one line per finished run; returns results aligned with ``specs``."""
+def run_grid(specs: Sequence[RunSpec], datasets: Datasets, executor) -> list[dict[str, Any] | None]:
+    """Execute every spec, handing it its shared datasets from ``datasets``; print one line per finished run;
+    returns results aligned with ``specs``."""
     results: list[dict[str, Any] | None] = [None] * len(specs)
     _say(f"runs   {len(specs)} runs with the {executor.name} executor")
-    for count, outcome in enumerate(executor.map(execute_run, specs), start=1):
+    tasks = [
+        RunTask(s, RunData(datasets.get(s.val_data), {t.name: datasets.get(t.data) for t in s.tests})) for s in specs
+    ]
+    for count, outcome in enumerate(executor.map(execute_task, tasks), start=1):
         spec = specs[outcome.index]
         results[outcome.index] = outcome.result
         _say(f"run    {count}/{len(specs)} {spec.label} seed {spec.seed}: {_outcome_text(outcome)}")
@@ -246,12 +241,16 @@ def run_experiment(cfg: ExperimentConfig, base: Path, out: Path, executor=None) 
     data = prepare_data(cfg, base, out, needed_methods(grid))
     if data.standin:
         _say(STANDIN_NOTICE)
+    datasets = Datasets(cfg.classes)
     for split in (cfg.real.val_split, cfg.real.test_split):  # fail now, not after the first training
-        load_data(data.real.with_split(split), cfg.classes)
-    specs = plan_runs(cfg, grid, data, write_mixtures(cfg, grid, data, out), out)
-    results = run_grid(specs, executor) if executor is not None else finished_runs(specs)
+        try:
+            datasets.get(data.real.with_split(split))
+        except SplitError as exc:
+            raise SplitError(f"{exc}: curate the real set (real.curate) or name its splits (real.*_split)") from None
+    specs = plan_runs(cfg, grid, data, write_mixtures(cfg, grid, data, datasets, out), out)
+    results = run_grid(specs, datasets, executor) if executor is not None else finished_runs(specs)
     rows = result_rows(specs, results, out)
     write_summary(cfg, specs, results, rows, out, data.standin)
-    report = write_report(cfg, data, rows, out, specs, results)
+    report = write_report(cfg, data, datasets, rows, out, specs, results)
     failed = [s for s, r in zip(specs, results) if r is None]
     return ExperimentResult(report, rows, failed, data.standin)

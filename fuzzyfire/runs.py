@@ -16,13 +16,15 @@ import os
 import time
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, NamedTuple
 
 from fuzzyfire.config import to_dict
+from fuzzyfire.datasets import DataRef, load_data
 from fuzzyfire.engine import CommandJob, command_train
-from fuzzyfire.stages import DataRef, digest, load_data
+from fuzzyfire.stages import digest
 
 if TYPE_CHECKING:
+    from curate.dataset import Dataset
     from eval.score import ScoreConfig
     from fuzzyfire.engine import EngineConfig
     from train.config import TrainConfig
@@ -100,6 +102,26 @@ class RunSpec:
         return {"hash": self.hash(), "identity": self.identity(), "tables": list(self.tables)}
 
 
+class RunData(NamedTuple):
+    """The shared datasets a run reads, prepared by the experiment (each read once for the whole grid): ``val``
+    and the test sets by name. The mixture a run trains on is its own; the run reads it."""
+
+    val: Dataset
+    tests: dict[str, Dataset]
+
+
+class RunTask(NamedTuple):
+    """A run as the grid hands it to an executor: its spec and its shared datasets."""
+
+    spec: RunSpec
+    data: RunData
+
+
+def execute_task(task: RunTask) -> dict[str, Any]:
+    """:func:`execute_run` of a task (what executors map over)."""
+    return execute_run(task.spec, task.data)
+
+
 def finished(spec: RunSpec) -> dict[str, Any] | None:
     """The run's results when it already finished with this very spec, else None."""
     path = spec.out / RESULTS_FILE
@@ -115,17 +137,24 @@ def _write_json(path: Path, doc: Any) -> None:
     os.replace(tmp, path)
 
 
-def train_run(spec: RunSpec) -> dict[str, Any]:
-    """Train (or resume) into ``spec.out/train``; returns train's results (best epoch and its metrics)."""
+def run_data(spec: RunSpec) -> RunData:
+    """The shared datasets of ``spec`` read from disk now (a run outside an experiment)."""
+    return RunData(
+        load_data(spec.val_data, spec.classes), {t.name: load_data(t.data, spec.classes) for t in spec.tests}
+    )
+
+
+def train_run(spec: RunSpec, val: Dataset) -> dict[str, Any]:
+    """Train (or resume) into ``spec.out/train``, selecting the best epoch on ``val``; returns train's results
+    (best epoch and its metrics)."""
     from train.loop import fit
 
-    train_ds = load_data(spec.train_data, spec.classes)
-    val_ds = load_data(spec.val_data, spec.classes)
-    return fit(spec.train, train_ds, val_ds, spec.out / "train")
+    return fit(spec.train, load_data(spec.train_data, spec.classes), val, spec.out / "train")
 
 
-def score_run(spec: RunSpec, model: Path) -> dict[str, dict[str, Any]]:
-    """Score ``model`` on every test set; writes ``scores/<name>/``; returns headline metrics per test set."""
+def score_run(spec: RunSpec, model: Path, tests: dict[str, Dataset]) -> dict[str, dict[str, Any]]:
+    """Score ``model`` on every test set (``tests``: their datasets by name); writes ``scores/<name>/``; returns
+    headline metrics per test set."""
     from eval.score import score, score_errors, write_outputs
 
     detector = spec.score.detector(model)
@@ -134,7 +163,7 @@ def score_run(spec: RunSpec, model: Path) -> dict[str, dict[str, Any]]:
     options = spec.score.predict_options()
     out = {}
     for test in spec.tests:
-        result = score(detector, load_data(test.data, spec.classes), options)
+        result = score(detector, tests[test.name], options)
         folder = spec.out / "scores" / slug(test.name)
         write_outputs(result, folder)
         score_errors(result).write(folder)
@@ -156,11 +185,13 @@ def slug(name: str) -> str:
     return "_".join(part for part in kept.split("_") if part) or "test"
 
 
-def execute_run(spec: RunSpec) -> dict[str, Any]:
-    """Run ``spec`` (module docstring) unless it already finished; returns its ``results.json`` content."""
+def execute_run(spec: RunSpec, data: RunData | None = None) -> dict[str, Any]:
+    """Run ``spec`` (module docstring) unless it already finished; returns its ``results.json`` content.
+    ``data``: its shared datasets as the experiment prepared them (None: read here)."""
     done = finished(spec)
     if done is not None:
         return {**done, "skipped": True}
+    data = run_data(spec) if data is None else data
     spec.out.mkdir(parents=True, exist_ok=True)
     _write_json(spec.out / "run.json", spec.record())
     start = time.perf_counter()
@@ -168,12 +199,12 @@ def execute_run(spec: RunSpec) -> dict[str, Any]:
         job = CommandJob(spec.train, Path(spec.train_data.path), spec.out, spec.hash())
         model, best = command_train(job, spec.engine), {"engine": spec.engine.name}
     else:
-        trained = train_run(spec)
+        trained = train_run(spec, data.val)
         if not trained.get("onnx"):
             raise RunError(f"{spec.out}: training produced no best.onnx (no epoch finished)")
         model, best = spec.out / "train" / trained["onnx"], trained["best"]
     trained_at = time.perf_counter()
-    tests = score_run(spec, model)
+    tests = score_run(spec, model, data.tests)
     _write_json(spec.out / "timing.json", {"train_s": trained_at - start, "score_s": time.perf_counter() - trained_at})
     results = {
         "hash": spec.hash(),

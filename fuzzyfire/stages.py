@@ -11,15 +11,14 @@ from __future__ import annotations
 import hashlib
 import json
 import shutil
-from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, field, replace
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
-from curate.dataset import Dataset
-from curate.formats.registry import read_dataset
 from fuzzyfire import __version__
 from fuzzyfire.config import to_dict
+from fuzzyfire.datasets import DataRef
 
 STAGE_FILE = "stage.json"
 STANDIN_LABEL = " (stand-in)"
@@ -29,43 +28,6 @@ def digest(identity: Mapping[str, Any]) -> str:
     """12 hex digits of the SHA-256 of ``identity`` as canonical JSON."""
     text = json.dumps(identity, sort_keys=True, separators=(",", ":"), default=str)
     return hashlib.sha256(text.encode("utf-8")).hexdigest()[:12]
-
-
-@dataclass(frozen=True)
-class DataRef:
-    """A labelled dataset a run reads: ``path`` (folder or COCO .json) in ``format``, one ``split`` of it (None =
-    every image), classes renamed by ``aliases`` and ``drop`` removed. ``identity``: what made it (hashable
-    JSON; no absolute output paths, so two experiment folders give the same run identities)."""
-
-    path: Path
-    identity: Mapping[str, Any]
-    format: str = "auto"
-    split: str | None = None
-    aliases: Mapping[str, str] = field(default_factory=dict)
-    drop: tuple[str, ...] = ()
-    standin: bool = False
-
-    def with_split(self, split: str | None) -> DataRef:
-        return DataRef(self.path, self.identity, self.format, split, self.aliases, self.drop, self.standin)
-
-    def key(self) -> dict[str, Any]:
-        """The identity of this split of the data."""
-        return {"data": dict(self.identity), "split": self.split}
-
-
-def load_data(ref: DataRef, classes: Sequence[str]) -> Dataset:
-    """The dataset of ``ref`` with exactly ``classes`` (in that order; boxes of other classes dropped).
-    Raises ValueError when the split is missing or empty."""
-    ds = read_dataset(ref.path, ref.format, aliases=dict(ref.aliases) or None).dataset
-    if ref.split is not None:
-        if ds.resolve_split(ref.split) is None:
-            shown = ", ".join(repr(s) for s in ds.splits)
-            raise ValueError(f"{ref.path}: no split {ref.split!r} (splits: {shown}); curate it (real.curate) first")
-        ds = ds.select_split(ref.split)
-    if not ds.images:
-        raise ValueError(f"{ref.path}: no images{f' in split {ref.split!r}' if ref.split else ''}")
-    drop = [*ref.drop, *(n for n in ds.category_names if n not in classes and n not in ref.drop)]
-    return ds.drop_categories(drop).with_categories(list(classes))
 
 
 @dataclass(frozen=True)

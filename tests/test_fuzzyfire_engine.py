@@ -15,6 +15,7 @@ from factories_experiment import run_local_and_ray, toy_dict
 
 from fuzzyfire.cli import main
 from fuzzyfire.config import build_config
+from fuzzyfire.datasets import Datasets
 from fuzzyfire.engine import EngineConfig, EngineError
 from fuzzyfire.executors import LocalExecutor
 from fuzzyfire.experiment import grid_entries, needed_methods, plan_runs, prepare_data, write_mixtures
@@ -45,7 +46,7 @@ def grid(tmp_path_factory: pytest.TempPathFactory):
     cfg.check()
     grid = grid_entries(cfg)
     data = prepare_data(cfg, out, out, needed_methods(grid))
-    return cfg, plan_runs(cfg, grid, data, write_mixtures(cfg, grid, data, out), out), out
+    return cfg, plan_runs(cfg, grid, data, write_mixtures(cfg, grid, data, Datasets(cfg.classes), out), out), out
 
 
 def test_command_runs_are_scored_like_ours_and_keep_their_logs(grid, tmp_path: Path) -> None:

@@ -8,6 +8,7 @@ from pathlib import Path
 import pytest
 from factories_experiment import run_local_and_ray, toy_config
 
+from fuzzyfire.datasets import Datasets
 from fuzzyfire.executors import EXECUTORS, ExecutorError, LocalExecutor, build_executor
 from fuzzyfire.experiment import grid_entries, needed_methods, plan_runs, prepare_data, write_mixtures
 
@@ -38,7 +39,7 @@ def toy_specs(tmp_path_factory: pytest.TempPathFactory):
     cfg = toy_config(mixtures=["R12_S0", "R6_S6"], table1=[])
     grid = grid_entries(cfg)
     data = prepare_data(cfg, out, out, needed_methods(grid))
-    return plan_runs(cfg, grid, data, write_mixtures(cfg, grid, data, out), out), out
+    return plan_runs(cfg, grid, data, write_mixtures(cfg, grid, data, Datasets(cfg.classes), out), out), out
 
 
 @pytest.mark.slow

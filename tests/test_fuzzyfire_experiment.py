@@ -4,6 +4,7 @@ finished runs; the same seeds give byte-identical results.json in another folder
 from __future__ import annotations
 
 import json
+from collections import Counter
 from pathlib import Path
 
 import pytest
@@ -39,17 +40,42 @@ def test_labels_say_stand_in_once() -> None:
 
 
 @pytest.fixture(scope="module")
-def full_run(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, str]:
-    """The toy grid run through the CLI (4 runs); returns the folder and what the command printed."""
+def full_run(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, str, Counter]:
+    """The toy grid run through the CLI (4 runs); returns the folder, what the command printed and how often
+    each dataset folder was read (every read of the dataset registry counted)."""
+    import contextlib
+
+    import curate.formats.registry as registry
+
     root = tmp_path_factory.mktemp("experiment")
     config = write_toy_config(root / "toy.yaml")
     capture = root / "stdout.txt"
-    import contextlib
+    reads: Counter = Counter()
+    real_read = registry.read_coco
 
-    with open(capture, "w") as fh, contextlib.redirect_stdout(fh):
+    def counting(path, **kwargs):
+        reads[Path(path).resolve()] += 1
+        return real_read(path, **kwargs)
+
+    with pytest.MonkeyPatch.context() as mp, open(capture, "w") as fh, contextlib.redirect_stdout(fh):
+        for name in ("read_yolo", "read_voc", "read_dfire"):  # the toy study is COCO only: anything else is a bug
+            mp.setattr(registry, name, lambda *a, **k: pytest.fail(f"unexpected read {a}"))
+        mp.setattr(registry, "read_coco", counting)
         code = main(["experiment", str(config), "--out", str(root / "A")])
     assert code == 0
-    return root / "A", capture.read_text()
+    return root / "A", capture.read_text(), reads
+
+
+@pytest.mark.slow
+def test_each_dataset_is_read_once(full_run: tuple[Path, str, Counter]) -> None:
+    """The real, rare and synthetic sets are read once for the whole study (checks, mixtures, every run's
+    validation and test sets, the report); each mixture once, by its run."""
+    out, _, reads = full_run
+    data = {p.resolve() for p in (out / "data").glob("*-*") if p.is_dir()}
+    mixtures = {p.parent.resolve() for p in (out / "mixtures").rglob("mixture.json")}
+    assert len(data) == 4 and len(mixtures) == 4  # real, rare, method1, method2; one mixture per run
+    assert set(reads) == data | mixtures
+    assert all(count == 1 for count in reads.values()), {p.name: c for p, c in reads.items() if c > 1}
 
 
 def _results(out: Path) -> dict[str, bytes]:
@@ -60,8 +86,8 @@ def _results(out: Path) -> dict[str, bytes]:
 
 
 @pytest.mark.slow
-def test_report_files_exist_and_say_stand_in(full_run: tuple[Path, str]) -> None:
-    out, printed = full_run
+def test_report_files_exist_and_say_stand_in(full_run: tuple[Path, str, Counter]) -> None:
+    out, printed, _ = full_run
     for name in ("table1.md", "table1.csv", "table1.tex", "table2.md", "table2.csv", "table2.tex"):
         assert (out / "tables" / name).stat().st_size > 0
         assert "(stand-in)" in (out / "tables" / name).read_text()
@@ -88,9 +114,9 @@ def test_report_files_exist_and_say_stand_in(full_run: tuple[Path, str]) -> None
 
 
 @pytest.mark.slow
-def test_report_gives_runs_scored_before_the_breakdown_theirs(full_run: tuple[Path, str]) -> None:
+def test_report_gives_runs_scored_before_the_breakdown_theirs(full_run: tuple[Path, str, Counter]) -> None:
     """A run scored without errors.json gets it from its predictions.json: the same numbers as at run time."""
-    out, _ = full_run
+    out, _, _ = full_run
     path = sorted((out / "runs").glob("*/*/scores/*/errors.json"))[0]
     at_run_time = json.loads(path.read_text())
     path.unlink()
@@ -100,19 +126,19 @@ def test_report_gives_runs_scored_before_the_breakdown_theirs(full_run: tuple[Pa
 
 @pytest.mark.slow
 def test_interrupted_grid_resumes_and_gives_identical_results(
-    full_run: tuple[Path, str], tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+    full_run: tuple[Path, str, Counter], tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     out = tmp_path / "B"
-    real_execute = experiment.execute_run
+    real_execute = experiment.execute_task
     calls: list[str] = []
 
-    def interrupted(spec):
+    def interrupted(task):
         if len(calls) == 2:
             raise KeyboardInterrupt  # Ctrl-C before the third run
-        calls.append(spec.label)
-        return real_execute(spec)
+        calls.append(task.spec.label)
+        return real_execute(task)
 
-    monkeypatch.setattr(experiment, "execute_run", interrupted)
+    monkeypatch.setattr(experiment, "execute_task", interrupted)
     with pytest.raises(KeyboardInterrupt):
         run_experiment(toy_config(), tmp_path, out, LocalExecutor())
     first = _results(out)
@@ -123,12 +149,12 @@ def test_interrupted_grid_resumes_and_gives_identical_results(
 
     skipped: list[bool] = []
 
-    def recording(spec):
-        result = real_execute(spec)
+    def recording(task):
+        result = real_execute(task)
         skipped.append(result["skipped"])
         return result
 
-    monkeypatch.setattr(experiment, "execute_run", recording)
+    monkeypatch.setattr(experiment, "execute_task", recording)
     result = run_experiment(toy_config(), tmp_path, out, LocalExecutor())
     assert skipped == [True, True, False, False] and not result.failed
     assert all(p.stat().st_mtime_ns == t for p, t in stamps.items())  # finished runs untouched

@@ -1,4 +1,4 @@
-"""Stage cache (built once, reused, an interrupted stage rebuilt) and reading a dataset split with fixed classes."""
+"""Stage cache (built once, reused, an interrupted stage rebuilt), folder references, synthetic pool identities."""
 
 from __future__ import annotations
 
@@ -6,10 +6,9 @@ import json
 from pathlib import Path
 
 import pytest
-from factories_train import painted_dataset
 
-from curate.writer import write_dataset
-from fuzzyfire.stages import STAGE_FILE, DataRef, cached_stage, digest, folder_ref, load_data
+from fuzzyfire.datasets import DataRef
+from fuzzyfire.stages import STAGE_FILE, cached_stage, digest, folder_ref
 
 
 def test_digest_is_stable_and_order_free() -> None:
@@ -44,26 +43,6 @@ def test_cached_stage_builds_once_and_rebuilds_an_interrupted_one(tmp_path: Path
     with pytest.raises(RuntimeError):
         cached_stage(tmp_path, "bad", {}, fails)
     assert not list(tmp_path.glob(f"bad-*/{STAGE_FILE}"))  # a failed stage is never marked done
-
-
-@pytest.fixture(scope="module")
-def split_folder(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    root = tmp_path_factory.mktemp("split")
-    ds = painted_dataset(root / "src", 10, seed=0)  # classes fire, smoke
-    images = tuple(img.__class__(**{**img.__dict__, "split": "train" if img.id <= 6 else "test"}) for img in ds.images)
-    write_dataset(ds.__class__(ds.root, images, ds.annotations, ds.categories), root / "ds", ("coco",))
-    return root / "ds"
-
-
-def test_load_data_picks_the_split_and_fixes_classes(split_folder: Path) -> None:
-    ref = folder_ref(split_folder, Path("/"), "auto", {}, ())
-    train = load_data(ref.with_split("train"), ["fire"])
-    assert len(train.images) == 6 and train.category_names == ["fire"]
-    full = load_data(ref, ["fire", "smoke"])
-    assert len(full.images) == 10 and len(full.annotations) > len(train.annotations)
-    assert load_data(ref, ["smoke", "fire"]).category_names == ["smoke", "fire"]
-    with pytest.raises(ValueError, match="no split 'valid'.*curate"):
-        load_data(ref.with_split("valid"), ["fire"])
 
 
 def test_folder_ref_resolves_against_the_config_folder(split_folder: Path) -> None:

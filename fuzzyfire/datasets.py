@@ -1,0 +1,81 @@
+"""The datasets of an experiment: references to them (:class:`DataRef`) and :class:`Datasets`, which reads each
+from disk once and keeps every split the experiment asks for in its prepared state (one split, the
+experiment's classes)."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from curate.dataset import Dataset
+from curate.formats.registry import read_dataset
+from curate.load import SplitError, pick_split, with_classes
+
+
+@dataclass(frozen=True)
+class DataRef:
+    """A labelled dataset a run reads: ``path`` (folder or COCO .json) in ``format``, one ``split`` of it (None =
+    every image), classes renamed by ``aliases`` and ``drop`` removed. ``identity``: what made it (hashable
+    JSON; no absolute output paths, so two experiment folders give the same run identities)."""
+
+    path: Path
+    identity: Mapping[str, Any]
+    format: str = "auto"
+    split: str | None = None
+    aliases: Mapping[str, str] = field(default_factory=dict)
+    drop: tuple[str, ...] = ()
+    standin: bool = False
+
+    def with_split(self, split: str | None) -> DataRef:
+        return DataRef(self.path, self.identity, self.format, split, self.aliases, self.drop, self.standin)
+
+    def key(self) -> dict[str, Any]:
+        """The identity of this split of the data."""
+        return {"data": dict(self.identity), "split": self.split}
+
+    def source(self) -> tuple[str, str, tuple[tuple[str, str], ...]]:
+        """What is read from disk: the same for every split of one dataset."""
+        return (Path(self.path).as_posix(), self.format, tuple(sorted(self.aliases.items())))
+
+
+class Datasets:
+    """Each dataset read once, each (split, classes) prepared once; ``classes`` are the experiment's.
+
+    :meth:`read` gives a dataset as read (every split, its own classes), :meth:`get` one split of it with
+    exactly ``classes`` (:func:`curate.load.with_classes`). Both return shared immutable objects."""
+
+    def __init__(self, classes: Sequence[str]) -> None:
+        self.classes = tuple(classes)
+        self._read: dict[tuple, Dataset] = {}
+        self._prepared: dict[tuple, Dataset] = {}
+
+    def read(self, ref: DataRef) -> Dataset:
+        """``ref``'s dataset as read, every split (read on first use)."""
+        key = ref.source()
+        if key not in self._read:
+            self._read[key] = read_dataset(ref.path, ref.format, aliases=dict(ref.aliases) or None).dataset
+        return self._read[key]
+
+    def get(self, ref: DataRef) -> Dataset:
+        """Split ``ref.split`` (None = every image) with exactly the experiment's classes, in their order.
+        Raises ValueError when the split is missing or has no images."""
+        key = (ref.source(), ref.split, ref.drop)
+        if key not in self._prepared:
+            self._prepared[key] = load_ref(self.read(ref), ref, self.classes)
+        return self._prepared[key]
+
+
+def load_ref(ds: Dataset, ref: DataRef, classes: Sequence[str]) -> Dataset:
+    """Split ``ref.split`` of ``ds`` (the dataset ``ref`` reads) with exactly ``classes``; raises
+    :class:`curate.load.SplitError` when the split is missing or the dataset has no images."""
+    chosen = pick_split(ds, ref.split, ref.path)
+    if not chosen.images:
+        raise SplitError(f"{ref.path}: no images")
+    return with_classes(chosen, classes, ref.drop)
+
+
+def load_data(ref: DataRef, classes: Sequence[str]) -> Dataset:
+    """``ref``'s split with exactly ``classes``, read from disk now (a run outside an experiment)."""
+    return Datasets(classes).get(ref)

@@ -1,0 +1,58 @@
+"""Dataset references and the experiment's datasets: each read from disk once, each split prepared once with the
+experiment's classes in their order."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+import curate.formats.registry as registry
+from curate.load import SplitError
+from fuzzyfire.datasets import DataRef, Datasets, load_data
+from fuzzyfire.stages import folder_ref
+
+
+@pytest.fixture
+def coco_reads(monkeypatch: pytest.MonkeyPatch) -> list[str]:
+    """The paths every COCO read of the registry is given, in order."""
+    paths: list[str] = []
+    real = registry.read_coco
+
+    def counting(path, **kwargs):
+        paths.append(Path(path).as_posix())
+        return real(path, **kwargs)
+
+    monkeypatch.setattr(registry, "read_coco", counting)
+    return paths
+
+
+def test_load_data_picks_the_split_and_fixes_classes(split_folder: Path) -> None:
+    ref = folder_ref(split_folder, Path("/"), "auto", {}, ())
+    train = load_data(ref.with_split("train"), ["fire"])
+    assert len(train.images) == 6 and train.category_names == ["fire"]
+    full = load_data(ref, ["fire", "smoke"])
+    assert len(full.images) == 10 and len(full.annotations) > len(train.annotations)
+    assert load_data(ref, ["smoke", "fire"]).category_names == ["smoke", "fire"]
+    with pytest.raises(SplitError, match="no split 'valid' \\(splits: 'train', 'test'\\)"):
+        load_data(ref.with_split("valid"), ["fire"])
+
+
+def test_each_dataset_is_read_once_and_each_split_prepared_once(split_folder: Path, coco_reads: list[str]) -> None:
+    ref = folder_ref(split_folder, Path("/"), "coco", {}, ())
+    datasets = Datasets(["fire"])
+    train, test = datasets.get(ref.with_split("train")), datasets.get(ref.with_split("test"))
+    assert datasets.get(ref.with_split("train")) is train and datasets.read(ref) is datasets.read(ref.with_split("x"))
+    assert len(train.images) + len(test.images) == 10 and test.category_names == ["fire"]
+    assert len(coco_reads) == 1  # one read for both splits and the raw dataset
+    dropped = Datasets(["fire", "smoke"]).get(DataRef(ref.path, ref.identity, "coco", None, drop=("smoke",)))
+    assert dropped.category_names == ["fire", "smoke"] and {a.category_id for a in dropped.annotations} == {1}
+    assert len(coco_reads) == 2  # another Datasets reads again: the cache is the experiment's, not global
+
+
+def test_a_dataset_read_under_other_aliases_is_another_read(split_folder: Path, coco_reads: list[str]) -> None:
+    datasets = Datasets(["fire", "smoke"])
+    plain = folder_ref(split_folder, Path("/"), "coco", {}, ())
+    renamed = folder_ref(split_folder, Path("/"), "coco", {"smoke": "fire"}, ())
+    assert len(datasets.get(renamed).annotations) == len(datasets.get(plain).annotations)
+    assert {a.category_id for a in datasets.get(renamed).annotations} == {1} and len(coco_reads) == 2
