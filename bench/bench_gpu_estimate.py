@@ -41,7 +41,7 @@ def gflop(fn, *args) -> float:
 
 def augment_rate(imgsz: int, images: int = 64) -> float:
     """Augmented training samples per second on one core at ``imgsz``."""
-    from curate.formats.registry import read_dataset
+    from curate.core.formats.registry import read_dataset
     from train.augment import AugmentConfig
     from train.data import TrainBatches, cache_images
 

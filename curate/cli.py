@@ -9,11 +9,11 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import TextIO
 
-from curate.formats.registry import FORMATS, read_dataset
-from curate.problems import Problem, count_levels, has_errors
+from curate.core.formats.registry import FORMATS, read_dataset
+from curate.core.problems import Problem, count_levels, has_errors
+from curate.core.writer import IMAGE_MODES, OUTPUT_FORMATS, OutputError, write_dataset
 from curate.stats import dataset_stats, plot_box_sizes
 from curate.validate import validate
-from curate.writer import IMAGE_MODES, OUTPUT_FORMATS, OutputError, write_dataset
 
 
 def add_reader_args(p: argparse.ArgumentParser) -> None:

@@ -6,6 +6,7 @@ import argparse
 import sys
 from pathlib import Path
 
+from curate.core.writer import OutputError
 from curate.mix import (
     MixError,
     check_available,
@@ -16,7 +17,6 @@ from curate.mix import (
     validation_set,
     write_mixture,
 )
-from curate.writer import OutputError
 
 _EXAMPLE = """example:
   fuzzyfire mix --real ../shared/data/fire-cctv-416 --synth out/method2 \\
@@ -31,7 +31,7 @@ nested: the real images of R250_S750 are inside those of R500_S500."""
 
 def cmd_mix(args: argparse.Namespace) -> int:
     from curate.cli import command_args, print_problems
-    from curate.formats.registry import read_dataset
+    from curate.core.formats.registry import read_dataset
 
     try:
         mixtures = paper_grid(args.total, args.step) if args.paper_grid else parse_mixtures(args.mixtures or "")

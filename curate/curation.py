@@ -16,12 +16,12 @@ from typing import Any, Literal, Optional
 
 import numpy as np
 
-from curate.dataset import Dataset
+from curate.core.dataset import Dataset
+from curate.core.problems import Problem
 from curate.dedup import DEFAULT_THRESHOLD
 from curate.dedupjob import DedupOptions, DedupRun, dedup_document, run_dedup
 from curate.embed import OnnxEmbedder, Preprocess, load_embedder
 from curate.embedcache import EmbeddingCache
-from curate.problems import Problem
 from curate.rank import rank_order
 from curate.sources import MergeConfig, SourceConfig, merge_sources
 from curate.split import near_groups, resolve_sizes, split_groups, straddling_groups

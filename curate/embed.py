@@ -107,7 +107,7 @@ def lite0_weights_path() -> Path:
 
 def builtin_model_path(folder: Path | None = None) -> Path:
     """The EfficientNet-Lite0 ONNX file, exported on first use (named by the weights' sha256)."""
-    from curate.manifest import file_sha256
+    from curate.core.manifest import file_sha256
 
     folder = folder or cache_dir() / "models"
     size = LITE0_PREPROCESS.size

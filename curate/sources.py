@@ -9,9 +9,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Literal, Optional
 
-from curate.dataset import Dataset, merge
-from curate.formats.registry import read_dataset
-from curate.problems import Problem
+from curate.core.dataset import Dataset, merge
+from curate.core.formats.registry import read_dataset
+from curate.core.problems import Problem
 
 
 @dataclass(frozen=True)

@@ -21,7 +21,7 @@ def _size(text: str) -> tuple[int, int]:
 
 
 def _device(text: str) -> str:
-    from curate.device import DeviceError, parse_device
+    from curate.core.device import DeviceError, parse_device
 
     try:
         parse_device(text)
@@ -87,7 +87,7 @@ def _report_problems(result) -> None:
 
 
 def cmd_score(args: argparse.Namespace) -> int:
-    from curate.cocoeval import ClassMatchError
+    from curate.core.cocoeval import ClassMatchError
     from eval.onnx_model import ModelError
     from eval.score import ScoreError, score_errors, write_outputs
 
@@ -129,7 +129,7 @@ def _print_errors(errors) -> None:  # errors: eval.errors.ErrorBreakdown
 def cmd_compare(args: argparse.Namespace) -> int:
     import numpy as np
 
-    from curate.cocoeval import ClassMatchError
+    from curate.core.cocoeval import ClassMatchError
     from eval.onnx_model import ModelError
     from eval.score import ScoreError
     from eval.stats import MatchTable, paired_bootstrap

@@ -10,11 +10,11 @@ from typing import Any, NamedTuple
 
 from pycocotools.cocoeval import COCOeval
 
-from curate.cocoeval import CocoMetrics, evaluate_predictions
-from curate.dataset import Dataset
-from curate.detections import Predictions
-from curate.formats.registry import read_dataset
-from curate.problems import Problem
+from curate.core.cocoeval import CocoMetrics, evaluate_predictions
+from curate.core.dataset import Dataset
+from curate.core.detections import Predictions
+from curate.core.formats.registry import read_dataset
+from curate.core.problems import Problem
 from eval.errors import ALARM_CONF, ErrorBreakdown, error_breakdown
 from eval.onnx_model import ModelSpec, OnnxDetector
 from eval.plots import plot_pr_curves, pr_curves_from_eval

@@ -166,7 +166,7 @@ def realism_gaps(cfg: ExperimentConfig, data: Prepared, out: Path) -> list[dict]
 
 def write_summary(cfg: ExperimentConfig, specs, results, rows, out: Path, standin: bool) -> None:
     """``experiment.json`` (config, versions, runs and their status) and ``results.jsonl``."""
-    from curate.manifest import git_commit, versions
+    from curate.core.manifest import git_commit, versions
 
     runs = [
         {"label": s.label, "seed": s.seed, "folder": s.out.relative_to(out).as_posix(), "hash": s.hash(),

@@ -25,8 +25,8 @@ COMMAND_MODULES: tuple[str, ...] = (
 
 def cmd_merge(args: argparse.Namespace) -> int:
     from curate.cli import print_problems
+    from curate.core.writer import OutputError, write_dataset
     from curate.sources import MergeConfig, merge_sources
-    from curate.writer import OutputError, write_dataset
     from fuzzyfire.config import ConfigError, load_config, to_dict
 
     try:

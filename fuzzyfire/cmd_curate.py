@@ -9,12 +9,12 @@ from pathlib import Path
 
 def cmd_curate(args: argparse.Namespace) -> int:
     from curate.cli import print_problems
+    from curate.core.dataset import Dataset
+    from curate.core.writer import OutputError, check_output_folder, write_dataset
     from curate.curation import CurateConfig, build_embedder, curate
-    from curate.dataset import Dataset
     from curate.dedupjob import write_outputs
     from curate.embed import cache_dir
     from curate.embedcache import EmbeddingCache
-    from curate.writer import OutputError, check_output_folder, write_dataset
     from fuzzyfire.config import ConfigError, load_config, to_dict
 
     try:

@@ -16,8 +16,8 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
-from curate.dataset import Dataset
-from curate.formats.registry import read_dataset
+from curate.core.dataset import Dataset
+from curate.core.formats.registry import read_dataset
 from fuzzyfire import __version__
 from fuzzyfire.config import to_dict
 
@@ -149,11 +149,11 @@ def curate_stage(root: Path, cfg: Any, base: Path) -> tuple[Stage, DataRef]:
 
 
 def _curate(cfg: Any, base: Path, out: Path) -> None:
+    from curate.core.writer import write_dataset
     from curate.curation import build_embedder, curate
     from curate.dedupjob import write_outputs
     from curate.embed import cache_dir
     from curate.embedcache import EmbeddingCache
-    from curate.writer import write_dataset
 
     cache = EmbeddingCache(cache_dir() / "embeddings.sqlite")
     try:

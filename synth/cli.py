@@ -19,7 +19,7 @@ def parse_size(text: str) -> tuple[int, int]:
 
 
 def cmd_flames(args: argparse.Namespace) -> int:
-    from curate.progress import progress
+    from curate.core.progress import progress
     from synth.library import procedural_library
     from synth.sprites import save_sequence
 

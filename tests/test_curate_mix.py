@@ -8,8 +8,8 @@ from pathlib import Path
 import pytest
 from factories import write_image
 
-from curate.dataset import Dataset, DatasetBuilder
-from curate.formats.coco import read_coco
+from curate.core.dataset import Dataset, DatasetBuilder
+from curate.core.formats.coco import read_coco
 from curate.mix import (
     MixError,
     Mixture,
@@ -115,7 +115,7 @@ def test_written_mixture_is_byte_identical_and_references_images(
 
 
 def test_cli_writes_grid_per_seed(pools: tuple[Dataset, Dataset], tmp_path: Path) -> None:
-    from curate.writer import write_dataset
+    from curate.core.writer import write_dataset
 
     real, synth = pools
     write_dataset(real, tmp_path / "real", ("coco",), "copy")
@@ -131,7 +131,7 @@ def test_cli_writes_grid_per_seed(pools: tuple[Dataset, Dataset], tmp_path: Path
 def test_data_yaml_val_names_a_yolo_validation_set(pools: tuple[Dataset, Dataset], tmp_path: Path) -> None:
     import yaml
 
-    from curate.writer import write_dataset
+    from curate.core.writer import write_dataset
 
     real, synth = pools
     default = write_mixture(real, synth, Mixture(4, 4), 0, tmp_path / "default")
@@ -146,7 +146,7 @@ def test_data_yaml_val_names_a_yolo_validation_set(pools: tuple[Dataset, Dataset
 
 
 def test_unusable_validation_sets_are_refused(pools: tuple[Dataset, Dataset], tmp_path: Path) -> None:
-    from curate.writer import write_dataset
+    from curate.core.writer import write_dataset
 
     real, synth = pools
     with pytest.raises(MixError, match="no YOLO label files"):  # COCO only: ultralytics finds no labels
@@ -161,7 +161,7 @@ def test_unusable_validation_sets_are_refused(pools: tuple[Dataset, Dataset], tm
 def test_cli_val_option(pools: tuple[Dataset, Dataset], tmp_path: Path) -> None:
     import yaml
 
-    from curate.writer import write_dataset
+    from curate.core.writer import write_dataset
 
     real, synth = pools
     write_dataset(real, tmp_path / "real", ("coco", "yolo"), "copy")

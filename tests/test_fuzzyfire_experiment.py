@@ -135,7 +135,7 @@ def test_missing_test_split_fails_before_training(tmp_path: Path) -> None:
 
     from factories_train import painted_dataset
 
-    from curate.writer import write_dataset
+    from curate.core.writer import write_dataset
     from fuzzyfire.experiment_config import RealConfig
 
     ds = painted_dataset(tmp_path / "src", 6, seed=0)

@@ -38,7 +38,7 @@ def pick_split(ds, wanted: str | None, defaults: tuple[str, ...], label: str):
 
 def _read(path: str, fmt: str, split: str | None, defaults: tuple[str, ...], drop: list[str]):
     from curate.cli import print_problems
-    from curate.formats.registry import read_dataset
+    from curate.core.formats.registry import read_dataset
 
     result = read_dataset(path, fmt)
     errors = [p for p in result.problems if p.level == "error"]

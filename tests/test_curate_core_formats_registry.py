@@ -1,7 +1,7 @@
 import pytest
 from factories import write_image, write_yolo_dataset
 
-from curate.formats.registry import detect_format, read_dataset
+from curate.core.formats.registry import detect_format, read_dataset
 
 
 def test_detects_each_format(tmp_path):

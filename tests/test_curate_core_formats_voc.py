@@ -1,8 +1,8 @@
 import numpy as np
 from factories import write_image
 
-from curate.formats.voc import read_voc
-from curate.writer import write_dataset
+from curate.core.formats.voc import read_voc
+from curate.core.writer import write_dataset
 
 
 def _xml(filename: str, w: int, h: int, objects: list[tuple[str, list[float], int]]) -> str:
@@ -48,7 +48,7 @@ def test_voc_to_coco_round_trip_exact(tmp_path):
     _voc(tmp_path / "voc")
     ds = read_voc(tmp_path / "voc").dataset
     write_dataset(ds, tmp_path / "out", ["coco"])
-    from curate.formats.coco import read_coco
+    from curate.core.formats.coco import read_coco
 
     back = read_coco(tmp_path / "out").dataset
     a = sorted((x.bbox, x.iscrowd) for x in ds.annotations)

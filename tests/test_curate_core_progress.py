@@ -1,4 +1,4 @@
-from curate.progress import progress
+from curate.core.progress import progress
 
 
 def test_progress_yields_everything_and_is_silent_off_a_terminal(capsys):

@@ -5,10 +5,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from curate.cocoeval import ClassMatchError, match_classes, run_cocoeval
-from curate.cocoeval import evaluate_predictions as evaluate
-from curate.dataset import DatasetBuilder
-from curate.detections import ImageDetections, Predictions
+from curate.core.cocoeval import ClassMatchError, match_classes, run_cocoeval
+from curate.core.cocoeval import evaluate_predictions as evaluate
+from curate.core.dataset import DatasetBuilder
+from curate.core.detections import ImageDetections, Predictions
 
 
 def make_dataset(tmp_path):
@@ -87,7 +87,7 @@ def test_records_cocoeval_never_reads_are_left_out_with_identical_results(tmp_pa
     from pycocotools.coco import COCO
     from pycocotools.cocoeval import COCOeval
 
-    from curate.cocoeval import top_records
+    from curate.core.cocoeval import top_records
 
     rng = np.random.default_rng(0)
     b = DatasetBuilder(tmp_path, ["fire", "smoke"])

@@ -1,6 +1,6 @@
 import os
 
-from curate.walk import walk, walk_files
+from curate.core.walk import walk, walk_files
 
 
 def test_links_followed_once_and_hidden_skipped(tmp_path):

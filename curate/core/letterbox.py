@@ -1,7 +1,7 @@
 """Letterbox an image for inference: one aspect-preserving resize, centred on a grey canvas.
 
-The geometry and the mapping of boxes back to original pixels live in :mod:`curate.boxes`
-(:func:`~curate.boxes.letterbox_params`, :func:`~curate.boxes.letterbox_to_image_xyxy`).
+The geometry and the mapping of boxes back to original pixels live in :mod:`curate.core.boxes`
+(:func:`~curate.core.boxes.letterbox_params`, :func:`~curate.core.boxes.letterbox_to_image_xyxy`).
 """
 
 from __future__ import annotations
@@ -10,7 +10,7 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from curate.boxes import letterbox_params
+from curate.core.boxes import letterbox_params
 
 #: Padding grey of YOLO-family detectors (114 of 255).
 PAD_VALUE = 114

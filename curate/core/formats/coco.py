@@ -8,10 +8,10 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-from curate.dataset import Dataset, DatasetBuilder
-from curate.formats.common import ClassResolver, ReadResult, probe_sizes, sanitize_box, source_tag
-from curate.imageio import ImageError
-from curate.problems import Problem
+from curate.core.dataset import Dataset, DatasetBuilder
+from curate.core.formats.common import ClassResolver, ReadResult, probe_sizes, sanitize_box, source_tag
+from curate.core.imageio import ImageError
+from curate.core.problems import Problem
 
 ANNOTATIONS_FILE = "annotations.json"
 

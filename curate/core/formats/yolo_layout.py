@@ -1,7 +1,7 @@
 """Where a YOLO dataset is: its folder and dataset YAML, the label file of each image, and its split.
 
 Layouts understood (folder names case-insensitive; links to folders and files are followed, see
-:mod:`curate.walk`):
+:mod:`curate.core.walk`):
 
 - ``<split>/images/*.jpg`` + ``<split>/labels/*.txt`` (Roboflow, D-Fire); ``image/`` + ``label/`` (singular)
   and ``JPEGImages/`` + ``labels/`` (darknet's VOC conversion) the same way;
@@ -27,9 +27,9 @@ from typing import Any
 
 import yaml
 
-from curate.imageio import is_image_file
-from curate.problems import Problem
-from curate.walk import walk_files
+from curate.core.imageio import is_image_file
+from curate.core.problems import Problem
+from curate.core.walk import walk_files
 
 IMAGE_FOLDERS = frozenset({"images", "image", "jpegimages", "imgs"})  # lower case
 LABEL_FOLDERS = ("labels", "label", "Labels", "Label", "LABELS")  # tried in this order beside the image folder

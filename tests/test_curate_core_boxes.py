@@ -1,7 +1,7 @@
 import numpy as np
 import pytest
 
-from curate import boxes
+from curate.core import boxes
 
 
 def _random_xywh(n: int, seed: int = 0) -> np.ndarray:
@@ -88,7 +88,7 @@ def test_letterbox_box_mapping_round_trip_and_hand_values():
 
 
 def test_mask_to_xywh_encloses_the_mask_exactly():
-    from curate.boxes import mask_to_xywh
+    from curate.core.boxes import mask_to_xywh
 
     mask = np.zeros((6, 8), bool)
     mask[2:5, 3] = True

@@ -5,9 +5,9 @@ import pytest
 import yaml
 from factories import write_image, write_yolo_dataset
 
-from curate.dataset import Dataset
-from curate.formats.yolo import read_dfire, read_yolo
-from curate.writer import write_dataset
+from curate.core.dataset import Dataset
+from curate.core.formats.yolo import read_dfire, read_yolo
+from curate.core.writer import write_dataset
 
 
 def _problems(result, level=None):
@@ -108,7 +108,7 @@ def test_yolo_coco_yolo_round_trip_exact(tmp_path):
     rows = write_yolo_dataset(tmp_path / "src")
     first = read_yolo(tmp_path / "src").dataset
     write_dataset(first, tmp_path / "coco", ["coco"])
-    from curate.formats.coco import read_coco
+    from curate.core.formats.coco import read_coco
 
     via_coco = read_coco(tmp_path / "coco").dataset
     write_dataset(via_coco, tmp_path / "yolo", ["yolo"])
@@ -182,7 +182,7 @@ def test_fire_smoke_608_keeps_every_image_and_row(shared_data, tmp_path):
 
 
 def test_ultralytics_label_path_replaces_the_last_images_folder():
-    from curate.formats.yolo import ultralytics_label_path
+    from curate.core.formats.yolo import ultralytics_label_path
 
     assert ultralytics_label_path(Path("/d/images/valid/images/a.b.jpg")) == Path("/d/images/valid/labels/a.b.txt")
     assert ultralytics_label_path(Path("/d/valid/images/x.png")) == Path("/d/valid/labels/x.txt")
@@ -191,7 +191,7 @@ def test_ultralytics_label_path_replaces_the_last_images_folder():
 
 @pytest.mark.parametrize("path_entry", ["absolute", "relative", "none", "elsewhere"])
 def test_a_data_yaml_file_means_its_dataset(tmp_path, path_entry):
-    from curate.formats.registry import detect_format, read_dataset
+    from curate.core.formats.registry import detect_format, read_dataset
 
     root = tmp_path / "datasets" / "fire"
     for split in ("train", "val"):

@@ -4,8 +4,8 @@ from pathlib import Path
 import yaml
 from factories import write_image
 
-from curate.formats.yolo import read_yolo
-from curate.formats.yolo_layout import LabelLocator, last_image_folder
+from curate.core.formats.yolo import read_yolo
+from curate.core.formats.yolo_layout import LabelLocator, last_image_folder
 
 ROW = "0 0.5 0.5 0.5 0.5\n"
 

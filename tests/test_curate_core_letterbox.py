@@ -6,7 +6,7 @@ import cv2
 import numpy as np
 import pytest
 
-from curate.letterbox import letterbox_image, to_nchw_float
+from curate.core.letterbox import letterbox_image, to_nchw_float
 
 
 def test_wide_image_is_centred_with_grey_bands():

@@ -2,7 +2,7 @@ from pathlib import Path
 
 import pytest
 
-from curate.dataset import DatasetBuilder, merge
+from curate.core.dataset import DatasetBuilder, merge
 
 
 def _ds(root: Path, names, boxes):

@@ -1,8 +1,8 @@
 """Detector post-processing shared by training-time validation and scoring: confidence filter, class-aware
-NMS (:func:`curate.boxes.batched_nms_xyxy`), boxes mapped from letterboxed input pixels back to the image.
+NMS (:func:`curate.core.boxes.batched_nms_xyxy`), boxes mapped from letterboxed input pixels back to the image.
 
 ``train`` (validation of every epoch) and ``eval`` (``fuzzyfire score``) both turn a detector's raw output
-into :class:`Predictions` here and score them with :mod:`curate.cocoeval`, so the AP that picks the best
+into :class:`Predictions` here and score them with :mod:`curate.core.cocoeval`, so the AP that picks the best
 epoch and the AP that scoring reports are computed by the same code."""
 
 from __future__ import annotations
@@ -12,8 +12,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
-from curate.boxes import batched_nms_xyxy, clip_xyxy, cxcywh_to_xyxy, letterbox_to_image_xyxy
-from curate.problems import Problem
+from curate.core.boxes import batched_nms_xyxy, clip_xyxy, cxcywh_to_xyxy, letterbox_to_image_xyxy
+from curate.core.problems import Problem
 
 #: Scoring defaults (COCO-style evaluation keeps low-confidence boxes: they only add recall).
 CONF_THRESHOLD = 0.001

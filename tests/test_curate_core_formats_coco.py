@@ -7,9 +7,9 @@ from factories import write_image, write_yolo_dataset
 from pycocotools.coco import COCO
 from pycocotools.cocoeval import COCOeval
 
-from curate.formats.coco import read_coco
-from curate.formats.yolo import read_yolo
-from curate.writer import write_dataset
+from curate.core.formats.coco import read_coco
+from curate.core.formats.yolo import read_yolo
+from curate.core.writer import write_dataset
 
 
 def _evaluate(gt_file, detections):

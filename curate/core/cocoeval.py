@@ -19,10 +19,10 @@ import numpy as np
 from pycocotools.coco import COCO
 from pycocotools.cocoeval import COCOeval, Params
 
-from curate.boxes import xyxy_to_xywh
-from curate.classes import canonical_class
-from curate.dataset import Dataset
-from curate.detections import Predictions
+from curate.core.boxes import xyxy_to_xywh
+from curate.core.classes import canonical_class
+from curate.core.dataset import Dataset
+from curate.core.detections import Predictions
 
 #: ``COCOeval.stats`` entries we report, by index.
 _STATS = {"AP": 0, "AP50": 1, "AP75": 2, "AP_small": 3, "AP_medium": 4, "AP_large": 5}
@@ -47,7 +47,7 @@ class ClassMatch:
 
 
 def match_classes(model_names: Sequence[str], dataset: Dataset) -> ClassMatch:
-    """Match class names case-insensitively through :func:`curate.classes.canonical_class`."""
+    """Match class names case-insensitively through :func:`curate.core.classes.canonical_class`."""
     test = {canonical_class(c.name): c for c in dataset.categories}
     label_to_cat = {}
     not_in_test = []

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from curate.device import DeviceError, parse_device
+from curate.core.device import DeviceError, parse_device
 
 
 @pytest.mark.parametrize(

@@ -5,11 +5,11 @@ from __future__ import annotations
 from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 
-from curate.formats.coco import ANNOTATIONS_FILE, read_coco
-from curate.formats.common import ReadResult
-from curate.formats.voc import read_voc
-from curate.formats.yolo import read_dfire, read_yolo
-from curate.walk import walk
+from curate.core.formats.coco import ANNOTATIONS_FILE, read_coco
+from curate.core.formats.common import ReadResult
+from curate.core.formats.voc import read_voc
+from curate.core.formats.yolo import read_dfire, read_yolo
+from curate.core.walk import walk
 
 FORMATS: tuple[str, ...] = ("coco", "yolo", "voc", "dfire")
 

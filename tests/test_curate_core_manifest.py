@@ -1,6 +1,6 @@
 import hashlib
 
-from curate.manifest import build_manifest, file_sha256, versions
+from curate.core.manifest import build_manifest, file_sha256, versions
 
 
 def test_sha256_and_sorted_sources(tmp_path):

@@ -1,6 +1,6 @@
 """YOLO txt datasets (ultralytics, Roboflow exports, D-Fire): read into a :class:`Dataset`, write back.
 
-Layouts read: see :mod:`curate.formats.yolo_layout` (Roboflow, ultralytics, singular ``image``/``label``,
+Layouts read: see :mod:`curate.core.formats.yolo_layout` (Roboflow, ultralytics, singular ``image``/``label``,
 ``JPEGImages``/``labels``, flat folders, ``data.yaml`` split entries; linked folders followed).
 
 A label row is ``class cx cy w h`` normalised to [0, 1] (a polygon ``class x1 y1 x2 y2 ...`` becomes its
@@ -17,13 +17,13 @@ from typing import Any
 import numpy as np
 import yaml
 
-from curate import boxes
-from curate.classes import DFIRE_NAMES
-from curate.dataset import Dataset, DatasetBuilder
-from curate.formats.common import ClassResolver, ReadResult, probe_sizes, sanitize_box, source_tag
-from curate.formats.yolo_layout import Pair, dataset_root, missing_label_problems, pair_images
-from curate.imageio import ImageError
-from curate.problems import Problem
+from curate.core import boxes
+from curate.core.classes import DFIRE_NAMES
+from curate.core.dataset import Dataset, DatasetBuilder
+from curate.core.formats.common import ClassResolver, ReadResult, probe_sizes, sanitize_box, source_tag
+from curate.core.formats.yolo_layout import Pair, dataset_root, missing_label_problems, pair_images
+from curate.core.imageio import ImageError
+from curate.core.problems import Problem
 
 
 def read_yolo(

@@ -11,12 +11,12 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
-from curate.dataset import Dataset, source_roots
-from curate.formats.coco import write_coco
-from curate.formats.yolo import write_data_yaml, write_yolo_labels
-from curate.manifest import build_manifest, hash_files, write_manifest
-from curate.problems import Problem
-from curate.progress import progress
+from curate.core.dataset import Dataset, source_roots
+from curate.core.formats.coco import write_coco
+from curate.core.formats.yolo import write_data_yaml, write_yolo_labels
+from curate.core.manifest import build_manifest, hash_files, write_manifest
+from curate.core.problems import Problem
+from curate.core.progress import progress
 
 IMAGE_MODES: tuple[str, ...] = ("copy", "hardlink", "symlink", "reference")
 OUTPUT_FORMATS: tuple[str, ...] = ("coco", "yolo")
@@ -123,7 +123,7 @@ def write_dataset(
     "sha256", "bytes", "source": original path}``. ``generated=True`` says the images were made by fuzzyfire
     in a temporary place: ``source`` is left out, so the manifest never points at files that are gone.
     ``yolo_val``: absolute image folders of a validation set for ``data.yaml``'s ``val`` (see
-    :func:`curate.formats.yolo.write_data_yaml`).
+    :func:`curate.core.formats.yolo.write_data_yaml`).
     """
     out = Path(out)
     unknown = [f for f in formats if f not in OUTPUT_FORMATS]

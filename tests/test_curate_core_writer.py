@@ -4,9 +4,9 @@ import os
 import pytest
 from factories import write_yolo_dataset
 
-from curate.formats.yolo import read_yolo
-from curate.manifest import file_sha256
-from curate.writer import OutputError, plan_image_names, write_dataset
+from curate.core.formats.yolo import read_yolo
+from curate.core.manifest import file_sha256
+from curate.core.writer import OutputError, plan_image_names, write_dataset
 
 
 @pytest.fixture()
@@ -92,7 +92,7 @@ def test_reference_mode_is_coco_only(src, tmp_path):
 
 
 def test_plan_makes_stems_unique_per_split(tmp_path):
-    from curate.dataset import DatasetBuilder
+    from curate.core.dataset import DatasetBuilder
 
     b = DatasetBuilder(tmp_path)
     b.add_image("x/fire.jpg", 10, 10, split="train")

@@ -1,11 +1,11 @@
-"""Post-processing: confidence threshold, multi-label, limits (the NMS itself: test_curate_boxes.py)."""
+"""Post-processing: confidence threshold, multi-label, limits (the NMS itself: test_curate_core_boxes.py)."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from curate.detections import postprocess
+from curate.core.detections import postprocess
 
 
 def test_postprocess_multi_label_and_thresholds():

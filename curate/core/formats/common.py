@@ -9,13 +9,13 @@ from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from curate import boxes
-from curate.classes import canonical_class, is_known
-from curate.dataset import Dataset
-from curate.imageio import ImageError, image_size, is_image_file
-from curate.problems import Problem
-from curate.progress import progress
-from curate.walk import walk_files
+from curate.core import boxes
+from curate.core.classes import canonical_class, is_known
+from curate.core.dataset import Dataset
+from curate.core.imageio import ImageError, image_size, is_image_file
+from curate.core.problems import Problem
+from curate.core.progress import progress
+from curate.core.walk import walk_files
 
 
 @dataclass
@@ -52,7 +52,7 @@ class ReadResult:
 
 def list_images(folder: Path) -> list[Path]:
     """Image files below ``folder`` (recursive, linked folders followed, hidden entries skipped), sorted by POSIX
-    path (see :mod:`curate.walk`)."""
+    path (see :mod:`curate.core.walk`)."""
     return walk_files(folder, is_image_file)
 
 

@@ -11,12 +11,12 @@ import xml.etree.ElementTree as ET
 from collections.abc import Mapping
 from pathlib import Path
 
-from curate import boxes
-from curate.dataset import DatasetBuilder
-from curate.formats.common import ClassResolver, ReadResult, list_images, probe_sizes, sanitize_box, source_tag
-from curate.imageio import ImageError
-from curate.problems import Problem
-from curate.walk import walk_files
+from curate.core import boxes
+from curate.core.dataset import DatasetBuilder
+from curate.core.formats.common import ClassResolver, ReadResult, list_images, probe_sizes, sanitize_box, source_tag
+from curate.core.imageio import ImageError
+from curate.core.problems import Problem
+from curate.core.walk import walk_files
 
 _SPLITS = ("train", "val", "test")
 

@@ -3,7 +3,7 @@ import pytest
 from factories import jpeg_bytes, write_image
 from PIL import Image
 
-from curate.imageio import ImageError, decode_image, image_size, read_image
+from curate.core.imageio import ImageError, decode_image, image_size, read_image
 
 
 def test_rgb_jpeg_reads_as_rgb_uint8(tmp_path):
@@ -132,7 +132,7 @@ def test_end_marker_before_the_scan_does_not_make_a_truncated_jpeg_complete(tmp_
 
 
 def test_reduced_decoding_keeps_min_side_and_reports_the_full_size(tmp_path):
-    from curate.imageio import decode_sized
+    from curate.core.imageio import decode_sized
 
     path = write_image(tmp_path / "big.jpg", 1600, 1200, seed=2)
     data = path.read_bytes()
@@ -151,7 +151,7 @@ def test_reduced_decoding_keeps_min_side_and_reports_the_full_size(tmp_path):
 
 
 def test_images_over_the_pixel_budget_are_refused(tmp_path, monkeypatch):
-    import curate.imageio as io_
+    import curate.core.imageio as io_
 
     path = write_image(tmp_path / "wide.png", 400, 300)
     monkeypatch.setattr(io_, "MAX_PIXELS", 100_000)

@@ -1,4 +1,4 @@
-from curate.classes import canonical_class, is_known, normalise_name
+from curate.core.classes import canonical_class, is_known, normalise_name
 
 
 def test_synonyms_and_case():

@@ -1,4 +1,4 @@
-from curate.problems import Problem, count_levels, has_errors
+from curate.core.problems import Problem, count_levels, has_errors
 
 
 def test_str_and_counts():
