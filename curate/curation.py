@@ -4,7 +4,7 @@ merge labelled sources -> exact duplicates -> near duplicates -> diversity ranki
 which no group of near duplicates straddles two splits -> a curated dataset (COCO + YOLO + manifest) with
 ``curation.json``, ``report.html`` and ``distances.png`` beside it.
 
-The schema dataclasses below are built from YAML by :mod:`fuzzyfire.config` (see ``configs/curate-shared.yaml``).
+The schema dataclasses below are built from YAML by :mod:`curate.core.config` (see ``configs/curate-shared.yaml``).
 """
 
 from __future__ import annotations

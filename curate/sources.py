@@ -1,6 +1,6 @@
 """Labelled sources to merge into one dataset (the first step of a FiIW-style curation).
 
-Schemas are plain frozen dataclasses; ``fuzzyfire.config`` builds them from commented YAML.
+Schemas are plain frozen dataclasses; ``curate.core.config`` builds them from commented YAML.
 """
 
 from __future__ import annotations

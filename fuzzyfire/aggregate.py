@@ -11,8 +11,8 @@ from typing import Any
 
 import numpy as np
 
+from curate.core.config import to_dict
 from curate.mix import parse_mixture
-from fuzzyfire.config import to_dict
 from fuzzyfire.experiment_config import ExperimentConfig
 from fuzzyfire.runs import RunSpec
 from fuzzyfire.stages import Prepared, digest, label, load_data

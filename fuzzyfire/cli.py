@@ -25,9 +25,9 @@ COMMAND_MODULES: tuple[str, ...] = (
 
 def cmd_merge(args: argparse.Namespace) -> int:
     from curate.cli import print_problems
+    from curate.core.config import ConfigError, load_config, to_dict
     from curate.core.writer import OutputError, write_dataset
     from curate.sources import MergeConfig, merge_sources
-    from fuzzyfire.config import ConfigError, load_config, to_dict
 
     try:
         cfg = load_config(args.config, MergeConfig, args.set)

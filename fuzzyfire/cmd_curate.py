@@ -9,13 +9,13 @@ from pathlib import Path
 
 def cmd_curate(args: argparse.Namespace) -> int:
     from curate.cli import print_problems
+    from curate.core.config import ConfigError, load_config, to_dict
     from curate.core.dataset import Dataset
     from curate.core.writer import OutputError, check_output_folder, write_dataset
     from curate.curation import CurateConfig, build_embedder, curate
     from curate.dedupjob import write_outputs
     from curate.embed import cache_dir
     from curate.embedcache import EmbeddingCache
-    from fuzzyfire.config import ConfigError, load_config, to_dict
 
     try:
         cfg = load_config(args.config, CurateConfig, args.set)

@@ -22,8 +22,8 @@ configs/demo.yaml needs no data: its 'real' and 'rare' sets are generated stand-
 
 
 def cmd_experiment(args: argparse.Namespace) -> int:
+    from curate.core.config import ConfigError, load_config
     from fuzzyfire.aggregate import STANDIN_NOTICE, table_text
-    from fuzzyfire.config import ConfigError, load_config
     from fuzzyfire.executors import ExecutorError, build_executor
     from fuzzyfire.experiment import run_experiment
     from fuzzyfire.experiment_config import ExperimentConfig, ExperimentConfigError

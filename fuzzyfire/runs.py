@@ -18,7 +18,7 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from fuzzyfire.config import to_dict
+from curate.core.config import to_dict
 from fuzzyfire.engine import command_train
 from fuzzyfire.stages import DataRef, digest, load_data
 

@@ -16,10 +16,10 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
+from curate.core.config import to_dict
 from curate.core.dataset import Dataset
 from curate.core.formats.registry import read_dataset
 from fuzzyfire import __version__
-from fuzzyfire.config import to_dict
 
 STAGE_FILE = "stage.json"
 STANDIN_LABEL = " (stand-in)"

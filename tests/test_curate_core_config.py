@@ -4,7 +4,7 @@ from typing import Literal, Optional
 
 import pytest
 
-from fuzzyfire.config import ConfigError, apply_overrides, build_config, load_config, to_dict
+from curate.core.config import ConfigError, apply_overrides, build_config, load_config, to_dict
 
 
 @dataclass(frozen=True)
