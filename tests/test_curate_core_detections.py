@@ -1,4 +1,4 @@
-"""Post-processing: confidence threshold, multi-label, limits (the NMS itself: test_curate_core_boxes.py)."""
+"""Post-processing: confidence threshold, multi-label, limits (the NMS itself: test_curate_core_nms.py)."""
 
 from __future__ import annotations
 

@@ -1,5 +1,5 @@
 """Detector post-processing shared by training-time validation and scoring: confidence filter, class-aware
-NMS (:func:`curate.core.boxes.batched_nms_xyxy`), boxes mapped from letterboxed input pixels back to the image.
+NMS (:func:`curate.core.nms.batched_nms_xyxy`), boxes mapped from letterboxed input pixels back to the image.
 
 ``train`` (validation of every epoch) and ``eval`` (``fuzzyfire score``) both turn a detector's raw output
 into :class:`Predictions` here and score them with :mod:`curate.core.cocoeval`, so the AP that picks the best
@@ -12,7 +12,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
-from curate.core.boxes import batched_nms_xyxy, clip_xyxy, cxcywh_to_xyxy, letterbox_to_image_xyxy
+from curate.core.boxes import clip_xyxy, cxcywh_to_xyxy, letterbox_to_image_xyxy
+from curate.core.nms import batched_nms_xyxy
 from curate.core.problems import Problem
 
 #: Scoring defaults (COCO-style evaluation keeps low-confidence boxes: they only add recall).
