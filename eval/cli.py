@@ -79,7 +79,7 @@ def _load(args: argparse.Namespace):  # -> eval.score.TestSet
 
 
 def _report_problems(result) -> None:
-    from curate.cli import print_problems
+    from curate.core.commands import print_problems
 
     shown = [p for p in result.problems if p.level != "info"]
     if shown:

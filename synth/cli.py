@@ -114,8 +114,8 @@ def cmd_gap(args: argparse.Namespace) -> int:
 
     import numpy as np
 
-    from curate.cli import print_problems
-    from curate.cli_curation import load_model_from_args
+    from curate.cli.dedup import load_model_from_args
+    from curate.core.commands import print_problems
     from synth.gap import dataset_images, embed_set, measure_gap
 
     sides = [
@@ -237,7 +237,7 @@ def _register_audit(sub: argparse._SubParsersAction) -> None:
 
 
 def _register_gap(sub: argparse._SubParsersAction) -> None:
-    from curate.cli_curation import add_model_args
+    from curate.cli.dedup import add_model_args
 
     p = sub.add_parser(
         "gap",

@@ -37,7 +37,7 @@ def pick_split(ds, wanted: str | None, defaults: tuple[str, ...], label: str):
 
 
 def _read(path: str, fmt: str, split: str | None, defaults: tuple[str, ...], drop: list[str]):
-    from curate.cli import print_problems
+    from curate.core.commands import print_problems
     from curate.core.formats.registry import read_dataset
 
     result = read_dataset(path, fmt)

@@ -30,7 +30,7 @@ nested: the real images of R250_S750 are inside those of R500_S500."""
 
 
 def cmd_mix(args: argparse.Namespace) -> int:
-    from curate.cli import command_args, print_problems
+    from curate.core.commands import command_args, print_problems
     from curate.core.formats.registry import read_dataset
 
     try:

@@ -1,78 +1,22 @@
-"""``fuzzyfire convert | validate | stats``: dataset commands. Each ``cmd_*`` returns an exit code."""
+"""``fuzzyfire convert | validate | stats | merge``: dataset commands. Each ``cmd_*`` returns an exit code."""
 
 from __future__ import annotations
 
 import argparse
 import json
 import sys
-from collections.abc import Sequence
 from pathlib import Path
-from typing import TextIO
 
-from curate.core.formats.registry import FORMATS, read_dataset
-from curate.core.problems import Problem, count_levels, has_errors
+from curate.core.commands import add_reader_args, command_args, parse_aliases, print_problems
+from curate.core.formats.registry import read_dataset
+from curate.core.problems import count_levels, has_errors
 from curate.core.writer import IMAGE_MODES, OUTPUT_FORMATS, OutputError, write_dataset
 from curate.stats import dataset_stats, plot_box_sizes
 from curate.validate import validate
 
 
-def add_reader_args(p: argparse.ArgumentParser) -> None:
-    """Options every command that reads a dataset accepts."""
-    p.add_argument(
-        "--from", dest="fmt", default="auto", choices=("auto", *FORMATS), help="source format (default: detect)"
-    )
-    p.add_argument(
-        "--names",
-        type=lambda s: [n.strip() for n in s.split(",") if n.strip()],
-        help="YOLO class names in id order, e.g. fire,smoke",
-    )
-    p.add_argument(
-        "--alias",
-        action="append",
-        default=[],
-        metavar="NAME=CLASS",
-        help="map a source class to a class, e.g. --alias flame_big=fire (repeatable)",
-    )
-    p.add_argument(
-        "--drop-class",
-        action="append",
-        default=[],
-        metavar="NAME",
-        help="remove the boxes of a class (its images stay, possibly as negatives); repeatable or comma-separated",
-    )
-    p.add_argument("--source", help="source tag for every image (default: real:<folder name>)")
-
-
-def _aliases(items: Sequence[str]) -> dict[str, str]:
-    out = {}
-    for item in items:
-        if "=" not in item:
-            raise SystemExit(f"--alias {item!r}: expected NAME=CLASS")
-        key, _, value = item.partition("=")
-        out[key.strip()] = value.strip()
-    return out
-
-
-def command_args(args: argparse.Namespace) -> dict:
-    """The user's arguments of a command, for its manifest (no internal parser fields)."""
-    return {k: v for k, v in vars(args).items() if k not in ("func", "command")}
-
-
-def print_problems(problems: Sequence[Problem], stream: TextIO | None = None, limit: int | None = None) -> None:
-    """One ``path: reason`` line per problem on ``stream`` (stdout), then the counts on stderr."""
-    stream = stream or sys.stdout
-    shown = problems if limit is None else problems[:limit]
-    for p in shown:
-        print(p, file=stream)
-    if limit is not None and len(problems) > limit:
-        print(f"... and {len(problems) - limit} more (see --json)", file=stream)
-    stream.flush()
-    counts = count_levels(problems)
-    print(f"{counts['error']} errors, {counts['warning']} warnings, {counts['info']} info", file=sys.stderr)
-
-
 def cmd_convert(args: argparse.Namespace) -> int:
-    result = read_dataset(args.src, args.fmt, names=args.names, source=args.source, aliases=_aliases(args.alias))
+    result = read_dataset(args.src, args.fmt, names=args.names, source=args.source, aliases=parse_aliases(args.alias))
     result = result.drop_classes(args.drop_class)
     ds = result.dataset
     formats = list(OUTPUT_FORMATS) if args.to == "all" else [args.to]
@@ -94,7 +38,9 @@ def cmd_convert(args: argparse.Namespace) -> int:
 
 
 def cmd_validate(args: argparse.Namespace) -> int:
-    result = validate(args.src, args.fmt, names=args.names, aliases=_aliases(args.alias), decode=not args.no_decode)
+    result = validate(
+        args.src, args.fmt, names=args.names, aliases=parse_aliases(args.alias), decode=not args.no_decode
+    )
     ds, problems = result.dataset, result.problems
     stats = dataset_stats(ds, result.unlabelled)
     if args.json:
@@ -119,7 +65,7 @@ def cmd_validate(args: argparse.Namespace) -> int:
 
 
 def cmd_stats(args: argparse.Namespace) -> int:
-    result = read_dataset(args.src, args.fmt, names=args.names, source=args.source, aliases=_aliases(args.alias))
+    result = read_dataset(args.src, args.fmt, names=args.names, source=args.source, aliases=parse_aliases(args.alias))
     result = result.drop_classes(args.drop_class)
     ds = result.dataset
     stats = dataset_stats(ds, result.unlabelled)
@@ -144,8 +90,37 @@ def cmd_stats(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_merge(args: argparse.Namespace) -> int:
+    from curate.core.config import ConfigError, load_config, to_dict
+    from curate.sources import MergeConfig, merge_sources
+
+    try:
+        cfg = load_config(args.config, MergeConfig, args.set)
+    except ConfigError as exc:
+        print(f"error: {args.config}: {exc}", file=sys.stderr)
+        return 2
+    ds, problems = merge_sources(cfg, Path(args.config).resolve().parent, args.out)
+    try:
+        written = write_dataset(
+            ds,
+            args.out,
+            ("coco", "yolo"),
+            args.images,
+            command="merge",
+            args={"config": to_dict(cfg), "set": args.set},
+            sources=[Path(args.config)],
+            overwrite=args.overwrite,
+        )
+    except OutputError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    print_problems([p for p in problems + written.problems if p.level != "info"], sys.stderr, limit=50)
+    print(f"wrote {args.out}: {len(ds.images)} images, {len(ds.annotations)} boxes from {len(cfg.sources)} sources")
+    return 0
+
+
 def register(sub: argparse._SubParsersAction) -> None:
-    """Add the dataset commands to the ``fuzzyfire`` parser."""
+    """Add ``convert``, ``validate`` and ``stats`` to the ``fuzzyfire`` parser."""
     fmt = argparse.RawDescriptionHelpFormatter
     p = sub.add_parser(
         "convert",
@@ -194,3 +169,22 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--json", action="store_true", help="print JSON")
     add_reader_args(p)
     p.set_defaults(func=cmd_stats)
+
+
+def register_merge(sub: argparse._SubParsersAction) -> None:
+    """Add ``merge`` to the ``fuzzyfire`` parser (the last command of ``fuzzyfire --help``, after ``experiment``)."""
+    p = sub.add_parser(
+        "merge",
+        help="merge labelled sources listed in a YAML config into one dataset",
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+        description="Merge datasets of any format into one COCO + YOLO folder with a fixed class list.\n\n"
+        "example:\n  fuzzyfire merge configs/merge-shared.yaml --out out/merged --set classes=[fire]",
+    )
+    p.add_argument("config", help="YAML file (see configs/merge-shared.yaml)")
+    p.add_argument("--out", required=True, type=Path, help="output folder")
+    p.add_argument(
+        "--set", action="append", default=[], metavar="KEY=VALUE", help="override a config key, e.g. classes=[fire]"
+    )
+    p.add_argument("--images", default="copy", choices=("copy", "hardlink", "symlink"))
+    p.add_argument("--overwrite", action="store_true", help="replace a fuzzyfire dataset already at --out")
+    p.set_defaults(func=cmd_merge)

@@ -1,17 +1,11 @@
+"""``fuzzyfire convert | validate | stats | merge`` (curate/cli/dataset.py)."""
+
 import json
 
 import pytest
 from factories import write_yolo_dataset
 
-from fuzzyfire.cli import build_parser, main
-
-
-def test_every_command_has_help_with_an_example(capsys):
-    parser = build_parser()
-    sub = next(a for a in parser._actions if a.__class__.__name__ == "_SubParsersAction")
-    assert set(sub.choices) >= {"convert", "validate", "stats", "merge"}
-    for name, p in sub.choices.items():
-        assert "example:" in p.format_help(), name
+from fuzzyfire.cli import main
 
 
 def test_convert_yolo_to_coco(tmp_path, capsys):
@@ -102,3 +96,13 @@ def test_an_ultralytics_data_yaml_is_its_dataset_in_every_command(tmp_path, caps
     test = load_test_set(data_yaml, split="valid")  # valid and val are one name
     assert test.split == "val" and len(test.dataset.images) == 2
     assert load_test_set(data_yaml).split == "val"  # no test split: the validation split, never train
+
+
+def test_merge_command(tmp_path, capsys):
+    write_yolo_dataset(tmp_path / "data" / "a")
+    (tmp_path / "m.yaml").write_text("classes: [fire, smoke]\nsources:\n  - path: data/a\n    name: first\n")
+    assert main(["merge", str(tmp_path / "m.yaml"), "--out", str(tmp_path / "out")]) == 0
+    doc = json.loads((tmp_path / "out" / "annotations.json").read_text())
+    assert len(doc["images"]) == 4 and (tmp_path / "out" / "data.yaml").is_file()
+    assert main(["merge", str(tmp_path / "m.yaml"), "--out", str(tmp_path / "o2"), "--set", "classes=fire"]) == 2
+    assert "classes: expected a list" in capsys.readouterr().err

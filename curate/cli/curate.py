@@ -8,7 +8,7 @@ from pathlib import Path
 
 
 def cmd_curate(args: argparse.Namespace) -> int:
-    from curate.cli import print_problems
+    from curate.core.commands import print_problems
     from curate.core.config import ConfigError, load_config, to_dict
     from curate.core.dataset import Dataset
     from curate.core.writer import OutputError, check_output_folder, write_dataset
@@ -62,6 +62,7 @@ def cmd_curate(args: argparse.Namespace) -> int:
 
 
 def register(sub: argparse._SubParsersAction) -> None:
+    """Add ``curate`` to the ``fuzzyfire`` parser."""
     p = sub.add_parser(
         "curate",
         help="merge labelled sources, remove duplicates, keep the most diverse, split without leakage",

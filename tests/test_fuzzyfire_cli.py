@@ -1,4 +1,5 @@
-"""``fuzzyfire experiment``: help with examples, clear errors before any work (exit code 2)."""
+"""The ``fuzzyfire`` parser (every command, help order) and ``fuzzyfire experiment``: help with examples, clear
+errors before any work (exit code 2)."""
 
 from __future__ import annotations
 
@@ -8,7 +9,34 @@ import pytest
 from conftest import REPO
 from factories_experiment import write_toy_config
 
-from fuzzyfire.cli import main
+from fuzzyfire.cli import build_parser, main
+
+
+def test_every_command_has_help_with_an_example(capsys):
+    parser = build_parser()
+    sub = next(a for a in parser._actions if a.__class__.__name__ == "_SubParsersAction")
+    assert set(sub.choices) >= {"convert", "validate", "stats", "merge"}
+    for name, p in sub.choices.items():
+        assert "example:" in p.format_help(), name
+
+
+def test_help_lists_the_commands_in_order() -> None:
+    sub = next(a for a in build_parser()._actions if a.__class__.__name__ == "_SubParsersAction")
+    assert [a.dest for a in sub._choices_actions] == [
+        "convert",
+        "validate",
+        "stats",
+        "mix",
+        "dedup",
+        "leakage",
+        "synth",
+        "train",
+        "score",
+        "compare",
+        "curate",
+        "experiment",
+        "merge",
+    ]
 
 
 def test_help_has_examples(capsys: pytest.CaptureFixture[str]) -> None:
