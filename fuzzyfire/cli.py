@@ -9,6 +9,7 @@ import sys
 from collections.abc import Sequence
 from pathlib import Path
 
+from curate.core.commands import add_command
 from fuzzyfire import __version__
 
 #: Modules whose ``register(subparsers)`` adds commands, in help order (imported when the parser is built);
@@ -74,10 +75,10 @@ def cmd_experiment(args: argparse.Namespace) -> int:
 
 def _register_experiment(sub: argparse._SubParsersAction) -> None:
     """Add ``experiment`` to the ``fuzzyfire`` parser."""
-    p = sub.add_parser(
+    p = add_command(
+        sub,
         "experiment",
         help="the whole study: curate, synth, mix, train each mixture x seed, score, tables and report",
-        formatter_class=argparse.RawDescriptionHelpFormatter,
         description=_DESCRIPTION,
     )
     p.add_argument("config", help="YAML file (configs/demo.yaml, configs/paper.yaml, configs/shared-data.yaml)")

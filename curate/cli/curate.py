@@ -6,21 +6,20 @@ import argparse
 import sys
 from pathlib import Path
 
+from curate.core.commands import add_command
+
 
 def cmd_curate(args: argparse.Namespace) -> int:
-    from curate.core.commands import print_problems
-    from curate.core.config import ConfigError, load_config, to_dict
+    from curate.core.commands import load_config_or_report, print_problems, write_dataset_or_report
     from curate.core.dataset import Dataset
-    from curate.core.writer import OutputError, check_output_folder, write_dataset
+    from curate.core.writer import OutputError, check_output_folder
     from curate.curation import CurateConfig, build_embedder, curate
     from curate.dedupjob import write_outputs
     from curate.embed import cache_dir
     from curate.embedcache import EmbeddingCache
 
-    try:
-        cfg = load_config(args.config, CurateConfig, args.set)
-    except ConfigError as exc:
-        print(f"error: {args.config}: {exc}", file=sys.stderr)
+    cfg = load_config_or_report(args.config, CurateConfig, args.set)
+    if cfg is None:
         return 2
     base = Path(args.config).resolve().parent
     roots = [str((s.path if s.path.is_absolute() else base / s.path).resolve()) for s in cfg.sources]
@@ -36,19 +35,7 @@ def cmd_curate(args: argparse.Namespace) -> int:
     finally:
         if cache is not None:
             cache.close()
-    try:
-        write_dataset(
-            result.dataset,
-            args.out,
-            ("coco", "yolo"),
-            cfg.images,
-            command="curate",
-            args={"config": to_dict(cfg), "set": args.set},
-            sources=[Path(args.config)],
-            overwrite=args.overwrite,
-        )
-    except OutputError as exc:
-        print(f"error: {exc}", file=sys.stderr)
+    if write_dataset_or_report(result.dataset, args, "curate", ("coco", "yolo"), cfg.images, cfg) is None:
         return 2
     files = write_outputs(result.run, result.document, args.out, "curation.json")
     print_problems([p for p in result.problems if p.level != "info"], sys.stderr, limit=50)
@@ -63,10 +50,10 @@ def cmd_curate(args: argparse.Namespace) -> int:
 
 def register(sub: argparse._SubParsersAction) -> None:
     """Add ``curate`` to the ``fuzzyfire`` parser."""
-    p = sub.add_parser(
+    p = add_command(
+        sub,
         "curate",
         help="merge labelled sources, remove duplicates, keep the most diverse, split without leakage",
-        formatter_class=argparse.RawDescriptionHelpFormatter,
         description="FiIW-style curation: merge sources -> exact and near duplicates -> diversity ranking -> top N ->\n"
         "seeded split where no group of near duplicates straddles two splits. Writes a COCO + YOLO dataset with\n"
         "manifest.json, curation.json, report.html and distances.png. Sources are never modified.\n\n"

@@ -7,10 +7,17 @@ import json
 import sys
 from pathlib import Path
 
-from curate.core.commands import add_reader_args, command_args, parse_aliases, print_problems
+from curate.core.commands import (
+    add_command,
+    add_reader_args,
+    load_config_or_report,
+    parse_aliases,
+    print_problems,
+    write_dataset_or_report,
+)
 from curate.core.formats.registry import read_dataset
 from curate.core.problems import count_levels, has_errors
-from curate.core.writer import IMAGE_MODES, OUTPUT_FORMATS, OutputError, write_dataset
+from curate.core.writer import IMAGE_MODES, OUTPUT_FORMATS
 from curate.stats import dataset_stats, plot_box_sizes
 from curate.validate import validate
 
@@ -20,12 +27,8 @@ def cmd_convert(args: argparse.Namespace) -> int:
     result = result.drop_classes(args.drop_class)
     ds = result.dataset
     formats = list(OUTPUT_FORMATS) if args.to == "all" else [args.to]
-    try:
-        written = write_dataset(
-            ds, args.out, formats, args.images, command="convert", args=command_args(args), overwrite=args.overwrite
-        )
-    except OutputError as exc:
-        print(f"error: {exc}", file=sys.stderr)
+    written = write_dataset_or_report(ds, args, "convert", formats, args.images)
+    if written is None:
         return 2
     problems = result.problems + written.problems
     shown = [p for p in problems if p.level != "info"]
@@ -91,28 +94,14 @@ def cmd_stats(args: argparse.Namespace) -> int:
 
 
 def cmd_merge(args: argparse.Namespace) -> int:
-    from curate.core.config import ConfigError, load_config, to_dict
     from curate.sources import MergeConfig, merge_sources
 
-    try:
-        cfg = load_config(args.config, MergeConfig, args.set)
-    except ConfigError as exc:
-        print(f"error: {args.config}: {exc}", file=sys.stderr)
+    cfg = load_config_or_report(args.config, MergeConfig, args.set)
+    if cfg is None:
         return 2
     ds, problems = merge_sources(cfg, Path(args.config).resolve().parent, args.out)
-    try:
-        written = write_dataset(
-            ds,
-            args.out,
-            ("coco", "yolo"),
-            args.images,
-            command="merge",
-            args={"config": to_dict(cfg), "set": args.set},
-            sources=[Path(args.config)],
-            overwrite=args.overwrite,
-        )
-    except OutputError as exc:
-        print(f"error: {exc}", file=sys.stderr)
+    written = write_dataset_or_report(ds, args, "merge", ("coco", "yolo"), args.images, cfg)
+    if written is None:
         return 2
     print_problems([p for p in problems + written.problems if p.level != "info"], sys.stderr, limit=50)
     print(f"wrote {args.out}: {len(ds.images)} images, {len(ds.annotations)} boxes from {len(cfg.sources)} sources")
@@ -121,11 +110,10 @@ def cmd_merge(args: argparse.Namespace) -> int:
 
 def register(sub: argparse._SubParsersAction) -> None:
     """Add ``convert``, ``validate`` and ``stats`` to the ``fuzzyfire`` parser."""
-    fmt = argparse.RawDescriptionHelpFormatter
-    p = sub.add_parser(
+    p = add_command(
+        sub,
         "convert",
         help="convert a dataset (YOLO, D-Fire, VOC, COCO) to COCO and/or YOLO",
-        formatter_class=fmt,
         description="Convert a dataset to a self-describing folder (images/, annotations.json and/or labels/ + data.yaml,\n"
         "manifest.json). The source folder is never modified.\n\n"
         "example:\n  fuzzyfire convert ../shared/data/fire-smoke-608 --to coco --out out/fire-smoke-coco\n"
@@ -144,10 +132,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     add_reader_args(p)
     p.set_defaults(func=cmd_convert)
 
-    p = sub.add_parser(
+    p = add_command(
+        sub,
         "validate",
         help="report every problem in a dataset, one 'path: reason' line each",
-        formatter_class=fmt,
         description="Check a dataset: unreadable images, labels without images, negatives, class ids out of range,\n"
         "boxes outside the image, zero area, NaN, duplicate stems. Exit code 1 when there are errors.\n\n"
         "example:\n  fuzzyfire validate ../shared/data/fire-cctv-416\n  fuzzyfire validate my_voc_folder --json > problems.json",
@@ -158,10 +146,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     add_reader_args(p)
     p.set_defaults(func=cmd_validate)
 
-    p = sub.add_parser(
+    p = add_command(
+        sub,
         "stats",
         help="counts per split and class, negatives, box sizes, histogram PNG",
-        formatter_class=fmt,
         description="Summarise a dataset.\n\nexample:\n  fuzzyfire stats ../shared/data/fire-smoke-608 --png sizes.png",
     )
     p.add_argument("src", help="dataset folder or COCO .json")
@@ -173,10 +161,10 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def register_merge(sub: argparse._SubParsersAction) -> None:
     """Add ``merge`` to the ``fuzzyfire`` parser (the last command of ``fuzzyfire --help``, after ``experiment``)."""
-    p = sub.add_parser(
+    p = add_command(
+        sub,
         "merge",
         help="merge labelled sources listed in a YAML config into one dataset",
-        formatter_class=argparse.RawDescriptionHelpFormatter,
         description="Merge datasets of any format into one COCO + YOLO folder with a fixed class list.\n\n"
         "example:\n  fuzzyfire merge configs/merge-shared.yaml --out out/merged --set classes=[fire]",
     )

@@ -7,6 +7,7 @@ import argparse
 import sys
 from pathlib import Path
 
+from curate.core.commands import add_command
 from curate.dedup import DEFAULT_THRESHOLD
 from curate.rank import RANK_METHODS
 from curate.search import BACKENDS
@@ -165,10 +166,10 @@ def cmd_leakage(args: argparse.Namespace) -> int:
 
 def register(sub: argparse._SubParsersAction) -> None:
     """Add ``dedup`` and ``leakage`` to the ``fuzzyfire`` parser."""
-    p = sub.add_parser(
+    p = add_command(
+        sub,
         "dedup",
         help="find exact and near-duplicate images in folders, rank the rest by diversity",
-        formatter_class=argparse.RawDescriptionHelpFormatter,
         description="Find exact duplicates (same bytes or same pixels) and near duplicates (CNN embeddings closer\n"
         "than --threshold), keep the best copy of each (protected > resolution > sharpness > file size > path),\n"
         "rank the kept images by diversity. Writes OUT/dedup.json, OUT/report.html, OUT/distances.png.\n"
@@ -201,10 +202,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     add_model_args(p)
     p.set_defaults(func=cmd_dedup)
 
-    p = sub.add_parser(
+    p = add_command(
+        sub,
         "leakage",
         help="report exact and near-duplicate images shared by two sets (e.g. train vs test)",
-        formatter_class=argparse.RawDescriptionHelpFormatter,
         description="List every pair (image in A, image in B) that is an exact copy (same bytes or pixels) or a near\n"
         "duplicate (embeddings closer than --threshold). Exit code 1 when any pair is found (use it in CI).\n\n"
         "example:\n  fuzzyfire leakage ../shared/data/fire-smoke-608/train ../shared/data/fire-smoke-608/test\n"

@@ -6,6 +6,7 @@ import argparse
 import sys
 from pathlib import Path
 
+from curate.core.commands import add_command
 from curate.core.writer import OutputError
 from curate.mix import (
     MixError,
@@ -62,10 +63,10 @@ def cmd_mix(args: argparse.Namespace) -> int:
 
 def register(sub: argparse._SubParsersAction) -> None:
     """Add ``mix`` to the ``fuzzyfire`` parser."""
-    p = sub.add_parser(
+    p = add_command(
+        sub,
         "mix",
         help="write R(m)_S(n) mixtures of real and synthetic images (nested seeded draws)",
-        formatter_class=argparse.RawDescriptionHelpFormatter,
         description="Draw training mixtures of m real and n synthetic images with a seed.\n\n" + _EXAMPLE,
     )
     p.add_argument("--real", required=True, help="real dataset folder or COCO .json")
