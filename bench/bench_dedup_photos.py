@@ -108,8 +108,8 @@ def same_group_pairs(doc: dict) -> set[tuple[str, str]]:
 def reduced_vs_full(photos: Path, count: int) -> tuple[float, int, int, int]:
     """On the first ``count`` photos: the smallest cosine between an embedding from the reduced decode (as dedup
     makes it) and one from the full decode, and the near-duplicate pairs (distance < 0.45) each way and in both."""
+    from curate.core.imageio import read_image
     from curate.embed import l2_normalize, load_embedder
-    from curate.imageio import read_image
     from curate.scan import scan_images
 
     paths = sorted(photos.glob("*.jpg"))[:count]

@@ -21,9 +21,9 @@ import cv2
 import numpy as np
 
 from curate.calibrate import _bright, _jpeg, _noise, _resize, _rotate
+from curate.core.imageio import read_image
 from curate.dedup import DEFAULT_THRESHOLD, UnionFind, find_duplicates
 from curate.embed import load_embedder
-from curate.imageio import read_image
 from curate.rank import k_center
 from curate.scan import list_image_files, scan_images
 

@@ -36,7 +36,7 @@ MIXTURE = "R400_S0"
 
 
 def _config(seeds: list[int], train_overrides: list[str]):
-    from fuzzyfire.config import load_config
+    from curate.core.config import load_config
     from fuzzyfire.experiment_config import ExperimentConfig
 
     grid = [f"grid.mixtures=[{MIXTURE}]", "grid.table1=[]", f"grid.seeds=[{','.join(map(str, seeds))}]"]

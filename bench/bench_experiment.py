@@ -18,7 +18,7 @@ import time
 from pathlib import Path
 
 import fuzzyfire.experiment as experiment
-from fuzzyfire.config import load_config
+from curate.core.config import load_config
 from fuzzyfire.executors import build_executor
 from fuzzyfire.experiment_config import ExperimentConfig
 

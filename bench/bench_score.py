@@ -18,9 +18,9 @@ from pathlib import Path
 
 import numpy as np
 
-from curate.cocoeval import run_cocoeval
-from curate.dataset import DatasetBuilder
-from curate.formats.registry import read_dataset
+from curate.core.cocoeval import run_cocoeval
+from curate.core.dataset import DatasetBuilder
+from curate.core.formats.registry import read_dataset
 from eval.onnx_model import OnnxDetector
 from eval.predict import PredictOptions
 from eval.score import score

@@ -48,7 +48,7 @@ VARIANTS = {
 
 
 def _config(overrides: list[str], seeds: list[int]):
-    from fuzzyfire.config import load_config
+    from curate.core.config import load_config
     from fuzzyfire.experiment_config import ExperimentConfig
 
     grid = ["grid.mixtures=[R0_S400]", "grid.table1=[]", "grid.synthetic=method2", "synth.method1=null"]

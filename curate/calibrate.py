@@ -20,8 +20,8 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
+from curate.core.imageio import ImageError, read_image
 from curate.embed import OnnxEmbedder, l2_normalize
-from curate.imageio import ImageError, read_image
 
 Image = NDArray[np.uint8]
 

@@ -4,7 +4,7 @@ merge labelled sources -> exact duplicates -> near duplicates -> diversity ranki
 which no group of near duplicates straddles two splits -> a curated dataset (COCO + YOLO + manifest) with
 ``curation.json``, ``report.html`` and ``distances.png`` beside it.
 
-The schema dataclasses below are built from YAML by :mod:`fuzzyfire.config` (see ``configs/curate-shared.yaml``).
+The schema dataclasses below are built from YAML by :mod:`curate.core.config` (see ``configs/curate-shared.yaml``).
 """
 
 from __future__ import annotations
@@ -16,12 +16,12 @@ from typing import Any, Literal, Optional
 
 import numpy as np
 
-from curate.dataset import Dataset
+from curate.core.dataset import Dataset
+from curate.core.problems import Problem
 from curate.dedup import DEFAULT_THRESHOLD
 from curate.dedupjob import DedupOptions, DedupRun, dedup_document, run_dedup
 from curate.embed import OnnxEmbedder, Preprocess, load_embedder
 from curate.embedcache import EmbeddingCache
-from curate.problems import Problem
 from curate.rank import rank_order
 from curate.sources import MergeConfig, SourceConfig, merge_sources
 from curate.split import near_groups, resolve_sizes, split_groups, straddling_groups

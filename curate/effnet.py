@@ -19,6 +19,8 @@ import torch
 from torch import nn
 from torch.nn import functional as F
 
+from curate.lite0_weights import lite0_weights_path
+
 #: (expand ratio, kernel, stride, repeats, output channels) per stage of EfficientNet-B0/Lite0.
 STAGES: tuple[tuple[int, int, int, int, int], ...] = (
     (1, 3, 1, 1, 16),
@@ -103,8 +105,6 @@ class EfficientNetLite0(nn.Module):
 
 def efficientnet_lite0(path: Path | None = None, image_size: int = IMAGE_SIZE) -> EfficientNetLite0:
     """The ImageNet-trained net for ``image_size`` inputs in eval mode (weights from the package unless ``path``)."""
-    from curate.embed import lite0_weights_path
-
     net = EfficientNetLite0(image_size)
     state = torch.load(path or lite0_weights_path(), map_location="cpu", weights_only=True)
     state = {k: v for k, v in state.items() if not k.endswith("num_batches_tracked")}

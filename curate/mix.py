@@ -20,9 +20,9 @@ from typing import Any
 
 import numpy as np
 
-from curate.dataset import Dataset, ImageRecord, merge
-from curate.formats.yolo import ultralytics_val_folders
-from curate.writer import plan_image_names, write_dataset
+from curate.core.dataset import Dataset, ImageRecord, merge
+from curate.core.formats.yolo import ultralytics_val_folders
+from curate.core.writer import plan_image_names, write_dataset
 
 _NAME = re.compile(r"^R(\d+)_S(\d+)$")
 #: Folder per seed inside the output: ``OUT/seed<S>/R<m>_S<n>``.

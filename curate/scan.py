@@ -21,12 +21,12 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
+from curate.core.imageio import ImageError, decode_sized, is_image_file
+from curate.core.problems import Problem
+from curate.core.progress import progress
+from curate.core.walk import walk_files
 from curate.embed import CROP_VIEW, OnnxEmbedder, Preprocess, l2_normalize
 from curate.embedcache import EmbeddingCache, FileFacts
-from curate.imageio import ImageError, decode_sized, is_image_file
-from curate.problems import Problem
-from curate.progress import progress
-from curate.walk import walk_files
 
 T = TypeVar("T")
 R = TypeVar("R")
@@ -107,7 +107,7 @@ def decode_facts(path: Path, preprocess: Preprocess | None) -> tuple[FileFacts, 
     """Decode one file: its facts and the (2, S, S, 3) model inputs of its two views (None without ``preprocess``).
 
     With ``preprocess`` a large JPEG is decoded at reduced size, its short side at least S / :data:`CROP_VIEW`
-    (so the centre view is never enlarged; :func:`curate.imageio.decode_image`); width and height are the full
+    (so the centre view is never enlarged; :func:`curate.core.imageio.decode_image`); width and height are the full
     size, the pixel hash and sharpness are of the decoded image (the same decode for the same file, so equal
     pictures still hash equal)."""
     try:

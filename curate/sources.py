@@ -1,6 +1,6 @@
 """Labelled sources to merge into one dataset (the first step of a FiIW-style curation).
 
-Schemas are plain frozen dataclasses; ``fuzzyfire.config`` builds them from commented YAML.
+Schemas are plain frozen dataclasses; ``curate.core.config`` builds them from commented YAML.
 """
 
 from __future__ import annotations
@@ -9,9 +9,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Literal, Optional
 
-from curate.dataset import Dataset, merge
-from curate.formats.registry import read_dataset
-from curate.problems import Problem
+from curate.core.dataset import Dataset, merge
+from curate.core.formats.registry import read_dataset
+from curate.core.problems import Problem
 
 
 @dataclass(frozen=True)

@@ -9,7 +9,7 @@ from typing import Any
 
 import numpy as np
 
-from curate.dataset import Dataset
+from curate.core.dataset import Dataset
 
 #: COCO's area thresholds (pixels squared) between small / medium / large.
 SMALL_AREA = 32.0**2

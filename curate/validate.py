@@ -7,12 +7,12 @@ from collections.abc import Mapping, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
-from curate.dataset import Dataset
-from curate.formats.common import ReadResult
-from curate.formats.registry import read_dataset
-from curate.imageio import ImageError, read_image
-from curate.problems import LEVELS, Problem
-from curate.progress import progress
+from curate.core.dataset import Dataset
+from curate.core.formats.common import ReadResult
+from curate.core.formats.registry import read_dataset
+from curate.core.imageio import ImageError, read_image
+from curate.core.problems import LEVELS, Problem
+from curate.core.progress import progress
 
 
 def decode_problems(ds: Dataset, workers: int = 4) -> list[Problem]:

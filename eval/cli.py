@@ -7,6 +7,8 @@ import json
 import sys
 from pathlib import Path
 
+from curate.core.commands import add_command
+
 
 def _names(text: str) -> list[str]:
     return [n.strip() for n in text.split(",") if n.strip()]
@@ -21,7 +23,7 @@ def _size(text: str) -> tuple[int, int]:
 
 
 def _device(text: str) -> str:
-    from curate.device import DeviceError, parse_device
+    from curate.core.device import DeviceError, parse_device
 
     try:
         parse_device(text)
@@ -78,7 +80,7 @@ def _load(args: argparse.Namespace):  # -> eval.score.TestSet
 
 
 def _report_problems(result) -> None:
-    from curate.cli import print_problems
+    from curate.core.commands import print_problems
 
     shown = [p for p in result.problems if p.level != "info"]
     if shown:
@@ -86,7 +88,7 @@ def _report_problems(result) -> None:
 
 
 def cmd_score(args: argparse.Namespace) -> int:
-    from curate.cocoeval import ClassMatchError
+    from curate.core.cocoeval import ClassMatchError
     from eval.onnx_model import ModelError
     from eval.score import ScoreError, score_errors, write_outputs
 
@@ -128,7 +130,7 @@ def _print_errors(errors) -> None:  # errors: eval.errors.ErrorBreakdown
 def cmd_compare(args: argparse.Namespace) -> int:
     import numpy as np
 
-    from curate.cocoeval import ClassMatchError
+    from curate.core.cocoeval import ClassMatchError
     from eval.onnx_model import ModelError
     from eval.score import ScoreError
     from eval.stats import MatchTable, paired_bootstrap
@@ -235,10 +237,10 @@ def _add_scoring_args(p: argparse.ArgumentParser) -> None:
 
 def register(sub: argparse._SubParsersAction) -> None:
     """Add ``score`` and ``compare`` to the ``fuzzyfire`` parser."""
-    p = sub.add_parser(
+    p = add_command(
+        sub,
         "score",
         help="COCO AP of a detector ONNX (ours, YOLOv5, YOLOv8/11 exports) on a test set",
-        formatter_class=argparse.RawDescriptionHelpFormatter,
         description="Run a detector ONNX with onnxruntime on every image of a test set (letterbox, NMS, boxes in\n"
         "original pixels) and report COCO AP, AP50, AP75, small/medium/large and per class (pycocotools;\n"
         "negative images count). Classes are matched by name between the model's metadata and the test set.\n\n"
@@ -266,10 +268,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     p.set_defaults(func=cmd_score)
 
-    p = sub.add_parser(
+    p = add_command(
+        sub,
         "compare",
         help="AP difference of two detectors on the same test images, with a paired bootstrap interval",
-        formatter_class=argparse.RawDescriptionHelpFormatter,
         description="Score two detector ONNX files on the same test set and report AP(B) - AP(A) with a 95%\n"
         "interval and p-value from a paired image-level bootstrap (both models scored on each resample).\n\n"
         "example:\n  fuzzyfire compare runs/R1000_S0/seed0/best.onnx runs/R750_S250/seed0/best.onnx \\\n"

@@ -263,7 +263,7 @@ def execution_providers(device: str, available: Sequence[str] | None = None) -> 
     """onnxruntime providers for ``device`` (``auto | cpu | cuda | cuda:N``) and a one-line notice when a GPU
     was asked for but onnxruntime has no CUDA provider here (then the CPU is used). ``auto`` takes CUDA when the
     provider is there (``pip install onnxruntime-gpu``), else the CPU without a word."""
-    from curate.device import parse_device
+    from curate.core.device import parse_device
 
     kind, index = parse_device(device)
     if available is None:

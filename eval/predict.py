@@ -12,8 +12,8 @@ from functools import partial
 import numpy as np
 from numpy.typing import NDArray
 
-from curate.dataset import Dataset, ImageRecord
-from curate.detections import (
+from curate.core.dataset import Dataset, ImageRecord
+from curate.core.detections import (
     CONF_THRESHOLD,
     IOU_THRESHOLD,
     MAX_DETECTIONS,
@@ -22,10 +22,10 @@ from curate.detections import (
     postprocess,
     to_original,
 )
-from curate.imageio import ImageError, read_image
-from curate.letterbox import letterbox_image, to_nchw_float
-from curate.problems import Problem
-from curate.progress import progress
+from curate.core.imageio import ImageError, read_image
+from curate.core.letterbox import letterbox_image, to_nchw_float
+from curate.core.problems import Problem
+from curate.core.progress import progress
 from eval.onnx_model import OnnxDetector
 
 Loaded = tuple[NDArray[np.uint8], tuple[int, int]] | ImageError
@@ -35,7 +35,7 @@ Loaded = tuple[NDArray[np.uint8], tuple[int, int]] | ImageError
 class PredictOptions:
     """Post-processing and batching: ``conf`` and ``iou`` thresholds, ``max_det`` per image, ``batch`` images
     per onnxruntime call, ``workers`` decoding threads, ``resize`` how images are letterboxed
-    (:data:`curate.letterbox.RESIZE_MODES`: ``area`` ours and YOLOv5's, ``linear`` ultralytics 8.x's)."""
+    (:data:`curate.core.letterbox.RESIZE_MODES`: ``area`` ours and YOLOv5's, ``linear`` ultralytics 8.x's)."""
 
     conf: float = CONF_THRESHOLD
     iou: float = IOU_THRESHOLD

@@ -12,9 +12,9 @@ from typing import Any
 import cv2
 import numpy as np
 
-from curate.boxes import xywh_to_xyxy
-from curate.dataset import Dataset
-from curate.imageio import ImageError, read_image
+from curate.core.boxes import xywh_to_xyxy
+from curate.core.dataset import Dataset
+from curate.core.imageio import ImageError, read_image
 from eval.tables import Table, marks, to_csv, to_latex, to_markdown
 
 _CSS = """body{font-family:system-ui,sans-serif;margin:2em auto;max-width:1100px;color:#222}

@@ -10,11 +10,11 @@ from typing import Any, NamedTuple
 
 from pycocotools.cocoeval import COCOeval
 
-from curate.cocoeval import CocoMetrics, evaluate_predictions
-from curate.dataset import Dataset
-from curate.detections import CONF_THRESHOLD, IOU_THRESHOLD, MAX_DETECTIONS, Predictions
-from curate.formats.registry import read_dataset
-from curate.problems import Problem
+from curate.core.cocoeval import CocoMetrics, evaluate_predictions
+from curate.core.dataset import Dataset
+from curate.core.detections import CONF_THRESHOLD, IOU_THRESHOLD, MAX_DETECTIONS, Predictions
+from curate.core.formats.registry import read_dataset
+from curate.core.problems import Problem
 from eval.errors import ALARM_CONF, ErrorBreakdown, error_breakdown
 from eval.onnx_model import ModelSpec, OnnxDetector
 from eval.plots import plot_pr_curves, pr_curves_from_eval
@@ -88,7 +88,7 @@ def load_test_set(
     aliases: Mapping[str, str] | None = None,
     drop: Sequence[str] = (),
 ) -> TestSet:
-    """Read any dataset :func:`curate.formats.registry.read_dataset` reads (a folder, a COCO .json, a
+    """Read any dataset :func:`curate.core.formats.registry.read_dataset` reads (a folder, a COCO .json, a
     ``data.yaml``), one split of it (``val`` and ``valid`` are one name; None = :func:`default_split`;
     :data:`ALL_SPLITS` = every image), with class ``aliases`` (source name -> class) and the boxes of classes
     ``drop`` removed."""

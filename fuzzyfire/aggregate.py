@@ -10,8 +10,8 @@ from pathlib import Path
 
 import numpy as np
 
+from curate.core.config import to_dict
 from curate.mix import parse_mixture
-from fuzzyfire.config import to_dict
 from fuzzyfire.datasets import Datasets
 from fuzzyfire.experiment_config import ExperimentConfig
 from fuzzyfire.runs import RunSpec
@@ -158,7 +158,7 @@ def realism_gaps(cfg: ExperimentConfig, data: Prepared, datasets: Datasets, out:
 
 def write_summary(cfg: ExperimentConfig, specs, results, rows, out: Path, standin: bool) -> None:
     """``experiment.json`` (config, versions, runs and their status) and ``results.jsonl``."""
-    from curate.manifest import git_commit, versions
+    from curate.core.manifest import git_commit, versions
 
     runs = [
         {"label": s.label, "seed": s.seed, "folder": s.out.relative_to(out).as_posix(), "hash": s.hash(),

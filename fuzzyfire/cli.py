@@ -1,4 +1,5 @@
-"""The ``fuzzyfire`` console script: subcommands gathered from each package's ``cli.register``."""
+"""The ``fuzzyfire`` console script: subcommands gathered from each package's ``cli.register``, and
+``fuzzyfire experiment CONFIG``: the whole study (curate -> synth -> mix -> train -> score -> report)."""
 
 from __future__ import annotations
 
@@ -8,68 +9,99 @@ import sys
 from collections.abc import Sequence
 from pathlib import Path
 
+from curate.core.commands import add_command
 from fuzzyfire import __version__
 
-#: Modules whose ``register(subparsers)`` adds commands, in help order (imported when the parser is built).
-COMMAND_MODULES: tuple[str, ...] = (
-    "curate.cli",
-    "curate.cli_mix",
-    "curate.cli_curation",
-    "synth.cli",
-    "train.cli",
-    "eval.cli",
-    "fuzzyfire.cmd_curate",
-    "fuzzyfire.cmd_experiment",
-)
+#: Modules whose ``register(subparsers)`` adds commands, in help order (imported when the parser is built);
+#: this module's :func:`register` adds the last ones.
+COMMAND_MODULES: tuple[str, ...] = ("curate.cli", "synth.cli", "train.cli", "eval.cli")
 
 
-def cmd_merge(args: argparse.Namespace) -> int:
-    from curate.cli import print_problems
-    from curate.sources import MergeConfig, merge_sources
-    from curate.writer import OutputError, write_dataset
-    from fuzzyfire.config import ConfigError, load_config, to_dict
+_DESCRIPTION = """Run the study of a YAML config: curate the real data (optional), generate the Method 1 and
+Method 2 pools, draw the R(m)_S(n) mixtures, train every mixture x seed, score each run on the common and the
+rare test set, and write tables (Markdown, CSV, LaTeX), Figure 5 and report.html. Stages are cached by a hash
+of their config and every run writes results.json last: run the same command again to resume.
 
+example:
+  fuzzyfire experiment configs/demo.yaml --out out/demo
+  fuzzyfire experiment configs/shared-data.yaml --out out/shared --set grid.seeds=[0,1,2]
+  fuzzyfire experiment configs/shared-data.yaml --out out/shared --report-only   # tables so far
+  fuzzyfire experiment configs/paper.yaml --out /shared/study --executor ray --address ray://head:10001 \\
+      --set real.path=/data/fiiw --set rare.path=/data/rare
+
+configs/demo.yaml needs no data: its 'real' and 'rare' sets are generated stand-ins (labelled so everywhere)."""
+
+
+def cmd_experiment(args: argparse.Namespace) -> int:
+    from curate.core.config import ConfigError, load_config
+    from fuzzyfire.aggregate import STANDIN_NOTICE, table_text
+    from fuzzyfire.executors import ExecutorError, build_executor
+    from fuzzyfire.experiment import run_experiment
+    from fuzzyfire.experiment_config import ExperimentConfig, ExperimentConfigError
+
+    overrides = list(args.set)
+    if args.executor:
+        overrides.append(f"executor.name={args.executor}")
+    if args.address:
+        overrides.append(f"executor.address={args.address}")
     try:
-        cfg = load_config(args.config, MergeConfig, args.set)
-    except ConfigError as exc:
+        cfg = load_config(args.config, ExperimentConfig, overrides)
+        cfg.check()
+        if cfg.executor.address and cfg.executor.name != "ray":
+            raise ExperimentConfigError("--address (executor.address) needs --executor ray")
+        e = cfg.executor
+        options = {"address": e.address, "num_cpus": e.num_cpus, "num_gpus": e.num_gpus, "local_cpus": e.local_cpus}
+        executor = None if args.report_only else build_executor(e.name, **(options if e.name == "ray" else {}))
+    except (ConfigError, ExperimentConfigError, ExecutorError) as exc:
         print(f"error: {args.config}: {exc}", file=sys.stderr)
         return 2
-    ds, problems = merge_sources(cfg, Path(args.config).resolve().parent, args.out)
+    out = args.out or Path("out") / Path(args.config).stem
     try:
-        written = write_dataset(
-            ds,
-            args.out,
-            ("coco", "yolo"),
-            args.images,
-            command="merge",
-            args={"config": to_dict(cfg), "set": args.set},
-            sources=[Path(args.config)],
-            overwrite=args.overwrite,
-        )
-    except OutputError as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        return 2
-    print_problems([p for p in problems + written.problems if p.level != "info"], sys.stderr, limit=50)
-    print(f"wrote {args.out}: {len(ds.images)} images, {len(ds.annotations)} boxes from {len(cfg.sources)} sources")
-    return 0
+        result = run_experiment(cfg, Path(args.config).resolve().parent, out, executor)
+    finally:
+        if executor is not None:
+            executor.close()
+    print(table_text(out.resolve()))
+    if result.standin:
+        print(STANDIN_NOTICE)
+    if args.report_only:
+        print(f"{len(result.failed)} runs not finished yet", file=sys.stderr)
+    else:
+        for spec in result.failed:
+            print(f"error: run {spec.label} seed {spec.seed} failed (see above); rerun to retry", file=sys.stderr)
+    print(f"report: {result.report}")
+    return 1 if result.failed and not args.report_only else 0
 
 
-def _register_merge(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser(
-        "merge",
-        help="merge labelled sources listed in a YAML config into one dataset",
-        formatter_class=argparse.RawDescriptionHelpFormatter,
-        description="Merge datasets of any format into one COCO + YOLO folder with a fixed class list.\n\n"
-        "example:\n  fuzzyfire merge configs/merge-shared.yaml --out out/merged --set classes=[fire]",
+def _register_experiment(sub: argparse._SubParsersAction) -> None:
+    """Add ``experiment`` to the ``fuzzyfire`` parser."""
+    p = add_command(
+        sub,
+        "experiment",
+        help="the whole study: curate, synth, mix, train each mixture x seed, score, tables and report",
+        description=_DESCRIPTION,
     )
-    p.add_argument("config", help="YAML file (see configs/merge-shared.yaml)")
-    p.add_argument("--out", required=True, type=Path, help="output folder")
+    p.add_argument("config", help="YAML file (configs/demo.yaml, configs/paper.yaml, configs/shared-data.yaml)")
+    p.add_argument("--out", type=Path, help="experiment folder (default: out/<config name>); rerun to resume")
+    p.add_argument("--executor", help="local (default: one run at a time, all cores) or ray (one task per run)")
+    p.add_argument("--address", help="ray: address of a running cluster, e.g. ray://head:10001 (default: local Ray)")
+    p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="override a config key")
     p.add_argument(
-        "--set", action="append", default=[], metavar="KEY=VALUE", help="override a config key, e.g. classes=[fire]"
+        "--report-only",
+        action="store_true",
+        help="train nothing: tables and report from the runs finished so far (e.g. while a cluster works)",
     )
-    p.add_argument("--images", default="copy", choices=("copy", "hardlink", "symlink"))
-    p.add_argument("--overwrite", action="store_true", help="replace a fuzzyfire dataset already at --out")
-    p.set_defaults(func=cmd_merge)
+    p.set_defaults(func=cmd_experiment)
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    """Add the commands listed after every package's own, in the help order ``fuzzyfire`` has always had:
+    ``curate`` (curate's), ``experiment`` (this module's) and ``merge`` (curate's)."""
+    from curate.cli import curate, dataset
+
+    curate.register(sub)
+    _register_experiment(sub)
+    dataset.register_merge(sub)
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -85,7 +117,7 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     for name in COMMAND_MODULES:
         importlib.import_module(name).register(sub)
-    _register_merge(sub)
+    register(sub)
     return parser
 
 

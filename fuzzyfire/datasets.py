@@ -9,9 +9,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from curate.dataset import Dataset
-from curate.formats.registry import read_dataset
-from curate.load import SplitError, pick_split, with_classes
+from curate.core.dataset import Dataset
+from curate.core.formats.registry import read_dataset
+from curate.core.load import SplitError, pick_split, with_classes
 
 
 @dataclass(frozen=True)
@@ -44,7 +44,7 @@ class Datasets:
     """Each dataset read once, each (split, classes) prepared once; ``classes`` are the experiment's.
 
     :meth:`read` gives a dataset as read (every split, its own classes), :meth:`get` one split of it with
-    exactly ``classes`` (:func:`curate.load.with_classes`). Both return shared immutable objects."""
+    exactly ``classes`` (:func:`curate.core.load.with_classes`). Both return shared immutable objects."""
 
     def __init__(self, classes: Sequence[str]) -> None:
         self.classes = tuple(classes)
@@ -69,7 +69,7 @@ class Datasets:
 
 def load_ref(ds: Dataset, ref: DataRef, classes: Sequence[str]) -> Dataset:
     """Split ``ref.split`` of ``ds`` (the dataset ``ref`` reads) with exactly ``classes``; raises
-    :class:`curate.load.SplitError` when the split is missing or the dataset has no images."""
+    :class:`curate.core.load.SplitError` when the split is missing or the dataset has no images."""
     chosen = pick_split(ds, ref.split, ref.path)
     if not chosen.images:
         raise SplitError(f"{ref.path}: no images")

@@ -20,9 +20,9 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
-from curate.dataset import Dataset, DatasetBuilder
-from curate.formats.yolo import ultralytics_val_folders
-from curate.load import SplitError
+from curate.core.dataset import Dataset, DatasetBuilder
+from curate.core.formats.yolo import ultralytics_val_folders
+from curate.core.load import SplitError
 from curate.mix import mixture_dir, parse_mixture, write_mixture
 from fuzzyfire.aggregate import STANDIN_NOTICE, result_rows, write_report, write_summary
 from fuzzyfire.datasets import DataRef, Datasets

@@ -1,5 +1,5 @@
 """The schema of ``fuzzyfire experiment CONFIG``: frozen dataclasses built once from commented YAML by
-:func:`fuzzyfire.config.load_config` (``configs/demo.yaml`` documents every key with its unit and range).
+:func:`curate.core.config.load_config` (``configs/demo.yaml`` documents every key with its unit and range).
 
 Component configs are the packages' own: :class:`curate.curation.CurateConfig`, :class:`synth.method1.
 Method1Config`, :class:`synth.method2.Method2Config`, :class:`synth.standin.StandInConfig`,

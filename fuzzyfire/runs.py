@@ -18,13 +18,13 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, NamedTuple
 
-from fuzzyfire.config import to_dict
+from curate.core.config import to_dict
 from fuzzyfire.datasets import DataRef, load_data
 from fuzzyfire.engine import CommandJob, command_train
 from fuzzyfire.stages import digest
 
 if TYPE_CHECKING:
-    from curate.dataset import Dataset
+    from curate.core.dataset import Dataset
     from eval.score import ScoreConfig
     from fuzzyfire.engine import EngineConfig
     from train.config import TrainConfig

@@ -16,8 +16,8 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
+from curate.core.config import to_dict
 from fuzzyfire import __version__
-from fuzzyfire.config import to_dict
 from fuzzyfire.datasets import DataRef
 
 STAGE_FILE = "stage.json"
@@ -111,11 +111,11 @@ def curate_stage(root: Path, cfg: Any, base: Path) -> tuple[Stage, DataRef]:
 
 
 def _curate(cfg: Any, base: Path, out: Path) -> None:
+    from curate.core.writer import write_dataset
     from curate.curation import build_embedder, curate
     from curate.dedupjob import write_outputs
     from curate.embed import cache_dir
     from curate.embedcache import EmbeddingCache
-    from curate.writer import write_dataset
 
     cache = EmbeddingCache(cache_dir() / "embeddings.sqlite")
     try:

@@ -6,7 +6,7 @@ import argparse
 import json
 from pathlib import Path
 
-FMT = argparse.RawDescriptionHelpFormatter
+from curate.core.commands import add_command
 
 
 def parse_size(text: str) -> tuple[int, int]:
@@ -19,7 +19,7 @@ def parse_size(text: str) -> tuple[int, int]:
 
 
 def cmd_flames(args: argparse.Namespace) -> int:
-    from curate.progress import progress
+    from curate.core.progress import progress
     from synth.library import procedural_library
     from synth.sprites import save_sequence
 
@@ -114,8 +114,8 @@ def cmd_gap(args: argparse.Namespace) -> int:
 
     import numpy as np
 
-    from curate.cli import print_problems
-    from curate.cli_curation import load_model_from_args
+    from curate.cli.dedup import load_model_from_args
+    from curate.core.commands import print_problems
     from synth.gap import dataset_images, embed_set, measure_gap
 
     sides = [
@@ -133,10 +133,10 @@ def cmd_gap(args: argparse.Namespace) -> int:
 
 
 def _register_flames(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser(
+    p = add_command(
+        sub,
         "flames",
         help="simulate procedural flame sprite sequences",
-        formatter_class=FMT,
         description="Simulate flame sequences (stable fluids or noise), keep every K-th frame.\n\n"
         "example:\n  fuzzyfire synth flames --out out/flames --n 12 --seed 0 --frames 1024 --keep-every 12",
     )
@@ -151,10 +151,10 @@ def _register_flames(sub: argparse._SubParsersAction) -> None:
 
 
 def _register_scenes(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser(
+    p = add_command(
+        sub,
         "scenes",
         help="render one preview per procedural environment",
-        formatter_class=FMT,
         description="Render a preview PNG of each of the first N environments.\n\n"
         "example:\n  fuzzyfire synth scenes --out out/scenes --n 48 --size 320x240",
     )
@@ -185,10 +185,10 @@ def _dataset_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def _register_method1(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser(
+    p = add_command(
+        sub,
         "method1",
         help="Method 1: flame planes in the 3D scenes (paper boxes vs visible boxes)",
-        formatter_class=FMT,
         description="Place flame image planes in the rendered environments (camera rules as in the paper)\n"
         "and annotate them with the visible box (segmentation pass + warped flame mask, occlusion\n"
         "handled) or the paper's box (projected plane corners, clipped). Both box sets are kept in\n"
@@ -203,10 +203,10 @@ def _register_method1(sub: argparse._SubParsersAction) -> None:
 
 
 def _register_method2(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser(
+    p = add_command(
+        sub,
         "method2",
         help="Method 2: composite flames on rendered views (exact boxes)",
-        formatter_class=FMT,
         description="Render environment views once and composite flame sprites on them; boxes come\n"
         "from each flame's final visible mask. Backgrounds: procedural scenes, 3D files (--environments)\n"
         "and/or your fire-free photos (--backgrounds). Resumes an interrupted run.\n\n"
@@ -224,10 +224,10 @@ def _register_method2(sub: argparse._SubParsersAction) -> None:
 
 
 def _register_audit(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser(
+    p = add_command(
+        sub,
         "audit",
         help="IoU of written boxes vs pixel-truth mask boxes",
-        formatter_class=FMT,
         description="Compare a synthetic dataset's boxes with the boxes of its kept flame masks.\n\n"
         "example:\n  fuzzyfire synth audit out/m2 --json",
     )
@@ -237,12 +237,12 @@ def _register_audit(sub: argparse._SubParsersAction) -> None:
 
 
 def _register_gap(sub: argparse._SubParsersAction) -> None:
-    from curate.cli_curation import add_model_args
+    from curate.cli.dedup import add_model_args
 
-    p = sub.add_parser(
+    p = add_command(
+        sub,
         "gap",
         help="realism gap: Fréchet distance of CNN embeddings, synthetic vs real, with the real-vs-real floor",
-        formatter_class=FMT,
         description="How far a synthetic set is from a real one: the Fréchet distance between the Gaussians of\n"
         "their CNN embeddings (ImageNet EfficientNet-Lite0 unless --model), at equal sizes against half of the\n"
         "real set, next to the distance of the real set's other half (the floor). Median and 2.5-97.5 % range\n"
@@ -267,10 +267,10 @@ def _register_gap(sub: argparse._SubParsersAction) -> None:
 
 def register(sub: argparse._SubParsersAction) -> None:
     """Add ``fuzzyfire synth ...`` to the ``fuzzyfire`` parser."""
-    synth = sub.add_parser(
+    synth = add_command(
+        sub,
         "synth",
         help="procedural flames, environments and synthetic datasets",
-        formatter_class=FMT,
         description="Synthetic data: flames, scenes, Method 1, Method 2, audit, realism gap.\n\n"
         "example:\n  fuzzyfire synth method2 --n 200 --out out/m2 --size 320x240",
     )

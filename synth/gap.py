@@ -16,10 +16,10 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from curate.core.problems import Problem
 from curate.embed import OnnxEmbedder
 from curate.embedcache import EmbeddingCache
 from curate.frechet import Gap, gap_interval
-from curate.problems import Problem
 from curate.scan import list_image_files, scan_images
 
 
@@ -70,7 +70,7 @@ class GapReport:
 def dataset_images(path: Path, split: str | None = None, fmt: str = "auto") -> list[Path]:
     """Image paths of the dataset at ``path`` (any format the toolkit reads), of ``split`` when given;
     ``fmt="images"``: every image file under the folder (no labels needed)."""
-    from curate.formats.registry import read_dataset
+    from curate.core.formats.registry import read_dataset
 
     if fmt == "images":
         if split is not None:

@@ -9,8 +9,8 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
-from curate.progress import progress
-from curate.writer import WriteResult
+from curate.core.progress import progress
+from curate.core.writer import WriteResult
 from synth import render
 from synth.envfile import find_environment_files
 from synth.output import Staging, finish

@@ -29,7 +29,7 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from curate.boxes import clip_xyxy, mask_to_xywh, points_to_xyxy, xyxy_to_xywh
+from curate.core.boxes import clip_xyxy, mask_to_xywh, points_to_xyxy, xyxy_to_xywh
 from synth import render
 from synth.effects import CameraConfig, Effects, apply_effects, expose, sample_effects
 from synth.generate import generate

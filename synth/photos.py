@@ -16,7 +16,7 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from curate.imageio import ImageError, read_image
+from curate.core.imageio import ImageError, read_image
 from curate.scan import list_image_files
 from synth import render
 

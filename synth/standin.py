@@ -31,10 +31,10 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from curate.formats.common import list_images
-from curate.imageio import ImageError, read_image
-from curate.progress import progress
-from curate.writer import WriteResult, plan_image_names, write_dataset
+from curate.core.formats.common import list_images
+from curate.core.imageio import ImageError, read_image
+from curate.core.progress import progress
+from curate.core.writer import WriteResult, plan_image_names, write_dataset
 from synth.composite import BLEND_MODES, Placement, composite
 from synth.effects import apply_effects, sample_effects
 from synth.flames import generate_sequence, sample_params

@@ -23,7 +23,7 @@ def split_folder(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """A COCO folder of 10 painted images (classes fire, smoke): ids 1-6 in split train, 7-10 in test."""
     from factories_train import painted_dataset
 
-    from curate.writer import write_dataset
+    from curate.core.writer import write_dataset
 
     root = tmp_path_factory.mktemp("split")
     ds = painted_dataset(root / "src", 10, seed=0)

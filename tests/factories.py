@@ -8,6 +8,8 @@ from pathlib import Path
 import numpy as np
 from PIL import Image
 
+from curate.core.dataset import Dataset, DatasetBuilder
+
 
 def write_image(path: Path, width: int, height: int, seed: int = 0, fmt: str | None = None) -> Path:
     """A random RGB image of ``width`` x ``height`` at ``path`` (format from the suffix)."""
@@ -49,6 +51,16 @@ def write_yolo_dataset(root: Path, names: tuple[str, ...] = ("fire", "smoke")) -
         f"train: ../train/images\nval: ../valid/images\nnc: {len(names)}\nnames: [{', '.join(names)}]\n"
     )
     return rows
+
+
+def tiny_pool(root: Path, n: int, source: str, category: str = "fire") -> Dataset:
+    """``n`` tiny images on disk, each with one box, tagged ``source``."""
+    builder = DatasetBuilder(root, [category])
+    for i in range(n):
+        write_image(root / f"img{i:03d}.png", 16, 12, seed=i)
+        image_id = builder.add_image(f"img{i:03d}.png", 16, 12, source=source)
+        builder.add_box(image_id, category, (1, 1, 4 + i % 5, 3))
+    return builder.build()
 
 
 def write_textured_room(path: Path, up: str = "+y", scale: float = 1.0, table: bool = True, walls: bool = True) -> Path:

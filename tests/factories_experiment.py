@@ -7,7 +7,7 @@ from typing import Any
 
 import yaml
 
-from fuzzyfire.config import build_config
+from curate.core.config import build_config
 from fuzzyfire.experiment_config import ExperimentConfig
 
 SIZE = {"width": 64, "height": 48}

@@ -9,6 +9,7 @@ import pytest
 import torch
 from curate_helpers import GRACE_HOPPER, scene, use_session_cache
 
+from curate.core.imageio import read_image
 from curate.effnet import efficientnet_lite0
 from curate.embed import (
     LITE0_PREPROCESS,
@@ -18,7 +19,6 @@ from curate.embed import (
     l2_normalize,
     load_embedder,
 )
-from curate.imageio import read_image
 
 
 @pytest.fixture(scope="module")

@@ -6,10 +6,10 @@ import json
 from pathlib import Path
 
 import pytest
-from factories import write_image
+from factories import tiny_pool
 
-from curate.dataset import Dataset, DatasetBuilder
-from curate.formats.coco import read_coco
+from curate.core.dataset import Dataset
+from curate.core.formats.coco import read_coco
 from curate.mix import (
     MixError,
     Mixture,
@@ -20,23 +20,12 @@ from curate.mix import (
     parse_seeds,
     write_mixture,
 )
-from fuzzyfire.cli import main
-
-
-def _pool(root: Path, n: int, source: str, category: str = "fire") -> Dataset:
-    """``n`` tiny images on disk, each with one box, tagged ``source``."""
-    builder = DatasetBuilder(root, [category])
-    for i in range(n):
-        write_image(root / f"img{i:03d}.png", 16, 12, seed=i)
-        image_id = builder.add_image(f"img{i:03d}.png", 16, 12, source=source)
-        builder.add_box(image_id, category, (1, 1, 4 + i % 5, 3))
-    return builder.build()
 
 
 @pytest.fixture(scope="module")
 def pools(tmp_path_factory: pytest.TempPathFactory) -> tuple[Dataset, Dataset]:
     base = tmp_path_factory.mktemp("pools")
-    return _pool(base / "real", 40, "real:cams"), _pool(base / "synth", 40, "synth:method2", "fire")
+    return tiny_pool(base / "real", 40, "real:cams"), tiny_pool(base / "synth", 40, "synth:method2", "fire")
 
 
 def _files(ds: Dataset, role: str) -> set[str]:
@@ -114,24 +103,10 @@ def test_written_mixture_is_byte_identical_and_references_images(
     assert len(back.images) == 10 and len(back.annotations) == 10
 
 
-def test_cli_writes_grid_per_seed(pools: tuple[Dataset, Dataset], tmp_path: Path) -> None:
-    from curate.writer import write_dataset
-
-    real, synth = pools
-    write_dataset(real, tmp_path / "real", ("coco",), "copy")
-    write_dataset(synth, tmp_path / "synth", ("coco",), "copy")
-    args = ["mix", "--real", str(tmp_path / "real"), "--synth", str(tmp_path / "synth"), "--out", str(tmp_path / "o")]
-    assert main([*args, "--mixtures", "R20_S0,R10_S10", "--seeds", "0-1"]) == 0
-    made = sorted(p.relative_to(tmp_path / "o").as_posix() for p in (tmp_path / "o").glob("*/*"))
-    assert made == ["seed0/R10_S10", "seed0/R20_S0", "seed1/R10_S10", "seed1/R20_S0"]
-    assert main([*args, "--mixtures", "R5_S5,R99_S0", "--out", str(tmp_path / "o2")]) == 2
-    assert not (tmp_path / "o2").exists()  # checked before anything is written
-
-
 def test_data_yaml_val_names_a_yolo_validation_set(pools: tuple[Dataset, Dataset], tmp_path: Path) -> None:
     import yaml
 
-    from curate.writer import write_dataset
+    from curate.core.writer import write_dataset
 
     real, synth = pools
     default = write_mixture(real, synth, Mixture(4, 4), 0, tmp_path / "default")
@@ -146,28 +121,13 @@ def test_data_yaml_val_names_a_yolo_validation_set(pools: tuple[Dataset, Dataset
 
 
 def test_unusable_validation_sets_are_refused(pools: tuple[Dataset, Dataset], tmp_path: Path) -> None:
-    from curate.writer import write_dataset
+    from curate.core.writer import write_dataset
 
     real, synth = pools
     with pytest.raises(MixError, match="no YOLO label files"):  # COCO only: ultralytics finds no labels
         write_mixture(real, synth, Mixture(4, 4), 0, tmp_path / "a", val=real)
-    smoke = _pool(tmp_path / "smoke-src", 3, "real:x", "smoke")
+    smoke = tiny_pool(tmp_path / "smoke-src", 3, "real:x", "smoke")
     write_dataset(smoke, tmp_path / "smoke", ("coco", "yolo"), "copy")
     with pytest.raises(MixError, match="would mix them up"):
         write_mixture(real, synth, Mixture(4, 4), 0, tmp_path / "b", val=read_coco(tmp_path / "smoke").dataset)
     assert not (tmp_path / "a").exists() and not (tmp_path / "b").exists()
-
-
-def test_cli_val_option(pools: tuple[Dataset, Dataset], tmp_path: Path) -> None:
-    import yaml
-
-    from curate.writer import write_dataset
-
-    real, synth = pools
-    write_dataset(real, tmp_path / "real", ("coco", "yolo"), "copy")
-    write_dataset(synth, tmp_path / "synth", ("coco",), "copy")
-    args = ["mix", "--real", str(tmp_path / "real"), "--synth", str(tmp_path / "synth"), "--mixtures", "R5_S5"]
-    assert main([*args, "--val", str(tmp_path / "real"), "--out", str(tmp_path / "o")]) == 0
-    doc = yaml.safe_load((tmp_path / "o" / "seed0" / "R5_S5" / "data.yaml").read_text())
-    assert doc["val"] == str((tmp_path / "real" / "images").absolute())
-    assert main([*args, "--val", str(tmp_path / "synth"), "--out", str(tmp_path / "o2")]) == 2

@@ -91,7 +91,7 @@ def test_big_jpegs_decode_reduced_with_the_same_near_duplicates(embedder: OnnxEm
     near-duplicate pairs; facts keep the full size."""
     import cv2
 
-    from curate.imageio import read_image
+    from curate.core.imageio import read_image
 
     def pairs(v: np.ndarray, threshold: float) -> set[tuple[int, int]]:
         d = np.linalg.norm(v[:, None] - v[None], axis=2)

@@ -1,10 +1,7 @@
-import json
-
 import pytest
 from factories import write_yolo_dataset
 
 from curate.sources import MergeConfig, SourceConfig, merge_sources
-from fuzzyfire.cli import main
 
 
 def test_merge_two_sources(tmp_path):
@@ -28,13 +25,3 @@ def test_unlisted_class_is_an_error(tmp_path):
     cfg = MergeConfig(sources=(SourceConfig(path=tmp_path / "b"),), classes=("fire",))
     with pytest.raises(ValueError, match=r"classes \['default'\] are not in classes"):
         merge_sources(cfg, tmp_path, tmp_path / "out")
-
-
-def test_merge_command(tmp_path, capsys):
-    write_yolo_dataset(tmp_path / "data" / "a")
-    (tmp_path / "m.yaml").write_text("classes: [fire, smoke]\nsources:\n  - path: data/a\n    name: first\n")
-    assert main(["merge", str(tmp_path / "m.yaml"), "--out", str(tmp_path / "out")]) == 0
-    doc = json.loads((tmp_path / "out" / "annotations.json").read_text())
-    assert len(doc["images"]) == 4 and (tmp_path / "out" / "data.yaml").is_file()
-    assert main(["merge", str(tmp_path / "m.yaml"), "--out", str(tmp_path / "o2"), "--set", "classes=fire"]) == 2
-    assert "classes: expected a list" in capsys.readouterr().err

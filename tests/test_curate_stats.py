@@ -1,6 +1,6 @@
 from factories import write_yolo_dataset
 
-from curate.formats.yolo import read_yolo
+from curate.core.formats.yolo import read_yolo
 from curate.stats import dataset_stats, plot_box_sizes, relative_box_sizes
 
 

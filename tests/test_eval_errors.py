@@ -5,8 +5,8 @@ from __future__ import annotations
 
 import pytest
 
-from curate.cocoeval import run_cocoeval
-from curate.dataset import DatasetBuilder
+from curate.core.cocoeval import run_cocoeval
+from curate.core.dataset import DatasetBuilder
 from eval.errors import ERROR_TYPES, error_breakdown
 
 FIRE, SMOKE = 1, 2

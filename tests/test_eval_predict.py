@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 from detector_factories import IMAGES, oracle_model, write_test_set
 
-from curate.boxes import xyxy_to_xywh
-from curate.formats.registry import read_dataset
+from curate.core.boxes import xyxy_to_xywh
+from curate.core.formats.registry import read_dataset
 from eval.onnx_model import OnnxDetector
 from eval.predict import PredictOptions, predict_dataset
 

@@ -6,7 +6,7 @@ import numpy as np
 from detector_factories import write_test_set
 from PIL import Image
 
-from curate.formats.registry import read_dataset
+from curate.core.formats.registry import read_dataset
 from eval.report import (
     draw_boxes,
     figure_html,

@@ -26,7 +26,7 @@ def test_split_selection(work):
 
 
 def test_default_split_is_test_then_val_never_train_silently(tmp_path):
-    from curate.dataset import DatasetBuilder
+    from curate.core.dataset import DatasetBuilder
     from eval.score import default_split
 
     def dataset(splits: tuple[str, ...]):

@@ -7,8 +7,8 @@ import time
 import numpy as np
 import pytest
 
-from curate.cocoeval import run_cocoeval
-from curate.dataset import DatasetBuilder
+from curate.core.cocoeval import run_cocoeval
+from curate.core.dataset import DatasetBuilder
 from eval.stats import MatchTable, bootstrap_ap, mean_std, paired_bootstrap, resample_weights
 
 

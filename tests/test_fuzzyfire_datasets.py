@@ -7,8 +7,8 @@ from pathlib import Path
 
 import pytest
 
-import curate.formats.registry as registry
-from curate.load import SplitError
+import curate.core.formats.registry as registry
+from curate.core.load import SplitError
 from fuzzyfire.datasets import DataRef, Datasets, load_data
 from fuzzyfire.stages import folder_ref
 

@@ -13,8 +13,8 @@ from pathlib import Path
 import pytest
 from factories_experiment import run_local_and_ray, toy_dict
 
+from curate.core.config import build_config
 from fuzzyfire.cli import main
-from fuzzyfire.config import build_config
 from fuzzyfire.datasets import Datasets
 from fuzzyfire.engine import EngineConfig, EngineError
 from fuzzyfire.executors import LocalExecutor

@@ -45,7 +45,7 @@ def full_run(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, str, Count
     each dataset folder was read (every read of the dataset registry counted)."""
     import contextlib
 
-    import curate.formats.registry as registry
+    import curate.core.formats.registry as registry
 
     root = tmp_path_factory.mktemp("experiment")
     config = write_toy_config(root / "toy.yaml")
@@ -166,7 +166,7 @@ def test_missing_test_split_fails_before_training(tmp_path: Path) -> None:
 
     from factories_train import painted_dataset
 
-    from curate.writer import write_dataset
+    from curate.core.writer import write_dataset
     from fuzzyfire.experiment_config import RealConfig
 
     ds = painted_dataset(tmp_path / "src", 6, seed=0)

@@ -7,8 +7,8 @@ from pathlib import Path
 import pytest
 from conftest import REPO
 
+from curate.core.config import ConfigError, build_config, load_config
 from curate.mix import paper_grid, parse_mixture
-from fuzzyfire.config import ConfigError, build_config, load_config
 from fuzzyfire.experiment_config import ExperimentConfig, ExperimentConfigError
 
 CONFIGS = REPO / "configs"

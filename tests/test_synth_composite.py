@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from curate.boxes import mask_to_xywh
+from curate.core.boxes import mask_to_xywh
 from synth.composite import Placement, composite
 from synth.sprites import SMOKE_ALPHA, Sprite
 

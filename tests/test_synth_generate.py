@@ -8,7 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 import pytest
 
-from curate.formats.registry import read_dataset
+from curate.core.formats.registry import read_dataset
 from synth.generate import generate
 from synth.output import staging_dir
 from synth.sprites import Sprite, SpriteSequence

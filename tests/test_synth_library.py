@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from fuzzyfire.config import ConfigError, load_config
+from curate.core.config import ConfigError, load_config
 from synth import library as L
 from synth.method1 import Method1Config
 from synth.method2 import Method2Config

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 import trimesh
 
-from curate.boxes import box_iou_xyxy, mask_to_xywh, xywh_to_xyxy
+from curate.core.boxes import box_iou_xyxy, mask_to_xywh, xywh_to_xyxy
 from synth import camera as C
 from synth import flames as F
 from synth import method1 as M

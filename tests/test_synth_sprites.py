@@ -2,7 +2,7 @@ import cv2
 import numpy as np
 import pytest
 
-from curate.imageio import ImageError
+from curate.core.imageio import ImageError
 from synth import flames as F
 from synth import sprites as S
 

@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from curate.boxes import mask_to_xywh
-from curate.formats.registry import read_dataset
+from curate.core.boxes import mask_to_xywh
+from curate.core.formats.registry import read_dataset
 from synth.colour import CHEMICAL_LINES
 from synth.standin import (
     NOTICE,

@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 from factories_train import painted_dataset
 
-from curate.writer import write_dataset
+from curate.core.writer import write_dataset
 from fuzzyfire.cli import main
 
 

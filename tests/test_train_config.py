@@ -1,10 +1,10 @@
-"""The training schema: YOLOv5 recipe defaults, strict loading through fuzzyfire.config."""
+"""The training schema: YOLOv5 recipe defaults, strict loading through curate.core.config."""
 
 from __future__ import annotations
 
 import pytest
 
-from fuzzyfire.config import ConfigError, build_config, to_dict
+from curate.core.config import ConfigError, build_config, to_dict
 from train.config import MODEL_SIZES, TrainConfig
 
 

@@ -9,7 +9,7 @@ import pytest
 import torch
 from factories_train import painted_dataset
 
-from curate.dataset import DatasetBuilder
+from curate.core.dataset import DatasetBuilder
 from train.augment import Sample
 from train.config import AugmentConfig
 from train.data import TrainBatches, cache_images, collate, letterboxed_images

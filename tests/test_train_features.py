@@ -8,8 +8,8 @@ import pytest
 import torch
 from factories_train import painted_dataset
 
-from curate.imageio import read_image
-from curate.letterbox import letterbox_image, to_nchw_float
+from curate.core.imageio import read_image
+from curate.core.letterbox import letterbox_image, to_nchw_float
 from train.config import AugmentConfig, ModelConfig
 from train.data import TrainBatches, cache_images, letterboxed_images
 from train.features import FeatureBatches, FrozenRunner, ValidationInputs, cache_views

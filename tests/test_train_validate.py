@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 import torch
 
-from curate.dataset import DatasetBuilder, ImageRecord
+from curate.core.dataset import DatasetBuilder, ImageRecord
 from train.validate import evaluate, fitness
 
 

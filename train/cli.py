@@ -7,6 +7,8 @@ import sys
 from dataclasses import replace
 from pathlib import Path
 
+from curate.core.commands import add_command
+
 _EXAMPLE = """example:
   fuzzyfire train --train out/mixtures/seed0/R500_S500 --val ../shared/data/fire-cctv-416 \\
       --out runs/R500_S500-seed0 --epochs 30 --imgsz 320 --seed 0
@@ -37,8 +39,8 @@ def pick_split(ds, wanted: str | None, defaults: tuple[str, ...], label: str):
 
 
 def _read(path: str, fmt: str, split: str | None, defaults: tuple[str, ...], drop: list[str]):
-    from curate.cli import print_problems
-    from curate.formats.registry import read_dataset
+    from curate.core.commands import print_problems
+    from curate.core.formats.registry import read_dataset
 
     result = read_dataset(path, fmt)
     errors = [p for p in result.problems if p.level == "error"]
@@ -105,10 +107,10 @@ def _defaults():
 
 def register(sub: argparse._SubParsersAction) -> None:
     """Add ``train`` to the ``fuzzyfire`` parser."""
-    p = sub.add_parser(
+    p = add_command(
+        sub,
         "train",
         help="train the YOLOv5-style detector (CPU-first), validate each epoch, export best.onnx",
-        formatter_class=argparse.RawDescriptionHelpFormatter,
         description="Train a detector with the YOLOv5 recipe (mosaic, affine, HSV, flip; SGD; EMA; best epoch by\n"
         "fitness on the validation set).\n\n" + _EXAMPLE,
     )

@@ -1,4 +1,4 @@
-"""Training hyper-parameters as frozen dataclasses (``fuzzyfire.config`` builds them from commented YAML).
+"""Training hyper-parameters as frozen dataclasses (``curate.core.config`` builds them from commented YAML).
 
 The defaults are the study's detector, chosen by AP per CPU-minute on real data (README, "The detector"):
 ImageNet EfficientNet-Lite0 with every stage frozen, its features computed once for 20 augmented views

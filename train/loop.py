@@ -19,9 +19,9 @@ from typing import Any
 import numpy as np
 import torch
 
-from curate.dataset import Dataset
-from curate.manifest import git_commit, versions
-from curate.progress import progress
+from curate.core.dataset import Dataset
+from curate.core.manifest import git_commit, versions
+from curate.core.progress import progress
 from train.anchors import check_anchors, label_sizes
 from train.config import DEFAULT_ANCHORS, ModelConfig, TrainConfig
 from train.data import TrainBatches, cache_images, letterboxed_images

@@ -1,0 +1,178 @@
+"""``fuzzyfire convert | validate | stats | merge``: dataset commands. Each ``cmd_*`` returns an exit code."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+from curate.core.commands import (
+    add_command,
+    add_reader_args,
+    load_config_or_report,
+    parse_aliases,
+    print_problems,
+    write_dataset_or_report,
+)
+from curate.core.formats.registry import read_dataset
+from curate.core.problems import count_levels, has_errors
+from curate.core.writer import IMAGE_MODES, OUTPUT_FORMATS
+from curate.stats import dataset_stats, plot_box_sizes
+from curate.validate import validate
+
+
+def cmd_convert(args: argparse.Namespace) -> int:
+    result = read_dataset(args.src, args.fmt, names=args.names, source=args.source, aliases=parse_aliases(args.alias))
+    result = result.drop_classes(args.drop_class)
+    ds = result.dataset
+    formats = list(OUTPUT_FORMATS) if args.to == "all" else [args.to]
+    written = write_dataset_or_report(ds, args, "convert", formats, args.images)
+    if written is None:
+        return 2
+    problems = result.problems + written.problems
+    shown = [p for p in problems if p.level != "info"]
+    print_problems(shown, sys.stderr, limit=50)
+    print(
+        f"wrote {args.out}: {len(ds.images)} images, {len(ds.annotations)} boxes, "
+        f"{ds.num_negatives()} negatives, classes {ds.category_names} ({', '.join(written.files.values())})"
+    )
+    return 0
+
+
+def cmd_validate(args: argparse.Namespace) -> int:
+    result = validate(
+        args.src, args.fmt, names=args.names, aliases=parse_aliases(args.alias), decode=not args.no_decode
+    )
+    ds, problems = result.dataset, result.problems
+    stats = dataset_stats(ds, result.unlabelled)
+    if args.json:
+        doc = {
+            "images": len(ds.images),
+            "boxes": len(ds.annotations),
+            "negatives": stats["negatives"],
+            "negatives_by_origin": stats["negatives_by_origin"],
+            "counts": count_levels(problems),
+            "problems": [p.to_dict() for p in problems],
+        }
+        print(json.dumps(doc, indent=1, ensure_ascii=False))
+    else:
+        print_problems(problems)
+        origin = stats["negatives_by_origin"]
+        print(
+            f"{len(ds.images)} images, {len(ds.annotations)} boxes, {stats['negatives']} negatives "
+            f"({origin['no_label_file']} without a label file, {origin['empty_labels']} with an empty one)",
+            file=sys.stderr,
+        )
+    return 1 if has_errors(problems) else 0
+
+
+def cmd_stats(args: argparse.Namespace) -> int:
+    result = read_dataset(args.src, args.fmt, names=args.names, source=args.source, aliases=parse_aliases(args.alias))
+    result = result.drop_classes(args.drop_class)
+    ds = result.dataset
+    stats = dataset_stats(ds, result.unlabelled)
+    png = Path(args.png) if args.png else None
+    if png is not None:
+        plot_box_sizes(ds, png, title=f"{Path(args.src).name}: {stats['images']} images, {stats['boxes']} boxes")
+        stats["histogram_png"] = str(png)
+    if args.json:
+        print(json.dumps(stats, indent=1, ensure_ascii=False))
+        return 0
+    origin = stats["negatives_by_origin"]
+    print(
+        f"images     {stats['images']}  (negatives {stats['negatives']}: {origin['no_label_file']} without a label "
+        f"file, {origin['empty_labels']} with an empty one)"
+    )
+    print(f"boxes      {stats['boxes']}  " + "  ".join(f"{k} {v}" for k, v in stats["boxes_per_class"].items()))
+    print("sizes      " + "  ".join(f"{k} {v}" for k, v in stats["box_sizes"].items()) + "  (COCO area buckets)")
+    for split, entry in stats["per_split"].items():
+        print(f"split {split:<8} " + "  ".join(f"{k} {v}" for k, v in entry.items()))
+    if png is not None:
+        print(f"histogram  {png}")
+    return 0
+
+
+def cmd_merge(args: argparse.Namespace) -> int:
+    from curate.sources import MergeConfig, merge_sources
+
+    cfg = load_config_or_report(args.config, MergeConfig, args.set)
+    if cfg is None:
+        return 2
+    ds, problems = merge_sources(cfg, Path(args.config).resolve().parent, args.out)
+    written = write_dataset_or_report(ds, args, "merge", ("coco", "yolo"), args.images, cfg)
+    if written is None:
+        return 2
+    print_problems([p for p in problems + written.problems if p.level != "info"], sys.stderr, limit=50)
+    print(f"wrote {args.out}: {len(ds.images)} images, {len(ds.annotations)} boxes from {len(cfg.sources)} sources")
+    return 0
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    """Add ``convert``, ``validate`` and ``stats`` to the ``fuzzyfire`` parser."""
+    p = add_command(
+        sub,
+        "convert",
+        help="convert a dataset (YOLO, D-Fire, VOC, COCO) to COCO and/or YOLO",
+        description="Convert a dataset to a self-describing folder (images/, annotations.json and/or labels/ + data.yaml,\n"
+        "manifest.json). The source folder is never modified.\n\n"
+        "example:\n  fuzzyfire convert ../shared/data/fire-smoke-608 --to coco --out out/fire-smoke-coco\n"
+        "  fuzzyfire convert DFireDataset --from dfire --to all --out out/dfire --images hardlink",
+    )
+    p.add_argument("src", help="dataset folder or COCO .json")
+    p.add_argument("--to", required=True, choices=(*OUTPUT_FORMATS, "all"), help="output format (all = COCO + YOLO)")
+    p.add_argument("--out", required=True, type=Path, help="output folder (must not be inside the source)")
+    p.add_argument(
+        "--images",
+        default="copy",
+        choices=IMAGE_MODES,
+        help="how images reach the output (reference = absolute paths, COCO only)",
+    )
+    p.add_argument("--overwrite", action="store_true", help="replace a fuzzyfire dataset already at --out")
+    add_reader_args(p)
+    p.set_defaults(func=cmd_convert)
+
+    p = add_command(
+        sub,
+        "validate",
+        help="report every problem in a dataset, one 'path: reason' line each",
+        description="Check a dataset: unreadable images, labels without images, negatives, class ids out of range,\n"
+        "boxes outside the image, zero area, NaN, duplicate stems. Exit code 1 when there are errors.\n\n"
+        "example:\n  fuzzyfire validate ../shared/data/fire-cctv-416\n  fuzzyfire validate my_voc_folder --json > problems.json",
+    )
+    p.add_argument("src", help="dataset folder or COCO .json")
+    p.add_argument("--json", action="store_true", help="print a JSON document instead of lines")
+    p.add_argument("--no-decode", action="store_true", help="check headers only (faster, misses truncated images)")
+    add_reader_args(p)
+    p.set_defaults(func=cmd_validate)
+
+    p = add_command(
+        sub,
+        "stats",
+        help="counts per split and class, negatives, box sizes, histogram PNG",
+        description="Summarise a dataset.\n\nexample:\n  fuzzyfire stats ../shared/data/fire-smoke-608 --png sizes.png",
+    )
+    p.add_argument("src", help="dataset folder or COCO .json")
+    p.add_argument("--png", help="write a box-size histogram to this PNG file")
+    p.add_argument("--json", action="store_true", help="print JSON")
+    add_reader_args(p)
+    p.set_defaults(func=cmd_stats)
+
+
+def register_merge(sub: argparse._SubParsersAction) -> None:
+    """Add ``merge`` to the ``fuzzyfire`` parser (the last command of ``fuzzyfire --help``, after ``experiment``)."""
+    p = add_command(
+        sub,
+        "merge",
+        help="merge labelled sources listed in a YAML config into one dataset",
+        description="Merge datasets of any format into one COCO + YOLO folder with a fixed class list.\n\n"
+        "example:\n  fuzzyfire merge configs/merge-shared.yaml --out out/merged --set classes=[fire]",
+    )
+    p.add_argument("config", help="YAML file (see configs/merge-shared.yaml)")
+    p.add_argument("--out", required=True, type=Path, help="output folder")
+    p.add_argument(
+        "--set", action="append", default=[], metavar="KEY=VALUE", help="override a config key, e.g. classes=[fire]"
+    )
+    p.add_argument("--images", default="copy", choices=("copy", "hardlink", "symlink"))
+    p.add_argument("--overwrite", action="store_true", help="replace a fuzzyfire dataset already at --out")
+    p.set_defaults(func=cmd_merge)

@@ -1,0 +1,210 @@
+"""COCO box metrics with pycocotools: AP, AP50, AP75, small/medium/large and per class. The one COCO
+evaluation of the toolkit: training-time validation (best-epoch selection) and ``fuzzyfire score`` both call
+:func:`evaluate_predictions`.
+
+Every image of the test set counts (negatives included: their detections are false positives); classes are
+matched by *name* between the model and the test set; an empty detection list gives AP 0, not an error.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import io
+from collections import defaultdict
+from collections.abc import Iterator, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from pycocotools.coco import COCO
+from pycocotools.cocoeval import COCOeval, Params
+
+from curate.core.boxes import xyxy_to_xywh
+from curate.core.classes import canonical_class
+from curate.core.dataset import Dataset
+from curate.core.detections import Predictions
+
+#: ``COCOeval.stats`` entries we report, by index.
+_STATS = {"AP": 0, "AP50": 1, "AP75": 2, "AP_small": 3, "AP_medium": 4, "AP_large": 5}
+
+
+class ClassMatchError(ValueError):
+    """The model and the test set share no class name."""
+
+
+@dataclass(frozen=True)
+class ClassMatch:
+    """How model classes map onto test-set categories (by canonical name).
+
+    ``label_to_cat``: model class index -> test category id; ``evaluated``: names scored, in test-set order;
+    ``not_in_model``: test classes the model cannot predict (not scored); ``not_in_test``: model classes
+    whose detections are dropped."""
+
+    label_to_cat: dict[int, int]
+    evaluated: tuple[str, ...]
+    not_in_model: tuple[str, ...]
+    not_in_test: tuple[str, ...]
+
+
+def match_classes(model_names: Sequence[str], dataset: Dataset) -> ClassMatch:
+    """Match class names case-insensitively through :func:`curate.core.classes.canonical_class`."""
+    test = {canonical_class(c.name): c for c in dataset.categories}
+    label_to_cat = {}
+    not_in_test = []
+    for i, name in enumerate(model_names):
+        cat = test.get(canonical_class(name))
+        if cat is None:
+            not_in_test.append(name)
+        else:
+            label_to_cat[i] = cat.id
+    shared = set(label_to_cat.values())
+    if not shared:
+        raise ClassMatchError(f"no class in common: model {list(model_names)}, test set {dataset.category_names}")
+    evaluated = tuple(c.name for c in dataset.categories if c.id in shared)
+    not_in_model = tuple(c.name for c in dataset.categories if c.id not in shared)
+    return ClassMatch(label_to_cat, evaluated, not_in_model, tuple(not_in_test))
+
+
+@contextlib.contextmanager
+def _quiet() -> Iterator[None]:
+    """pycocotools prints progress on stdout; keep stdout clean for ``--json``."""
+    with contextlib.redirect_stdout(io.StringIO()):
+        yield
+
+
+def _coco_from_dict(doc: dict[str, Any]) -> COCO:
+    coco = COCO()
+    coco.dataset = doc
+    with _quiet():
+        coco.createIndex()
+    return coco
+
+
+def detection_records(preds: Predictions, match: ClassMatch) -> list[dict[str, Any]]:
+    """COCO result records ``{image_id, category_id, bbox: [x, y, w, h], score}`` of the matched classes."""
+    records = []
+    for image_id, det in sorted(preds.by_image.items()):
+        if not len(det):
+            continue
+        boxes = np.round(xyxy_to_xywh(det.boxes), 3).reshape(-1, 4).tolist()
+        scores = np.round(det.scores, 5).tolist()
+        for box, score, label in zip(boxes, scores, det.labels.tolist()):
+            cat = match.label_to_cat.get(label)
+            if cat is not None:
+                records.append({"image_id": int(image_id), "category_id": cat, "bbox": box, "score": score})
+    return records
+
+
+def top_records(records: Sequence[dict[str, Any]], max_det: int) -> list[dict[str, Any]]:
+    """``records`` without those COCOeval never reads: beyond the ``max_det`` best of their (image, category).
+
+    COCOeval sorts each (image, category)'s detections by score with a stable sort and keeps the first
+    ``max_det`` before matching, for every area range; the same stable sort here keeps the same ones, in
+    their original order (so ties still resolve the same way)."""
+    groups: dict[tuple[int, int], list[int]] = defaultdict(list)
+    for i, r in enumerate(records):
+        groups[(r["image_id"], r["category_id"])].append(i)
+    if all(len(idx) <= max_det for idx in groups.values()):
+        return list(records)
+    keep: list[int] = []
+    for idx in groups.values():
+        keep += sorted(idx, key=lambda i: -records[i]["score"])[:max_det] if len(idx) > max_det else idx
+    return [records[i] for i in sorted(keep)]
+
+
+def run_cocoeval(
+    dataset: Dataset,
+    records: Sequence[dict[str, Any]],
+    cat_ids: Sequence[int],
+    iou_thresholds: Sequence[float] | None = None,
+) -> COCOeval:
+    """``COCOeval`` over every image of ``dataset`` and categories ``cat_ids``, evaluated and accumulated.
+
+    Results are loaded without ``COCO.loadRes`` so an empty list is a valid input (AP 0). Only the records
+    COCOeval can look at are loaded (:func:`top_records`), which gives the same numbers faster.
+    ``iou_thresholds`` (default COCO's 0.5:0.95) limits the work when only some are needed (e.g. ``[0.5]``:
+    ``stats[1]`` is AP50, the stats of other thresholds are -1)."""
+    gt_doc = dataset.to_coco()
+    gt = _coco_from_dict(gt_doc)
+    records = top_records(records, Params(iouType="bbox").maxDets[-1])
+    anns = [{**r, "id": i, "area": float(r["bbox"][2] * r["bbox"][3]), "iscrowd": 0} for i, r in enumerate(records, 1)]
+    dt = _coco_from_dict({"images": gt_doc["images"], "categories": gt_doc["categories"], "annotations": anns})
+    ev = COCOeval(gt, dt, "bbox")
+    ev.params.imgIds = sorted(img.id for img in dataset.images)
+    ev.params.catIds = sorted(cat_ids)
+    if iou_thresholds is not None:
+        ev.params.iouThrs = np.asarray(iou_thresholds, dtype=np.float64)
+    with _quiet():
+        ev.evaluate()
+        ev.accumulate()
+        ev.summarize()
+    return ev
+
+
+def _mean_valid(values: np.ndarray) -> float | None:
+    valid = values[values > -1]
+    return float(valid.mean()) if valid.size else None
+
+
+@dataclass
+class CocoMetrics:
+    """Headline numbers (None where undefined, e.g. no ground truth of that size), per class and counts.
+    ``negatives``: scored images without a box of a scored class (they can only collect false positives)."""
+
+    summary: dict[str, float | None]
+    per_class: dict[str, dict[str, Any]]
+    images: int
+    boxes: int
+    detections: int
+    negatives: int = 0
+    extra: dict[str, Any] = field(default_factory=dict)
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            **self.summary,
+            "images": self.images,
+            "boxes": self.boxes,
+            "negatives": self.negatives,
+            "detections": self.detections,
+            "per_class": self.per_class,
+            **self.extra,
+        }
+
+
+def metrics_from_eval(ev: COCOeval, dataset: Dataset, detections: int) -> CocoMetrics:
+    """Read AP numbers from an accumulated ``COCOeval`` (area ``all``, 100 detections per image)."""
+    summary = {k: (float(ev.stats[i]) if ev.stats[i] > -1 else None) for k, i in _STATS.items()}
+    precision = ev.eval["precision"]  # (T, R, K, A, M)
+    names = {c.id: c.name for c in dataset.categories}
+    counts: dict[int, int] = {}
+    for a in dataset.annotations:
+        if not a.iscrowd:
+            counts[a.category_id] = counts.get(a.category_id, 0) + 1
+    per_class = {}
+    for k, cat_id in enumerate(ev.params.catIds):
+        per_class[names[cat_id]] = {
+            "AP": _mean_valid(precision[:, :, k, 0, -1]),
+            "AP50": _mean_valid(precision[0, :, k, 0, -1]),
+            "boxes": counts.get(cat_id, 0),
+        }
+    boxes = sum(counts.get(c, 0) for c in ev.params.catIds)
+    scored = set(ev.params.catIds)
+    with_boxes = {a.image_id for a in dataset.annotations if a.category_id in scored}
+    negatives = sum(1 for i in ev.params.imgIds if i not in with_boxes)
+    return CocoMetrics(summary, per_class, len(ev.params.imgIds), boxes, detections, negatives)
+
+
+def evaluate_predictions(dataset: Dataset, preds: Predictions) -> tuple[CocoMetrics, COCOeval, list[dict[str, Any]]]:
+    """Score ``preds`` against ``dataset`` over the images that were scored (unreadable ones are left out
+    and listed in ``preds.problems``). Returns metrics, the accumulated ``COCOeval`` and the records."""
+    match = match_classes(preds.class_names, dataset)
+    scored = dataset.filter_images(lambda img: img.id in preds.by_image)
+    records = detection_records(preds, match)
+    ev = run_cocoeval(scored, records, sorted(set(match.label_to_cat.values())))
+    metrics = metrics_from_eval(ev, scored, len(records))
+    metrics.extra["classes"] = {
+        "evaluated": list(match.evaluated),
+        "not_in_model": list(match.not_in_model),
+        "not_in_test": list(match.not_in_test),
+    }
+    return metrics, ev, records

@@ -1,0 +1,111 @@
+"""Helpers for every package's commands (``<package>/cli.py``): a subcommand with examples, the options of a
+command that reads a dataset, its arguments for the manifest, problems printed one per line, and a config
+loaded or a dataset written, or else ``error: ...`` on stderr for the command to return 2."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any, TextIO, TypeVar
+
+from curate.core.config import ConfigError, load_config, to_dict
+from curate.core.dataset import Dataset
+from curate.core.formats.registry import FORMATS
+from curate.core.problems import Problem, count_levels
+from curate.core.writer import OutputError, WriteResult, write_dataset
+
+T = TypeVar("T")
+
+
+def add_command(sub: argparse._SubParsersAction, name: str, help: str, description: str) -> argparse.ArgumentParser:
+    """The subcommand ``name`` of ``sub``: ``help`` is its line in the parent's help, ``description`` (with its
+    examples) is printed as written."""
+    return sub.add_parser(
+        name, help=help, formatter_class=argparse.RawDescriptionHelpFormatter, description=description
+    )
+
+
+def add_reader_args(p: argparse.ArgumentParser) -> None:
+    """Options every command that reads a dataset accepts."""
+    p.add_argument(
+        "--from", dest="fmt", default="auto", choices=("auto", *FORMATS), help="source format (default: detect)"
+    )
+    p.add_argument(
+        "--names",
+        type=lambda s: [n.strip() for n in s.split(",") if n.strip()],
+        help="YOLO class names in id order, e.g. fire,smoke",
+    )
+    p.add_argument(
+        "--alias",
+        action="append",
+        default=[],
+        metavar="NAME=CLASS",
+        help="map a source class to a class, e.g. --alias flame_big=fire (repeatable)",
+    )
+    p.add_argument(
+        "--drop-class",
+        action="append",
+        default=[],
+        metavar="NAME",
+        help="remove the boxes of a class (its images stay, possibly as negatives); repeatable or comma-separated",
+    )
+    p.add_argument("--source", help="source tag for every image (default: real:<folder name>)")
+
+
+def parse_aliases(items: Sequence[str]) -> dict[str, str]:
+    """``--alias NAME=CLASS`` values (see :func:`add_reader_args`) -> ``{NAME: CLASS}``."""
+    out = {}
+    for item in items:
+        if "=" not in item:
+            raise SystemExit(f"--alias {item!r}: expected NAME=CLASS")
+        key, _, value = item.partition("=")
+        out[key.strip()] = value.strip()
+    return out
+
+
+def command_args(args: argparse.Namespace) -> dict:
+    """The user's arguments of a command, for its manifest (no internal parser fields)."""
+    return {k: v for k, v in vars(args).items() if k not in ("func", "command")}
+
+
+def print_problems(problems: Sequence[Problem], stream: TextIO | None = None, limit: int | None = None) -> None:
+    """One ``path: reason`` line per problem on ``stream`` (stdout), then the counts on stderr."""
+    stream = stream or sys.stdout
+    shown = problems if limit is None else problems[:limit]
+    for p in shown:
+        print(p, file=stream)
+    if limit is not None and len(problems) > limit:
+        print(f"... and {len(problems) - limit} more (see --json)", file=stream)
+    stream.flush()
+    counts = count_levels(problems)
+    print(f"{counts['error']} errors, {counts['warning']} warnings, {counts['info']} info", file=sys.stderr)
+
+
+def load_config_or_report(path: Path | str, schema: type[T], overrides: Sequence[str] = ()) -> T | None:
+    """:func:`~curate.core.config.load_config`; ``None`` after printing ``error: PATH: message`` on stderr when
+    the file does not fit ``schema`` (the command then returns 2)."""
+    try:
+        return load_config(path, schema, overrides)
+    except ConfigError as exc:
+        print(f"error: {path}: {exc}", file=sys.stderr)
+        return None
+
+
+def write_dataset_or_report(
+    ds: Dataset, args: argparse.Namespace, command: str, formats: Sequence[str], images: str, config: Any = None
+) -> WriteResult | None:
+    """Write ``ds`` to ``args.out`` (``args.overwrite`` honoured) with the command's provenance in the manifest:
+    its arguments, or for a command driven by a YAML config the resolved ``config``, the ``--set`` overrides and
+    the config file ``args.config`` (hashed). ``None`` after printing ``error: message`` on stderr when the
+    output folder is refused (the command then returns 2)."""
+    if config is None:
+        provenance = {"args": command_args(args)}
+    else:
+        provenance = {"args": {"config": to_dict(config), "set": args.set}, "sources": [Path(args.config)]}
+    try:
+        return write_dataset(ds, args.out, formats, images, command=command, overwrite=args.overwrite, **provenance)
+    except OutputError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return None

@@ -1,0 +1,83 @@
+"""Detector post-processing shared by training-time validation and scoring: confidence filter, class-aware
+NMS (:func:`curate.core.nms.batched_nms_xyxy`), boxes mapped from letterboxed input pixels back to the image.
+
+``train`` (validation of every epoch) and ``eval`` (``fuzzyfire score``) both turn a detector's raw output
+into :class:`Predictions` here and score them with :mod:`curate.core.cocoeval`, so the AP that picks the best
+epoch and the AP that scoring reports are computed by the same code."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import NDArray
+
+from curate.core.boxes import clip_xyxy, cxcywh_to_xyxy, letterbox_to_image_xyxy
+from curate.core.nms import batched_nms_xyxy
+from curate.core.problems import Problem
+
+#: Scoring defaults (COCO-style evaluation keeps low-confidence boxes: they only add recall).
+CONF_THRESHOLD = 0.001
+IOU_THRESHOLD = 0.6
+MAX_DETECTIONS = 300
+#: Highest-scoring candidates passed to NMS per image (bounds the cost of an untrained model's noise).
+MAX_CANDIDATES = 30000
+
+
+@dataclass(frozen=True)
+class ImageDetections:
+    """Detections of one image: ``boxes`` (K, 4) xyxy pixels, ``scores`` (K,), ``labels`` (K,) class index
+    into the model's class names; sorted by descending score."""
+
+    boxes: NDArray[np.float64]
+    scores: NDArray[np.float64]
+    labels: NDArray[np.int64]
+
+    def __len__(self) -> int:
+        return len(self.scores)
+
+
+@dataclass
+class Predictions:
+    """Detections per image id (xyxy in original pixels, labels index the model's ``class_names``) and the
+    images that could not be scored."""
+
+    class_names: tuple[str, ...]
+    by_image: dict[int, ImageDetections]
+    problems: list[Problem] = field(default_factory=list)
+
+
+def postprocess(
+    boxes_cxcywh: NDArray,
+    scores: NDArray,
+    conf: float = CONF_THRESHOLD,
+    iou: float = IOU_THRESHOLD,
+    max_det: int = MAX_DETECTIONS,
+    multi_label: bool = True,
+) -> ImageDetections:
+    """One image's raw head output -> its detections in input pixels.
+
+    ``boxes_cxcywh`` (N, 4) centre boxes, ``scores`` (N, C). ``multi_label`` keeps every (box, class) pair
+    above ``conf`` (COCO-style evaluation), otherwise only each box's best class.
+    """
+    if multi_label:
+        rows, labels = np.nonzero(scores > conf)
+    else:
+        labels = np.argmax(scores, axis=1) if scores.size else np.zeros(0, dtype=np.int64)
+        rows = np.flatnonzero(scores[np.arange(len(labels)), labels] > conf) if scores.size else labels
+        labels = labels[rows]
+    picked = scores[rows, labels].astype(np.float64)
+    if len(picked) > MAX_CANDIDATES:
+        top = np.argsort(-picked, kind="stable")[:MAX_CANDIDATES]
+        rows, labels, picked = rows[top], labels[top], picked[top]
+    xyxy = cxcywh_to_xyxy(boxes_cxcywh[rows]) if len(rows) else np.zeros((0, 4))
+    keep = batched_nms_xyxy(xyxy, picked, labels, iou, max_det)
+    return ImageDetections(xyxy[keep], picked[keep], labels[keep].astype(np.int64))
+
+
+def to_original(det: ImageDetections, size: tuple[int, int], input_size: tuple[int, int]) -> ImageDetections:
+    """Boxes of ``det`` from letterboxed input pixels (``input_size`` = (W, H)) to the original image of
+    ``size`` = (width, height) pixels, clipped to it."""
+    width, height = size
+    boxes = letterbox_to_image_xyxy(det.boxes, width, height, *input_size) if len(det) else det.boxes
+    return ImageDetections(clip_xyxy(boxes, width, height), det.scores, det.labels)

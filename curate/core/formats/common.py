@@ -1,0 +1,135 @@
+"""Helpers shared by the readers: folder scans, header probing, box sanitising, class-name resolution."""
+
+from __future__ import annotations
+
+import math
+from collections import Counter
+from collections.abc import Iterable, Mapping, Sequence
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from curate.core import boxes
+from curate.core.classes import canonical_class, is_known
+from curate.core.dataset import Dataset
+from curate.core.imageio import ImageError, image_size, is_image_file
+from curate.core.problems import Problem
+from curate.core.progress import progress
+from curate.core.walk import walk_files
+
+
+@dataclass
+class ReadResult:
+    """What a reader found: the dataset it could build and every problem on the way. ``unlabelled``: ids of the
+    images that have no label/annotation file at all (negatives by absence, as opposed to an empty label file)."""
+
+    dataset: Dataset
+    problems: list[Problem] = field(default_factory=list)
+    unlabelled: frozenset[int] = frozenset()
+
+    def drop_classes(self, names: Iterable[str]) -> ReadResult:
+        """Without the boxes of the classes ``names`` (any spelling; their images stay, maybe as negatives).
+
+        A name may be a comma-separated list (``"default,smoke"``). The user chose to drop them, so their "unknown
+        class" warnings go; an info line per class says how many boxes were dropped, or that the dataset has no
+        such class (a typo shows up instead of silently keeping the boxes).
+        """
+        asked = {canonical_class(part) for name in names for part in name.split(",") if part.strip()}
+        drop = asked & set(self.dataset.category_names)
+        ds = self.dataset
+        where = str(ds.info.get("source_root") or ds.info.get("source_file") or ds.root)
+        absent = [
+            Problem(where, f"no class {n!r} to drop (classes: {', '.join(ds.category_names) or 'none'})", "info")
+            for n in sorted(asked - drop)
+        ]
+        if not drop:
+            return ReadResult(ds, [*self.problems, *absent], self.unlabelled) if absent else self
+        counts = Counter(ds.categories[a.category_id - 1].name for a in ds.annotations)
+        problems = [p for p in self.problems if p.code not in {f"unknown-class:{n}" for n in drop}]
+        problems += [Problem(where, f"dropped {counts[n]} boxes of class {n!r} as asked", "info") for n in sorted(drop)]
+        return ReadResult(ds.drop_categories(drop), problems + absent, self.unlabelled)
+
+
+def list_images(folder: Path) -> list[Path]:
+    """Image files below ``folder`` (recursive, linked folders followed, hidden entries skipped), sorted by POSIX
+    path (see :mod:`curate.core.walk`)."""
+    return walk_files(folder, is_image_file)
+
+
+def probe_sizes(
+    paths: Sequence[Path], desc: str = "reading image headers", workers: int = 8
+) -> list[tuple[int, int] | ImageError]:
+    """``(width, height)`` after EXIF orientation for each path, or the :class:`ImageError` it raised."""
+
+    def one(path: Path) -> tuple[int, int] | ImageError:
+        try:
+            return image_size(path)
+        except ImageError as exc:
+            return exc
+
+    with ThreadPoolExecutor(max_workers=workers) as pool:
+        it = pool.map(one, paths)
+        return list(progress(it, total=len(paths), desc=desc))
+
+
+def sanitize_box(
+    xywh: Sequence[float], width: int, height: int, where: str, problems: list[Problem]
+) -> tuple[float, float, float, float] | None:
+    """The box clipped to the image, or ``None`` (with an error) when it is NaN/inf or has no area.
+
+    A box reaching outside the image is clipped and reported as a warning.
+    """
+    if not all(math.isfinite(float(v)) for v in xywh):
+        problems.append(Problem(where, f"box {_fmt(xywh)} has NaN or infinite values (dropped)"))
+        return None
+    x, y, w, h = (float(v) for v in xywh)
+    if w <= 0 or h <= 0:
+        problems.append(Problem(where, f"box {_fmt(xywh)} has zero or negative area (dropped)"))
+        return None
+    clipped = boxes.clip_xywh([x, y, w, h], width, height)
+    if not bool(boxes.inside_xywh([x, y, w, h], width, height, tol=1e-3)):
+        if clipped[2] <= 0 or clipped[3] <= 0:
+            problems.append(Problem(where, f"box {_fmt(xywh)} lies outside the {width}x{height} image (dropped)"))
+            return None
+        problems.append(
+            Problem(where, f"box {_fmt(xywh)} reaches outside the {width}x{height} image (clipped)", "warning")
+        )
+        return (float(clipped[0]), float(clipped[1]), float(clipped[2]), float(clipped[3]))
+    return (x, y, w, h)
+
+
+def _fmt(xywh: Iterable[float]) -> str:
+    return "[" + ", ".join(f"{float(v):.6g}" for v in xywh) + "] (x, y, w, h px)"
+
+
+class ClassResolver:
+    """Maps a source's class names to canonical names; reports each class outside the known vocabulary once.
+
+    ``aliases`` adds user synonyms (source name -> canonical name). Unknown classes are kept under their
+    normalised name (never silently dropped) and reported as a warning naming the source file.
+    """
+
+    def __init__(self, where: str, aliases: Mapping[str, str] | None = None) -> None:
+        self.where = where
+        self.aliases = dict(aliases or {})
+        self._reported: set[str] = set()
+
+    def resolve(self, name: str, problems: list[Problem]) -> str:
+        canonical = canonical_class(name, self.aliases)
+        if not is_known(canonical) and canonical not in self._reported:
+            self._reported.add(canonical)
+            problems.append(
+                Problem(
+                    self.where,
+                    f"class {name!r} is not a known class (fire, smoke): kept as {canonical!r}; "
+                    "map it with --alias NAME=fire or drop it with --drop-class",
+                    "warning",
+                    code=f"unknown-class:{canonical}",
+                )
+            )
+        return canonical
+
+
+def source_tag(root: Path, source: str | None) -> str:
+    """The ``source`` tag of a real dataset: ``source`` as given, else ``real:<folder name>``."""
+    return source if source else f"real:{root.resolve().name}"

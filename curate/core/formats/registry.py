@@ -1,0 +1,64 @@
+"""Pick a reader by name or by looking at the folder; unknown names raise, nothing falls back silently."""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping, Sequence
+from pathlib import Path
+
+from curate.core.formats.coco import ANNOTATIONS_FILE, read_coco
+from curate.core.formats.common import ReadResult
+from curate.core.formats.voc import read_voc
+from curate.core.formats.yolo import read_dfire, read_yolo
+from curate.core.walk import walk
+
+FORMATS: tuple[str, ...] = ("coco", "yolo", "voc", "dfire")
+
+
+def detect_format(path: Path | str) -> str:
+    """``coco`` for a .json file or a folder with ``annotations.json``; ``voc`` for ``Annotations/`` or XML files;
+    ``yolo`` for a dataset YAML file or a folder with ``data.yaml``, a ``label(s)`` folder or ``.txt`` files.
+    Raises ValueError otherwise."""
+    path = Path(path)
+    if not path.exists():
+        raise FileNotFoundError(f"{path}: no such file or folder")
+    if path.is_file():
+        if path.suffix.lower() == ".json":
+            return "coco"
+        if path.suffix.lower() in (".yaml", ".yml"):
+            return "yolo"
+        raise ValueError(f"{path}: a single file must be a COCO .json or an ultralytics data.yaml")
+    if (path / ANNOTATIONS_FILE).is_file():
+        return "coco"
+    if (path / "Annotations").is_dir() or next(path.glob("*.xml"), None) is not None:
+        return "voc"
+    if (path / "data.yaml").is_file():
+        return "yolo"
+    xml = False
+    for _, dirs, files in walk(path):  # one lazy walk: the first label folder or .txt file decides
+        if any(d.lower() in ("labels", "label") for d in dirs) or any(f.lower().endswith(".txt") for f in files):
+            return "yolo"
+        xml = xml or any(f.lower().endswith(".xml") for f in files)
+    if xml:
+        return "voc"
+    raise ValueError(f"{path}: cannot tell the dataset format; pass --from coco|yolo|voc|dfire")
+
+
+def read_dataset(
+    path: Path | str,
+    fmt: str = "auto",
+    *,
+    names: Sequence[str] | None = None,
+    source: str | None = None,
+    aliases: Mapping[str, str] | None = None,
+) -> ReadResult:
+    """Read a dataset of format ``fmt`` (``auto`` detects it). ``names`` only applies to YOLO."""
+    fmt = detect_format(path) if fmt == "auto" else fmt
+    readers: dict[str, Callable[[], ReadResult]] = {
+        "coco": lambda: read_coco(path, source=source, aliases=aliases),
+        "yolo": lambda: read_yolo(path, names=names, source=source, aliases=aliases),
+        "voc": lambda: read_voc(path, source=source, aliases=aliases),
+        "dfire": lambda: read_dfire(path, source=source),
+    }
+    if fmt not in readers:
+        raise ValueError(f"unknown format {fmt!r}; choose one of {', '.join(FORMATS)}")
+    return readers[fmt]()

@@ -1,0 +1,43 @@
+"""Letterbox an image for inference: one aspect-preserving resize, centred on a grey canvas.
+
+The geometry and the mapping of boxes back to original pixels live in :mod:`curate.core.boxes`
+(:func:`~curate.core.boxes.letterbox_params`, :func:`~curate.core.boxes.letterbox_to_image_xyxy`).
+"""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+from numpy.typing import NDArray
+
+from curate.core.boxes import letterbox_params
+
+#: Padding grey of YOLO-family detectors (114 of 255).
+PAD_VALUE = 114
+#: How the image is resized: ``area`` = area averaging when shrinking, bilinear when enlarging (ours and
+#: YOLOv5's); ``linear`` = always bilinear (ultralytics 8.x).
+RESIZE_MODES = ("area", "linear")
+
+
+def letterbox_image(
+    image: NDArray[np.uint8], out_width: int, out_height: int, pad_value: int = PAD_VALUE, resize: str = "area"
+) -> NDArray[np.uint8]:
+    """(H, W, 3) uint8 -> (out_height, out_width, 3) uint8: resized (see :data:`RESIZE_MODES`) and centred on a
+    ``pad_value`` canvas. Channel order is kept."""
+    if resize not in RESIZE_MODES:
+        raise ValueError(f"unknown resize {resize!r}; choose one of {', '.join(RESIZE_MODES)}")
+    height, width = image.shape[:2]
+    new_w, new_h, pad_x, pad_y = letterbox_params(width, height, out_width, out_height)
+    if (new_w, new_h) != (width, height):
+        area = resize == "area" and new_w < width and new_h < height
+        image = cv2.resize(image, (new_w, new_h), interpolation=cv2.INTER_AREA if area else cv2.INTER_LINEAR)
+    canvas = np.full((out_height, out_width, 3), pad_value, dtype=np.uint8)
+    canvas[pad_y : pad_y + new_h, pad_x : pad_x + new_w] = image
+    return canvas
+
+
+def to_nchw_float(images: list[NDArray[np.uint8]]) -> NDArray[np.float32]:
+    """A list of (H, W, 3) uint8 RGB images of one size -> (N, 3, H, W) float32 in [0, 1]."""
+    batch = np.ascontiguousarray(np.stack(images).transpose(0, 3, 1, 2), dtype=np.float32)  # one pass
+    batch *= 1.0 / 255.0
+    return batch

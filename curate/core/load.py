@@ -1,0 +1,54 @@
+"""One split of a dataset with the classes a task wants: the one way every command and the experiment pick a
+split, drop classes and fix the category list (read, :func:`pick_split`, :func:`with_classes`)."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+
+from curate.core.dataset import Dataset
+from curate.core.formats.registry import read_dataset
+
+
+class SplitError(ValueError):
+    """A split that is missing or has no images; the message names the dataset and the splits it has."""
+
+
+def pick_split(ds: Dataset, split: str | None, where: Path | str = "", defaults: Sequence[str] = ()) -> Dataset:
+    """The images of split ``split`` of ``ds`` (``val``, ``valid`` and ``validation`` name one split); None: the
+    first of ``defaults`` that ``ds`` has, else every image. Raises :class:`SplitError` when the named split
+    is missing or empty (``where`` names the dataset in the message)."""
+    if split is None:
+        found = next((s for s in (ds.resolve_split(d) for d in defaults) if s is not None), None)
+        return ds if found is None else ds.select_split(found)
+    if ds.resolve_split(split) is None:
+        shown = ", ".join(repr(s) for s in ds.splits)
+        raise SplitError(f"{where or ds.root}: no split {split!r} (splits: {shown})")
+    chosen = ds.select_split(split)
+    if not chosen.images:
+        raise SplitError(f"{where or ds.root}: no images in split {split!r}")
+    return chosen
+
+
+def with_classes(ds: Dataset, classes: Sequence[str], drop: Sequence[str] = ()) -> Dataset:
+    """``ds`` with exactly the categories ``classes``, in that order: boxes of ``drop`` and of every class not in
+    ``classes`` removed (their images stay, maybe as negatives)."""
+    gone = [*drop, *(n for n in ds.category_names if n not in classes and n not in drop)]
+    return ds.drop_categories(gone).with_categories(list(classes))
+
+
+def load_split(
+    path: Path | str,
+    fmt: str = "auto",
+    split: str | None = None,
+    classes: Sequence[str] | None = None,
+    aliases: Mapping[str, str] | None = None,
+    drop: Sequence[str] = (),
+) -> Dataset:
+    """Read the dataset at ``path`` (:func:`curate.core.formats.registry.read_dataset`, class ``aliases`` applied),
+    take split ``split`` (None = every image; :func:`pick_split`), then :func:`with_classes` (``classes`` None:
+    only ``drop`` removed). Raises :class:`SplitError` for a missing or empty split, ValueError for no images."""
+    ds = pick_split(read_dataset(path, fmt, aliases=aliases or None).dataset, split, path)
+    if not ds.images:
+        raise SplitError(f"{path}: no images")
+    return ds.drop_categories(drop) if classes is None else with_classes(ds, classes, drop)

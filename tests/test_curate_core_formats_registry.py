@@ -1,0 +1,47 @@
+import pytest
+from factories import write_image, write_yolo_dataset
+
+from curate.core.formats.registry import detect_format, read_dataset
+
+
+def test_detects_each_format(tmp_path):
+    write_yolo_dataset(tmp_path / "yolo")
+    assert detect_format(tmp_path / "yolo") == "yolo"
+    (tmp_path / "voc" / "Annotations").mkdir(parents=True)
+    assert detect_format(tmp_path / "voc") == "voc"
+    (tmp_path / "coco").mkdir()
+    (tmp_path / "coco" / "annotations.json").write_text('{"images": []}')
+    assert detect_format(tmp_path / "coco") == "coco"
+    assert detect_format(tmp_path / "coco" / "annotations.json") == "coco"
+
+
+def test_undetectable_and_unknown(tmp_path):
+    write_image(tmp_path / "only" / "x.jpg", 5, 5)
+    with pytest.raises(ValueError, match="cannot tell the dataset format"):
+        detect_format(tmp_path / "only")
+    with pytest.raises(FileNotFoundError):
+        detect_format(tmp_path / "nothing")
+    write_yolo_dataset(tmp_path / "yolo")
+    with pytest.raises(ValueError, match="unknown format 'kitti'"):
+        read_dataset(tmp_path / "yolo", "kitti")
+
+
+def test_drop_classes_silences_their_unknown_class_warning(tmp_path):
+    write_yolo_dataset(tmp_path / "ds", names=("Fire", "Default"))
+    result = read_dataset(tmp_path / "ds")
+    assert [p.code for p in result.problems if p.code] == ["unknown-class:default"]
+    dropped = result.drop_classes(["DEFAULT"])
+    assert dropped.dataset.category_names == ["fire"] and len(dropped.dataset.annotations) == 2
+    assert not [p for p in dropped.problems if p.level == "warning"]
+    assert any(p.reason == "dropped 1 boxes of class 'default' as asked" for p in dropped.problems)
+    assert result.drop_classes([]) is result and result.dataset.category_names == ["fire", "default"]
+
+
+def test_drop_classes_takes_comma_lists_and_reports_names_that_match_nothing(tmp_path):
+    write_yolo_dataset(tmp_path / "ds", names=("Fire", "Default"))
+    result = read_dataset(tmp_path / "ds")
+    dropped = result.drop_classes(["default,smok"])
+    assert dropped.dataset.category_names == ["fire"]
+    assert any(p.reason == "no class 'smok' to drop (classes: fire, default)" for p in dropped.problems)
+    only_typo = result.drop_classes(["smok"])
+    assert only_typo.dataset is result.dataset and any("no class 'smok'" in p.reason for p in only_typo.problems)

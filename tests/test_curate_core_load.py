@@ -1,0 +1,43 @@
+"""One split with the wanted classes: split aliases, defaults, errors that name the splits, class order."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from curate.core.load import SplitError, load_split, pick_split, with_classes
+
+
+def test_pick_split_by_name_alias_or_default(split_folder: Path) -> None:
+    ds = load_split(split_folder)
+    assert len(pick_split(ds, "train").images) == 6 and len(pick_split(ds, "test").images) == 4
+    assert pick_split(ds, None) is ds  # no default present: every image
+    assert len(pick_split(ds, None, defaults=("valid", "test")).images) == 4
+    with pytest.raises(SplitError, match=r"here: no split 'valid' \(splits: 'train', 'test'\)"):
+        pick_split(ds, "valid", "here")
+    renamed = ds.filter_images(lambda img: True)
+    renamed = renamed.__class__(renamed.root, tuple(i.__class__(**{**i.__dict__, "split": "val"}) for i in ds.images),
+                                ds.annotations, ds.categories)  # fmt: skip
+    assert len(pick_split(renamed, "valid").images) == 10  # val, valid, validation: one split
+
+
+def test_with_classes_orders_and_drops(split_folder: Path) -> None:
+    ds = load_split(split_folder)
+    assert ds.category_names == ["fire", "smoke"]
+    only_fire = with_classes(ds, ["fire"])
+    assert only_fire.category_names == ["fire"] and len(only_fire.images) == 10
+    assert len(only_fire.annotations) == sum(1 for a in ds.annotations if a.category_id == 1)
+    swapped = with_classes(ds, ["smoke", "fire"])
+    names = {a.id: ds.categories[a.category_id - 1].name for a in ds.annotations}
+    assert all(swapped.categories[a.category_id - 1].name == names[a.id] for a in swapped.annotations)
+    no_smoke = with_classes(ds, ["fire", "smoke"], drop=["smoke"])
+    assert no_smoke.category_names == ["fire", "smoke"] and {a.category_id for a in no_smoke.annotations} == {1}
+
+
+def test_load_split_reads_one_split_with_classes(split_folder: Path) -> None:
+    test = load_split(split_folder, "coco", "test", classes=["fire"])
+    assert len(test.images) == 4 and test.category_names == ["fire"]
+    assert load_split(split_folder, aliases={"smoke": "fire"}).category_names == ["fire"]
+    with pytest.raises(SplitError, match="no split 'val'"):
+        load_split(split_folder, split="val")

@@ -1,0 +1,148 @@
+"""The import graph, read from the source with ``ast`` (imports at module level and inside functions alike):
+no cycles between modules, packages layered ``curate <- synth, train, eval <- fuzzyfire``, and ``curate.core``
+(the floor) importing nothing from the rest of ``curate``."""
+
+from __future__ import annotations
+
+import ast
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+from conftest import REPO
+
+PACKAGES = ("curate", "synth", "train", "eval", "fuzzyfire")
+
+#: Which packages each package may import (itself included): ``curate <- synth, train, eval <- fuzzyfire``.
+ALLOWED: dict[str, frozenset[str]] = {
+    "curate": frozenset({"curate"}),
+    "synth": frozenset({"curate", "synth"}),
+    "train": frozenset({"curate", "train"}),
+    "eval": frozenset({"curate", "eval"}),
+    "fuzzyfire": frozenset(PACKAGES),
+}
+
+
+def _module_name(path: Path) -> str:
+    parts = path.relative_to(REPO).with_suffix("").parts
+    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+
+
+def _modules() -> dict[str, Path]:
+    return {_module_name(p): p for pkg in PACKAGES for p in sorted((REPO / pkg).rglob("*.py"))}
+
+
+def _imports(name: str, path: Path, known: set[str]) -> Iterator[tuple[str, int]]:
+    """(imported module of ours, line) for every import statement in ``path``, wherever it stands."""
+    package = name if path.name == "__init__.py" else name.rpartition(".")[0]
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"), str(path))):
+        if isinstance(node, ast.Import):
+            targets = [alias.name for alias in node.names]
+        elif isinstance(node, ast.ImportFrom):
+            base = node.module or ""
+            if node.level:
+                anchor = package.split(".")[: len(package.split(".")) - (node.level - 1)]
+                base = ".".join([*anchor, *([base] if base else [])])
+            targets = [f"{base}.{a.name}" if f"{base}.{a.name}" in known else base for a in node.names]
+        else:
+            continue
+        for target in targets:
+            while target and target not in known:  # `import curate.core.formats.coco` -> that module
+                target = target.rpartition(".")[0]
+            if target:
+                yield target, node.lineno
+
+
+@pytest.fixture(scope="module")
+def graph() -> dict[str, dict[str, int]]:
+    """module -> {imported module: first line}; only the modules of PACKAGES."""
+    modules = _modules()
+    known = set(modules)
+    out: dict[str, dict[str, int]] = {}
+    for name, path in modules.items():
+        edges = out.setdefault(name, {})
+        for target, line in _imports(name, path, known):
+            if target != name:
+                edges.setdefault(target, line)
+    return out
+
+
+def _cycles(graph: dict[str, dict[str, int]]) -> list[frozenset[str]]:
+    """The strongly connected components with more than one module (Tarjan, iterative)."""
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    on_stack: set[str] = set()
+    found: list[frozenset[str]] = []
+    for root in sorted(graph):
+        if root in index:
+            continue
+        work = [(root, iter(sorted(graph[root])))]
+        index[root] = low[root] = len(index)
+        stack.append(root)
+        on_stack.add(root)
+        while work:
+            node, children = work[-1]
+            child = next(children, None)
+            if child is not None:
+                if child not in index:
+                    index[child] = low[child] = len(index)
+                    stack.append(child)
+                    on_stack.add(child)
+                    work.append((child, iter(sorted(graph[child]))))
+                elif child in on_stack:
+                    low[node] = min(low[node], index[child])
+                continue
+            work.pop()
+            if work:
+                low[work[-1][0]] = min(low[work[-1][0]], low[node])
+            if low[node] == index[node]:
+                component = set()
+                while True:
+                    member = stack.pop()
+                    on_stack.discard(member)
+                    component.add(member)
+                    if member == node:
+                        break
+                if len(component) > 1:
+                    found.append(frozenset(component))
+    return found
+
+
+def test_the_graph_is_read(graph: dict[str, dict[str, int]]) -> None:
+    assert "curate.core.boxes" in graph["curate.core.nms"]  # module level
+    assert "curate.effnet" in graph["curate.embed"]  # inside a function
+    assert "curate.cli.dataset" in graph["curate.cli"]  # `from package import module`
+
+
+def test_no_import_cycles(graph: dict[str, dict[str, int]]) -> None:
+    assert [sorted(c) for c in _cycles(graph)] == []
+
+
+def test_the_cycle_finder_finds_cycles() -> None:
+    toy = {"a": {"b": 1}, "b": {"c": 1}, "c": {"a": 1}, "d": {"a": 1}, "e": {"f": 1}, "f": {"e": 1}}
+    assert sorted(sorted(c) for c in _cycles(toy)) == [["a", "b", "c"], ["e", "f"]]
+
+
+def test_packages_import_only_the_packages_below(graph: dict[str, dict[str, int]]) -> None:
+    modules = _modules()
+    wrong = [
+        f"{modules[src].relative_to(REPO)}:{line}: {src} imports {dst}"
+        for src, edges in graph.items()
+        for dst, line in edges.items()
+        if dst.split(".")[0] not in ALLOWED[src.split(".")[0]]
+    ]
+    assert wrong == []
+
+
+def test_curate_core_imports_nothing_from_the_rest_of_curate(graph: dict[str, dict[str, int]]) -> None:
+    modules = _modules()
+    core = [name for name in graph if name == "curate.core" or name.startswith("curate.core.")]
+    assert len(core) > 15
+    wrong = [
+        f"{modules[src].relative_to(REPO)}:{line}: {src} imports {dst}"
+        for src in core
+        for dst, line in graph[src].items()
+        if dst.split(".")[0] == "curate" and not (dst == "curate.core" or dst.startswith("curate.core."))
+    ]
+    assert wrong == []
