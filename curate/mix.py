@@ -198,24 +198,3 @@ def write_mixture(
     record = mixture_record(ds, mix, seed)
     (folder / MIXTURE_FILE).write_text(json.dumps(record, indent=1, ensure_ascii=False) + "\n", encoding="utf-8")
     return folder
-
-
-def validation_set(ds: Dataset, split: str | None) -> Dataset:
-    """The validation images of ``ds``: split ``split``; by default ``val`` or ``valid`` when present, else all."""
-    if split is None:
-        named = [s for s in ("val", "valid") if s in ds.splits]
-        return ds.select_split(named[0]) if named else ds
-    pool = ds.select_split(split)
-    if not pool.images:
-        raise MixError(f"{ds.root}: no images in split {split!r} (splits: {ds.splits})")
-    return pool
-
-
-def training_pool(ds: Dataset, split: str | None) -> Dataset:
-    """The images to draw from: split ``split``; by default ``train`` when ``ds`` has it, else every image."""
-    if split is None:
-        return ds.select_split("train") if "train" in ds.splits else ds
-    pool = ds.select_split(split)
-    if not pool.images:
-        raise MixError(f"{ds.root}: no images in split {split!r} (splits: {ds.splits})")
-    return pool

@@ -14,6 +14,7 @@ from curate.core.cocoeval import CocoMetrics, evaluate_predictions
 from curate.core.dataset import Dataset
 from curate.core.detections import CONF_THRESHOLD, IOU_THRESHOLD, MAX_DETECTIONS, Predictions
 from curate.core.formats.registry import read_dataset
+from curate.core.load import SplitError, pick_split
 from curate.core.problems import Problem
 from eval.errors import ALARM_CONF, ErrorBreakdown, error_breakdown
 from eval.onnx_model import ModelSpec, OnnxDetector
@@ -97,10 +98,10 @@ def load_test_set(
     splits = ds.splits
     split = default_split(ds, path) if split is None else split
     if split != ALL_SPLITS:
-        found = ds.resolve_split(split)
-        if found is None:
-            raise ScoreError(f"{path}: no split {split!r} (splits: {_shown(ds)}; --split all for every image)")
-        ds, split = ds.select_split(found), found
+        try:
+            ds, split = pick_split(ds, split, path), ds.resolve_split(split) or split
+        except SplitError as exc:
+            raise ScoreError(f"{exc}; --split all for every image") from None
     if not ds.images:
         raise ScoreError(f"{path}: no images to score")
     return TestSet(ds, list(result.problems), split, splits)

@@ -71,6 +71,7 @@ def dataset_images(path: Path, split: str | None = None, fmt: str = "auto") -> l
     """Image paths of the dataset at ``path`` (any format the toolkit reads), of ``split`` when given;
     ``fmt="images"``: every image file under the folder (no labels needed)."""
     from curate.core.formats.registry import read_dataset
+    from curate.core.load import pick_split
 
     if fmt == "images":
         if split is not None:
@@ -83,11 +84,7 @@ def dataset_images(path: Path, split: str | None = None, fmt: str = "auto") -> l
         ds = read_dataset(path, fmt).dataset
     except ValueError as exc:
         raise ValueError(f"{exc} (or 'images' for a plain folder of images)") from None
-    if split is not None:
-        chosen = ds.select_split(split)
-        if not chosen.images:
-            raise ValueError(f"{path}: no images in split {split!r} (splits: {ds.splits})")
-        ds = chosen
+    ds = pick_split(ds, split, path)
     if not ds.images:
         raise ValueError(f"{path}: no images")
     return [ds.image_path(im) for im in ds.images]

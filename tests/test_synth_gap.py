@@ -48,7 +48,7 @@ def test_a_set_like_the_real_one_is_closer_than_a_flat_one(folders) -> None:
 def test_dataset_layouts_and_errors(tmp_path: Path, folders) -> None:
     ds = write_scene_dataset(tmp_path / "ds", {f"s{i}": (i, None) for i in range(4)})
     assert len(dataset_images(ds)) == 4 and len(dataset_images(ds, "train")) == 4
-    with pytest.raises(ValueError, match="no images in split 'test'"):
+    with pytest.raises(ValueError, match=r"no split 'test' \(splits: 'train'\)"):
         dataset_images(ds, "test")
     with pytest.raises(ValueError, match="'images' for a plain folder"):
         dataset_images(folders["real"])

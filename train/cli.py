@@ -25,29 +25,18 @@ TRAIN_SPLITS = ("train",)
 VAL_SPLITS = ("valid", "val", "validation")
 
 
-def pick_split(ds, wanted: str | None, defaults: tuple[str, ...], label: str):
-    """The split ``wanted``; by default the first of ``defaults`` present, else every image."""
-    if wanted is not None:
-        chosen = ds.select_split(wanted)
-        if not chosen.images:
-            raise ValueError(f"{label}: no images in split {wanted!r} (splits: {ds.splits})")
-        return chosen
-    for name in defaults:
-        if name in ds.splits:
-            return ds.select_split(name)
-    return ds
-
-
 def _read(path: str, fmt: str, split: str | None, defaults: tuple[str, ...], drop: list[str]):
+    """Split ``split`` of the dataset at ``path`` (default: the first of ``defaults`` it has, else every image),
+    boxes of ``drop`` removed; the reader's errors go to stderr."""
     from curate.core.commands import print_problems
     from curate.core.formats.registry import read_dataset
+    from curate.core.load import pick_split
 
     result = read_dataset(path, fmt)
     errors = [p for p in result.problems if p.level == "error"]
     if errors:
         print_problems(errors, sys.stderr, limit=20)
-    ds = result.drop_classes(drop).dataset
-    return pick_split(ds, split, defaults, path)
+    return pick_split(result.drop_classes(drop).dataset, split, path, defaults)
 
 
 def build_config(args: argparse.Namespace):

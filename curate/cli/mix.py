@@ -7,6 +7,7 @@ import sys
 from pathlib import Path
 
 from curate.core.commands import add_command
+from curate.core.load import SplitError, pick_split
 from curate.core.writer import OutputError
 from curate.mix import (
     MixError,
@@ -14,8 +15,6 @@ from curate.mix import (
     paper_grid,
     parse_mixtures,
     parse_seeds,
-    training_pool,
-    validation_set,
     write_mixture,
 )
 
@@ -39,11 +38,15 @@ def cmd_mix(args: argparse.Namespace) -> int:
         seeds = parse_seeds(args.seeds)
         real_read = read_dataset(args.real, args.real_format)
         synth_read = read_dataset(args.synth, args.synth_format)
-        real = training_pool(real_read.dataset, args.split)
-        synth = training_pool(synth_read.dataset, args.split)
+        real = pick_split(real_read.dataset, args.split, args.real, defaults=("train",))
+        synth = pick_split(synth_read.dataset, args.split, args.synth, defaults=("train",))
         check_available(real, synth, mixtures)
-        val = validation_set(read_dataset(args.val, args.val_format).dataset, args.val_split) if args.val else None
-    except MixError as exc:
+        val = None
+        if args.val:
+            val = pick_split(
+                read_dataset(args.val, args.val_format).dataset, args.val_split, args.val, defaults=("val",)
+            )
+    except (MixError, SplitError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
     print_problems([p for p in real_read.problems + synth_read.problems if p.level == "error"], sys.stderr, limit=20)
