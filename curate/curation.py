@@ -10,6 +10,7 @@ The schema dataclasses below are built from YAML by :mod:`curate.core.config` (s
 from __future__ import annotations
 
 from collections import Counter
+from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any, Literal, Optional
@@ -18,13 +19,16 @@ import numpy as np
 
 from curate.core.dataset import Dataset
 from curate.core.problems import Problem
+from curate.core.writer import write_dataset
 from curate.dedup import DEFAULT_THRESHOLD
-from curate.dedupjob import DedupOptions, DedupRun, dedup_document, run_dedup
+from curate.dedupjob import DedupOptions, DedupRun, dedup_document, run_dedup, write_outputs
 from curate.embed import OnnxEmbedder, Preprocess, load_embedder
 from curate.embedcache import EmbeddingCache
 from curate.rank import rank_order
 from curate.sources import MergeConfig, SourceConfig, merge_sources
 from curate.split import near_groups, resolve_sizes, split_groups, straddling_groups
+
+CURATION_FILE = "curation.json"  # what the curation did, beside the curated dataset
 
 
 @dataclass(frozen=True)
@@ -137,6 +141,28 @@ def curate(
     doc["split_groups"] = {"threshold": cfg.split.group_threshold, "groups": len(groups), "straddling": 0}
     doc["split_seed"] = cfg.split.seed
     return CurateResult(curated, doc, run, problems + run.scan.problems)
+
+
+def curate_dataset(
+    cfg: CurateConfig,
+    base: Path,
+    out: Path,
+    cache: Path | None,
+    provenance: Mapping[str, Any],
+    overwrite: bool = False,
+) -> tuple[CurateResult, dict[str, Path]]:
+    """``fuzzyfire curate`` whole: :func:`curate` with ``cfg.model``'s embedder and the embedding cache file
+    ``cache`` (None: no cache), then the dataset in ``out`` (COCO + YOLO + manifest; ``provenance``: the
+    manifest's ``command``, ``args`` and ``sources``) and ``curation.json`` + its report beside it. Returns the
+    result and the report files; raises :class:`curate.core.writer.OutputError` when ``out`` is refused."""
+    db = EmbeddingCache(cache) if cache is not None else None
+    try:
+        result = curate(cfg, base, out, build_embedder(cfg.model), db)
+    finally:
+        if db is not None:
+            db.close()
+    write_dataset(result.dataset, out, ("coco", "yolo"), cfg.images, overwrite=overwrite, **provenance)
+    return result, write_outputs(result.run, result.document, out, CURATION_FILE)
 
 
 def assign_splits(run: DedupRun, cfg: SplitConfig, n: int) -> tuple[dict[int, str], list[list[int]]]:

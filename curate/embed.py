@@ -92,6 +92,11 @@ def cache_dir() -> Path:
     return path
 
 
+def embedding_cache_path() -> Path:
+    """The user's embedding cache (:class:`curate.embedcache.EmbeddingCache`), shared by every command."""
+    return cache_dir() / "embeddings.sqlite"
+
+
 def builtin_model_path(folder: Path | None = None) -> Path:
     """The EfficientNet-Lite0 ONNX file, exported on first use (named by the weights' sha256)."""
     from curate.core.manifest import file_sha256

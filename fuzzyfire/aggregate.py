@@ -134,11 +134,11 @@ def realism_gaps(cfg: ExperimentConfig, data: Prepared, datasets: Datasets, out:
     path = out / "tables" / "gap.json"
     if path.is_file() and (doc := json.loads(path.read_text(encoding="utf-8"))).get("key") == key:
         return doc["gaps"]
-    from curate.embed import cache_dir, load_embedder
+    from curate.embed import embedding_cache_path, load_embedder
     from curate.embedcache import EmbeddingCache
     from synth.gap import embed_set, measure_gap
 
-    embedder, cache = load_embedder(), EmbeddingCache(cache_dir() / "embeddings.sqlite")
+    embedder, cache = load_embedder(), EmbeddingCache(embedding_cache_path())
     real_ds = datasets.get(real_ref)
     real = embed_set("real (train split)", [real_ds.image_path(i) for i in real_ds.images], embedder, cache)
     gaps = []

@@ -111,20 +111,12 @@ def curate_stage(root: Path, cfg: Any, base: Path) -> tuple[Stage, DataRef]:
 
 
 def _curate(cfg: Any, base: Path, out: Path) -> None:
-    from curate.core.writer import write_dataset
-    from curate.curation import build_embedder, curate
-    from curate.dedupjob import write_outputs
-    from curate.embed import cache_dir
-    from curate.embedcache import EmbeddingCache
+    from curate.curation import curate_dataset
+    from curate.embed import embedding_cache_path
 
-    cache = EmbeddingCache(cache_dir() / "embeddings.sqlite")
-    try:
-        result = curate(cfg, base, out, build_embedder(cfg.model), cache)
-    finally:
-        cache.close()
-    args = {"config": to_dict(cfg)}
-    write_dataset(result.dataset, out, ("coco", "yolo"), cfg.images, command="experiment curate", args=args)
-    write_outputs(result.run, result.document, out, "curation.json")
+    curate_dataset(
+        cfg, base, out, embedding_cache_path(), {"command": "experiment curate", "args": {"config": to_dict(cfg)}}
+    )
 
 
 @dataclass(frozen=True)

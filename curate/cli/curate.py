@@ -10,34 +10,30 @@ from curate.core.commands import add_command
 
 
 def cmd_curate(args: argparse.Namespace) -> int:
-    from curate.core.commands import load_config_or_report, print_problems, write_dataset_or_report
+    from curate.core.commands import load_config_or_report, print_problems
+    from curate.core.config import to_dict
     from curate.core.dataset import Dataset
     from curate.core.writer import OutputError, check_output_folder
-    from curate.curation import CurateConfig, build_embedder, curate
-    from curate.dedupjob import write_outputs
-    from curate.embed import cache_dir
-    from curate.embedcache import EmbeddingCache
+    from curate.curation import CurateConfig, curate_dataset
+    from curate.embed import embedding_cache_path
 
     cfg = load_config_or_report(args.config, CurateConfig, args.set)
     if cfg is None:
         return 2
     base = Path(args.config).resolve().parent
     roots = [str((s.path if s.path.is_absolute() else base / s.path).resolve()) for s in cfg.sources]
-    try:  # fail before the long run, not after it
-        check_output_folder(args.out, Dataset(args.out, info={"source_roots": roots}), args.overwrite)
+    provenance = {
+        "command": "curate",
+        "args": {"config": to_dict(cfg), "set": args.set},
+        "sources": [Path(args.config)],
+    }
+    try:
+        check_output_folder(args.out, Dataset(args.out, info={"source_roots": roots}), args.overwrite)  # fail now
+        cache = None if args.no_cache else args.cache or embedding_cache_path()
+        result, files = curate_dataset(cfg, base, args.out, cache, provenance, args.overwrite)
     except OutputError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
-    embedder = build_embedder(cfg.model)
-    cache = None if args.no_cache else EmbeddingCache(args.cache or cache_dir() / "embeddings.sqlite")
-    try:
-        result = curate(cfg, base, args.out, embedder, cache)
-    finally:
-        if cache is not None:
-            cache.close()
-    if write_dataset_or_report(result.dataset, args, "curate", ("coco", "yolo"), cfg.images, cfg) is None:
-        return 2
-    files = write_outputs(result.run, result.document, args.out, "curation.json")
     print_problems([p for p in result.problems if p.level != "info"], sys.stderr, limit=50)
     c, splits = result.document["counts"], result.document["splits"]
     print(

@@ -43,7 +43,7 @@ def add_model_args(p: argparse.ArgumentParser) -> None:
 
 
 def load_model_from_args(args: argparse.Namespace):  # noqa: ANN201 - (OnnxEmbedder, EmbeddingCache | None)
-    from curate.embed import Preprocess, cache_dir, load_embedder
+    from curate.embed import Preprocess, embedding_cache_path, load_embedder
     from curate.embedcache import EmbeddingCache
 
     if args.model is None:
@@ -56,7 +56,7 @@ def load_model_from_args(args: argparse.Namespace):  # noqa: ANN201 - (OnnxEmbed
     else:
         pre = Preprocess(args.input_size, args.mean, args.std, args.bgr, "nhwc" if args.nhwc else "nchw", args.blur)
         embedder = load_embedder(args.model, pre, output=args.output)
-    cache = None if args.no_cache else EmbeddingCache(args.cache or cache_dir() / "embeddings.sqlite")
+    cache = None if args.no_cache else EmbeddingCache(args.cache or embedding_cache_path())
     return embedder, cache
 
 
