@@ -13,7 +13,7 @@ from curate.core.commands import add_command
 from fuzzyfire import __version__
 
 #: Modules whose ``register(subparsers)`` adds commands, in help order (imported when the parser is built);
-#: this module's :func:`register` adds the last ones.
+#: ``experiment``, this module's own, comes last.
 COMMAND_MODULES: tuple[str, ...] = ("curate.cli", "synth.cli", "train.cli", "eval.cli")
 
 
@@ -73,7 +73,7 @@ def cmd_experiment(args: argparse.Namespace) -> int:
     return 1 if result.failed and not args.report_only else 0
 
 
-def _register_experiment(sub: argparse._SubParsersAction) -> None:
+def register(sub: argparse._SubParsersAction) -> None:
     """Add ``experiment`` to the ``fuzzyfire`` parser."""
     p = add_command(
         sub,
@@ -92,16 +92,6 @@ def _register_experiment(sub: argparse._SubParsersAction) -> None:
         help="train nothing: tables and report from the runs finished so far (e.g. while a cluster works)",
     )
     p.set_defaults(func=cmd_experiment)
-
-
-def register(sub: argparse._SubParsersAction) -> None:
-    """Add the commands listed after every package's own, in the help order ``fuzzyfire`` has always had:
-    ``curate`` (curate's), ``experiment`` (this module's) and ``merge`` (curate's)."""
-    from curate.cli import curate, dataset
-
-    curate.register(sub)
-    _register_experiment(sub)
-    dataset.register_merge(sub)
 
 
 def build_parser() -> argparse.ArgumentParser:

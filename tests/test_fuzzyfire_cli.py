@@ -26,16 +26,16 @@ def test_help_lists_the_commands_in_order() -> None:
         "convert",
         "validate",
         "stats",
+        "merge",
         "mix",
         "dedup",
         "leakage",
+        "curate",
         "synth",
         "train",
         "score",
         "compare",
-        "curate",
         "experiment",
-        "merge",
     ]
 
 

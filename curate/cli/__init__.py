@@ -9,12 +9,9 @@ import argparse
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    """Add ``convert``, ``validate``, ``stats``, ``mix``, ``dedup`` and ``leakage`` to the ``fuzzyfire`` parser,
-    in help order. ``curate`` and ``merge`` come later in ``fuzzyfire --help`` (after eval's commands and after
-    ``experiment``): :func:`fuzzyfire.cli.register` adds them with :func:`curate.cli.curate.register` and
-    :func:`curate.cli.dataset.register_merge`."""
-    from curate.cli import dataset, dedup, mix
+    """Add curate's commands to the ``fuzzyfire`` parser, in help order: the dataset commands, the mixer,
+    deduplication and curation."""
+    from curate.cli import curate, dataset, dedup, mix
 
-    dataset.register(sub)
-    mix.register(sub)
-    dedup.register(sub)
+    for module in (dataset, mix, dedup, curate):
+        module.register(sub)

@@ -109,7 +109,7 @@ def cmd_merge(args: argparse.Namespace) -> int:
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    """Add ``convert``, ``validate`` and ``stats`` to the ``fuzzyfire`` parser."""
+    """Add ``convert``, ``validate``, ``stats`` and ``merge`` to the ``fuzzyfire`` parser."""
     p = add_command(
         sub,
         "convert",
@@ -158,9 +158,6 @@ def register(sub: argparse._SubParsersAction) -> None:
     add_reader_args(p)
     p.set_defaults(func=cmd_stats)
 
-
-def register_merge(sub: argparse._SubParsersAction) -> None:
-    """Add ``merge`` to the ``fuzzyfire`` parser (the last command of ``fuzzyfire --help``, after ``experiment``)."""
     p = add_command(
         sub,
         "merge",
