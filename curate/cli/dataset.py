@@ -110,6 +110,12 @@ def cmd_merge(args: argparse.Namespace) -> int:
 
 def register(sub: argparse._SubParsersAction) -> None:
     """Add ``convert``, ``validate``, ``stats`` and ``merge`` to the ``fuzzyfire`` parser."""
+    _register_convert(sub)
+    _register_inspect(sub)
+    _register_merge(sub)
+
+
+def _register_convert(sub: argparse._SubParsersAction) -> None:
     p = add_command(
         sub,
         "convert",
@@ -132,6 +138,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     add_reader_args(p)
     p.set_defaults(func=cmd_convert)
 
+
+def _register_inspect(sub: argparse._SubParsersAction) -> None:
+    """``validate`` and ``stats``: commands that read a dataset and write nothing but a report."""
     p = add_command(
         sub,
         "validate",
@@ -158,6 +167,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     add_reader_args(p)
     p.set_defaults(func=cmd_stats)
 
+
+def _register_merge(sub: argparse._SubParsersAction) -> None:
     p = add_command(
         sub,
         "merge",
