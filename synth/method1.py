@@ -34,7 +34,7 @@ from synth import render
 from synth.effects import CameraConfig, Effects, apply_effects, expose, sample_effects
 from synth.generate import generate
 from synth.library import FlameLibraryConfig
-from synth.output import boxes_from_masks
+from synth.staging import boxes_from_masks
 from synth.scenes import translate
 from synth.schema import check_range
 from synth.sprites import Sprite, SpriteSequence, flatten_rgba

@@ -38,7 +38,7 @@ from curate.core.writer import WriteResult, plan_image_names, write_dataset
 from synth.composite import BLEND_MODES, Placement, composite
 from synth.effects import apply_effects, sample_effects
 from synth.flames import generate_sequence, sample_params
-from synth.output import Staging, boxes_from_masks, build_dataset, contact_sheet
+from synth.staging import Staging, boxes_from_masks, build_dataset, contact_sheet
 from synth.sprites import SpriteSequence
 
 KINDS: tuple[str, ...] = ("common", "rare")

@@ -10,7 +10,7 @@ import pytest
 
 from curate.core.formats.registry import read_dataset
 from synth.generate import generate
-from synth.output import staging_dir
+from synth.staging import staging_dir
 from synth.sprites import Sprite, SpriteSequence
 
 

@@ -17,7 +17,7 @@ from synth import flames as F
 from synth import method1 as M
 from synth import render as R
 from synth.audit import audit_dataset
-from synth.output import Staging, staging_dir
+from synth.staging import Staging, staging_dir
 from synth.scenes import translate
 from synth.sprites import Sprite
 from synth.views import View, ViewCache

@@ -11,7 +11,7 @@ import pytest
 from synth import flames as F
 from synth import method2 as M
 from synth.audit import audit_dataset
-from synth.output import staging_dir
+from synth.staging import staging_dir
 
 CFG = M.Method2Config(n=6, seed=3, width=96, height=72, scenes=2, images_per_view=3, max_flames=3, negatives=0.0)
 
@@ -59,7 +59,7 @@ def test_same_seed_gives_byte_identical_output_and_resume_matches(written, libra
     out = tmp_path / "b"
     staging = staging_dir(out)
     # interrupted run: only the first two images were staged
-    from synth.output import Staging
+    from synth.staging import Staging
 
     st = Staging(out)
     with M.render.Renderer(CFG.width, CFG.height) as r:
