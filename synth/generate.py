@@ -13,10 +13,10 @@ from curate.core.progress import progress
 from curate.core.writer import WriteResult
 from synth import render
 from synth.envfile import find_environment_files
-from synth.staging import Staging, finish
 from synth.photos import PhotoBackgrounds, list_photos
 from synth.schema import to_json
 from synth.sprites import SpriteSequence
+from synth.staging import Staging, finish
 from synth.views import ViewCache
 
 MakeImage = Callable[[Any, int, Sequence[SpriteSequence], ViewCache], tuple]

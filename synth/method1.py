@@ -34,10 +34,10 @@ from synth import render
 from synth.effects import CameraConfig, Effects, apply_effects, expose, sample_effects
 from synth.generate import generate
 from synth.library import FlameLibraryConfig
-from synth.staging import boxes_from_masks
 from synth.scenes import translate
 from synth.schema import check_range
 from synth.sprites import Sprite, SpriteSequence, flatten_rgba
+from synth.staging import boxes_from_masks
 from synth.views import View, ViewCache
 
 BOX_MODES: tuple[str, ...] = ("paper", "visible")

@@ -19,9 +19,9 @@ from synth.composite import BLEND_MODES, Placement, composite
 from synth.effects import CameraConfig, apply_effects, expose, sample_effects
 from synth.generate import generate
 from synth.library import FlameLibraryConfig
-from synth.staging import boxes_from_masks
 from synth.schema import check_range
 from synth.sprites import SpriteSequence
+from synth.staging import boxes_from_masks
 from synth.views import ViewCache
 
 

@@ -38,8 +38,8 @@ from curate.core.writer import WriteResult, plan_image_names, write_dataset
 from synth.composite import BLEND_MODES, Placement, composite
 from synth.effects import apply_effects, sample_effects
 from synth.flames import generate_sequence, sample_params
-from synth.staging import Staging, boxes_from_masks, build_dataset, contact_sheet
 from synth.sprites import SpriteSequence
+from synth.staging import Staging, boxes_from_masks, build_dataset, contact_sheet
 
 KINDS: tuple[str, ...] = ("common", "rare")
 KIND_CODE = {"common": 11, "rare": 12}

@@ -10,8 +10,8 @@ import pytest
 
 from curate.core.formats.registry import read_dataset
 from synth.generate import generate
-from synth.staging import staging_dir
 from synth.sprites import Sprite, SpriteSequence
+from synth.staging import staging_dir
 
 
 @dataclass(frozen=True)

@@ -17,9 +17,9 @@ from synth import flames as F
 from synth import method1 as M
 from synth import render as R
 from synth.audit import audit_dataset
-from synth.staging import Staging, staging_dir
 from synth.scenes import translate
 from synth.sprites import Sprite
+from synth.staging import Staging, staging_dir
 from synth.views import View, ViewCache
 
 CFG = M.Method1Config(n=6, seed=5, width=128, height=96, scenes=3, max_flames=3, negatives=0.0, min_box_px=2)
