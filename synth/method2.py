@@ -44,6 +44,8 @@ class Method2Config:
     negatives: float = 0.1  # fraction of images without flames
     flame_height_m: tuple[float, float] = (0.3, 2.5)  # flame height in the scene, metres
     flame_opacity: tuple[float, float] = (0.5, 0.95)  # luminous coverage of a flame (1 = hides what is behind)
+    closeup: float = 0.0  # fraction of fire images framed as a close-up: one flame of closeup_height x the image
+    closeup_height: tuple[float, float] = (0.4, 1.0)  # close-up flame height, fraction of the image height
     min_box_px: int = 4  # visible flames smaller than this (either side) are dropped
     smoke_class: bool = False
     light: bool = True  # flames light their surroundings (a warm cast around each flame)
@@ -60,6 +62,9 @@ class Method2Config:
         if self.max_flames < 1 or not 0.0 <= self.negatives <= 1.0 or self.min_box_px < 1:
             raise ValueError(f"invalid Method 2 config: {self}")
         check_range("flame_height_m", self.flame_height_m, 0.01)
+        check_range("closeup_height", self.closeup_height, 0.05)
+        if not 0.0 <= self.closeup <= 1.0:
+            raise ValueError(f"closeup must be in 0..1, got {self.closeup}")
         if not 0.0 <= self.flame_opacity[0] <= self.flame_opacity[1] <= 1.0:
             raise ValueError(f"flame_opacity must be a range in 0..1, got {self.flame_opacity}")
 
@@ -71,18 +76,25 @@ def plan_flames(
     yfov: float,
     rng: np.random.Generator,
 ) -> list[tuple[Placement, str]]:
-    """Random flames standing at random pixels, sized by the scene depth there (world height in metres)."""
+    """Random flames standing at random pixels, sized by the scene depth there (world height in metres); or,
+    for a ``cfg.closeup`` share of the fire images, one flame filling ``cfg.closeup_height`` of the frame with
+    its base near the bottom edge (a fire seen from close by; the part outside the frame is cut off)."""
     if rng.random() < cfg.negatives:
         return []
+    closeup = cfg.closeup > 0 and rng.random() < cfg.closeup
     fy = render.intrinsics(yfov, cfg.width, cfg.height)[1, 1]
     out = []
-    for _ in range(int(rng.integers(1, cfg.max_flames + 1))):
+    for _ in range(1 if closeup else int(rng.integers(1, cfg.max_flames + 1))):
         seq = library[int(rng.integers(len(library)))]
         frame = int(rng.integers(len(seq.sprites)))
         sprite = seq.sprites[frame]
-        bx, by = int(rng.integers(0, cfg.width)), int(rng.integers(cfg.height // 3, cfg.height))
-        d = float(depth[min(by, cfg.height - 1), bx]) or 10.0
-        hpx = int(np.clip(fy * rng.uniform(*cfg.flame_height_m) / d, 12, 0.9 * cfg.height))
+        if closeup:
+            bx, by = int(rng.integers(cfg.width // 4, 3 * cfg.width // 4 + 1)), int(cfg.height * rng.uniform(0.85, 1.1))
+            hpx = int(round(cfg.height * rng.uniform(*cfg.closeup_height)))
+        else:
+            bx, by = int(rng.integers(0, cfg.width)), int(rng.integers(cfg.height // 3, cfg.height))
+            d = float(depth[min(by, cfg.height - 1), bx]) or 10.0
+            hpx = int(np.clip(fy * rng.uniform(*cfg.flame_height_m) / d, 12, 0.9 * cfg.height))
         sw, sh = sprite.size
         wpx = max(int(round(hpx * sw / sh)), 2)
         blend = str(rng.choice(BLEND_MODES))

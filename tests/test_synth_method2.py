@@ -84,3 +84,21 @@ def test_smoke_class_boxes_come_from_the_smoke_masks(tmp_path):
     assert report["mean_iou"] == 1.0 and report["smoke"]["boxes"] >= 1
     assert report["smoke"]["mean_iou"] == 1.0 and report["smoke"]["min_iou"] == 1.0
     assert len(list((out / "masks").glob("*.smoke.png"))) == 4
+
+
+def test_closeups_frame_one_large_flame_at_the_bottom(library) -> None:
+    from dataclasses import replace
+
+    cfg = replace(CFG, closeup=1.0, closeup_height=(0.6, 1.0), max_flames=3)
+    depth = np.full((cfg.height, cfg.width), 4.0, np.float32)
+    for i in range(20):
+        (placed,) = [p for p, _ in M.plan_flames(cfg, library, depth, 1.0, np.random.default_rng(i))]
+        assert 0.6 * cfg.height - 1 <= placed.height <= cfg.height
+        bottom = placed.y + placed.height
+        assert 0.85 * cfg.height - 1 <= bottom <= 1.1 * cfg.height + 1
+        assert cfg.width // 4 <= placed.x + placed.width // 2 <= 3 * cfg.width // 4 + 1
+    far = [p for i in range(20) for p, _ in M.plan_flames(replace(CFG, negatives=0.0), library, depth, 1.0,
+                                                          np.random.default_rng(i))]  # fmt: skip
+    assert max(p.height for p in far) < 0.6 * cfg.height  # at 4 m the flames of 0.3-2.5 m stay smaller
+    with pytest.raises(ValueError, match="closeup"):
+        M.Method2Config(closeup=1.5)
