@@ -78,23 +78,41 @@ LATER_KEYS = ("environments", "flame_opacity", "closeup", "closeup_height")
 
 
 def synth_stage(root: Path, method: str, cfg: Any, base: Path) -> tuple[Stage, DataRef]:
-    """A Method 1 or Method 2 pool, its flame library built from ``cfg.flames``; ``cfg.environments`` resolve
-    against ``base``."""
+    """A Method 1 or Method 2 pool, its flame library built from ``cfg.flames``; ``cfg.environments`` (and
+    Method 2's ``backgrounds``) resolve against ``base``. They enter the pool's identity by content
+    (:func:`synth.envfile.fingerprint`, :func:`synth.photos.photo_fingerprints`), not by path, so a study
+    moved to another folder or machine finds its pools (and runs) again."""
     from synth.library import build_library
     from synth.method1 import run_method1
     from synth.method2 import run_method2
 
     runner = {"method1": run_method1, "method2": run_method2}[method]
     cfg = replace(cfg, environments=tuple(_absolute(Path(p), base) for p in cfg.environments))
+    if getattr(cfg, "backgrounds", ()):
+        cfg = replace(cfg, backgrounds=tuple(_absolute(Path(p), base) for p in cfg.backgrounds))
     config = to_dict(cfg)
     default = to_dict(type(cfg)())
     for key in LATER_KEYS:  # pools made before these keys existed keep their identity while they hold the default
         if key in config and config[key] == default[key]:
             del config[key]
+    config.update(content_identity(cfg))
     stage = cached_stage(
         root, method, {"kind": method, "config": config}, lambda out: runner(cfg, build_library(cfg.flames), out)
     )
     return stage, DataRef(stage.folder, {"kind": method, "hash": stage.hash}, "coco")
+
+
+def content_identity(cfg: Any) -> dict[str, Any]:
+    """The environment files and background photos of ``cfg`` by content (only the keys that are set)."""
+    from synth.envfile import find_environment_files, fingerprint
+    from synth.photos import photo_fingerprints
+
+    out: dict[str, Any] = {}
+    if cfg.environments:
+        out["environments"] = [fingerprint(spec) for spec in find_environment_files(cfg.environments)]
+    if getattr(cfg, "backgrounds", ()):
+        out["backgrounds"] = photo_fingerprints(cfg.backgrounds)
+    return out
 
 
 def curate_stage(root: Path, cfg: Any, base: Path) -> tuple[Stage, DataRef]:

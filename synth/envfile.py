@@ -26,7 +26,7 @@ Sizes are in metres after ``scale``.
 from __future__ import annotations
 
 from collections.abc import Iterable, Sequence
-from dataclasses import dataclass, field, fields
+from dataclasses import asdict, dataclass, field, fields
 from pathlib import Path
 from typing import Any
 
@@ -147,6 +147,24 @@ def find_environment_files(paths: Iterable[Path | str]) -> list[EnvironmentFile]
     if not found:
         raise ValueError(f"no mesh files ({', '.join(MESH_SUFFIXES)}) in {', '.join(map(str, paths))}")
     return [found[k] for k in sorted(found)]
+
+
+#: Files beside a mesh that a non-GLB mesh may load (materials, buffers, textures): part of its fingerprint.
+RESOURCE_SUFFIXES = (".mtl", ".bin", ".png", ".jpg", ".jpeg", ".tga", ".bmp", ".ktx2", ".webp")
+
+
+def fingerprint(spec: EnvironmentFile) -> dict[str, Any]:
+    """What makes the environment ``spec``, wherever it lies: its mesh file's name and the sha256 of its bytes
+    (a mesh that is not a ``.glb`` also brings the materials, buffers and textures beside it) and its sidecar
+    settings. Two copies of a scene in different folders have one fingerprint; an edited file or setting
+    changes it."""
+    from curate.core.manifest import file_sha256
+
+    beside = [] if spec.file.suffix.lower() == ".glb" else sorted(
+        p for p in spec.file.parent.iterdir() if p.is_file() and p.suffix.lower() in RESOURCE_SUFFIXES
+    )  # fmt: skip
+    settings = {k: v for k, v in asdict(spec).items() if k not in ("file", "sidecar")}
+    return {"file": spec.file.name, "sha256": {p.name: file_sha256(p) for p in [spec.file, *beside]}, **settings}
 
 
 def _up_rotation(up: str) -> NDArray[np.float64]:

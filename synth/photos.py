@@ -33,6 +33,14 @@ def list_photos(paths: Iterable[Path | str]) -> list[Path]:
     return photos
 
 
+def photo_fingerprints(paths: Iterable[Path | str]) -> list[dict[str, str]]:
+    """The photos under ``paths`` (:func:`list_photos` order) as name and sha256 of their bytes: what a pool
+    composited on them is made of, wherever the folder lies."""
+    from curate.core.manifest import file_sha256
+
+    return [{"name": p.name, "sha256": file_sha256(p)} for p in list_photos(paths)]
+
+
 def ground_depth(width: int, height: int, horizon: float) -> NDArray[np.float32]:
     """(H, W) float32 metres of the ground-plane pseudo depth (module docstring); ``horizon`` in 0..1 of H."""
     fy = render.intrinsics(YFOV, width, height)[1, 1]

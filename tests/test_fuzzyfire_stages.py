@@ -75,4 +75,40 @@ def test_synth_stage_resolves_environments_and_keeps_old_identities(tmp_path: Pa
     files = replace(cfg, scenes=0, environments=(Path("scenes"),))
     stage, _ = synth_stage(tmp_path / "data", "method2", files, tmp_path)
     identity = json.loads((stage.folder / "stage.json").read_text())["identity"]
-    assert identity["config"]["environments"] == [(tmp_path / "scenes").resolve().as_posix()]
+    (env,) = identity["config"]["environments"]  # by content, not by path
+    assert env["file"] == "den.glb" and len(env["sha256"]["den.glb"]) == 64 and env["scale"] == 1.0
+
+
+def test_pools_are_identified_by_the_content_of_their_environments_and_photos(tmp_path: Path) -> None:
+    """A study moved elsewhere finds its pools: the same files in another folder give the same pool; an edited
+    sidecar or another photo gives another."""
+    import shutil
+    from dataclasses import replace
+
+    from factories import write_textured_room
+    from factories_train import painted_dataset
+
+    from fuzzyfire.stages import synth_stage
+    from synth.library import FlameLibraryConfig
+    from synth.method2 import Method2Config
+
+    for where in ("a", "b"):
+        write_textured_room(tmp_path / where / "scenes" / "den.glb")
+        painted_dataset(tmp_path / where / "photos", 2, seed=0)
+    flames = FlameLibraryConfig(sequences=1, frames=60, keep_every=30)
+    cfg = Method2Config(n=2, width=64, height=48, scenes=0, images_per_view=2, flames=flames,
+                        environments=(Path("scenes"),), backgrounds=(Path("photos"),))  # fmt: skip
+    first, _ = synth_stage(tmp_path / "data", "method2", cfg, tmp_path / "a")
+    moved, _ = synth_stage(tmp_path / "data", "method2", cfg, tmp_path / "b")
+    assert moved.hash == first.hash and moved.cached
+    (tmp_path / "b" / "scenes" / "den.yaml").write_text("scale: 0.5\n")  # a sidecar beside the mesh
+    shutil.copy(next((tmp_path / "b" / "photos").rglob("*.png")), tmp_path / "b" / "photos" / "extra.png")
+    identity = json.loads((first.folder / STAGE_FILE).read_text())["identity"]["config"]
+    assert [p["name"] for p in identity["backgrounds"]] == sorted(p["name"] for p in identity["backgrounds"])
+    from fuzzyfire.stages import content_identity
+
+    changed = content_identity(replace(cfg, environments=(tmp_path / "b" / "scenes",),
+                                        backgrounds=(tmp_path / "b" / "photos",)))  # fmt: skip
+    assert (
+        changed["environments"][0]["scale"] == 0.5 and len(changed["backgrounds"]) == len(identity["backgrounds"]) + 1
+    )

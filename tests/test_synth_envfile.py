@@ -109,3 +109,16 @@ def test_large_textures_are_scaled_down_once(tmp_path: Path) -> None:
     meshes = load_meshes(environment_file(tmp_path / "big.glb"))
     textures = {id(m.visual.material.baseColorTexture): m.visual.material.baseColorTexture for m, _ in meshes}
     assert [t.size for t in textures.values()] == [(MAX_TEXTURE, MAX_TEXTURE // 2)]
+
+
+def test_fingerprints_follow_content_not_location(tmp_path: Path) -> None:
+    from synth.envfile import fingerprint
+
+    glb = [write_textured_room(tmp_path / d / "room.glb") for d in ("a", "b")]
+    a, b = (fingerprint(environment_file(p)) for p in glb)
+    assert a == b and set(a["sha256"]) == {"room.glb"} and a["scale"] == 1.0 and "camera" in a
+    obj = write_textured_room(tmp_path / "c" / "room.obj")
+    resources = fingerprint(environment_file(obj))["sha256"]
+    assert "room.obj" in resources and any(n.endswith((".mtl", ".png", ".jpg")) for n in resources if n != "room.obj")
+    (obj.parent / "room.yaml").write_text("scale: 0.01\n")  # a sidecar beside it changes the settings
+    assert fingerprint(environment_file(obj))["scale"] == 0.01

@@ -37,3 +37,16 @@ def test_broken_photos_are_skipped_and_named(tmp_path: Path) -> None:
     (tmp_path / "empty").mkdir()
     with pytest.raises(ValueError, match="no images"):
         list_photos([tmp_path / "empty"])
+
+
+def test_photo_fingerprints_name_and_hash_each_photo(tmp_path: Path) -> None:
+    from synth.photos import photo_fingerprints
+
+    for name in ("b.png", "a.jpg"):
+        write_image(tmp_path / "x" / name, 32, 24)
+    prints = photo_fingerprints([tmp_path / "x"])
+    assert [p["name"] for p in prints] == ["a.jpg", "b.png"] and all(len(p["sha256"]) == 64 for p in prints)
+    (tmp_path / "y").mkdir()
+    for p in (tmp_path / "x").iterdir():
+        (tmp_path / "y" / p.name).write_bytes(p.read_bytes())
+    assert photo_fingerprints([tmp_path / "y"]) == prints
