@@ -10,8 +10,7 @@ from curate.core.commands import add_command
 
 
 def cmd_curate(args: argparse.Namespace) -> int:
-    from curate.core.commands import load_config_or_report, print_problems
-    from curate.core.config import to_dict
+    from curate.core.commands import config_provenance, load_config_or_report, print_problems
     from curate.core.dataset import Dataset
     from curate.core.writer import OutputError, check_output_folder
     from curate.curation import CurateConfig, curate_dataset
@@ -22,11 +21,7 @@ def cmd_curate(args: argparse.Namespace) -> int:
         return 2
     base = Path(args.config).resolve().parent
     roots = [str((s.path if s.path.is_absolute() else base / s.path).resolve()) for s in cfg.sources]
-    provenance = {
-        "command": "curate",
-        "args": {"config": to_dict(cfg), "set": args.set},
-        "sources": [Path(args.config)],
-    }
+    provenance = config_provenance("curate", args, cfg)
     try:
         check_output_folder(args.out, Dataset(args.out, info={"source_roots": roots}), args.overwrite)  # fail now
         cache = None if args.no_cache else args.cache or embedding_cache_path()

@@ -93,6 +93,13 @@ def load_config_or_report(path: Path | str, schema: type[T], overrides: Sequence
         return None
 
 
+def config_provenance(command: str, args: argparse.Namespace, config: Any) -> dict[str, Any]:
+    """The manifest's provenance of a command driven by a YAML config (``args.config``, hashed): ``command``,
+    the resolved ``config`` and the ``--set`` overrides (keyword arguments of
+    :func:`curate.core.writer.write_dataset`)."""
+    return {"command": command, "args": {"config": to_dict(config), "set": args.set}, "sources": [Path(args.config)]}
+
+
 def write_dataset_or_report(
     ds: Dataset, args: argparse.Namespace, command: str, formats: Sequence[str], images: str, config: Any = None
 ) -> WriteResult | None:
@@ -101,11 +108,11 @@ def write_dataset_or_report(
     the config file ``args.config`` (hashed). ``None`` after printing ``error: message`` on stderr when the
     output folder is refused (the command then returns 2)."""
     if config is None:
-        provenance = {"args": command_args(args)}
+        provenance = {"command": command, "args": command_args(args)}
     else:
-        provenance = {"args": {"config": to_dict(config), "set": args.set}, "sources": [Path(args.config)]}
+        provenance = config_provenance(command, args, config)
     try:
-        return write_dataset(ds, args.out, formats, images, command=command, overwrite=args.overwrite, **provenance)
+        return write_dataset(ds, args.out, formats, images, overwrite=args.overwrite, **provenance)
     except OutputError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return None
