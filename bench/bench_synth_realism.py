@@ -13,7 +13,9 @@ Variants (400 images at 416x416, seed 0, each a cached pool of the experiment pi
 - ``files_opaque_dark``: + the scene at low exposure in 40 % of images (night, or a camera exposed for the fire);
 - ``files_views``: the default with 2 images per rendered view instead of 8 (200 viewpoints instead of 50);
 - ``files_closeups``: ``files_views`` with 30 % of the fire images framed as close-ups (one flame filling 40-100 %
-  of the frame height, its base near the bottom edge: a fire seen from close by, as in the rare set).
+  of the frame height, its base near the bottom edge: a fire seen from close by, as in the rare set);
+- ``files_natural``: ``files_views`` with opaque flames (coverage 0.85-1) and no chemical-colour flames (the
+  real sets have none; with 12 sequences, 2 are blue or red and look pink on light walls).
 
 Lines: ``synth_<variant>_gap`` (Fréchet distance to half the real train split, median of 200 draws),
 ``synth_<variant>_gap_ratio`` (to the real-vs-real floor), ``synth_real_floor``, and with ``--train``
@@ -47,6 +49,7 @@ VARIANTS = {
     "files_opaque_dark": [*FILES, *OPAQUE, "synth.method2.camera.low_light=0.4"],
     "files_views": [*FILES, "synth.method2.images_per_view=2"],
     "files_closeups": [*FILES, "synth.method2.images_per_view=2", "synth.method2.closeup=0.3"],
+    "files_natural": [*FILES, "synth.method2.images_per_view=2", *OPAQUE, "synth.method2.flames.rare=0"],
 }
 
 
