@@ -45,9 +45,11 @@ def _print_text(result, intervals: dict) -> None:  # result: eval.score.ScoreRes
     print("       " + "  ".join(f"{k} {_fmt(v)}" for k, v in m.summary.items()))
     for key, iv in intervals.items():
         print(f"       {key[:-3]} 95% CI [{iv['low']:.3f}, {iv['high']:.3f}] ({iv['samples']} image resamples)")
-    print(f"       {'class':<12} {'boxes':>6} {'AP':>6} {'AP50':>6}")
+    print(f"       {'class':<12} {'boxes':>6} {'AP':>6} {'AP50':>6} {'AP25':>6}")
     for name, row in m.per_class.items():
-        print(f"       {name:<12} {row['boxes']:>6} {_fmt(row['AP']):>6} {_fmt(row['AP50']):>6}")
+        print(
+            f"       {name:<12} {row['boxes']:>6} {_fmt(row['AP']):>6} {_fmt(row['AP50']):>6} {_fmt(row.get('AP25')):>6}"
+        )
     skipped = m.extra["classes"]
     if skipped["not_in_model"]:
         print(f"       not scored (the model has no such class): {', '.join(skipped['not_in_model'])}")

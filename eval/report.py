@@ -204,7 +204,8 @@ def write_study_report(
     notice: str = "",
     title: str = "fuzzyfire study",
 ) -> Path:
-    """Write ``out/tables/table{1,2}.{md,csv,tex}``, ``out/figures/figure5_{AP,AP50}.png``, sample
+    """Write ``out/tables/table{1,2}.{md,csv,tex}`` (AP, AP50 and, when every run has it, AP25),
+    ``out/figures/figure5_{AP,AP50}.png``, sample
     thumbnails and ``out/report.html``; returns the page's path.
 
     ``results``: one mapping per (run, test set) as :func:`eval.tables.table2` takes (also the run list);
@@ -216,13 +217,13 @@ def write_study_report(
 
     sections: list[tuple[str, str]] = []
     if method_results:
-        t1 = table1(method_results)
+        t1 = table1(method_results, metrics=table_metrics(method_results))
         write_table_files(t1, out / "tables", "table1")
         sections.append(("Table 1 — Method 1 vs Method 2", table_html(t1)))
     if gaps:
         sections.append(("Realism gap of the synthetic pools", gaps_html(gaps)))
     if results:
-        t2 = table2(results)
+        t2 = table2(results, metrics=table_metrics(results))
         write_table_files(t2, out / "tables", "table2")
         figures = [plot_figure5(results, out / "figures" / f"figure5_{m}.png", m) for m in ("AP", "AP50")]
         sections.append(("Table 2 — training mixtures", table_html(t2)))
@@ -239,6 +240,12 @@ def write_study_report(
     out.mkdir(parents=True, exist_ok=True)
     page.write_text(render_page(title, sections, notice), encoding="utf-8")
     return page
+
+
+def table_metrics(results: Sequence[Mapping[str, Any]]) -> tuple[str, ...]:
+    """The paper's AP and AP50, and AP25 (:mod:`curate.core.cocoeval`) when every row has it (runs scored before
+    AP25 existed do not)."""
+    return ("AP", "AP50", "AP25") if results and all(r.get("AP25") is not None for r in results) else ("AP", "AP50")
 
 
 def _slug(label: str) -> str:

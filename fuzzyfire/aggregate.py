@@ -25,7 +25,8 @@ STANDIN_NOTICE = (
 
 
 def result_rows(specs: Sequence[RunSpec], results: Sequence[dict | None], out: Path) -> list[dict]:
-    """One row per (finished run, test set): mixture, method, seed, test_set, AP, AP50, run folder (relative to
+    """One row per (finished run, test set): mixture, method, seed, test_set, AP, AP50, AP25 (None for runs scored
+    before it existed), run folder (relative to
     ``out``), the tables it belongs to (as its spec says) and its matches file."""
     rows = []
     for spec, res in zip(specs, results):
@@ -35,7 +36,7 @@ def result_rows(specs: Sequence[RunSpec], results: Sequence[dict | None], out: P
         for test, m in res["tests"].items():
             rows.append({
                 "mixture": spec.mixture, "method": spec.method or "-", "seed": spec.seed, "test_set": test,
-                "AP": m["AP"], "AP50": m["AP50"], "run": spec.out.relative_to(out).as_posix(), "tables": tables,
+                "AP": m["AP"], "AP50": m["AP50"], "AP25": m.get("AP25"), "run": spec.out.relative_to(out).as_posix(), "tables": tables,
                 "matches": (spec.out / m["scores"] / "matches.npz").as_posix(),
             })  # fmt: skip
     return rows
@@ -88,7 +89,7 @@ def write_report(
         samples[label(cfg.rare.name, data.rare.standin)] = data.rare
     samples.update({f"synthetic {m}": ref for m, ref in data.pools.items()})
     shown = {k: datasets.get(ref) for k, ref in samples.items()} if cfg.report.samples else {}
-    columns = ("mixture", "method", "seed", "test_set", "AP", "AP50", "run")
+    columns = ("mixture", "method", "seed", "test_set", "AP", "AP50", "AP25", "run")
     title = cfg.report.title + (" — STAND-IN DATA" if data.standin else "")
     return write_study_report(
         out, t2, np.random.default_rng(0), method_results=t1, gaps=realism_gaps(cfg, data, datasets, out),

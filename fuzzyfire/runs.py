@@ -30,7 +30,7 @@ if TYPE_CHECKING:
     from train.config import TrainConfig
 
 RESULTS_FILE = "results.json"
-METRICS = ("AP", "AP50", "APs", "APm", "APl")
+METRICS = ("AP", "AP50", "AP25", "AP75", "AP_small", "AP_medium", "AP_large")  # as eval.score reports them
 
 
 class RunError(RuntimeError):

@@ -43,7 +43,24 @@ def perfect(fire: int = 0, smoke: int = 1):
 def test_ground_truth_gives_ap_1_including_negatives(tmp_path):
     m, _, records = evaluate(make_dataset(tmp_path), Predictions(("fire", "smoke"), perfect(), []))
     assert m.summary["AP"] == pytest.approx(1.0) and m.images == 3 and m.boxes == 3 and len(records) == 3
-    assert m.per_class["smoke"] == {"AP": pytest.approx(1.0), "AP50": pytest.approx(1.0), "boxes": 1}
+    assert m.per_class["smoke"] == {
+        "AP": pytest.approx(1.0),
+        "AP50": pytest.approx(1.0),
+        "AP25": pytest.approx(1.0),
+        "boxes": 1,
+    }
+    assert m.summary["AP25"] == pytest.approx(1.0)
+
+
+def test_ap25_counts_a_fire_found_with_a_loose_box(tmp_path):
+    """A box of IoU 0.36 with the ground truth is a miss at 0.5 and a hit at 0.25 (fire and smoke have no crisp
+    edge; test sets draw them differently)."""
+    by_image = perfect()
+    by_image[2] = dets([([0, 0, 36, 60], 0.7, 0)])  # the 60 x 60 fire boxed 36 x 60: IoU 0.6 -> still a hit
+    by_image[1] = dets([([10, 10, 30, 30], 0.9, 0), ([50, 50, 74, 74], 0.8, 1)])  # smoke 40 x 40 boxed 24 x 24
+    m, _, _ = evaluate(make_dataset(tmp_path), Predictions(("fire", "smoke"), by_image, []))
+    assert m.per_class["smoke"]["AP50"] == 0.0 and m.per_class["smoke"]["AP25"] == pytest.approx(1.0)
+    assert m.per_class["fire"]["AP50"] == pytest.approx(1.0) and m.summary["AP25"] == pytest.approx(1.0)
 
 
 def test_false_positive_on_a_negative_ranked_first_costs_ap(tmp_path):

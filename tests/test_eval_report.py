@@ -116,3 +116,12 @@ def test_errors_table_means_over_seeds() -> None:
     assert "<td>rare</td><td>R400_S0</td><td>30.0</td>" in page
     assert "<td>20.0</td>" in page  # localisation: mean of 10 and 30 points
     assert "<td>15.0 (of 40)</td><td>2</td>" in page
+
+
+def test_tables_show_ap25_only_when_every_run_has_it() -> None:
+    from eval.report import table_metrics
+
+    rows = [{"mixture": "R4_S0", "seed": s, "test_set": "rare", "AP": 0.1, "AP50": 0.2, "AP25": 0.5} for s in (0, 1)]
+    assert table_metrics(rows) == ("AP", "AP50", "AP25")
+    assert table_metrics([*rows, {**rows[0], "seed": 2, "AP25": None}]) == ("AP", "AP50")  # scored before AP25
+    assert table_metrics([]) == ("AP", "AP50")

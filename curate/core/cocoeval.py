@@ -1,6 +1,10 @@
-"""COCO box metrics with pycocotools: AP, AP50, AP75, small/medium/large and per class. The one COCO
+"""COCO box metrics with pycocotools: AP, AP50, AP75, small/medium/large, AP25 and per class. The one COCO
 evaluation of the toolkit: training-time validation (best-epoch selection) and ``fuzzyfire score`` both call
 :func:`evaluate_predictions`.
+
+AP25 is AP at IoU 0.25, beside COCO's numbers: fire and smoke have no crisp edge, and test sets box them
+differently (the flames, or the whole burning region), so a detector that finds the fire but draws its box
+another way scores near 0 at IoU 0.5 and still well at 0.25.
 
 Every image of the test set counts (negatives included: their detections are false positives); classes are
 matched by *name* between the model and the test set; an empty detection list gives AP 0, not an error.
@@ -26,6 +30,7 @@ from curate.core.detections import Predictions
 
 #: ``COCOeval.stats`` entries we report, by index.
 _STATS = {"AP": 0, "AP50": 1, "AP75": 2, "AP_small": 3, "AP_medium": 4, "AP_large": 5}
+LOOSE_IOU = 0.25  # the IoU threshold of AP25
 
 
 class ClassMatchError(ValueError):
@@ -194,14 +199,25 @@ def metrics_from_eval(ev: COCOeval, dataset: Dataset, detections: int) -> CocoMe
     return CocoMetrics(summary, per_class, len(ev.params.imgIds), boxes, detections, negatives)
 
 
+def _add_loose_ap(metrics: CocoMetrics, loose: COCOeval, dataset: Dataset) -> None:
+    """``AP25`` into ``metrics.summary`` and each class of ``metrics.per_class``, from an evaluation of
+    ``dataset`` at :data:`LOOSE_IOU` alone."""
+    metrics.summary["AP25"] = float(loose.stats[0]) if loose.stats[0] > -1 else None
+    names = {c.id: c.name for c in dataset.categories}
+    for k, cat_id in enumerate(loose.params.catIds):
+        metrics.per_class[names[cat_id]]["AP25"] = _mean_valid(loose.eval["precision"][0, :, k, 0, -1])
+
+
 def evaluate_predictions(dataset: Dataset, preds: Predictions) -> tuple[CocoMetrics, COCOeval, list[dict[str, Any]]]:
     """Score ``preds`` against ``dataset`` over the images that were scored (unreadable ones are left out
     and listed in ``preds.problems``). Returns metrics, the accumulated ``COCOeval`` and the records."""
     match = match_classes(preds.class_names, dataset)
     scored = dataset.filter_images(lambda img: img.id in preds.by_image)
     records = detection_records(preds, match)
-    ev = run_cocoeval(scored, records, sorted(set(match.label_to_cat.values())))
+    cat_ids = sorted(set(match.label_to_cat.values()))
+    ev = run_cocoeval(scored, records, cat_ids)
     metrics = metrics_from_eval(ev, scored, len(records))
+    _add_loose_ap(metrics, run_cocoeval(scored, records, cat_ids, [LOOSE_IOU]), scored)
     metrics.extra["classes"] = {
         "evaluated": list(match.evaluated),
         "not_in_model": list(match.not_in_model),
