@@ -11,7 +11,7 @@ from typing import Any
 
 from curate.core.dataset import Dataset
 from curate.core.formats.registry import read_dataset
-from curate.core.load import SplitError, pick_split, with_classes
+from curate.core.load import load_split, prepare
 
 
 @dataclass(frozen=True)
@@ -44,7 +44,7 @@ class Datasets:
     """Each dataset read once, each (split, classes) prepared once; ``classes`` are the experiment's.
 
     :meth:`read` gives a dataset as read (every split, its own classes), :meth:`get` one split of it with
-    exactly ``classes`` (:func:`curate.core.load.with_classes`). Both return shared immutable objects."""
+    exactly ``classes`` (:func:`curate.core.load.prepare`). Both return shared immutable objects."""
 
     def __init__(self, classes: Sequence[str]) -> None:
         self.classes = tuple(classes)
@@ -63,19 +63,10 @@ class Datasets:
         Raises ValueError when the split is missing or has no images."""
         key = (ref.source(), ref.split, ref.drop)
         if key not in self._prepared:
-            self._prepared[key] = load_ref(self.read(ref), ref, self.classes)
+            self._prepared[key] = prepare(self.read(ref), ref.split, self.classes, ref.drop, ref.path)
         return self._prepared[key]
-
-
-def load_ref(ds: Dataset, ref: DataRef, classes: Sequence[str]) -> Dataset:
-    """Split ``ref.split`` of ``ds`` (the dataset ``ref`` reads) with exactly ``classes``; raises
-    :class:`curate.core.load.SplitError` when the split is missing or the dataset has no images."""
-    chosen = pick_split(ds, ref.split, ref.path)
-    if not chosen.images:
-        raise SplitError(f"{ref.path}: no images")
-    return with_classes(chosen, classes, ref.drop)
 
 
 def load_data(ref: DataRef, classes: Sequence[str]) -> Dataset:
     """``ref``'s split with exactly ``classes``, read from disk now (a run outside an experiment)."""
-    return Datasets(classes).get(ref)
+    return load_split(ref.path, ref.format, ref.split, classes, dict(ref.aliases), ref.drop)

@@ -41,3 +41,12 @@ def test_load_split_reads_one_split_with_classes(split_folder: Path) -> None:
     assert load_split(split_folder, aliases={"smoke": "fire"}).category_names == ["fire"]
     with pytest.raises(SplitError, match="no split 'val'"):
         load_split(split_folder, split="val")
+
+
+def test_prepare_is_load_split_on_a_dataset_already_read(split_folder: Path) -> None:
+    from curate.core.load import prepare
+
+    ds = load_split(split_folder)
+    assert prepare(ds, "test", ["fire"]) == load_split(split_folder, split="test", classes=["fire"])
+    with pytest.raises(SplitError, match="nowhere: no images"):
+        prepare(ds.filter_images(lambda img: False), None, where="nowhere")

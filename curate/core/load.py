@@ -1,5 +1,6 @@
 """One split of a dataset with the classes a task wants: the one way every command and the experiment pick a
-split, drop classes and fix the category list (read, :func:`pick_split`, :func:`with_classes`)."""
+split, drop classes and fix the category list (read, :func:`pick_split`, :func:`with_classes`; both:
+:func:`prepare`; read and prepare: :func:`load_split`)."""
 
 from __future__ import annotations
 
@@ -37,6 +38,21 @@ def with_classes(ds: Dataset, classes: Sequence[str], drop: Sequence[str] = ()) 
     return ds.drop_categories(gone).with_categories(list(classes))
 
 
+def prepare(
+    ds: Dataset,
+    split: str | None,
+    classes: Sequence[str] | None = None,
+    drop: Sequence[str] = (),
+    where: Path | str = "",
+) -> Dataset:
+    """Split ``split`` of ``ds`` (None = every image; :func:`pick_split`), then :func:`with_classes` (``classes``
+    None: only ``drop`` removed). Raises :class:`SplitError` for a missing or empty split or no images."""
+    chosen = pick_split(ds, split, where)
+    if not chosen.images:
+        raise SplitError(f"{where or ds.root}: no images")
+    return chosen.drop_categories(drop) if classes is None else with_classes(chosen, classes, drop)
+
+
 def load_split(
     path: Path | str,
     fmt: str = "auto",
@@ -45,10 +61,6 @@ def load_split(
     aliases: Mapping[str, str] | None = None,
     drop: Sequence[str] = (),
 ) -> Dataset:
-    """Read the dataset at ``path`` (:func:`curate.core.formats.registry.read_dataset`, class ``aliases`` applied),
-    take split ``split`` (None = every image; :func:`pick_split`), then :func:`with_classes` (``classes`` None:
-    only ``drop`` removed). Raises :class:`SplitError` for a missing or empty split, ValueError for no images."""
-    ds = pick_split(read_dataset(path, fmt, aliases=aliases or None).dataset, split, path)
-    if not ds.images:
-        raise SplitError(f"{path}: no images")
-    return ds.drop_categories(drop) if classes is None else with_classes(ds, classes, drop)
+    """Read the dataset at ``path`` (:func:`curate.core.formats.registry.read_dataset`, class ``aliases``
+    applied) and :func:`prepare` split ``split`` with ``classes``."""
+    return prepare(read_dataset(path, fmt, aliases=aliases or None).dataset, split, classes, drop, path)
