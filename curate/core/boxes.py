@@ -67,15 +67,6 @@ def voc_to_xywh(boxes: ArrayLike) -> Boxes:
     return out
 
 
-def xywh_to_voc(boxes: ArrayLike) -> Boxes:
-    """(N, 4) xywh pixels -> (N, 4) VOC 1-based inclusive boxes (inverse of :func:`voc_to_xywh`)."""
-    b = _as_boxes(boxes)
-    out = b.copy()
-    out[..., :2] = b[..., :2] + 1.0
-    out[..., 2:] = b[..., :2] + b[..., 2:]
-    return out
-
-
 def clip_xyxy(boxes: ArrayLike, width: float, height: float) -> Boxes:
     """(N, 4) xyxy pixels clipped to the image ``[0, width] x [0, height]``."""
     b = _as_boxes(boxes)
@@ -87,12 +78,6 @@ def clip_xyxy(boxes: ArrayLike, width: float, height: float) -> Boxes:
 def clip_xywh(boxes: ArrayLike, width: float, height: float) -> Boxes:
     """(N, 4) xywh pixels clipped to the image; boxes fully outside get zero width or height."""
     return xyxy_to_xywh(clip_xyxy(xywh_to_xyxy(boxes), width, height))
-
-
-def area_xywh(boxes: ArrayLike) -> NDArray[np.float64]:
-    """(N, 4) xywh -> (N,) areas; negative extents count as zero."""
-    b = _as_boxes(boxes)
-    return np.clip(b[..., 2], 0.0, None) * np.clip(b[..., 3], 0.0, None)
 
 
 def inside_xywh(boxes: ArrayLike, width: float, height: float, tol: float = 1e-6) -> NDArray[np.bool_]:
