@@ -9,10 +9,16 @@ import onnxruntime as ort
 import pytest
 import torch
 
-from train.backbones import _check_shapes, build_backbone
+from train.backbones import build_backbone
 from train.config import ModelConfig
 from train.export import export_onnx
 from train.model import build_model
+
+
+def _check_shapes(backbone: torch.nn.Module, imgsz: int) -> list[tuple[int, ...]]:
+    """Shapes of the three outputs for a (1, 3, imgsz, imgsz) input."""
+    with torch.no_grad():
+        return [tuple(f.shape) for f in backbone(torch.zeros(1, 3, imgsz, imgsz))]
 
 
 def test_unknown_backbone_raises() -> None:

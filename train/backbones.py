@@ -18,7 +18,6 @@ from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 
-import torch
 from torch import Tensor, nn
 from torch.nn import functional as F
 
@@ -157,9 +156,3 @@ def build_backbone(
     if name not in BACKBONES:
         raise ValueError(f"unknown backbone {name!r}; choose one of {', '.join(BACKBONES)}")
     return BACKBONES[name](depth, width, imgsz, pretrained, freeze)
-
-
-def _check_shapes(backbone: nn.Module, imgsz: int) -> list[tuple[int, ...]]:
-    """Shapes of the three outputs for a (1, 3, imgsz, imgsz) input (for tests)."""
-    with torch.no_grad():
-        return [tuple(f.shape) for f in backbone(torch.zeros(1, 3, imgsz, imgsz))]
