@@ -12,7 +12,7 @@ import numpy as np
 
 from curate.core.config import to_dict
 from curate.mix import parse_mixture
-from fuzzyfire.datasets import Datasets
+from fuzzyfire.datasets import DataRef, Datasets
 from fuzzyfire.experiment_config import ExperimentConfig
 from fuzzyfire.runs import RunSpec
 from fuzzyfire.stages import Prepared, digest, label
@@ -24,22 +24,49 @@ STANDIN_NOTICE = (
 )
 
 
-def result_rows(specs: Sequence[RunSpec], results: Sequence[dict | None], out: Path) -> list[dict]:
-    """One row per (finished run, test set): mixture, method, seed, test_set, AP, AP50, AP25 (None for runs scored
-    before it existed), run folder (relative to
-    ``out``), the tables it belongs to (as its spec says) and its matches file."""
+def result_rows(
+    specs: Sequence[RunSpec], results: Sequence[dict | None], out: Path, datasets: Datasets | None = None
+) -> list[dict]:
+    """One row per (finished run, test set): mixture, method, seed, test_set, AP, AP50, AP25, run folder (relative
+    to ``out``), the tables it belongs to (as its spec says) and its matches file. Runs scored before AP25
+    existed get it from their predictions once (:func:`loose_ap`) when ``datasets`` is given, else None."""
     rows = []
     for spec, res in zip(specs, results):
         if res is None:
             continue
         tables = list(spec.tables)
-        for test, m in res["tests"].items():
+        for test in spec.tests:
+            if test.name not in res["tests"]:
+                continue
+            m = res["tests"][test.name]
+            ap25 = m.get("AP25") if datasets is None else loose_ap(datasets, spec.out / m["scores"], test.data, m)
             rows.append({
-                "mixture": spec.mixture, "method": spec.method or "-", "seed": spec.seed, "test_set": test,
-                "AP": m["AP"], "AP50": m["AP50"], "AP25": m.get("AP25"), "run": spec.out.relative_to(out).as_posix(), "tables": tables,
-                "matches": (spec.out / m["scores"] / "matches.npz").as_posix(),
+                "mixture": spec.mixture, "method": spec.method or "-", "seed": spec.seed, "test_set": test.name,
+                "AP": m["AP"], "AP50": m["AP50"], "AP25": ap25, "run": spec.out.relative_to(out).as_posix(),
+                "tables": tables, "matches": (spec.out / m["scores"] / "matches.npz").as_posix(),
             })  # fmt: skip
     return rows
+
+
+LOOSE_FILE = "ap25.json"  # AP25 of a run scored before AP25 existed, computed once from its predictions
+
+
+def loose_ap(datasets: Datasets, folder: Path, test: DataRef, scored: dict) -> float | None:
+    """AP25 (:data:`curate.core.cocoeval.LOOSE_IOU`) of a run on a test set: from its results (``scored``), else
+    from ``folder/predictions.json`` against the test set, kept in ``folder/ap25.json``."""
+    from curate.core.cocoeval import LOOSE_IOU, run_cocoeval
+
+    if scored.get("AP25") is not None:
+        return scored["AP25"]
+    path = folder / LOOSE_FILE
+    if path.is_file():
+        return json.loads(path.read_text(encoding="utf-8"))["AP25"]
+    ds = datasets.get(test)
+    records = json.loads((folder / "predictions.json").read_text(encoding="utf-8"))
+    stat = float(run_cocoeval(ds, records, [c.id for c in ds.categories], [LOOSE_IOU]).stats[0])
+    value = stat if stat > -1 else None
+    path.write_text(json.dumps({"AP25": value}) + "\n", encoding="utf-8")
+    return value
 
 
 def comparisons(cfg: ExperimentConfig, rows: Sequence[dict]) -> list[dict]:

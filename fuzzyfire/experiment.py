@@ -249,7 +249,7 @@ def run_experiment(cfg: ExperimentConfig, base: Path, out: Path, executor=None) 
             raise SplitError(f"{exc}: curate the real set (real.curate) or name its splits (real.*_split)") from None
     specs = plan_runs(cfg, grid, data, write_mixtures(cfg, grid, data, datasets, out), out)
     results = run_grid(specs, datasets, executor) if executor is not None else finished_runs(specs)
-    rows = result_rows(specs, results, out)
+    rows = result_rows(specs, results, out, datasets)
     write_summary(cfg, specs, results, rows, out, data.standin)
     report = write_report(cfg, data, datasets, rows, out, specs, results)
     failed = [s for s, r in zip(specs, results) if r is None]

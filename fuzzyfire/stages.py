@@ -37,8 +37,20 @@ class Stage:
     cached: bool
 
 
-def cached_stage(root: Path, name: str, identity: Mapping[str, Any], build: Callable[[Path], Any]) -> Stage:
-    """Run ``build(folder)`` unless ``root/<name>-<hash>/stage.json`` exists; write ``stage.json`` last."""
+def cached_stage(
+    root: Path,
+    name: str,
+    identity: Mapping[str, Any],
+    build: Callable[[Path], Any],
+    legacy: Mapping[str, Any] | None = None,
+) -> Stage:
+    """Run ``build(folder)`` unless ``root/<name>-<hash>/stage.json`` exists; write ``stage.json`` last.
+    ``legacy``: the identity an earlier version gave the same stage; a finished stage under it is reused as is
+    (its folder and hash, so what was made from it keeps its identity too)."""
+    if legacy is not None:
+        old = digest({**legacy, "fuzzyfire": __version__})
+        if (Path(root) / f"{name}-{old}" / STAGE_FILE).is_file():
+            return Stage(Path(root) / f"{name}-{old}", old, True)
     identity = {**identity, "fuzzyfire": __version__}
     h = digest(identity)
     folder = Path(root) / f"{name}-{h}"
@@ -88,18 +100,25 @@ def synth_stage(root: Path, method: str, cfg: Any, base: Path) -> tuple[Stage, D
 
     runner = {"method1": run_method1, "method2": run_method2}[method]
     cfg = replace(cfg, environments=tuple(_absolute(Path(p), base) for p in cfg.environments))
+    by_path = _later_keys_dropped(to_dict(cfg), to_dict(type(cfg)()))  # the identity before content hashing
     if getattr(cfg, "backgrounds", ()):
         cfg = replace(cfg, backgrounds=tuple(_absolute(Path(p), base) for p in cfg.backgrounds))
-    config = to_dict(cfg)
-    default = to_dict(type(cfg)())
-    for key in LATER_KEYS:  # pools made before these keys existed keep their identity while they hold the default
-        if key in config and config[key] == default[key]:
-            del config[key]
-    config.update(content_identity(cfg))
+    files = content_identity(cfg)
+    config = {**_later_keys_dropped(to_dict(cfg), to_dict(type(cfg)())), **files}
     stage = cached_stage(
-        root, method, {"kind": method, "config": config}, lambda out: runner(cfg, build_library(cfg.flames), out)
+        root,
+        method,
+        {"kind": method, "config": config},
+        lambda out: runner(cfg, build_library(cfg.flames), out),
+        legacy={"kind": method, "config": by_path} if files else None,  # pools made by path before this version
     )
     return stage, DataRef(stage.folder, {"kind": method, "hash": stage.hash}, "coco")
+
+
+def _later_keys_dropped(config: dict[str, Any], default: dict[str, Any]) -> dict[str, Any]:
+    """``config`` without the :data:`LATER_KEYS` that hold their default (pools made before they existed keep
+    their identity)."""
+    return {k: v for k, v in config.items() if not (k in LATER_KEYS and v == default[k])}
 
 
 def content_identity(cfg: Any) -> dict[str, Any]:

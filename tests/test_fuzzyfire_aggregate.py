@@ -8,7 +8,7 @@ from factories_experiment import toy_config
 
 from eval.score import ScoreConfig
 from fuzzyfire.aggregate import comparisons, result_rows
-from fuzzyfire.runs import RunSpec
+from fuzzyfire.runs import EvalSet, RunSpec
 from fuzzyfire.stages import DataRef
 from train.config import TrainConfig
 
@@ -16,7 +16,8 @@ from train.config import TrainConfig
 def _spec(out: Path, mixture: str, method: str | None, seed: int = 0, tables: tuple[str, ...] = ()) -> RunSpec:
     ref = DataRef(Path("/d"), {"kind": "x"})
     train = TrainConfig(seed=seed)
-    return RunSpec(mixture, method, ref, ref, (), ("fire",), train, ScoreConfig(), out, tables=tables)
+    tests = (EvalSet("common", ref), EvalSet("rare", ref))
+    return RunSpec(mixture, method, ref, ref, tests, ("fire",), train, ScoreConfig(), out, tables=tables)
 
 
 def _result(ap: float) -> dict:

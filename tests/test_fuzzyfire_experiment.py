@@ -125,6 +125,30 @@ def test_report_gives_runs_scored_before_the_breakdown_theirs(full_run: tuple[Pa
 
 
 @pytest.mark.slow
+def test_runs_scored_before_ap25_get_it_from_their_predictions(full_run: tuple[Path, str, Counter]) -> None:
+    """A results.json without AP25 (as runs scored before it existed have) gets the run-time value back from the
+    run's predictions.json, kept in scores/<test>/ap25.json."""
+    out, _, _ = full_run
+    path = sorted((out / "runs").glob("*/*/results.json"))[0]
+    original = path.read_bytes()
+    doc = json.loads(original)
+    at_run_time = {name: m["AP25"] for name, m in doc["tests"].items()}
+    try:
+        for m in doc["tests"].values():
+            del m["AP25"]
+        path.write_text(json.dumps(doc))
+        run_experiment(toy_config(), out.parent, out)  # report only
+        run = path.parent.relative_to(out).as_posix()
+        rows = [json.loads(line) for line in (out / "results.jsonl").read_text().splitlines()]
+        assert {r["test_set"]: r["AP25"] for r in rows if r["run"] == run} == pytest.approx(at_run_time)
+        assert len(list(path.parent.glob("scores/*/ap25.json"))) == len(at_run_time)
+    finally:
+        path.write_bytes(original)
+        for extra in path.parent.glob("scores/*/ap25.json"):
+            extra.unlink()
+
+
+@pytest.mark.slow
 def test_interrupted_grid_resumes_and_gives_identical_results(
     full_run: tuple[Path, str, Counter], tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
