@@ -112,3 +112,27 @@ def test_pools_are_identified_by_the_content_of_their_environments_and_photos(tm
     assert (
         changed["environments"][0]["scale"] == 0.5 and len(changed["backgrounds"]) == len(identity["backgrounds"]) + 1
     )
+
+
+def test_pools_made_by_path_before_content_identities_are_still_found(tmp_path: Path) -> None:
+    """A pool an earlier version identified by its absolute environment path is reused, with its hash."""
+    from dataclasses import replace
+
+    from factories import write_textured_room
+
+    from curate.core.config import to_dict
+    from fuzzyfire.stages import _later_keys_dropped, cached_stage, synth_stage
+    from synth.library import FlameLibraryConfig
+    from synth.method2 import Method2Config
+
+    write_textured_room(tmp_path / "scenes" / "den.glb")
+    flames = FlameLibraryConfig(sequences=1, frames=60, keep_every=30)
+    cfg = Method2Config(n=2, width=64, height=48, scenes=0, images_per_view=2, flames=flames,
+                        environments=(Path("scenes"),))  # fmt: skip
+    absolute = replace(cfg, environments=((tmp_path / "scenes").resolve(),))
+    by_path = _later_keys_dropped(to_dict(absolute), to_dict(Method2Config()))
+    old = cached_stage(
+        tmp_path / "data", "method2", {"kind": "method2", "config": by_path}, lambda f: f.mkdir(parents=True)
+    )
+    found, ref = synth_stage(tmp_path / "data", "method2", cfg, tmp_path)
+    assert found.cached and found.folder == old.folder and ref.identity == {"kind": "method2", "hash": old.hash}
