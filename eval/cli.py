@@ -56,10 +56,11 @@ def _print_text(result, intervals: dict) -> None:  # result: eval.score.ScoreRes
 
 
 def _score_model(model: Path, args: argparse.Namespace, dataset, problems):  # -> eval.score.ScoreResult
+    from dataclasses import fields
+
     from eval.score import ScoreConfig, score
 
-    keys = ("conf", "iou", "max_det", "batch", "workers", "threads", "device")
-    cfg = ScoreConfig(**{k: getattr(args, k) for k in keys})
+    cfg = ScoreConfig(**{f.name: getattr(args, f.name) for f in fields(ScoreConfig)})
     detector = cfg.detector(model, args.format, args.names, args.imgsz)
     if detector.device_notice:
         print(detector.device_notice, file=sys.stderr)

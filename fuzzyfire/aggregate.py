@@ -5,7 +5,7 @@
 from __future__ import annotations
 
 import json
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from pathlib import Path
 
 import numpy as np
@@ -14,7 +14,7 @@ from curate.core.config import to_dict
 from curate.mix import parse_mixture
 from fuzzyfire.datasets import DataRef, Datasets
 from fuzzyfire.experiment_config import ExperimentConfig
-from fuzzyfire.runs import RunSpec
+from fuzzyfire.runs import EvalSet, RunSpec
 from fuzzyfire.stages import Prepared, digest, label
 
 STANDIN_NOTICE = (
@@ -24,37 +24,40 @@ STANDIN_NOTICE = (
 )
 
 
+def _scored(specs: Sequence[RunSpec], results: Sequence[dict | None]) -> Iterator[tuple[RunSpec, EvalSet, dict, Path]]:
+    """Every (finished run, test set it was scored on): its spec, the test set, its headline metrics (from
+    ``results.json``) and its ``scores/<test>`` folder."""
+    for spec, res in zip(specs, results):
+        for test in spec.tests if res is not None else ():
+            if test.name in res["tests"]:
+                scored = res["tests"][test.name]
+                yield spec, test, scored, spec.out / scored["scores"]
+
+
 def result_rows(
     specs: Sequence[RunSpec], results: Sequence[dict | None], out: Path, datasets: Datasets | None = None
 ) -> list[dict]:
     """One row per (finished run, test set): mixture, method, seed, test_set, AP, AP50, AP25, run folder (relative
     to ``out``), the tables it belongs to (as its spec says) and its matches file. Runs scored before AP25
-    existed get it from their predictions once (:func:`loose_ap`) when ``datasets`` is given, else None."""
+    existed get it from their predictions once (:func:`run_ap25`) when ``datasets`` is given, else None."""
     rows = []
-    for spec, res in zip(specs, results):
-        if res is None:
-            continue
-        tables = list(spec.tables)
-        for test in spec.tests:
-            if test.name not in res["tests"]:
-                continue
-            m = res["tests"][test.name]
-            ap25 = m.get("AP25") if datasets is None else loose_ap(datasets, spec.out / m["scores"], test.data, m)
-            rows.append({
-                "mixture": spec.mixture, "method": spec.method or "-", "seed": spec.seed, "test_set": test.name,
-                "AP": m["AP"], "AP50": m["AP50"], "AP25": ap25, "run": spec.out.relative_to(out).as_posix(),
-                "tables": tables, "matches": (spec.out / m["scores"] / "matches.npz").as_posix(),
-            })  # fmt: skip
+    for spec, test, m, folder in _scored(specs, results):
+        ap25 = m.get("AP25") if datasets is None else run_ap25(datasets, folder, test.data, m)
+        rows.append({
+            "mixture": spec.mixture, "method": spec.method or "-", "seed": spec.seed, "test_set": test.name,
+            "AP": m["AP"], "AP50": m["AP50"], "AP25": ap25, "run": spec.out.relative_to(out).as_posix(),
+            "tables": list(spec.tables), "matches": (folder / "matches.npz").as_posix(),
+        })  # fmt: skip
     return rows
 
 
 LOOSE_FILE = "ap25.json"  # AP25 of a run scored before AP25 existed, computed once from its predictions
 
 
-def loose_ap(datasets: Datasets, folder: Path, test: DataRef, scored: dict) -> float | None:
-    """AP25 (:data:`curate.core.cocoeval.LOOSE_IOU`) of a run on a test set: from its results (``scored``), else
-    from ``folder/predictions.json`` against the test set, kept in ``folder/ap25.json``."""
-    from curate.core.cocoeval import LOOSE_IOU, run_cocoeval
+def run_ap25(datasets: Datasets, folder: Path, test: DataRef, scored: dict) -> float | None:
+    """AP25 of a run on a test set: from its results (``scored``), else from ``folder/predictions.json``
+    against the test set (:func:`curate.core.cocoeval.loose_ap`), kept in ``folder/ap25.json``."""
+    from curate.core.cocoeval import loose_ap
 
     if scored.get("AP25") is not None:
         return scored["AP25"]
@@ -62,11 +65,14 @@ def loose_ap(datasets: Datasets, folder: Path, test: DataRef, scored: dict) -> f
     if path.is_file():
         return json.loads(path.read_text(encoding="utf-8"))["AP25"]
     ds = datasets.get(test)
-    records = json.loads((folder / "predictions.json").read_text(encoding="utf-8"))
-    stat = float(run_cocoeval(ds, records, [c.id for c in ds.categories], [LOOSE_IOU]).stats[0])
-    value = stat if stat > -1 else None
+    value = loose_ap(ds, _predictions(folder), [c.id for c in ds.categories])
     path.write_text(json.dumps({"AP25": value}) + "\n", encoding="utf-8")
     return value
+
+
+def _predictions(folder: Path) -> list[dict]:
+    """The COCO result records a run's scoring kept in ``folder/predictions.json``."""
+    return json.loads((folder / "predictions.json").read_text(encoding="utf-8"))
 
 
 def comparisons(cfg: ExperimentConfig, rows: Sequence[dict]) -> list[dict]:
@@ -132,21 +138,16 @@ def error_rows(datasets: Datasets, specs: Sequence[RunSpec], results: Sequence[d
     from eval.errors import ERRORS_FILE, error_breakdown
 
     rows = []
-    for spec, res in zip(specs, results):
-        for test in spec.tests if res is not None else ():
-            if test.name not in res["tests"]:
-                continue
-            folder = spec.out / res["tests"][test.name]["scores"]
-            path = folder / ERRORS_FILE
-            if path.is_file():
-                doc = json.loads(path.read_text(encoding="utf-8"))
-            else:
-                ds = datasets.get(test.data)
-                records = json.loads((folder / "predictions.json").read_text(encoding="utf-8"))
-                breakdown = error_breakdown(ds, records, [c.id for c in ds.categories])
-                breakdown.write(folder)
-                doc = breakdown.to_dict()
-            rows.append({"test_set": test.name, "label": spec.label, "seed": spec.seed, "errors": doc})
+    for spec, test, _, folder in _scored(specs, results):
+        path = folder / ERRORS_FILE
+        if path.is_file():
+            doc = json.loads(path.read_text(encoding="utf-8"))
+        else:
+            ds = datasets.get(test.data)
+            breakdown = error_breakdown(ds, _predictions(folder), [c.id for c in ds.categories])
+            breakdown.write(folder)
+            doc = breakdown.to_dict()
+        rows.append({"test_set": test.name, "label": spec.label, "seed": spec.seed, "errors": doc})
     return rows
 
 

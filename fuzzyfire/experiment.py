@@ -28,7 +28,7 @@ from fuzzyfire.aggregate import STANDIN_NOTICE, result_rows, write_report, write
 from fuzzyfire.datasets import DataRef, Datasets
 from fuzzyfire.executors import Outcome
 from fuzzyfire.experiment_config import METHODS, ExperimentConfig
-from fuzzyfire.runs import EvalSet, RunData, RunSpec, RunTask, execute_task, finished
+from fuzzyfire.runs import EvalSet, RunSpec, RunTask, execute_task, finished, run_data
 from fuzzyfire.stages import Prepared, curate_stage, digest, folder_ref, label, standin_stage, synth_stage
 
 
@@ -194,9 +194,7 @@ def run_grid(specs: Sequence[RunSpec], datasets: Datasets, executor) -> list[dic
     returns results aligned with ``specs``."""
     results: list[dict[str, Any] | None] = [None] * len(specs)
     _say(f"runs   {len(specs)} runs with the {executor.name} executor")
-    tasks = [
-        RunTask(s, RunData(datasets.get(s.val_data), {t.name: datasets.get(t.data) for t in s.tests})) for s in specs
-    ]
+    tasks = [RunTask(s, run_data(s, datasets.get)) for s in specs]
     for count, outcome in enumerate(executor.map(execute_task, tasks), start=1):
         spec = specs[outcome.index]
         results[outcome.index] = outcome.result

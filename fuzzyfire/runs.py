@@ -14,6 +14,7 @@ from __future__ import annotations
 import json
 import os
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, NamedTuple
@@ -137,11 +138,11 @@ def _write_json(path: Path, doc: Any) -> None:
     os.replace(tmp, path)
 
 
-def run_data(spec: RunSpec) -> RunData:
-    """The shared datasets of ``spec`` read from disk now (a run outside an experiment)."""
-    return RunData(
-        load_data(spec.val_data, spec.classes), {t.name: load_data(t.data, spec.classes) for t in spec.tests}
-    )
+def run_data(spec: RunSpec, load: Callable[[DataRef], Dataset] | None = None) -> RunData:
+    """The shared datasets of ``spec``, each from ``load`` (the experiment's :meth:`fuzzyfire.datasets.Datasets.get`);
+    without it read from disk now (a run outside an experiment)."""
+    load = load or (lambda ref: load_data(ref, spec.classes))
+    return RunData(load(spec.val_data), {t.name: load(t.data) for t in spec.tests})
 
 
 def train_run(spec: RunSpec, val: Dataset) -> dict[str, Any]:

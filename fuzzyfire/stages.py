@@ -103,12 +103,11 @@ def synth_stage(root: Path, method: str, cfg: Any, base: Path) -> tuple[Stage, D
     by_path = _later_keys_dropped(to_dict(cfg), to_dict(type(cfg)()))  # the identity before content hashing
     if getattr(cfg, "backgrounds", ()):
         cfg = replace(cfg, backgrounds=tuple(_absolute(Path(p), base) for p in cfg.backgrounds))
-    files = content_identity(cfg)
-    config = {**_later_keys_dropped(to_dict(cfg), to_dict(type(cfg)())), **files}
+    files = content_identity(cfg)  # replaces the environments and backgrounds of by_path when they are set
     stage = cached_stage(
         root,
         method,
-        {"kind": method, "config": config},
+        {"kind": method, "config": {**by_path, **files}},
         lambda out: runner(cfg, build_library(cfg.flames), out),
         legacy={"kind": method, "config": by_path} if files else None,  # pools made by path before this version
     )

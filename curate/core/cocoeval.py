@@ -146,6 +146,11 @@ def run_cocoeval(
     return ev
 
 
+def _stat(value: float) -> float | None:
+    """A ``COCOeval.stats`` entry, None where pycocotools says -1 (undefined)."""
+    return float(value) if value > -1 else None
+
+
 def _mean_valid(values: np.ndarray) -> float | None:
     valid = values[values > -1]
     return float(valid.mean()) if valid.size else None
@@ -176,9 +181,10 @@ class CocoMetrics:
         }
 
 
-def metrics_from_eval(ev: COCOeval, dataset: Dataset, detections: int) -> CocoMetrics:
-    """Read AP numbers from an accumulated ``COCOeval`` (area ``all``, 100 detections per image)."""
-    summary = {k: (float(ev.stats[i]) if ev.stats[i] > -1 else None) for k, i in _STATS.items()}
+def metrics_from_eval(ev: COCOeval, dataset: Dataset, detections: int, loose: COCOeval | None = None) -> CocoMetrics:
+    """Read AP numbers from an accumulated ``COCOeval`` (area ``all``, 100 detections per image); ``loose``,
+    the same evaluation at :data:`LOOSE_IOU` alone, adds AP25 to the summary and to each class."""
+    summary = {k: _stat(ev.stats[i]) for k, i in _STATS.items()}
     precision = ev.eval["precision"]  # (T, R, K, A, M)
     names = {c.id: c.name for c in dataset.categories}
     counts: dict[int, int] = {}
@@ -191,7 +197,10 @@ def metrics_from_eval(ev: COCOeval, dataset: Dataset, detections: int) -> CocoMe
             "AP": _mean_valid(precision[:, :, k, 0, -1]),
             "AP50": _mean_valid(precision[0, :, k, 0, -1]),
             "boxes": counts.get(cat_id, 0),
+            **({"AP25": _mean_valid(loose.eval["precision"][0, :, k, 0, -1])} if loose is not None else {}),
         }
+    if loose is not None:
+        summary["AP25"] = _stat(loose.stats[0])
     boxes = sum(counts.get(c, 0) for c in ev.params.catIds)
     scored = set(ev.params.catIds)
     with_boxes = {a.image_id for a in dataset.annotations if a.category_id in scored}
@@ -199,13 +208,10 @@ def metrics_from_eval(ev: COCOeval, dataset: Dataset, detections: int) -> CocoMe
     return CocoMetrics(summary, per_class, len(ev.params.imgIds), boxes, detections, negatives)
 
 
-def _add_loose_ap(metrics: CocoMetrics, loose: COCOeval, dataset: Dataset) -> None:
-    """``AP25`` into ``metrics.summary`` and each class of ``metrics.per_class``, from an evaluation of
-    ``dataset`` at :data:`LOOSE_IOU` alone."""
-    metrics.summary["AP25"] = float(loose.stats[0]) if loose.stats[0] > -1 else None
-    names = {c.id: c.name for c in dataset.categories}
-    for k, cat_id in enumerate(loose.params.catIds):
-        metrics.per_class[names[cat_id]]["AP25"] = _mean_valid(loose.eval["precision"][0, :, k, 0, -1])
+def loose_ap(dataset: Dataset, records: Sequence[dict[str, Any]], cat_ids: Sequence[int]) -> float | None:
+    """AP25 of COCO result ``records`` over every image of ``dataset`` and categories ``cat_ids`` (None when no
+    category has ground truth)."""
+    return _stat(run_cocoeval(dataset, records, cat_ids, [LOOSE_IOU]).stats[0])
 
 
 def evaluate_predictions(dataset: Dataset, preds: Predictions) -> tuple[CocoMetrics, COCOeval, list[dict[str, Any]]]:
@@ -216,8 +222,7 @@ def evaluate_predictions(dataset: Dataset, preds: Predictions) -> tuple[CocoMetr
     records = detection_records(preds, match)
     cat_ids = sorted(set(match.label_to_cat.values()))
     ev = run_cocoeval(scored, records, cat_ids)
-    metrics = metrics_from_eval(ev, scored, len(records))
-    _add_loose_ap(metrics, run_cocoeval(scored, records, cat_ids, [LOOSE_IOU]), scored)
+    metrics = metrics_from_eval(ev, scored, len(records), run_cocoeval(scored, records, cat_ids, [LOOSE_IOU]))
     metrics.extra["classes"] = {
         "evaluated": list(match.evaluated),
         "not_in_model": list(match.not_in_model),
