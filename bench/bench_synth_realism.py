@@ -16,6 +16,9 @@ Variants (400 images at 416x416, seed 0, each a cached pool of the experiment pi
   of the frame height, its base near the bottom edge: a fire seen from close by, as in the rare set);
 - ``files_natural``: ``files_views`` with opaque flames (coverage 0.85-1) and no chemical-colour flames (the
   real sets have none; with 12 sequences, 2 are blue or red and look pink on light walls).
+- ``files_cutouts``: ``files_views`` with *real* flames in place of simulated ones: every fire box of the
+  curated real train split cut out by ``fuzzyfire synth cutouts`` (never the test split). Its distance to the
+  other variants is the share of the gap the flames' appearance accounts for; the rest is the scenes.
 
 Lines: ``synth_<variant>_gap`` (Fréchet distance to half the real train split, median of 200 draws),
 ``synth_<variant>_gap_ratio`` (to the real-vs-real floor), ``synth_real_floor``, and with ``--train``
@@ -50,7 +53,10 @@ VARIANTS = {
     "files_views": [*FILES, "synth.method2.images_per_view=2"],
     "files_closeups": [*FILES, "synth.method2.images_per_view=2", "synth.method2.closeup=0.3"],
     "files_natural": [*FILES, "synth.method2.images_per_view=2", *OPAQUE, "synth.method2.flames.rare=0"],
+    "files_cutouts": [*FILES, "synth.method2.images_per_view=2"],  # + flames.folders, see _cutout_library
 }
+#: Variants whose flames are cut from the curated real train split.
+CUTOUT_VARIANTS = ("files_cutouts",)
 
 
 def _config(overrides: list[str], seeds: list[int]):
@@ -60,6 +66,21 @@ def _config(overrides: list[str], seeds: list[int]):
     grid = ["grid.mixtures=[R0_S400]", "grid.table1=[]", "grid.synthetic=method2", "synth.method1=null"]
     seeds_ = f"grid.seeds=[{','.join(map(str, seeds))}]"
     return load_config(CONFIG, ExperimentConfig, [*grid, seeds_, "report.samples=false", *overrides])
+
+
+def _cutout_library(seeds: list[int], out: Path) -> Path:
+    """The curated real train split's flames cut out once into ``out/cutouts-<real hash>`` (the real stage is
+    built or reused first); returns that folder."""
+    from curate.core.load import load_split
+    from fuzzyfire.experiment import prepare_data
+    from synth.cutouts import cutouts, write_cutouts
+
+    real = prepare_data(_config([], seeds), CONFIG.parent, out, ()).real
+    folder = out / f"cutouts-{real.path.name.rsplit('-', 1)[-1]}"
+    if not (folder / "cutouts.json").exists():
+        train = load_split(real.path, real.format, "train", ["fire"])
+        write_cutouts(cutouts(train, "fire"), folder)
+    return folder
 
 
 def _gap_line(name: str, gap: dict) -> None:
@@ -88,9 +109,14 @@ def main() -> int:
     seeds = [int(s) for s in args.seeds.split(",")]
     floor_printed = False
     for name in args.only.split(","):
-        cfg = _config(VARIANTS[name], seeds)
         out = args.out  # one curated real set; each variant's pool and runs have their own hash
         with contextlib.redirect_stdout(sys.stderr):
+            extra = (
+                [f"synth.method2.flames.folders=[{_cutout_library(seeds, out).as_posix()}]"]
+                if name in CUTOUT_VARIANTS
+                else []
+            )
+            cfg = _config([*VARIANTS[name], *extra], seeds)
             data = prepare_data(cfg, CONFIG.parent, out, needed_methods(grid_entries(cfg)))
             (gap,) = realism_gaps(cfg, data, Datasets(cfg.classes), out)
         if not floor_printed:

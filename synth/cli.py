@@ -1,4 +1,4 @@
-"""``fuzzyfire synth`` subcommands: flames, scenes, method1, method2, audit, gap (registered by ``fuzzyfire.cli``)."""
+"""``fuzzyfire synth`` subcommands: flames, cutouts, scenes, method1, method2, audit, gap (registered by ``fuzzyfire.cli``)."""
 
 from __future__ import annotations
 
@@ -27,6 +27,31 @@ def cmd_flames(args: argparse.Namespace) -> int:
     for seq in progress(seqs, total=len(seqs), desc="flames"):
         save_sequence(args.out / seq.name, seq)
     print(f"wrote {len(seqs)} sequences ({sum(len(s.sprites) for s in seqs)} sprites) to {args.out}")
+    return 0
+
+
+def cmd_cutouts(args: argparse.Namespace) -> int:
+    import sys
+
+    from curate.core.commands import parse_aliases, print_problems
+    from curate.core.formats.registry import read_dataset
+    from curate.core.load import SplitError, pick_split
+    from synth.cutouts import cutouts, write_cutouts
+
+    aliases = parse_aliases(args.alias)
+    result = read_dataset(args.src, args.fmt, names=args.names, source=args.source, aliases=aliases)
+    try:
+        ds = pick_split(result.drop_classes(args.drop_class).dataset, args.split, args.src)
+        problems: list = []
+        n = write_cutouts(cutouts(ds, args.class_name, args.min_side, args.min_cover, problems), args.out)
+    except (SplitError, ValueError, FileExistsError) as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    if problems:
+        print_problems(problems, sys.stderr, limit=20)
+    print(
+        f"wrote {n} cut-outs of {args.class_name!r} from {len(ds.images)} images to {args.out} (use: --flames {args.out})"
+    )
     return 0
 
 
@@ -150,6 +175,32 @@ def _register_flames(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=cmd_flames)
 
 
+def _register_cutouts(sub: argparse._SubParsersAction) -> None:
+    from curate.core.commands import add_reader_args
+
+    p = add_command(
+        sub,
+        "cutouts",
+        help="cut real flames out of a labelled dataset (RGBA sprites for --flames)",
+        description="Cut the fire-coloured pixels of each box of a labelled real dataset into RGBA PNG sprites,\n"
+        "25 per sequence folder, with cutouts.json naming each one's source image and box. Method 1 and 2 take\n"
+        "the folder as a flame library (--flames, or flames.folders in a config): real flames in rendered\n"
+        "scenes, which separates the flames' share of the realism gap from the scenes' share.\n\n"
+        "example:\n  fuzzyfire synth cutouts ../shared/data/fire-cctv-416 --split train --out out/cutouts\n"
+        "  fuzzyfire synth method2 --environments ../shared/data/scenes --flames out/cutouts --n 200 --out out/m2-real",
+    )
+    p.add_argument("src", help="labelled dataset folder (any layout fuzzyfire reads)")
+    p.add_argument("--out", required=True, type=Path, help="new folder for the sequence folders")
+    p.add_argument("--split", help="only this split (default: every image)")
+    p.add_argument("--class", dest="class_name", default="fire", help="class to cut out (default fire)")
+    p.add_argument("--min-side", type=int, default=16, help="skip boxes smaller than this, pixels (default 16)")
+    p.add_argument(
+        "--min-cover", type=float, default=0.08, help="skip boxes less fire-coloured than this share (default 0.08)"
+    )
+    add_reader_args(p)
+    p.set_defaults(func=cmd_cutouts)
+
+
 def _register_scenes(sub: argparse._SubParsersAction) -> None:
     p = add_command(
         sub,
@@ -271,12 +322,13 @@ def register(sub: argparse._SubParsersAction) -> None:
         sub,
         "synth",
         help="procedural flames, environments and synthetic datasets",
-        description="Synthetic data: flames, scenes, Method 1, Method 2, audit, realism gap.\n\n"
+        description="Synthetic data: flames, cut-outs, scenes, Method 1, Method 2, audit, realism gap.\n\n"
         "example:\n  fuzzyfire synth method2 --n 200 --out out/m2 --size 320x240",
     )
     inner = synth.add_subparsers(dest="synth_command", metavar="SUBCOMMAND")
     for add in (
         _register_flames,
+        _register_cutouts,
         _register_scenes,
         _register_method1,
         _register_method2,

@@ -99,7 +99,8 @@ def sprite_from_rgba(rgba: NDArray[np.uint8], flame_threshold: float = 0.55) -> 
     return Sprite(np.ascontiguousarray(rgba), np.zeros(rgba.shape[:2] + (3,), np.uint8), mask)
 
 
-def _write_png(path: Path, array: NDArray[np.uint8]) -> None:
+def write_png(path: Path, array: NDArray[np.uint8]) -> None:
+    """Write an (h, w) grey, (h, w, 3) RGB or (h, w, 4) RGBA uint8 array as a PNG; OSError when it cannot."""
     if array.ndim == 3:
         array = cv2.cvtColor(array, cv2.COLOR_RGBA2BGRA if array.shape[2] == 4 else cv2.COLOR_RGB2BGR)
     if not cv2.imwrite(str(path), array, [cv2.IMWRITE_PNG_COMPRESSION, 3]):
@@ -119,9 +120,9 @@ def save_sequence(folder: Path, seq: SpriteSequence) -> Path:
     """Write ``seq`` into ``folder`` (created); returns the folder."""
     folder.mkdir(parents=True, exist_ok=True)
     for i, sp in enumerate(seq.sprites):
-        _write_png(folder / f"{i:04d}_over.png", sp.over)
-        _write_png(folder / f"{i:04d}_emission.png", sp.emission)
-        _write_png(folder / f"{i:04d}_mask.png", sp.mask.astype(np.uint8) * 255)
+        write_png(folder / f"{i:04d}_over.png", sp.over)
+        write_png(folder / f"{i:04d}_emission.png", sp.emission)
+        write_png(folder / f"{i:04d}_mask.png", sp.mask.astype(np.uint8) * 255)
     meta = {"name": seq.name, "frames": len(seq.sprites), **dict(seq.meta)}
     (folder / "sequence.json").write_text(json.dumps(meta, indent=1, sort_keys=True) + "\n", encoding="utf-8")
     return folder

@@ -1,0 +1,123 @@
+"""Flame cut-outs from labelled images: the colour rule, the RGBA crop, and the command's sequence folders."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pytest
+
+from curate.core.formats.registry import read_dataset
+from curate.core.problems import Problem
+from fuzzyfire.cli import main
+from synth.cutouts import cut, cutouts, filled, fire_mask, pixel_box
+from synth.sprites import load_library
+
+ORANGE, CORE, BLUE, GREY = (240, 120, 20), (255, 240, 200), (30, 60, 200), (128, 128, 128)
+
+
+def _image_with_disc(size: tuple[int, int] = (120, 160), centre: tuple[int, int] = (60, 50), r: int = 20) -> np.ndarray:
+    """(h, w, 3) RGB: blue background, an orange disc with a bright core at ``centre`` (x, y)."""
+    img = np.zeros(size + (3,), np.uint8)
+    img[:] = BLUE
+    cv2.circle(img, centre, r, ORANGE, -1)
+    cv2.circle(img, centre, r // 3, CORE, -1)
+    return img
+
+
+def test_the_colour_rule_takes_flames_and_their_core_not_sky_or_grey() -> None:
+    px = np.array([[ORANGE, CORE, BLUE, GREY, (255, 255, 255)]], np.uint8)
+    assert fire_mask(px).tolist() == [[True, True, False, False, True]]
+
+
+def test_holes_are_filled_and_the_outside_stays_empty() -> None:
+    ring = np.zeros((40, 40), np.uint8)
+    cv2.circle(ring, (20, 20), 12, 1, 3)
+    out = filled(ring.astype(bool))
+    assert out[20, 20] and out[20, 10] and not out[0, 0] and not out[39, 39]
+
+
+def test_a_cutout_is_the_crop_with_the_flame_as_alpha() -> None:
+    img = _image_with_disc()
+    got = cut(img, (30, 20, 60, 60), min_cover=0.08)
+    assert got is not None
+    rgba, cover = got
+    assert rgba.shape == (60, 60, 4) and np.array_equal(rgba[..., :3], img[20:80, 30:90])
+    assert rgba[30, 30, 3] == 255 and rgba[0, 0, 3] == 0  # disc centre opaque, blue corner transparent
+    assert 0.25 < cover < 0.45  # pi 20^2 / 60^2 = 0.35
+    assert cut(img, (100, 0, 50, 30), min_cover=0.08) is None  # only sky
+
+
+def test_pixel_boxes_cover_the_float_box_and_stay_in_the_image() -> None:
+    assert pixel_box((10.2, 5.7, 20.5, 10.0), 100, 100) == (10, 5, 21, 11)
+    assert pixel_box((-4.0, 90.5, 20.0, 20.0), 100, 100) == (0, 90, 16, 10)
+
+
+def _write_yolo(root: Path, images: dict[str, tuple[np.ndarray, list[str]]]) -> None:
+    for split in ("train", "valid"):
+        (root / split / "images").mkdir(parents=True)
+        (root / split / "labels").mkdir(parents=True)
+    for name, (img, rows) in images.items():
+        split = "valid" if name.startswith("v") else "train"
+        cv2.imwrite(str(root / split / "images" / f"{name}.png"), cv2.cvtColor(img, cv2.COLOR_RGB2BGR))
+        (root / split / "labels" / f"{name}.txt").write_text("".join(r + "\n" for r in rows))
+    (root / "data.yaml").write_text("names: [fire, smoke]\nnc: 2\n")
+
+
+@pytest.fixture
+def labelled(tmp_path: Path) -> Path:
+    """train: a0 (a flame box, a 10-px fire box, a sky box, a smoke box over the flame), a1 (a flame box);
+    valid: v0 (a flame box)."""
+    root = tmp_path / "real"
+
+    def row(cls: int, x: int, y: int, w: int, h: int) -> str:  # pixel box of a 160x120 image -> a YOLO row
+        return f"{cls} {(x + w / 2) / 160:.9f} {(y + h / 2) / 120:.9f} {w / 160:.9f} {h / 120:.9f}"
+
+    flame = row(0, 30, 20, 60, 60)  # the disc
+    _write_yolo(
+        root,
+        {
+            "a0": (_image_with_disc(), [flame, row(0, 140, 5, 10, 10), row(0, 100, 2, 48, 30), row(1, 30, 20, 60, 60)]),
+            "a1": (_image_with_disc(centre=(100, 70), r=25), [row(0, 75, 45, 50, 50)]),
+            "v0": (_image_with_disc(), [flame]),
+        },
+    )
+    return root
+
+
+def test_cutouts_skip_small_and_sky_boxes_and_other_classes(labelled: Path) -> None:
+    ds = read_dataset(labelled).dataset.select_split("train")
+    problems: list[Problem] = []
+    items = list(cutouts(ds, "fire", min_side=16, min_cover=0.08, problems=problems))
+    assert [(Path(c.file).stem, c.box) for c in items] == [("a0", (30, 20, 60, 60)), ("a1", (75, 45, 50, 50))]
+    assert not problems
+    with pytest.raises(ValueError, match="no class 'flame'"):
+        list(cutouts(ds, "flame"))
+
+
+def test_an_unreadable_image_is_named_and_the_rest_is_cut(labelled: Path) -> None:
+    ds = read_dataset(labelled).dataset.select_split("train")
+    (labelled / "train" / "images" / "a1.png").write_bytes(b"not a png")  # broken after the listing
+    problems: list[Problem] = []
+    items = list(cutouts(ds, "fire", problems=problems))
+    assert [Path(c.file).stem for c in items] == ["a0"]
+    assert len(problems) == 1 and problems[0].path.endswith("a1.png")
+
+
+def test_the_command_writes_a_flame_library_and_refuses_to_overwrite(labelled: Path, tmp_path: Path, capsys) -> None:
+    out = tmp_path / "cutouts"
+    assert main(["synth", "cutouts", str(labelled), "--split", "train", "--out", str(out)]) == 0
+    assert "wrote 2 cut-outs" in capsys.readouterr().out
+    index = json.loads((out / "cutouts.json").read_text())
+    assert [(e["png"], e["box"]) for e in index] == [
+        ("real-000/00000.png", [30, 20, 60, 60]),
+        ("real-000/00001.png", [75, 45, 50, 50]),
+    ]
+    (seq,) = load_library([out])
+    assert len(seq.sprites) == 2 and all(s.mask.any() for s in seq.sprites)
+    assert seq.sprites[0].size[0] <= 60 and seq.sprites[0].mask.mean() > 0.5  # cropped to the disc
+    assert main(["synth", "cutouts", str(labelled), "--out", str(out)]) == 2
+    assert "holds cut-outs already" in capsys.readouterr().err
+    assert main(["synth", "cutouts", str(labelled), "--split", "test", "--out", str(tmp_path / "x")]) == 2
