@@ -33,15 +33,13 @@ def cmd_flames(args: argparse.Namespace) -> int:
 def cmd_cutouts(args: argparse.Namespace) -> int:
     import sys
 
-    from curate.core.commands import parse_aliases, print_problems
-    from curate.core.formats.registry import read_dataset
+    from curate.core.commands import print_problems, read_from_args
     from curate.core.load import SplitError, pick_split
     from synth.cutouts import cutouts, write_cutouts
 
-    aliases = parse_aliases(args.alias)
-    result = read_dataset(args.src, args.fmt, names=args.names, source=args.source, aliases=aliases)
+    result = read_from_args(args)
     try:
-        ds = pick_split(result.drop_classes(args.drop_class).dataset, args.split, args.src)
+        ds = pick_split(result.dataset, args.split, args.src)
         problems: list = []
         n = write_cutouts(cutouts(ds, args.class_name, args.min_side, args.min_cover, problems), args.out)
     except (SplitError, ValueError, FileExistsError) as exc:

@@ -13,9 +13,9 @@ from curate.core.commands import (
     load_config_or_report,
     parse_aliases,
     print_problems,
+    read_from_args,
     write_dataset_or_report,
 )
-from curate.core.formats.registry import read_dataset
 from curate.core.problems import count_levels, has_errors
 from curate.core.writer import IMAGE_MODES, OUTPUT_FORMATS
 from curate.stats import dataset_stats, plot_box_sizes
@@ -23,8 +23,7 @@ from curate.validate import validate
 
 
 def cmd_convert(args: argparse.Namespace) -> int:
-    result = read_dataset(args.src, args.fmt, names=args.names, source=args.source, aliases=parse_aliases(args.alias))
-    result = result.drop_classes(args.drop_class)
+    result = read_from_args(args)
     ds = result.dataset
     formats = list(OUTPUT_FORMATS) if args.to == "all" else [args.to]
     written = write_dataset_or_report(ds, args, "convert", formats, args.images)
@@ -68,8 +67,7 @@ def cmd_validate(args: argparse.Namespace) -> int:
 
 
 def cmd_stats(args: argparse.Namespace) -> int:
-    result = read_dataset(args.src, args.fmt, names=args.names, source=args.source, aliases=parse_aliases(args.alias))
-    result = result.drop_classes(args.drop_class)
+    result = read_from_args(args)
     ds = result.dataset
     stats = dataset_stats(ds, result.unlabelled)
     png = Path(args.png) if args.png else None

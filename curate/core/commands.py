@@ -12,7 +12,8 @@ from typing import Any, TextIO, TypeVar
 
 from curate.core.config import ConfigError, load_config, to_dict
 from curate.core.dataset import Dataset
-from curate.core.formats.registry import FORMATS
+from curate.core.formats.common import ReadResult
+from curate.core.formats.registry import FORMATS, read_dataset
 from curate.core.problems import Problem, count_levels
 from curate.core.writer import OutputError, WriteResult, write_dataset
 
@@ -52,6 +53,13 @@ def add_reader_args(p: argparse.ArgumentParser) -> None:
         help="remove the boxes of a class (its images stay, possibly as negatives); repeatable or comma-separated",
     )
     p.add_argument("--source", help="source tag for every image (default: real:<folder name>)")
+
+
+def read_from_args(args: argparse.Namespace) -> ReadResult:
+    """The dataset ``args.src`` as the options of :func:`add_reader_args` describe it: format, YOLO names,
+    source tag and aliases applied, the ``--drop-class`` classes removed."""
+    result = read_dataset(args.src, args.fmt, names=args.names, source=args.source, aliases=parse_aliases(args.alias))
+    return result.drop_classes(args.drop_class)
 
 
 def parse_aliases(items: Sequence[str]) -> dict[str, str]:
