@@ -17,6 +17,7 @@ reaches pair F1 0.98, against 0.82 for one 224-pixel view of the 1280-d head, at
 from __future__ import annotations
 
 import hashlib
+import math
 import os
 import tempfile
 import warnings
@@ -30,6 +31,11 @@ from numpy.typing import NDArray
 
 DEFAULT_MODEL = "efficientnet-lite0"
 CROP_VIEW = 0.8  # side of the centre view, as a fraction of the image side
+#: A JPEG is decoded at 1/2, 1/4 or 1/8 of its size only while its short side stays >= this many times S: a
+#: 416-px frame is decoded whole for S = 160 (its sharpness and embedding are those of the full picture), a
+#: 6.6 MP photo at 1/4. Part of every embedding's identity (:meth:`Preprocess.key`): the embedding cache never
+#: mixes vectors decoded under another rule.
+DECODE_MIN_SIDE = 2.0
 
 
 @dataclass(frozen=True)
@@ -76,8 +82,12 @@ class Preprocess:
         x = (batch.astype(np.float32) - mean) * inv_std
         return np.ascontiguousarray(x.transpose(0, 3, 1, 2)) if self.layout == "nchw" else x
 
+    def decode_min_side(self) -> int:
+        """Smallest short side, in pixels, a JPEG may be decoded down to for these inputs (:data:`DECODE_MIN_SIDE`)."""
+        return math.ceil(DECODE_MIN_SIDE * self.size)
+
     def key(self) -> str:
-        return f"b{self.blur:g}-v{CROP_VIEW:g}-s{self.size}-m{','.join(f'{v:g}' for v in self.mean)}-d{','.join(f'{v:g}' for v in self.std)}-{'bgr' if self.bgr else 'rgb'}-{self.layout}"
+        return f"r{DECODE_MIN_SIDE:g}-b{self.blur:g}-v{CROP_VIEW:g}-s{self.size}-m{','.join(f'{v:g}' for v in self.mean)}-d{','.join(f'{v:g}' for v in self.std)}-{'bgr' if self.bgr else 'rgb'}-{self.layout}"
 
 
 LITE0_PREPROCESS = Preprocess(size=160, blur=1.5)

@@ -8,7 +8,6 @@ and hashes the files and decodes the new ones. Unreadable files become :class:`P
 from __future__ import annotations
 
 import hashlib
-import math
 import os
 from collections import deque
 from collections.abc import Callable, Iterable, Iterator, Sequence
@@ -25,7 +24,7 @@ from curate.core.imageio import ImageError, decode_sized, is_image_file
 from curate.core.problems import Problem
 from curate.core.progress import progress
 from curate.core.walk import walk_files
-from curate.embed import CROP_VIEW, OnnxEmbedder, Preprocess, l2_normalize
+from curate.embed import OnnxEmbedder, Preprocess, l2_normalize
 from curate.embedcache import EmbeddingCache, FileFacts
 
 T = TypeVar("T")
@@ -106,14 +105,13 @@ def sharpness(image: NDArray[np.uint8]) -> float:
 def decode_facts(path: Path, preprocess: Preprocess | None) -> tuple[FileFacts, NDArray[np.uint8] | None] | Problem:
     """Decode one file: its facts and the (2, S, S, 3) model inputs of its two views (None without ``preprocess``).
 
-    With ``preprocess`` a large JPEG is decoded at reduced size, its short side at least S / :data:`CROP_VIEW`
-    (so the centre view is never enlarged; :func:`curate.core.imageio.decode_image`); width and height are the full
-    size, the pixel hash and sharpness are of the decoded image (the same decode for the same file, so equal
+    With ``preprocess`` a large JPEG is decoded at reduced size, its short side at least
+    :meth:`~curate.embed.Preprocess.decode_min_side` (:func:`curate.core.imageio.decode_image`); width and height
+    are the full size, the pixel hash and sharpness are of the decoded image (the same decode for the same file, so equal
     pictures still hash equal)."""
     try:
         data = path.read_bytes()
-        min_side = math.ceil(preprocess.size / CROP_VIEW) if preprocess else 0
-        image, (width, height) = decode_sized(data, path, min_side)
+        image, (width, height) = decode_sized(data, path, preprocess.decode_min_side() if preprocess else 0)
     except ImageError as exc:
         return Problem(path.as_posix(), exc.reason)
     except OSError as exc:
