@@ -1,19 +1,33 @@
 # fuzzyfire: `make test` creates .venv (torch CPU build first) when missing or stale, then runs the tests.
+# Every package is installed at the version requirements.lock pins (`make lock` refreshes it).
 PYTHON ?= python3
 VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
+LOCK := requirements.lock
 
-.PHONY: install test test-fast lint bench clean experiment
+.PHONY: install test test-fast lint bench clean experiment lock
 
 install: $(STAMP)
 
-$(STAMP): pyproject.toml
+$(STAMP): pyproject.toml $(LOCK)
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
-	$(BIN)/python -m pip install --quiet torch==2.13.0
-	$(BIN)/python -m pip install --quiet -e ".[dev]"
+	$(BIN)/python -m pip install --quiet torch==2.13.0 -c $(LOCK)
+	$(BIN)/python -m pip install --quiet -e ".[dev]" -c $(LOCK)
+	$(BIN)/python -m curate.core.lock
 	touch $(STAMP)
+
+# Refresh requirements.lock: install pyproject.toml's dependencies unconstrained into a scratch venv, freeze them.
+lock:
+	rm -rf .lock-venv && $(PYTHON) -m venv .lock-venv
+	.lock-venv/bin/python -m pip install --quiet --upgrade pip
+	.lock-venv/bin/python -m pip install --quiet torch==2.13.0
+	.lock-venv/bin/python -m pip install --quiet -e ".[dev]"
+	head -3 $(LOCK) > $(LOCK).new
+	.lock-venv/bin/python -m pip freeze --exclude-editable | sed 's/^torch==\([0-9.]*\)+cpu$$/torch==\1/' >> $(LOCK).new
+	mv $(LOCK).new $(LOCK) && rm -rf .lock-venv
+	@echo "wrote $(LOCK): $$(grep -c '==' $(LOCK)) packages"
 
 test: $(STAMP)
 	$(BIN)/python -m pytest -q

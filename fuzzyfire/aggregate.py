@@ -187,6 +187,7 @@ def realism_gaps(cfg: ExperimentConfig, data: Prepared, datasets: Datasets, out:
 
 def write_summary(cfg: ExperimentConfig, specs, results, rows, out: Path, standin: bool) -> None:
     """``experiment.json`` (config, versions, runs and their status) and ``results.jsonl``."""
+    from curate.core.lock import lock_status
     from curate.core.manifest import git_commit, versions
 
     runs = [
@@ -194,7 +195,14 @@ def write_summary(cfg: ExperimentConfig, specs, results, rows, out: Path, standi
          "status": "failed" if r is None else "done"}
         for s, r in zip(specs, results)
     ]  # fmt: skip
-    doc = {"config": to_dict(cfg), "standin": standin, "runs": runs, "versions": versions(), "git_commit": git_commit()}
+    doc = {
+        "config": to_dict(cfg),
+        "standin": standin,
+        "runs": runs,
+        "versions": versions(),
+        "lock": lock_status(),
+        "git_commit": git_commit(),
+    }
     if standin:
         doc["notice"] = STANDIN_NOTICE
     (out / "experiment.json").write_text(json.dumps(doc, indent=1) + "\n", encoding="utf-8")

@@ -23,6 +23,7 @@ from typing import Any
 from curate.core.dataset import Dataset, DatasetBuilder
 from curate.core.formats.yolo import ultralytics_val_folders
 from curate.core.load import SplitError
+from curate.core.lock import lock_status, lock_summary
 from curate.mix import mixture_dir, parse_mixture, write_mixture
 from fuzzyfire.aggregate import STANDIN_NOTICE, result_rows, write_report, write_summary
 from fuzzyfire.datasets import DataRef, Datasets
@@ -235,6 +236,7 @@ def run_experiment(cfg: ExperimentConfig, base: Path, out: Path, executor=None) 
     cfg.check()
     out = Path(out).resolve()
     out.mkdir(parents=True, exist_ok=True)
+    _say(f"env    {lock_summary(lock_status())}")
     grid = grid_entries(cfg)
     data = prepare_data(cfg, base, out, needed_methods(grid))
     if data.standin:

@@ -20,6 +20,7 @@ import numpy as np
 import torch
 
 from curate.core.dataset import Dataset
+from curate.core.lock import lock_status
 from curate.core.manifest import git_commit, versions
 from curate.core.progress import progress
 from train.anchors import check_anchors, label_sizes
@@ -289,6 +290,7 @@ def _finish(t: Trainer, out: Path, best: dict[str, Any]) -> dict[str, Any]:
         "onnx": "best.onnx" if (out / "best.onnx").is_file() else None,
         "device": str(t.device),
         "versions": versions(),
+        "lock": lock_status(),
         "git_commit": git_commit(),
     }
     (out / "results.json").write_text(json.dumps(results, indent=1) + "\n", encoding="utf-8")

@@ -1,5 +1,5 @@
-"""``manifest.json``: what made a dataset folder (command, arguments, versions, git commit, source files
-with content hashes). No timestamps, so the same inputs give a byte-identical manifest."""
+"""``manifest.json``: what made a dataset folder (command, arguments, versions and whether they are the locked
+ones, git commit, source files with content hashes). No timestamps, so the same inputs give a byte-identical manifest."""
 
 from __future__ import annotations
 
@@ -12,6 +12,8 @@ from concurrent.futures import ThreadPoolExecutor
 from importlib import metadata
 from pathlib import Path
 from typing import Any
+
+from curate.core.lock import lock_status
 
 _PACKAGES = ("fuzzyfire", "numpy", "opencv-contrib-python-headless", "pillow", "pycocotools", "torch", "onnxruntime")
 
@@ -75,6 +77,7 @@ def build_manifest(
         "command": command,
         "args": {k: _jsonable(v) for k, v in sorted(args.items())},
         "versions": versions(),
+        "lock": lock_status(),  # whether the versions are requirements.lock's
         "git_commit": git_commit(),
         "outputs": dict(outputs or {}),
         **dict(extra or {}),
