@@ -21,7 +21,7 @@ from curate.core.dataset import Dataset
 from curate.core.problems import Problem
 from curate.core.writer import write_dataset
 from curate.dedup import DEFAULT_THRESHOLD
-from curate.dedupjob import DedupOptions, DedupRun, dedup_document, run_dedup, write_outputs
+from curate.dedupjob import DedupOptions, DedupRun, dedup_document, run_dedup, tie_key, write_outputs
 from curate.embed import OnnxEmbedder, Preprocess, load_embedder
 from curate.embedcache import EmbeddingCache
 from curate.rank import rank_order
@@ -126,7 +126,7 @@ def curate(
     opts = replace(opts, top=top)
     if top is not None and cfg.rank.method == "kcenter":  # the k-center order depends on N
         kept = run.result.kept
-        keys = [run.scan.images[i].path for i in kept]
+        keys = [tie_key(run.scan.images[i]) for i in kept]
         order, _ = rank_order(run.scan.vectors[kept], keys, "kcenter", cfg.rank.k, cfg.dedup.backend, top)
         run.ranking = [kept[i] for i in order]
     run.selected = sorted(run.ranking[:top] if top is not None else run.ranking)

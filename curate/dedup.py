@@ -7,14 +7,19 @@
   N x N matrix.
 
 **Keeper policy.** Images are ranked by: protected first (under a ``--protect`` folder), then largest
-resolution (width x height), then sharpness (variance of the Laplacian), then file size, then path (A..Z).
+resolution (width x height), then sharpness (variance of the Laplacian of exact integer
+sums, compared to 10 significant digits), then file
+size, then content (sha256), then path (A..Z).
 Walking that order, an image is *kept* unless a duplicate of it was already kept; a removed image names the
 nearest kept duplicate (``duplicate_of``). Hence no two kept images are duplicates, every removed image is a
 true duplicate of a kept one (no chaining through intermediate frames), and protected images are never removed.
 
 **Groups** are the connected components of the duplicate pairs (union-find), reported keeper first. Results do
 not depend on input order: vectors are indexed in (sha256, path) order and all choices follow the total order
-above.
+above. Nor do they hang on the last float bits: a removed image names the kept duplicate in the nearest
+:data:`curate.search.DISTANCE_GRID` cell (keeper order among equals) and sharpness to 10 significant digits (its
+summation order is the only float in it), so the noise between machines and builds (``bench/bench_embedding_noise.py``) changes no choice unless a
+distance lies within it of the threshold itself (the shared data's nearest is 5x10^-5 away: README).
 """
 
 from __future__ import annotations
@@ -28,7 +33,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from curate.scan import ScannedImage
-from curate.search import Pairs, duplicate_pairs
+from curate.search import Pairs, duplicate_pairs, grid_cells
 
 #: Default near-duplicate radius on unit EfficientNet-Lite0 embeddings (see ``bench/bench_dedup_quality.py``).
 DEFAULT_THRESHOLD = 0.45
@@ -58,9 +63,21 @@ def keeper_order(images: Sequence[ScannedImage], protected: Sequence[bool]) -> l
 
     def key(i: int) -> tuple:
         f = images[i].facts
-        return (not protected[i], -f.width * f.height, -f.sharpness, -f.bytes, images[i].path)
+        return (
+            not protected[i],
+            -f.width * f.height,
+            -significant(f.sharpness, 10),
+            -f.bytes,
+            f.sha256,
+            images[i].path,
+        )
 
     return sorted(range(len(images)), key=key)
+
+
+def significant(value: float, digits: int) -> float:
+    """``value`` rounded to ``digits`` significant digits (0 stays 0)."""
+    return float(f"{value:.{digits - 1}e}")
 
 
 def is_protected(images: Sequence[ScannedImage], folders: Sequence[Path | str]) -> list[bool]:
@@ -108,18 +125,22 @@ def near_pairs(
 def greedy_keep(
     n: int, pairs: Pairs, order: Sequence[int], allowed: Sequence[bool], protected: Sequence[bool]
 ) -> list[Removal]:
-    """Walk ``order``; remove an allowed, unprotected image when a kept neighbour exists (nearest named)."""
+    """Walk ``order``; remove an allowed, unprotected image when a kept neighbour exists (the nearest named:
+    smallest :func:`curate.search.grid_cells` distance, then earliest in ``order``)."""
     ptr, nbr, dist = _adjacency(n, pairs)
+    cells = grid_cells(dist)
+    rank = np.empty(n, np.int64)
+    rank[np.asarray(order, np.int64)] = np.arange(len(order))
     kept = np.zeros(n, bool)
     removed = []
     for i in order:
         if not allowed[i]:
             continue
         lo, hi = ptr[i], ptr[i + 1]
-        hit = kept[nbr[lo:hi]]
-        if hit.any() and not protected[i]:
-            k = int(np.argmin(np.where(hit, dist[lo:hi], np.inf)))
-            removed.append(Removal(i, int(nbr[lo + k]), "near", float(dist[lo + k])))
+        hit = np.flatnonzero(kept[nbr[lo:hi]]) + lo
+        if len(hit) and not protected[i]:
+            k = hit[np.lexsort((rank[nbr[hit]], cells[hit]))[0]]
+            removed.append(Removal(i, int(nbr[k]), "near", float(dist[k])))
         else:
             kept[i] = True
     return removed

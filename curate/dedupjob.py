@@ -22,7 +22,7 @@ from curate.embed import OnnxEmbedder
 from curate.embedcache import EmbeddingCache
 from curate.rank import rank_order
 from curate.report import make_thumbs, write_histogram, write_html
-from curate.scan import ScanResult, scan_images
+from curate.scan import ScannedImage, ScanResult, scan_images
 from curate.search import build_index
 
 APPLY_MODES: tuple[str, ...] = ("copy", "link")
@@ -53,6 +53,11 @@ class DedupRun:
     selected: list[int] = field(default_factory=list)  # the --top set (or all kept), ascending
 
 
+def tie_key(image: ScannedImage) -> str:
+    """Ranking tie-break: the file's content (sha256), then its path."""
+    return f"{image.facts.sha256}:{image.path}"
+
+
 def run_dedup(
     paths: Sequence[Path],
     embedder: OnnxEmbedder,
@@ -68,7 +73,7 @@ def run_dedup(
     )
     kept = result.kept
     order, scores = rank_order(
-        scan.vectors[kept], [scan.images[i].path for i in kept], opts.rank, opts.k, opts.backend, opts.top
+        scan.vectors[kept], [tie_key(scan.images[i]) for i in kept], opts.rank, opts.k, opts.backend, opts.top
     )
     ranking = [kept[i] for i in order]
     nn = np.zeros(len(scan.images), np.float32)

@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from curate.search import build_index
+from curate.search import build_index, grid_cells
 
 RANK_METHODS: tuple[str, ...] = ("score", "kcenter")
 
@@ -31,7 +31,8 @@ def diversity_scores(vectors: NDArray[np.float32], k: int = 10, backend: str = "
 
 
 def k_center(vectors: NDArray[np.float32], n: int, first: int) -> list[int]:
-    """``n`` row indices chosen farthest-point first, starting at row ``first``; ties -> lowest index.
+    """``n`` row indices chosen farthest-point first (distances compared on the
+    :data:`curate.search.DISTANCE_GRID`), starting at row ``first``; ties -> lowest index.
 
     Memory O(N); time O(n N D)."""
     total = len(vectors)
@@ -40,7 +41,7 @@ def k_center(vectors: NDArray[np.float32], n: int, first: int) -> list[int]:
     picked = [first]
     nearest = np.linalg.norm(vectors - vectors[first], axis=1)
     for _ in range(min(n, total) - 1):
-        nxt = int(np.argmax(nearest))
+        nxt = int(np.argmax(grid_cells(nearest)))
         picked.append(nxt)
         nearest = np.minimum(nearest, np.linalg.norm(vectors - vectors[nxt], axis=1))
         nearest[picked] = -1.0
@@ -55,14 +56,16 @@ def rank_order(
     backend: str = "auto",
     top: int | None = None,
 ) -> tuple[list[int], NDArray[np.float32]]:
-    """Row indices best first, and the (N,) diversity scores. ``keys`` (e.g. paths) break ties.
+    """Row indices best first, and the (N,) diversity scores. Scores are compared on the
+    :data:`curate.search.DISTANCE_GRID`; ``keys`` (e.g. content hashes) break ties.
 
     ``score``: descending score (all rows). ``kcenter``: the ``top`` (default all) rows in farthest-point
     order from the top-scored row, then the rest by score."""
     if method not in RANK_METHODS:
         raise ValueError(f"unknown ranking method {method!r}; choose one of {', '.join(RANK_METHODS)}")
     scores = diversity_scores(vectors, k, backend)
-    by_score = sorted(range(len(vectors)), key=lambda i: (-float(scores[i]), keys[i]))
+    cells = grid_cells(scores)
+    by_score = sorted(range(len(vectors)), key=lambda i: (-int(cells[i]), keys[i]))
     if method == "score" or not by_score:
         return by_score, scores
     picked = k_center(vectors, len(vectors) if top is None else top, by_score[0])

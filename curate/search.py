@@ -22,6 +22,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 AUTO_EXACT_MAX = 200_000
+#: Orderings of distances and scores (which kept duplicate is nearest, the diversity ranking) compare them on this
+#: grid, ties broken by content, so float noise far below it (2e-6 between builds, CPUs and thread counts:
+#: ``bench/bench_embedding_noise.py``) reorders nothing. Thresholds keep their exact meaning (``d < t``).
+DISTANCE_GRID = 1e-4
 _BLOCK_CELLS = 1 << 24  # query rows x base rows per similarity block (64 MB of float32)
 
 Idx = NDArray[np.int64]
@@ -38,6 +42,11 @@ class Pairs:
 
     def __len__(self) -> int:
         return int(self.i.shape[0])
+
+
+def grid_cells(values: NDArray[np.floating]) -> NDArray[np.int64]:
+    """(N,) distances or scores -> (N,) int64 cells of :data:`DISTANCE_GRID` (floor), for orderings."""
+    return np.floor(np.asarray(values, np.float64) / DISTANCE_GRID).astype(np.int64)
 
 
 def sim_to_dist(sim: NDArray[np.floating]) -> Vec:

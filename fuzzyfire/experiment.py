@@ -64,6 +64,8 @@ def _stage(what: str, make, *args) -> DataRef:
     _say(f"data   {what:<16} ...")
     stage, ref = make(*args)
     _say(f"data   {what:<16} {stage.folder}{'  (cached)' if stage.cached else ''}")
+    if stage.note:
+        _say(f"data   {what:<16} {stage.note}")
     return ref
 
 

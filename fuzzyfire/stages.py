@@ -1,7 +1,9 @@
 """Data stages of an experiment, each cached in a folder named by a hash of its resolved config.
 
-A stage writes ``OUT/data/<name>-<hash>/`` and, last, ``stage.json`` (its identity): a folder with
-``stage.json`` is reused as is; a folder without it is an interrupted stage of ours and is rebuilt (synthetic
+A stage writes ``OUT/data/<name>-<hash>/`` and, last, ``stage.json`` (its identity, the fingerprint of the
+dataset it holds and the versions that built it): a folder with ``stage.json`` is reused (a curation after
+checking that this environment curates the same contents; any stage with a note when it was built with other
+versions); a folder without it is an interrupted stage of ours and is rebuilt (synthetic
 generators resume from their own staging folders beside it). Stages: the real data (a user folder read in
 place, a curation of sources, or a generated stand-in), the rare test set, and the Method 1 / Method 2 pools.
 """
@@ -35,6 +37,29 @@ class Stage:
     folder: Path
     hash: str
     cached: bool
+    note: str | None = None  # one line for the user about a reused stage (built on another environment)
+
+
+class StageMismatch(ValueError):
+    """A finished stage holds other contents than its config gives in this environment."""
+
+
+def contents(folder: Path) -> dict[str, Any] | None:
+    """The :class:`curate.core.fingerprint.Fingerprint` of the dataset in ``folder`` (None: not a dataset)."""
+    from curate.core.fingerprint import fingerprint
+    from curate.core.formats.coco import read_coco
+
+    if not (folder / "annotations.json").is_file():
+        return None
+    return fingerprint(read_coco(folder).dataset).to_dict()
+
+
+def environment() -> dict[str, Any]:
+    """What a stage was built with: the versions that shape outputs and the lock file's hash."""
+    from curate.core.lock import lock_status
+    from curate.core.manifest import versions
+
+    return {"versions": versions(), "lock": lock_status().get("sha256")}
 
 
 def cached_stage(
@@ -43,10 +68,14 @@ def cached_stage(
     identity: Mapping[str, Any],
     build: Callable[[Path], Any],
     legacy: Mapping[str, Any] | None = None,
+    verify: bool = False,
 ) -> Stage:
-    """Run ``build(folder)`` unless ``root/<name>-<hash>/stage.json`` exists; write ``stage.json`` last.
+    """Run ``build(folder)`` unless ``root/<name>-<hash>/stage.json`` exists; write ``stage.json`` last, with
+    the :func:`contents` of what was built and the :func:`environment` that built it.
     ``legacy``: the identity an earlier version gave the same stage; a finished stage under it is reused as is
-    (its folder and hash, so what was made from it keeps its identity too)."""
+    (its folder and hash, so what was made from it keeps its identity too).
+    ``verify`` (for cheap stages, e.g. a curation whose embeddings are cached): a reused stage is rebuilt aside
+    and compared by contents; other contents raise :class:`StageMismatch` instead of mixing two datasets."""
     if legacy is not None:
         old = digest({**legacy, "fuzzyfire": __version__})
         if (Path(root) / f"{name}-{old}" / STAGE_FILE).is_file():
@@ -55,13 +84,58 @@ def cached_stage(
     h = digest(identity)
     folder = Path(root) / f"{name}-{h}"
     if (folder / STAGE_FILE).is_file():
-        return Stage(folder, h, True)
+        return reused_stage(folder, h, build if verify else None)
     if folder.exists():
         shutil.rmtree(folder)  # our own interrupted stage (no stage.json): rebuild it
     build(folder)
-    doc = {"stage": name, "hash": h, "identity": identity}
+    doc = {"stage": name, "hash": h, "identity": identity, "contents": contents(folder), "environment": environment()}
     (folder / STAGE_FILE).write_text(json.dumps(doc, indent=1, sort_keys=True, default=str) + "\n", encoding="utf-8")
     return Stage(folder, h, False)
+
+
+def reused_stage(folder: Path, h: str, rebuild: Callable[[Path], Any] | None) -> Stage:
+    """A finished stage, checked: with ``rebuild``, against a fresh build of it (:class:`StageMismatch` when the
+    contents differ); otherwise its environment against this one (a note when they differ)."""
+    doc = json.loads((folder / STAGE_FILE).read_text(encoding="utf-8"))
+    if rebuild is not None:
+        recorded = doc.get("contents") or contents(folder)
+        fresh = _rebuilt_contents(folder, rebuild)
+        if fresh != recorded:
+            raise StageMismatch(
+                f"{folder}: holds {_describe(recorded)}, but its config now gives {_describe(fresh)} "
+                "(another environment or fuzzyfire version): its runs would mix two datasets; move the folder "
+                "away to rebuild it, or use another --out"
+            )
+    return Stage(folder, h, True, _environment_note(doc.get("environment")))
+
+
+def _rebuilt_contents(folder: Path, rebuild: Callable[[Path], Any]) -> dict[str, Any] | None:
+    aside = folder.parent / f".{folder.name}.verify"
+    shutil.rmtree(aside, ignore_errors=True)
+    try:
+        rebuild(aside)
+        return contents(aside)
+    finally:
+        shutil.rmtree(aside, ignore_errors=True)
+
+
+def _describe(fp: Mapping[str, Any] | None) -> str:
+    if fp is None:
+        return "no dataset"
+    splits = ", ".join(f"{k or '(none)'} {v}" for k, v in fp["splits"].items())
+    return f"{fp['images']} images ({splits}, fingerprint {fp['fingerprint']})"
+
+
+def _environment_note(built: Mapping[str, Any] | None) -> str | None:
+    """One line naming the versions that differ from the ones a stage was built with (None: same, or unknown)."""
+    if not built:
+        return None
+    now = environment()
+    changed = {k: (v, now["versions"].get(k)) for k, v in built["versions"].items() if now["versions"].get(k) != v}
+    if not changed:
+        return None
+    shown = ", ".join(f"{k} {old} (now {new})" for k, (old, new) in sorted(changed.items()))
+    return f"built with {shown}: a rebuild may differ"
 
 
 def _absolute(path: Path, base: Path) -> Path:
@@ -135,14 +209,17 @@ def content_identity(cfg: Any) -> dict[str, Any]:
 
 def curate_stage(root: Path, cfg: Any, base: Path) -> tuple[Stage, DataRef]:
     """``fuzzyfire curate`` of ``cfg`` (a :class:`curate.curation.CurateConfig`; sources relative to ``base``)
-    with the user's embedding cache."""
+    with the user's embedding cache. A finished curation is verified on reuse (a few seconds with the cache):
+    its contents must be what this environment curates."""
     config = to_dict(cfg)
     for source in config["sources"]:
         where = _absolute(Path(source["path"]), base)
         if not where.exists():
             raise FileNotFoundError(f"{where}: dataset to curate not found")
         source["path"] = where.as_posix()
-    stage = cached_stage(root, "curated", {"kind": "curate", "config": config}, lambda out: _curate(cfg, base, out))
+    stage = cached_stage(
+        root, "curated", {"kind": "curate", "config": config}, lambda out: _curate(cfg, base, out), verify=True
+    )
     return stage, DataRef(stage.folder, {"kind": "curate", "hash": stage.hash}, "coco")
 
 

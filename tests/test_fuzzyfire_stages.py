@@ -136,3 +136,60 @@ def test_pools_made_by_path_before_content_identities_are_still_found(tmp_path: 
     )
     found, ref = synth_stage(tmp_path / "data", "method2", cfg, tmp_path)
     assert found.cached and found.folder == old.folder and ref.identity == {"kind": "method2", "hash": old.hash}
+
+
+def _dataset_builder(n: int, seeds: list[int]):
+    """A build function writing a COCO dataset of ``n`` images whose pixels come from ``seeds`` (one per build)."""
+    from dataclasses import replace
+
+    from curate.core.writer import write_dataset
+    from tests.factories import tiny_pool
+
+    def build(folder: Path) -> None:
+        src = folder.parent / f"src-{len(seeds)}"
+        pool = tiny_pool(src, n, "real:x")
+        if seeds.pop(0):  # another environment: the same config makes another picture
+            from tests.factories import write_image
+
+            write_image(src / "img000.png", 16, 12, seed=99)
+        pool = replace(pool, images=tuple(replace(im, split="train") for im in pool.images))
+        write_dataset(pool, folder, ("coco",), "copy")
+
+    return build
+
+
+def test_a_stage_records_its_contents_and_environment(tmp_path: Path) -> None:
+    from curate.core.fingerprint import fingerprint
+    from curate.core.formats.coco import read_coco
+
+    stage = cached_stage(tmp_path, "data", {"n": 3}, _dataset_builder(3, [0]))
+    doc = json.loads((stage.folder / STAGE_FILE).read_text())
+    assert doc["contents"] == fingerprint(read_coco(stage.folder).dataset).to_dict()
+    assert doc["contents"]["images"] == 3 and doc["contents"]["splits"] == {"train": 3}
+    assert doc["environment"]["versions"]["numpy"] and doc["environment"]["lock"]
+
+
+def test_a_verified_stage_with_other_contents_is_refused_in_one_line(tmp_path: Path) -> None:
+    from fuzzyfire.stages import StageMismatch
+
+    seeds = [0, 0, 1]  # first build, an identical rebuild, then a rebuild that differs
+    build = _dataset_builder(3, seeds)
+    first = cached_stage(tmp_path, "curated", {"n": 3}, build, verify=True)
+    again = cached_stage(tmp_path, "curated", {"n": 3}, build, verify=True)
+    assert again.cached and again.folder == first.folder and again.note is None
+    with pytest.raises(StageMismatch) as err:
+        cached_stage(tmp_path, "curated", {"n": 3}, build, verify=True)
+    message = str(err.value)
+    assert "\n" not in message and "would mix two datasets" in message
+    assert message.count("3 images (train 3, fingerprint") == 2
+    assert (first.folder / STAGE_FILE).is_file() and not list(tmp_path.glob(".*verify"))  # nothing lost or left
+
+
+def test_a_stage_built_with_other_versions_says_so(tmp_path: Path) -> None:
+    stage = cached_stage(tmp_path, "data", {"n": 2}, _dataset_builder(2, [0]))
+    doc = json.loads((stage.folder / STAGE_FILE).read_text())
+    doc["environment"]["versions"]["onnxruntime"] = "0.0.1"
+    (stage.folder / STAGE_FILE).write_text(json.dumps(doc))
+    again = cached_stage(tmp_path, "data", {"n": 2}, _dataset_builder(2, []))
+    assert again.cached and again.note is not None
+    assert again.note.startswith("built with onnxruntime 0.0.1 (now ") and again.note.endswith("a rebuild may differ")
