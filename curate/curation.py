@@ -25,6 +25,7 @@ from curate.dedupjob import DedupOptions, DedupRun, dedup_document, run_dedup, t
 from curate.embed import OnnxEmbedder, Preprocess, load_embedder
 from curate.embedcache import EmbeddingCache
 from curate.rank import rank_order
+from curate.scan import ScanResult
 from curate.sources import MergeConfig, SourceConfig, merge_sources
 from curate.split import near_groups, resolve_sizes, split_groups, straddling_groups
 
@@ -104,9 +105,15 @@ def _selection_size(cfg: CurateConfig, n: int) -> int | None:
 
 
 def curate(
-    cfg: CurateConfig, base: Path, out: Path, embedder: OnnxEmbedder, cache: EmbeddingCache | None
+    cfg: CurateConfig,
+    base: Path,
+    out: Path,
+    embedder: OnnxEmbedder,
+    cache: EmbeddingCache | None,
+    scan: ScanResult | None = None,
 ) -> CurateResult:
-    """Run the pipeline (module docstring); relative source paths resolve against ``base``."""
+    """Run the pipeline (module docstring); relative source paths resolve against ``base``. ``scan``: the
+    facts and embeddings of the merged images, when already computed (e.g. a previous result's ``run.scan``)."""
     merged, problems = merge_sources(MergeConfig(cfg.sources, cfg.classes), base, out)
     protect = tuple(_source_path(s, base) for s in cfg.sources if s.name and s.name in cfg.dedup.protect_sources)
     paths = [Path(img.file_name) for img in merged.images]
@@ -121,7 +128,7 @@ def curate(
         cfg.model.workers,
         cfg.model.batch_size,
     )
-    run = run_dedup(paths, embedder, cache, opts)  # ranks every kept image; the top N is cut below
+    run = run_dedup(paths, embedder, cache, opts, scan)  # ranks every kept image; the top N is cut below
     top = _selection_size(cfg, len(run.result.kept))
     opts = replace(opts, top=top)
     if top is not None and cfg.rank.method == "kcenter":  # the k-center order depends on N

@@ -7,19 +7,18 @@
   N x N matrix.
 
 **Keeper policy.** Images are ranked by: protected first (under a ``--protect`` folder), then largest
-resolution (width x height), then sharpness (variance of the Laplacian of exact integer
-sums, compared to 10 significant digits), then file
-size, then content (sha256), then path (A..Z).
-Walking that order, an image is *kept* unless a duplicate of it was already kept; a removed image names the
+resolution (width x height), then sharpness (variance of the Laplacian), then file size, then content (sha256),
+then path (A..Z). Walking that order, an image is *kept* unless a duplicate of it was already kept; a removed image names the
 nearest kept duplicate (``duplicate_of``). Hence no two kept images are duplicates, every removed image is a
 true duplicate of a kept one (no chaining through intermediate frames), and protected images are never removed.
 
 **Groups** are the connected components of the duplicate pairs (union-find), reported keeper first. Results do
 not depend on input order: vectors are indexed in (sha256, path) order and all choices follow the total order
-above. Nor do they hang on the last float bits: a removed image names the kept duplicate in the nearest
-:data:`curate.search.DISTANCE_GRID` cell (keeper order among equals) and sharpness to 10 significant digits (its
-summation order is the only float in it), so the noise between machines and builds (``bench/bench_embedding_noise.py``) changes no choice unless a
-distance lies within it of the threshold itself (the shared data's nearest is 5x10^-5 away: README).
+above. Nor do they hang on the last float bits where they need not: a removed image names the kept duplicate in
+the nearest :data:`curate.search.DISTANCE_GRID` cell (keeper order among equals), sharpness is compared to 10
+significant digits and ties go to content, not path. A distance within float noise of the threshold itself can
+still flip (any threshold has an edge); the README ("Reproducible anywhere") measures how far the shared data's
+decisions are from it.
 """
 
 from __future__ import annotations

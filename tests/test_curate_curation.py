@@ -82,3 +82,70 @@ def test_top_n_protect_and_determinism(sources: Path, embedder: OnnxEmbedder) ->
         None,
     )
     assert [i.split for i in other_seed.dataset.images] != [i.split for i in first.dataset.images]
+
+
+#: configs/shared-data.yaml's curation of fire-cctv-416 in the locked environment, as the README states it.
+SHARED_CURATION = "629 images (test 126, train 440, valid 63), fingerprint d54583468d5768dd"
+#: Largest change of a two-view distance between onnxruntime settings, torch and AVX2 kernels
+#: (``bench/bench_embedding_noise.py``).
+CROSS_BUILD_NOISE = 2.4e-6
+
+
+@pytest.fixture(scope="module")
+def shared_curation(shared_data: Path, embedder: OnnxEmbedder, tmp_path_factory: pytest.TempPathFactory):
+    from curate.core.config import load_config
+    from fuzzyfire.experiment_config import ExperimentConfig
+
+    configs = Path(__file__).resolve().parents[1] / "configs"
+    cfg = load_config(configs / "shared-data.yaml", ExperimentConfig).real.curate_config()
+    out = tmp_path_factory.mktemp("shared-curation")
+    return cfg, configs, out, curate(cfg, configs, out, embedder, None)
+
+
+def _picked(result) -> list[tuple[str, str]]:
+    return sorted((img.file_name, img.split) for img in result.dataset.images)
+
+
+@pytest.mark.slow
+@pytest.mark.shared_data
+def test_shared_curation_is_the_one_the_readme_states(shared_curation) -> None:
+    from curate.core.fingerprint import fingerprint
+
+    *_, result = shared_curation
+    assert fingerprint(result.dataset).describe() == SHARED_CURATION
+    readme = (Path(__file__).resolve().parents[1] / "README.md").read_text(encoding="utf-8")
+    assert SHARED_CURATION.split("fingerprint ")[1] in readme
+
+
+@pytest.mark.slow
+@pytest.mark.shared_data
+def test_shared_curation_survives_ten_times_the_cross_build_noise(shared_curation, embedder: OnnxEmbedder) -> None:
+    """Unit embeddings moved by Gaussian noise (sigma 1e-5 per component: the largest distance change it makes
+    is > 10x the largest measured between builds) keep every kept image, duplicate group and split."""
+    from dataclasses import replace
+
+    import numpy as np
+
+    from curate.embed import l2_normalize
+
+    cfg, base, out, result = shared_curation
+    scan = result.run.scan
+
+    def distances(vectors: np.ndarray) -> np.ndarray:
+        v = vectors[:400].astype(np.float64)
+        return np.sqrt(np.maximum(2 - 2 * v @ v.T, 0))
+
+    reference = distances(scan.vectors)
+    for seed in range(3):
+        rng = np.random.default_rng(seed)
+        moved = replace(
+            scan,
+            vectors=l2_normalize(scan.vectors + rng.normal(0, 1e-5, scan.vectors.shape).astype(np.float32)),
+            crops=l2_normalize(scan.crops + rng.normal(0, 1e-5, scan.crops.shape).astype(np.float32)),
+        )
+        change = np.abs(distances(moved.vectors) - reference)[reference < 0.7]
+        assert change.max() > 10 * CROSS_BUILD_NOISE  # the noise is that large
+        again = curate(cfg, base, out, embedder, None, scan=moved)
+        assert _picked(again) == _picked(result)
+        assert again.run.result.kept == result.run.result.kept
+        assert again.run.result.groups == result.run.result.groups

@@ -115,3 +115,32 @@ def test_union_find_components() -> None:
     uf.union(1, 3)
     uf.union(5, 0)
     assert uf.components() == [[0, 5], [1, 3, 4], [2]]
+
+
+def test_near_ties_are_decided_by_keeper_order_not_float_bits() -> None:
+    """Image 2 duplicates kept images 0 and 1 at distances that differ by float noise (3e-6, inside one
+    DISTANCE_GRID cell): it names the earlier keeper, whichever float is smaller."""
+    from curate.dedup import greedy_keep
+    from curate.search import Pairs
+
+    for eps in (3e-6, -3e-6):
+        pairs = Pairs(np.array([0, 1]), np.array([2, 2]), np.array([0.30005, 0.30005 + eps], np.float32))
+        removed = greedy_keep(3, pairs, [1, 0, 2], [True] * 3, [False] * 3)
+        assert [(r.index, r.duplicate_of) for r in removed] == [(2, 1)]
+    far = Pairs(np.array([0, 1]), np.array([2, 2]), np.array([0.3001, 0.3004], np.float32))  # other cells
+    assert greedy_keep(3, far, [1, 0, 2], [True] * 3, [False] * 3)[0].duplicate_of == 0
+
+
+def test_keeper_order_breaks_sharpness_noise_by_content() -> None:
+    from curate.dedup import keeper_order
+    from curate.embedcache import FileFacts
+    from curate.scan import ScannedImage
+
+    def image(path: str, sha: str, sharpness: float) -> ScannedImage:
+        return ScannedImage(path, FileFacts(sha, 1000, 64, 48, sha, sharpness))
+
+    for noise in (1e-12, -1e-12):  # the summation order of another CPU
+        images = [image("/a.jpg", "f" * 64, 123.456789), image("/b.jpg", "0" * 64, 123.456789 + noise)]
+        assert keeper_order(images, [False, False]) == [1, 0]  # content decides, not the last float bit
+    sharper = [image("/a.jpg", "f" * 64, 123.5), image("/b.jpg", "0" * 64, 123.4)]
+    assert keeper_order(sharper, [False, False]) == [0, 1]

@@ -53,3 +53,13 @@ def test_rank_order_methods_and_errors() -> None:
     assert diversity_scores(x[:1]).tolist() == [0.0]
     with pytest.raises(ValueError):
         k_center(x, 3, first=99)
+
+
+def test_equal_scores_follow_the_keys() -> None:
+    """Two mirror-image vectors score the same up to float bits: the tie-break keys order them."""
+    m = np.array([1.0, 1.0, 0.0]) / np.sqrt(2)
+    vectors = np.array([[1, 0, 0], [0, 1, 0], m, [0, 0, 1]], np.float32)
+    for keys in (["a", "b", "c", "d"], ["b", "a", "c", "d"]):
+        order, _ = rank_order(vectors, keys, "score", k=2)
+        first, second = (0, 1) if keys[0] < keys[1] else (1, 0)
+        assert order.index(first) < order.index(second)
