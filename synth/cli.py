@@ -163,10 +163,10 @@ def _register_flames(sub: argparse._SubParsersAction) -> None:
         description="Simulate flame sequences (stable fluids or noise), keep every K-th frame.\n\n"
         "example:\n  fuzzyfire synth flames --out out/flames --n 12 --seed 0 --frames 1024 --keep-every 12",
     )
-    p.add_argument("--out", required=True, type=Path)
+    p.add_argument("--out", required=True, type=Path, help="folder for the sequence folders")
     p.add_argument("--n", type=int, default=12, help="number of sequences")
-    p.add_argument("--seed", type=int, default=0)
-    p.add_argument("--generator", default="fluid", choices=("fluid", "noise"))
+    p.add_argument("--seed", type=int, default=0, help="random seed")
+    p.add_argument("--generator", default="fluid", choices=("fluid", "noise"), help="flame simulation")
     p.add_argument("--frames", type=int, default=1024, help="simulation steps per sequence")
     p.add_argument("--keep-every", type=int, default=12, help="keep one frame every K steps")
     p.add_argument("--rare", type=float, default=0.1, help="fraction of chemical-colour (rare) flames")
@@ -207,18 +207,18 @@ def _register_scenes(sub: argparse._SubParsersAction) -> None:
         description="Render a preview PNG of each of the first N environments.\n\n"
         "example:\n  fuzzyfire synth scenes --out out/scenes --n 48 --size 320x240",
     )
-    p.add_argument("--out", required=True, type=Path)
-    p.add_argument("--n", type=int, default=48)
-    p.add_argument("--seed", type=int, default=0)
-    p.add_argument("--size", type=parse_size, default=(320, 240))
+    p.add_argument("--out", required=True, type=Path, help="folder for the preview PNGs")
+    p.add_argument("--n", type=int, default=48, help="procedural environments to preview")
+    p.add_argument("--seed", type=int, default=0, help="random seed")
+    p.add_argument("--size", type=parse_size, default="320x240", help="preview size WxH in pixels")
     p.set_defaults(func=cmd_scenes)
 
 
 def _dataset_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--out", required=True, type=Path)
-    p.add_argument("--n", type=int, default=100)
-    p.add_argument("--seed", type=int, default=0)
-    p.add_argument("--size", type=parse_size, default=(640, 480))
+    p.add_argument("--out", required=True, type=Path, help="output dataset folder")
+    p.add_argument("--n", type=int, default=100, help="images to generate")
+    p.add_argument("--seed", type=int, default=0, help="random seed (the same seed gives the same images)")
+    p.add_argument("--size", type=parse_size, default="640x480", help="image size WxH in pixels")
     p.add_argument("--scenes", type=int, default=48, help="procedural environments (0 = only --environments)")
     p.add_argument(
         "--environments",
@@ -229,7 +229,7 @@ def _dataset_arguments(p: argparse.ArgumentParser) -> None:
     )
     p.add_argument("--flames", type=Path, nargs="*", help="sequence folders (synth flames output, or RGBA PNGs)")
     p.add_argument("--library", type=int, default=12, help="procedural sequences to make when --flames is absent")
-    p.add_argument("--overwrite", action="store_true")
+    p.add_argument("--overwrite", action="store_true", help="replace a fuzzyfire dataset already at --out")
     p.add_argument("--smoke", action="store_true", help="also annotate smoke (class 'smoke', alpha >= 0.25)")
 
 
@@ -267,7 +267,7 @@ def _register_method2(sub: argparse._SubParsersAction) -> None:
     _dataset_arguments(p)
     p.add_argument("--backgrounds", type=Path, nargs="+", metavar="PATH", help="fire-free photos (files or folders)")
     p.add_argument(
-        "--photo-share", type=float, default=0.5, help="share of views on a photo when 3D scenes are also used (0.5)"
+        "--photo-share", type=float, default=0.5, help="share of views on a photo when 3D scenes are also used"
     )
     p.set_defaults(func=cmd_method2)
 
@@ -280,8 +280,8 @@ def _register_audit(sub: argparse._SubParsersAction) -> None:
         description="Compare a synthetic dataset's boxes with the boxes of its kept flame masks.\n\n"
         "example:\n  fuzzyfire synth audit out/m2 --json",
     )
-    p.add_argument("folder", type=Path)
-    p.add_argument("--json", action="store_true")
+    p.add_argument("folder", type=Path, help="a dataset written by synth method1 or method2")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(func=cmd_audit)
 
 

@@ -179,6 +179,6 @@ def _register_merge(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--set", action="append", default=[], metavar="KEY=VALUE", help="override a config key, e.g. classes=[fire]"
     )
-    p.add_argument("--images", default="copy", choices=("copy", "hardlink", "symlink"))
+    p.add_argument("--images", default="copy", choices=("copy", "hardlink", "symlink"), help="how images reach --out")
     p.add_argument("--overwrite", action="store_true", help="replace a fuzzyfire dataset already at --out")
     p.set_defaults(func=cmd_merge)

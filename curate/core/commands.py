@@ -20,12 +20,25 @@ from curate.core.writer import OutputError, WriteResult, write_dataset
 T = TypeVar("T")
 
 
+class HelpFormatter(argparse.RawDescriptionHelpFormatter):
+    """The description (with its examples) printed as written, and every option's default in its help line:
+    ``(default: VALUE)`` is added unless the help already speaks of its default or there is none to show
+    (None, a switch, an empty list)."""
+
+    def _get_help_string(self, action: argparse.Action) -> str | None:
+        text = action.help or ""
+        default = action.default
+        if not action.option_strings or "default" in text or default in (None, argparse.SUPPRESS):
+            return text
+        if isinstance(default, bool) or default == []:
+            return text
+        return f"{text} (default: %(default)s)".lstrip()
+
+
 def add_command(sub: argparse._SubParsersAction, name: str, help: str, description: str) -> argparse.ArgumentParser:
     """The subcommand ``name`` of ``sub``: ``help`` is its line in the parent's help, ``description`` (with its
-    examples) is printed as written."""
-    return sub.add_parser(
-        name, help=help, formatter_class=argparse.RawDescriptionHelpFormatter, description=description
-    )
+    examples) is printed as written, and every option's help shows its default (:class:`HelpFormatter`)."""
+    return sub.add_parser(name, help=help, formatter_class=HelpFormatter, description=description)
 
 
 def add_reader_args(p: argparse.ArgumentParser) -> None:
