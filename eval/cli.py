@@ -8,6 +8,7 @@ import sys
 from pathlib import Path
 
 from curate.core.commands import add_command
+from curate.core.formats.registry import FORMATS
 
 
 def _names(text: str) -> list[str]:
@@ -202,7 +203,13 @@ def _add_scoring_args(p: argparse.ArgumentParser) -> None:
         help="split to score (val and valid are one name); default: test, else val/valid, else the whole set "
         "when it has no splits; 'all' = every image",
     )
-    p.add_argument("--from", dest="data_format", default="auto", help="test-set format (default: detect)")
+    p.add_argument(
+        "--from",
+        dest="data_format",
+        default="auto",
+        choices=("auto", *FORMATS),
+        help="test-set format (default: detect)",
+    )
     p.add_argument(
         "--alias", action="append", default=[], metavar="NAME=CLASS", help="map a test-set class, e.g. Flame=fire"
     )

@@ -195,7 +195,7 @@ def _register_cutouts(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--min-cover", type=float, default=0.08, help="skip boxes less fire-coloured than this share (default 0.08)"
     )
-    add_reader_args(p)
+    add_reader_args(p, source=False)
     p.set_defaults(func=cmd_cutouts)
 
 

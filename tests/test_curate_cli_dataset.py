@@ -106,3 +106,25 @@ def test_merge_command(tmp_path, capsys):
     assert len(doc["images"]) == 4 and (tmp_path / "out" / "data.yaml").is_file()
     assert main(["merge", str(tmp_path / "m.yaml"), "--out", str(tmp_path / "o2"), "--set", "classes=fire"]) == 2
     assert "classes: expected a list" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("command", ["convert", "validate", "stats"])
+def test_a_mistyped_drop_class_is_an_error_listing_the_classes_before_any_work(tmp_path, capsys, command):
+    write_yolo_dataset(tmp_path / "src", names=("fire", "default"))
+    out = ["--to", "coco", "--out", str(tmp_path / "o")] if command == "convert" else []
+    assert main([command, str(tmp_path / "src"), *out, "--drop-class", "defualt"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "--drop-class 'defualt': no such class (classes: 'fire', 'default')" in err
+    assert not (tmp_path / "o").exists()
+
+
+def test_validate_honours_drop_class_as_stats_does(tmp_path, capsys):
+    write_yolo_dataset(tmp_path / "src", names=("fire", "default"))
+    assert main(["validate", str(tmp_path / "src"), "--drop-class", "default", "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert main(["stats", str(tmp_path / "src"), "--drop-class", "default", "--json"]) == 0
+    stats = json.loads(capsys.readouterr().out)
+    assert (doc["boxes"], doc["negatives"]) == (stats["boxes"], stats["negatives"]) == (2, 2)
+    assert not any("not a known class" in p["reason"] for p in doc["problems"])
+    with pytest.raises(SystemExit):  # validate shows no source tag: --source is not offered
+        main(["validate", str(tmp_path / "src"), "--source", "real:x"])

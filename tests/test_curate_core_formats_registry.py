@@ -37,11 +37,14 @@ def test_drop_classes_silences_their_unknown_class_warning(tmp_path):
     assert result.drop_classes([]) is result and result.dataset.category_names == ["fire", "default"]
 
 
-def test_drop_classes_takes_comma_lists_and_reports_names_that_match_nothing(tmp_path):
+def test_drop_classes_takes_comma_lists_and_refuses_names_that_match_nothing(tmp_path):
+    from curate.core.names import UnknownNameError
+
     write_yolo_dataset(tmp_path / "ds", names=("Fire", "Default"))
     result = read_dataset(tmp_path / "ds")
-    dropped = result.drop_classes(["default,smok"])
-    assert dropped.dataset.category_names == ["fire"]
-    assert any(p.reason == "no class 'smok' to drop (classes: fire, default)" for p in dropped.problems)
-    only_typo = result.drop_classes(["smok"])
-    assert only_typo.dataset is result.dataset and any("no class 'smok'" in p.reason for p in only_typo.problems)
+    dropped = result.drop_classes(["default,fire"])
+    assert dropped.dataset.category_names == [] and not dropped.dataset.annotations
+    with pytest.raises(UnknownNameError, match=r"--drop-class 'smok': no such class \(classes: 'fire', 'default'\)"):
+        result.drop_classes(["default,smok"])
+    kept = result.drop_classes(["smok"], missing_ok=True)  # the caller checked the name against other datasets
+    assert kept is result

@@ -162,3 +162,10 @@ def test_errors_breakdown_from_the_cli(work, tmp_path):
     assert all(v == pytest.approx(0.0) for v in errors["delta_AP50"].values())  # the oracle makes no error
     assert errors["negatives"] >= 1 and errors["false_alarms_per_100_negatives"] == 0.0
     assert json.loads((tmp_path / "o" / "errors.json").read_text()) == errors
+
+
+def test_a_mistyped_test_set_class_is_an_error_before_scoring(work, capsys):
+    model = oracle_model(work["root"] / "typo.onnx")
+    assert main(["score", str(model), "--data", str(work["test"]), "--drop-class", "smok"]) == 2
+    captured = capsys.readouterr()
+    assert "--drop-class 'smok': no such class (classes: 'fire', 'smoke')" in captured.err and not captured.out

@@ -42,7 +42,7 @@ def cmd_convert(args: argparse.Namespace) -> int:
 def cmd_validate(args: argparse.Namespace) -> int:
     result = validate(
         args.src, args.fmt, names=args.names, aliases=parse_aliases(args.alias), decode=not args.no_decode
-    )
+    ).drop_classes(args.drop_class)
     ds, problems = result.dataset, result.problems
     stats = dataset_stats(ds, result.unlabelled)
     if args.json:
@@ -150,7 +150,7 @@ def _register_inspect(sub: argparse._SubParsersAction) -> None:
     p.add_argument("src", help="dataset folder or COCO .json")
     p.add_argument("--json", action="store_true", help="print a JSON document instead of lines")
     p.add_argument("--no-decode", action="store_true", help="check headers only (faster, misses truncated images)")
-    add_reader_args(p)
+    add_reader_args(p, source=False)
     p.set_defaults(func=cmd_validate)
 
     p = add_command(
