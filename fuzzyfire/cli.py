@@ -10,6 +10,7 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from curate.core.commands import HelpFormatter, add_command
+from curate.core.writer import OutputError
 from fuzzyfire import __version__
 
 #: Modules whose ``register(subparsers)`` adds commands, in help order (imported when the parser is built);
@@ -119,7 +120,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 2
     try:
         return int(args.func(args))
-    except (FileNotFoundError, ValueError) as exc:
+    except (FileNotFoundError, FileExistsError, NotADirectoryError, PermissionError, ValueError, OutputError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
