@@ -37,12 +37,22 @@ def _fmt(value: float | None) -> str:
     return "  -  " if value is None else f"{value:.3f}"
 
 
-def _print_text(result, intervals: dict) -> None:  # result: eval.score.ScoreResult
+def _split_label(split: str) -> str:
+    """How the scored split is named in the output: as the dataset names it."""
+    from eval.score import ALL_SPLITS
+
+    return "all splits" if split == ALL_SPLITS else f"split {split}" if split else "every image"
+
+
+def _print_text(result, intervals: dict, split: str) -> None:  # result: eval.score.ScoreResult
     m, spec = result.metrics, result.spec
     print(
         f"model  {spec.path} ({spec.format}, {spec.input_width}x{spec.input_height}, classes {list(spec.class_names)})"
     )
-    print(f"test   {m.images} images ({m.negatives} negatives), {m.boxes} boxes, {m.detections} detections")
+    print(
+        f"data   {_split_label(split)}: {m.images} images ({m.negatives} negatives), {m.boxes} boxes, "
+        f"{m.detections} detections"
+    )
     print("       " + "  ".join(f"{k} {_fmt(v)}" for k, v in m.summary.items()))
     for key, iv in intervals.items():
         print(f"       {key[:-3]} 95% CI [{iv['low']:.3f}, {iv['high']:.3f}] ({iv['samples']} image resamples)")
@@ -114,7 +124,7 @@ def cmd_score(args: argparse.Namespace) -> int:
         extra = {"errors": errors.to_dict()} if errors is not None else {}
         print(json.dumps({**result.metrics.to_dict(), **intervals, **extra}, indent=1))
     else:
-        _print_text(result, intervals)
+        _print_text(result, intervals, test.split)
         if errors is not None:
             _print_errors(errors)
     return 0

@@ -169,3 +169,16 @@ def test_a_mistyped_test_set_class_is_an_error_before_scoring(work, capsys):
     assert main(["score", str(model), "--data", str(work["test"]), "--drop-class", "smok"]) == 2
     captured = capsys.readouterr()
     assert "--drop-class 'smok': no such class (classes: 'fire', 'smoke')" in captured.err and not captured.out
+
+
+def test_the_scored_split_is_named_as_the_dataset_names_it(work, tmp_path, capsys):
+    from factories import write_yolo_dataset
+
+    model = oracle_model(work["root"] / "names.onnx")
+    write_yolo_dataset(tmp_path / "ds")
+    assert main(["score", str(model), "--data", str(tmp_path / "ds"), "--split", "val"]) == 0
+    assert "\ndata   split valid: 2 images (2 negatives)" in capsys.readouterr().out
+    assert main(["score", str(model), "--data", str(work["test"])]) == 0
+    assert "\ndata   split test: 6 images" in capsys.readouterr().out
+    assert main(["score", str(model), "--data", str(work["test"]), "--split", "all"]) == 0
+    assert "\ndata   all splits: 6 images" in capsys.readouterr().out

@@ -28,6 +28,7 @@ def test_train_command_writes_a_run(folders, tmp_path: Path, capsys) -> None:
     assert "best epoch 1" in out and "best.onnx" in out
     results = json.loads((tmp_path / "run" / "results.json").read_text())
     assert results["config"]["imgsz"] == 64 and (tmp_path / "run" / "best.onnx").is_file()
+    assert results["best"]["epoch"] == 1  # the epoch the console names, counted the same way
 
 
 def test_bad_arguments_are_errors(folders, tmp_path: Path) -> None:

@@ -103,7 +103,7 @@ def cmd_train(args: argparse.Namespace) -> int:
         return 2
     best = results["best"]
     print(
-        f"best epoch {best['epoch'] + 1}: AP {best['AP']:.4f}  AP50 {best['AP50']:.4f}  "
+        f"best epoch {best['epoch']}: AP {best['AP']:.4f}  AP50 {best['AP50']:.4f}  "
         f"fitness {best['fitness']:.4f}  -> {Path(args.out) / 'best.onnx'}"
     )
     return 0
