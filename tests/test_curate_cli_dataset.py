@@ -128,3 +128,25 @@ def test_validate_honours_drop_class_as_stats_does(tmp_path, capsys):
     assert not any("not a known class" in p["reason"] for p in doc["problems"])
     with pytest.raises(SystemExit):  # validate shows no source tag: --source is not offered
         main(["validate", str(tmp_path / "src"), "--source", "real:x"])
+
+
+@pytest.mark.parametrize("fmt", [[], ["--from", "yolo"], ["--from", "images"]])
+def test_a_folder_of_images_without_labels_is_a_negatives_only_set(tmp_path, capsys, fmt):
+    from factories import write_image
+
+    for k in range(3):
+        write_image(tmp_path / "photos" / f"p{k}.jpg", 40, 30, seed=k)
+    assert main(["validate", str(tmp_path / "photos"), *fmt]) == 0
+    captured = capsys.readouterr()
+    assert captured.out == f"{tmp_path / 'photos'}: 3 images, no label files: a negatives-only set\n"
+    assert "0 errors, 0 warnings, 1 info" in captured.err
+    assert main(["stats", str(tmp_path / "photos"), *fmt]) == 0
+    out = capsys.readouterr().out
+    assert "images     3  (negatives 3: 3 without a label file" in out
+    assert "set        3 images, no label files: a negatives-only set" in out
+
+
+def test_an_empty_folder_is_named_as_such(tmp_path, capsys):
+    (tmp_path / "empty").mkdir()
+    assert main(["validate", str(tmp_path / "empty")]) == 2
+    assert "empty: no images, labels or annotations found" in capsys.readouterr().err

@@ -101,3 +101,17 @@ def test_every_output_folder_is_checked_before_the_first_is_written(pools, tmp_p
     assert main([*args, "--mixtures", "R5_S5,R10_S0"]) == 2
     assert "pass --overwrite" in capsys.readouterr().err
     assert not (tmp_path / "o" / "seed0" / "R5_S5").exists()
+
+
+def test_a_folder_of_images_without_labels_mixes_as_negatives(pools, tmp_path: Path, capsys) -> None:
+    from factories import write_image
+
+    _, synth = _split_pools(pools, tmp_path)
+    for k in range(4):
+        write_image(tmp_path / "photos" / f"p{k}.jpg", 16, 12, seed=k)
+    args = ["mix", "--real", str(tmp_path / "photos"), "--synth", str(synth), "--out", str(tmp_path / "o")]
+    assert main([*args, "--mixtures", "R4_S4"]) == 0
+    doc = json.loads((tmp_path / "o" / "seed0" / "R4_S4" / "annotations.json").read_text())
+    boxed = {a["image_id"] for a in doc["annotations"]}
+    real = [i for i in doc["images"] if i["source"].startswith("real:")]
+    assert len(real) == 4 and not boxed & {i["id"] for i in real}

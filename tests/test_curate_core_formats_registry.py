@@ -15,10 +15,15 @@ def test_detects_each_format(tmp_path):
     assert detect_format(tmp_path / "coco" / "annotations.json") == "coco"
 
 
-def test_undetectable_and_unknown(tmp_path):
+def test_images_alone_are_a_negatives_only_set_and_nothing_is_undetectable(tmp_path):
     write_image(tmp_path / "only" / "x.jpg", 5, 5)
-    with pytest.raises(ValueError, match="cannot tell the dataset format"):
-        detect_format(tmp_path / "only")
+    assert detect_format(tmp_path / "only") == "images"
+    result = read_dataset(tmp_path / "only")
+    assert len(result.dataset.images) == 1 and not result.dataset.annotations and not result.dataset.categories
+    assert result.unlabelled == {1} and [p.code for p in result.problems] == ["negatives-only"]
+    (tmp_path / "empty" / "sub").mkdir(parents=True)
+    with pytest.raises(ValueError, match="no images, labels or annotations found"):
+        detect_format(tmp_path / "empty")
     with pytest.raises(FileNotFoundError):
         detect_format(tmp_path / "nothing")
     write_yolo_dataset(tmp_path / "yolo")

@@ -86,6 +86,8 @@ def cmd_stats(args: argparse.Namespace) -> int:
     print("sizes      " + "  ".join(f"{k} {v}" for k, v in stats["box_sizes"].items()) + "  (COCO area buckets)")
     for split, entry in stats["per_split"].items():
         print(f"split {split:<8} " + "  ".join(f"{k} {v}" for k, v in entry.items()))
+    for note in (p for p in result.problems if p.code == "negatives-only"):
+        print(f"set        {note.reason}")
     if png is not None:
         print(f"histogram  {png}")
     return 0
