@@ -9,7 +9,7 @@ from __future__ import annotations
 import json
 import os
 import shutil
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -26,7 +26,8 @@ from curate.scan import ScannedImage, ScanResult, scan_images
 from curate.search import build_index
 
 APPLY_MODES: tuple[str, ...] = ("copy", "link")
-REPORT_GROUPS = 100  # groups shown in report.html (at most 12 images each)
+REPORT_GROUPS = 100  # groups shown in report.html
+REPORT_GROUP_IMAGES = 12  # images shown per group (its kept ones first), with the group's counts
 REPORT_TOP = 60  # top-ranked images shown
 
 
@@ -129,9 +130,9 @@ def write_outputs(run: DedupRun, doc: dict[str, Any], out: Path, json_name: str 
     files["json"].write_text(json.dumps(doc, indent=1, ensure_ascii=False) + "\n", encoding="utf-8")
     write_histogram(run.nn_dist, doc["threshold"], files["histogram"], f"{len(run.nn_dist)} images")
     images, removed = run.scan.images, {r.index: r for r in run.result.removed}
-    groups = [g[:12] for g in run.result.groups[:REPORT_GROUPS]]
+    groups = [_report_group(g, removed) for g in run.result.groups[:REPORT_GROUPS]]
     top = run.ranking[:REPORT_TOP]
-    wanted = [(images[i].path, images[i].facts.sha256) for i in [*(i for g in groups for i in g), *top]]
+    wanted = [(images[i].path, images[i].facts.sha256) for i in [*(i for _, g in groups for i in g), *top]]
     thumbs = make_thumbs(wanted, out / "thumbs")
 
     def caption(i: int) -> str:
@@ -150,12 +151,24 @@ def write_outputs(run: DedupRun, doc: dict[str, Any], out: Path, json_name: str 
         files["report"],
         str(doc["tool"]),
         summary,
-        [[(images[i].path, caption(i), i not in removed) for i in g] for g in groups],
+        [(heading, [(images[i].path, caption(i), i not in removed) for i in g]) for heading, g in groups],
         [(images[i].path, f"{run.scores[i]:.3f} {Path(images[i].path).name}") for i in top],
         thumbs,
         files["histogram"].name,
+        len(run.result.groups),
     )
     return files
+
+
+def _report_group(group: Sequence[int], removed: Mapping[int, Any]) -> tuple[str, list[int]]:
+    """A group's heading (its size, how many kept and removed, how many shown) and the images shown: its kept
+    images first, then the removed ones, in keeper order, at most :data:`REPORT_GROUP_IMAGES`."""
+    kept = [i for i in group if i not in removed]
+    shown = [*kept, *(i for i in group if i in removed)][:REPORT_GROUP_IMAGES]
+    heading = f"{len(group)} images: {len(kept)} kept, {len(group) - len(kept)} removed"
+    if len(shown) < len(group):
+        heading += f" (showing {len(shown)} of {len(group)})"
+    return heading, shown
 
 
 def check_apply_target(roots: Sequence[Path], to: Path, mode: str) -> None:

@@ -72,27 +72,40 @@ def _figure(path: str, thumb: str | None, caption: str, keep: bool) -> str:
     )
 
 
+GROUPS_NOTE = (
+    "A group is the images linked by duplicate pairs. Near duplicates are not transitive (A like B and B like C "
+    "while A is unlike C), so a group can keep several images: no two kept images are duplicates of each other, "
+    "and every removed image is a duplicate of a kept one (named in dedup.json)."
+)
+
+#: A group as the page shows it: its heading (counts) and ``(path, caption, is_kept)`` per image shown.
+ReportGroup = tuple[str, Sequence[tuple[str, str, bool]]]
+
+
 def write_html(
     path: Path,
     title: str,
     summary: Sequence[str],
-    groups: Sequence[Sequence[tuple[str, str, bool]]],
+    groups: Sequence[ReportGroup],
     top: Sequence[tuple[str, str]],
     thumbs: dict[str, str],
     histogram: str | None,
+    total_groups: int | None = None,
 ) -> Path:
-    """The report page. ``groups``: per group ``(path, caption, is_keeper)`` keeper first; ``top``:
-    ``(path, caption)`` best first; ``thumbs``: path -> thumbnail (relative to the page)."""
+    """The report page. ``groups``: the first groups (of ``total_groups``, default all shown), each with its
+    heading and images, kept ones first; ``top``: ``(path, caption)`` best first; ``thumbs``: path ->
+    thumbnail (relative to the page)."""
     parts = [f"<!doctype html><meta charset=utf-8><title>{html.escape(title)}</title><style>{_CSS}</style>"]
     parts.append(
         f"<h1>{html.escape(title)}</h1><ul>" + "".join(f"<li>{html.escape(s)}</li>" for s in summary) + "</ul>"
     )
     if histogram:
         parts.append(f'<img src="{html.escape(histogram)}" style="max-width:700px;max-height:none;border:0">')
-    parts.append(f"<h2>Duplicate groups (green = kept), first {len(groups)}</h2>")
-    for group in groups:
-        figs = "".join(_figure(p, thumbs.get(p), c, k) for p, c, k in group)
-        parts.append(f'<div class="group">{figs}</div>')
+    total = len(groups) if total_groups is None else total_groups
+    parts.append(f"<h2>Duplicate groups (green = kept): {len(groups)} of {total}</h2><p>{html.escape(GROUPS_NOTE)}</p>")
+    for heading, images in groups:
+        figs = "".join(_figure(p, thumbs.get(p), c, k) for p, c, k in images)
+        parts.append(f'<div class="group"><p>{html.escape(heading)}</p>{figs}</div>')
     parts.append(f"<h2>Most diverse kept images, top {len(top)}</h2><div>")
     parts.append("".join(_figure(p, thumbs.get(p), c, True) for p, c in top) + "</div>")
     path.write_text("\n".join(parts) + "\n", encoding="utf-8")

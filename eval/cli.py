@@ -8,6 +8,7 @@ import sys
 from pathlib import Path
 
 from curate.core.commands import add_command
+from curate.core.formats.registry import FORMATS
 
 
 def _names(text: str) -> list[str]:
@@ -36,12 +37,21 @@ def _fmt(value: float | None) -> str:
     return "  -  " if value is None else f"{value:.3f}"
 
 
-def _print_text(result, intervals: dict) -> None:  # result: eval.score.ScoreResult
+def _split_label(test) -> str:  # test: eval.score.TestSet
+    """How the scored split is named in the output: as the dataset names it."""
+    from eval.score import ALL_SPLITS
+
+    if test.split != ALL_SPLITS:
+        return f"split {test.split}"
+    return "all splits" if any(test.splits) else "every image (no splits)"
+
+
+def _print_text(result, intervals: dict, split: str) -> None:  # result: eval.score.ScoreResult
     m, spec = result.metrics, result.spec
     print(
         f"model  {spec.path} ({spec.format}, {spec.input_width}x{spec.input_height}, classes {list(spec.class_names)})"
     )
-    print(f"test   {m.images} images ({m.negatives} negatives), {m.boxes} boxes, {m.detections} detections")
+    print(f"data   {split}: {m.images} images ({m.negatives} negatives), {m.boxes} boxes, {m.detections} detections")
     print("       " + "  ".join(f"{k} {_fmt(v)}" for k, v in m.summary.items()))
     for key, iv in intervals.items():
         print(f"       {key[:-3]} 95% CI [{iv['low']:.3f}, {iv['high']:.3f}] ({iv['samples']} image resamples)")
@@ -64,6 +74,10 @@ def _score_model(model: Path, args: argparse.Namespace, dataset, problems):  # -
     detector = cfg.detector(model, args.format, args.names, args.imgsz)
     if detector.device_notice:
         print(detector.device_notice, file=sys.stderr)
+    if not dataset.categories:  # a negatives-only set: the model's classes, none present (every detection false)
+        from curate.core.classes import canonical_class
+
+        dataset = dataset.with_categories(list(dict.fromkeys(canonical_class(n) for n in detector.spec.class_names)))
     return score(detector, dataset, cfg.predict_options(args.resize), problems)
 
 
@@ -72,6 +86,10 @@ def _load(args: argparse.Namespace):  # -> eval.score.TestSet
     from eval.score import ALL_SPLITS, load_test_set
 
     test = load_test_set(args.data, args.data_format, args.split, _aliases(args.alias), args.drop_class)
+    for note in (p for p in test.problems if p.code == "negatives-only"):
+        print(
+            f"{note.path}: {note.reason} (AP has no boxes to find: --errors counts its false alarms)", file=sys.stderr
+        )
     if args.split is None and test.split != ALL_SPLITS:
         others = [s for s in test.splits if s != test.split]
         print(
@@ -113,7 +131,7 @@ def cmd_score(args: argparse.Namespace) -> int:
         extra = {"errors": errors.to_dict()} if errors is not None else {}
         print(json.dumps({**result.metrics.to_dict(), **intervals, **extra}, indent=1))
     else:
-        _print_text(result, intervals)
+        _print_text(result, intervals, _split_label(test))
         if errors is not None:
             _print_errors(errors)
     return 0
@@ -202,7 +220,13 @@ def _add_scoring_args(p: argparse.ArgumentParser) -> None:
         help="split to score (val and valid are one name); default: test, else val/valid, else the whole set "
         "when it has no splits; 'all' = every image",
     )
-    p.add_argument("--from", dest="data_format", default="auto", help="test-set format (default: detect)")
+    p.add_argument(
+        "--from",
+        dest="data_format",
+        default="auto",
+        choices=("auto", *FORMATS),
+        help="test-set format (default: detect)",
+    )
     p.add_argument(
         "--alias", action="append", default=[], metavar="NAME=CLASS", help="map a test-set class, e.g. Flame=fire"
     )

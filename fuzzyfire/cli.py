@@ -9,7 +9,8 @@ import sys
 from collections.abc import Sequence
 from pathlib import Path
 
-from curate.core.commands import add_command
+from curate.core.commands import HelpFormatter, add_command
+from curate.core.writer import OutputError
 from fuzzyfire import __version__
 
 #: Modules whose ``register(subparsers)`` adds commands, in help order (imported when the parser is built);
@@ -98,7 +99,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     parser = argparse.ArgumentParser(
         prog="fuzzyfire",
-        formatter_class=argparse.RawDescriptionHelpFormatter,
+        formatter_class=HelpFormatter,
         description="Build and judge detectors of fuzzy objects (fire, smoke) from real and synthetic images.\n\n"
         "example:\n  fuzzyfire convert ../shared/data/fire-smoke-608 --to coco --out out/fs608\n"
         "  fuzzyfire validate out/fs608",
@@ -119,7 +120,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 2
     try:
         return int(args.func(args))
-    except (FileNotFoundError, ValueError) as exc:
+    except (FileNotFoundError, FileExistsError, NotADirectoryError, PermissionError, ValueError, OutputError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:

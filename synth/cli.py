@@ -75,18 +75,42 @@ def cmd_scenes(args: argparse.Namespace) -> int:
     return 0
 
 
-def _dataset_config(args: argparse.Namespace) -> dict:
-    """The config fields Method 1 and Method 2 share, from :func:`_dataset_arguments`."""
-    from synth.library import FlameLibraryConfig
+DEFAULT_SCENES = 48  # procedural rooms when the user brings no backgrounds of their own
+DEFAULT_LIBRARY = 12  # procedural flame sequences when --flames is absent
 
+
+def _scenes(args: argparse.Namespace) -> int:
+    """``--scenes``, else none when the user brings environments or photos (theirs alone), else 48."""
+    if args.scenes is not None:
+        return args.scenes
+    return 0 if args.environments or getattr(args, "backgrounds", None) else DEFAULT_SCENES
+
+
+def _dataset_config(args: argparse.Namespace) -> dict:
+    """The config fields Method 1 and Method 2 share, from :func:`_dataset_arguments`, after checking what can be
+    checked before the flame library is made: the output folder, the environment files and the photos."""
+    from curate.core.writer import check_output_target
+    from synth.envfile import find_environment_files
+    from synth.library import FlameLibraryConfig
+    from synth.photos import list_photos
+
+    check_output_target(args.out, args.overwrite)
+    if args.environments:
+        find_environment_files(args.environments)
+    if getattr(args, "backgrounds", None):
+        list_photos(args.backgrounds)
+
+    if args.library is not None and args.flames:
+        raise ValueError("--library makes procedural flames, which --flames replaces: give one of them")
     w, h = args.size
-    flames = FlameLibraryConfig(sequences=args.library, seed=args.seed, folders=tuple(args.flames or ()))
+    library = DEFAULT_LIBRARY if args.library is None else args.library
+    flames = FlameLibraryConfig(sequences=library, seed=args.seed, folders=tuple(args.flames or ()))
     return {
         "n": args.n,
         "seed": args.seed,
         "width": w,
         "height": h,
-        "scenes": args.scenes,
+        "scenes": _scenes(args),
         "environments": tuple(args.environments or ()),
         "smoke_class": args.smoke,
         "flames": flames,
@@ -107,7 +131,10 @@ def cmd_method2(args: argparse.Namespace) -> int:
     from synth.library import build_library
     from synth.method2 import Method2Config, run_method2
 
-    photos = {"backgrounds": tuple(args.backgrounds or ()), "photo_share": args.photo_share}
+    if args.photo_share is not None and not args.backgrounds:
+        raise ValueError("--photo-share is the share of views on --backgrounds photos, which are not given")
+    share = 0.5 if args.photo_share is None else args.photo_share
+    photos = {"backgrounds": tuple(args.backgrounds or ()), "photo_share": share}
     cfg = Method2Config(**_dataset_config(args), **photos)
     result = run_method2(cfg, build_library(cfg.flames), args.out, overwrite=args.overwrite)
     print(f"wrote {args.out}: {args.n} images ({', '.join(result.files.values())})")
@@ -163,10 +190,10 @@ def _register_flames(sub: argparse._SubParsersAction) -> None:
         description="Simulate flame sequences (stable fluids or noise), keep every K-th frame.\n\n"
         "example:\n  fuzzyfire synth flames --out out/flames --n 12 --seed 0 --frames 1024 --keep-every 12",
     )
-    p.add_argument("--out", required=True, type=Path)
+    p.add_argument("--out", required=True, type=Path, help="folder for the sequence folders")
     p.add_argument("--n", type=int, default=12, help="number of sequences")
-    p.add_argument("--seed", type=int, default=0)
-    p.add_argument("--generator", default="fluid", choices=("fluid", "noise"))
+    p.add_argument("--seed", type=int, default=0, help="random seed")
+    p.add_argument("--generator", default="fluid", choices=("fluid", "noise"), help="flame simulation")
     p.add_argument("--frames", type=int, default=1024, help="simulation steps per sequence")
     p.add_argument("--keep-every", type=int, default=12, help="keep one frame every K steps")
     p.add_argument("--rare", type=float, default=0.1, help="fraction of chemical-colour (rare) flames")
@@ -195,7 +222,7 @@ def _register_cutouts(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--min-cover", type=float, default=0.08, help="skip boxes less fire-coloured than this share (default 0.08)"
     )
-    add_reader_args(p)
+    add_reader_args(p, source=False)
     p.set_defaults(func=cmd_cutouts)
 
 
@@ -207,19 +234,26 @@ def _register_scenes(sub: argparse._SubParsersAction) -> None:
         description="Render a preview PNG of each of the first N environments.\n\n"
         "example:\n  fuzzyfire synth scenes --out out/scenes --n 48 --size 320x240",
     )
-    p.add_argument("--out", required=True, type=Path)
-    p.add_argument("--n", type=int, default=48)
-    p.add_argument("--seed", type=int, default=0)
-    p.add_argument("--size", type=parse_size, default=(320, 240))
+    p.add_argument("--out", required=True, type=Path, help="folder for the preview PNGs")
+    p.add_argument("--n", type=int, default=48, help="procedural environments to preview")
+    p.add_argument("--seed", type=int, default=0, help="random seed")
+    p.add_argument("--size", type=parse_size, default="320x240", help="preview size WxH in pixels")
     p.set_defaults(func=cmd_scenes)
 
 
-def _dataset_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--out", required=True, type=Path)
-    p.add_argument("--n", type=int, default=100)
-    p.add_argument("--seed", type=int, default=0)
-    p.add_argument("--size", type=parse_size, default=(640, 480))
-    p.add_argument("--scenes", type=int, default=48, help="procedural environments (0 = only --environments)")
+def _dataset_arguments(p: argparse.ArgumentParser, photos: bool = False) -> None:
+    """Method 1 and Method 2's options (``photos``: Method 2's --backgrounds exists)."""
+    yours = "--environments or --backgrounds are" if photos else "--environments are"
+    p.add_argument("--out", required=True, type=Path, help="output dataset folder")
+    p.add_argument("--n", type=int, default=100, help="images to generate")
+    p.add_argument("--seed", type=int, default=0, help="random seed (the same seed gives the same images)")
+    p.add_argument("--size", type=parse_size, default="640x480", help="image size WxH in pixels")
+    p.add_argument(
+        "--scenes",
+        type=int,
+        help=f"procedural rooms (default: {DEFAULT_SCENES}, or 0 when {yours} given: then only yours are used; "
+        "pass --scenes N to add N procedural rooms to them)",
+    )
     p.add_argument(
         "--environments",
         type=Path,
@@ -228,8 +262,12 @@ def _dataset_arguments(p: argparse.ArgumentParser) -> None:
         help="3D environments: glTF/GLB/OBJ/PLY files, folders of them, or sidecar YAMLs (see synth/envfile.py)",
     )
     p.add_argument("--flames", type=Path, nargs="*", help="sequence folders (synth flames output, or RGBA PNGs)")
-    p.add_argument("--library", type=int, default=12, help="procedural sequences to make when --flames is absent")
-    p.add_argument("--overwrite", action="store_true")
+    p.add_argument(
+        "--library",
+        type=int,
+        help=f"procedural flame sequences to make instead of --flames (default {DEFAULT_LIBRARY})",
+    )
+    p.add_argument("--overwrite", action="store_true", help="replace a fuzzyfire dataset already at --out")
     p.add_argument("--smoke", action="store_true", help="also annotate smoke (class 'smoke', alpha >= 0.25)")
 
 
@@ -260,14 +298,17 @@ def _register_method2(sub: argparse._SubParsersAction) -> None:
         "from each flame's final visible mask. Backgrounds: procedural scenes, 3D files (--environments)\n"
         "and/or your fire-free photos (--backgrounds). Resumes an interrupted run.\n\n"
         "example:\n  fuzzyfire synth method2 --n 1000 --seed 0 --out out/m2 --size 640x480 --scenes 48\n"
-        "  fuzzyfire synth method2 --n 200 --out out/m2-rooms --scenes 0 --environments configs/scenes\n"
-        "  fuzzyfire synth method2 --n 200 --out out/m2-photos --scenes 0 --backgrounds my/negatives\n"
+        "  fuzzyfire synth method2 --n 200 --out out/m2-rooms --environments configs/scenes\n"
+        "  fuzzyfire synth method2 --n 200 --out out/m2-photos --backgrounds my/negatives\n"
+        "  fuzzyfire synth method2 --n 200 --out out/m2-mixed --environments configs/scenes --scenes 24\n"
         "  fuzzyfire synth audit out/m2 --json",
     )
-    _dataset_arguments(p)
+    _dataset_arguments(p, photos=True)
     p.add_argument("--backgrounds", type=Path, nargs="+", metavar="PATH", help="fire-free photos (files or folders)")
     p.add_argument(
-        "--photo-share", type=float, default=0.5, help="share of views on a photo when 3D scenes are also used (0.5)"
+        "--photo-share",
+        type=float,
+        help="share of views on a --backgrounds photo when 3D scenes are also used (default 0.5)",
     )
     p.set_defaults(func=cmd_method2)
 
@@ -280,8 +321,8 @@ def _register_audit(sub: argparse._SubParsersAction) -> None:
         description="Compare a synthetic dataset's boxes with the boxes of its kept flame masks.\n\n"
         "example:\n  fuzzyfire synth audit out/m2 --json",
     )
-    p.add_argument("folder", type=Path)
-    p.add_argument("--json", action="store_true")
+    p.add_argument("folder", type=Path, help="a dataset written by synth method1 or method2")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(func=cmd_audit)
 
 

@@ -14,6 +14,7 @@ whose fire-coloured share is below ``min_cover`` are skipped.
 from __future__ import annotations
 
 import json
+import shutil
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
@@ -22,8 +23,10 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
+from curate.core.classes import canonical_class
 from curate.core.dataset import Dataset
 from curate.core.imageio import ImageError, read_image
+from curate.core.names import check_names
 from curate.core.problems import Problem
 from curate.core.progress import progress
 from synth.sprites import write_png
@@ -88,9 +91,9 @@ def cutouts(
 ) -> Iterator[Cutout]:
     """Cut-outs of every ``category`` box of ``ds`` at least ``min_side`` pixels on both sides, image by image
     in the dataset's order (each image read once). Unreadable images are appended to ``problems``."""
+    category = canonical_class(category)
+    check_names("class", [category], ds.category_names, str(ds.root), "classes", "--class")
     cat_ids = {c.id for c in ds.categories if c.name == category}
-    if not cat_ids:
-        raise ValueError(f"{ds.root}: no class {category!r} (classes: {', '.join(c.name for c in ds.categories)})")
     boxes: dict[int, list[tuple[float, float, float, float]]] = {}
     for a in ds.annotations:
         if a.category_id in cat_ids and not a.iscrowd and min(a.bbox[2], a.bbox[3]) >= min_side:
@@ -114,10 +117,22 @@ def cutouts(
 
 def write_cutouts(items: Iterator[Cutout], out: Path, per_sequence: int = PER_SEQUENCE) -> int:
     """Write ``items`` as RGBA PNG sequence folders ``out/real-KKK/NNNNN.png`` (``per_sequence`` each) and
-    ``out/cutouts.json`` (source file, box, cover of each PNG); returns the count. ``out`` must not hold
-    cut-outs already."""
+    ``out/cutouts.json`` (source file, box, cover of each PNG); returns the count. ``out`` must be new or empty
+    (:class:`FileExistsError` otherwise); when writing fails, what was written is removed."""
     if (out / "cutouts.json").exists():
         raise FileExistsError(f"{out}: holds cut-outs already (cutouts.json); choose an empty folder")
+    if out.exists() and (not out.is_dir() or any(out.iterdir())):
+        raise FileExistsError(f"{out}: is not an empty folder; choose a new or empty one")
+    created = not out.exists()
+    try:
+        return _write_sequences(items, out, per_sequence)
+    except BaseException:
+        for child in [out] if created else list(out.iterdir()):
+            shutil.rmtree(child, ignore_errors=True)
+        raise
+
+
+def _write_sequences(items: Iterator[Cutout], out: Path, per_sequence: int) -> int:
     index = []
     for n, item in enumerate(items):
         name = f"real-{n // per_sequence:03d}/{n:05d}.png"

@@ -10,7 +10,7 @@ from pathlib import Path
 from typing import Any
 
 from curate.core.progress import progress
-from curate.core.writer import WriteResult
+from curate.core.writer import WriteResult, check_output_target
 from synth import render
 from synth.envfile import find_environment_files
 from synth.photos import PhotoBackgrounds, list_photos
@@ -35,20 +35,30 @@ def generate(
 
     ``method`` names the source tag (``synth:<method>``) and the command in the manifest; ``cfg`` is a
     Method1Config or Method2Config (``n``, ``seed``, ``scenes``, ``environments``, ``width``, ``height``, ``smoke_class``).
+    The output folder, the environment files and the background photos are checked before anything is rendered
+    (:class:`~curate.core.writer.OutputError`, FileNotFoundError, ValueError). A run that fails or is interrupted
+    keeps the images it finished in the staging folder and says so (the same command resumes from them); one
+    that finished none leaves nothing behind.
     """
     if not library or not all(seq.sprites for seq in library):
         raise ValueError("the flame library is empty")
-    staging = Staging(out)
-    todo = [i for i in range(cfg.n) if not staging.done(i)]
-    with render.Renderer(cfg.width, cfg.height, platform) as renderer:
-        files = find_environment_files(cfg.environments) if cfg.environments else []
-        backgrounds = getattr(cfg, "backgrounds", ())  # Method 2 only
-        photos = PhotoBackgrounds(list_photos(backgrounds), cfg.width, cfg.height, cfg.seed) if backgrounds else None
-        share, count = getattr(cfg, "photo_share", 0.0), -(-cfg.n // cfg.images_per_view)  # views of the run
-        views = ViewCache(cfg.seed, cfg.scenes, renderer, files, photos, share, count)
-        for i in progress(todo, total=len(todo), desc=f"{method} images"):
-            staging.save(i, *make_image(cfg, i, library, views))
-    for path, reason in (photos.problems if photos else {}).items():
-        print(f"{path}: skipped background photo ({reason})", file=sys.stderr)
+    check_output_target(out, overwrite)
+    files = find_environment_files(cfg.environments) if cfg.environments else []
+    backgrounds = getattr(cfg, "backgrounds", ())  # Method 2 only
+    photo_files = list_photos(backgrounds) if backgrounds else []
     args = {**to_json(cfg), "flame_sequences": [s.name for s in library]}
-    return finish(staging, out, cfg.n, f"synth:{method}", f"synth {method}", args, cfg.smoke_class, overwrite)
+    staging = Staging(out, args)
+    try:
+        with render.Renderer(cfg.width, cfg.height, platform) as renderer:
+            photos = PhotoBackgrounds(photo_files, cfg.width, cfg.height, cfg.seed) if photo_files else None
+            share, count = getattr(cfg, "photo_share", 0.0), -(-cfg.n // cfg.images_per_view)  # views of the run
+            views = ViewCache(cfg.seed, cfg.scenes, renderer, files, photos, share, count)
+            todo = [i for i in range(cfg.n) if not staging.done(i)]
+            for i in progress(todo, total=len(todo), desc=f"{method} images"):
+                staging.save(i, *make_image(cfg, i, library, views))
+        for path, reason in (photos.problems if photos else {}).items():
+            print(f"{path}: skipped background photo ({reason})", file=sys.stderr)
+        return finish(staging, out, cfg.n, f"synth:{method}", f"synth {method}", args, cfg.smoke_class, overwrite)
+    except BaseException:
+        staging.abandon(cfg.n)
+        raise

@@ -13,6 +13,7 @@ from __future__ import annotations
 import json
 import os
 import shutil
+import sys
 from collections.abc import Mapping, Sequence
 from dataclasses import replace
 from pathlib import Path
@@ -58,11 +59,42 @@ def staging_dir(out: Path) -> Path:
     return out.resolve().parent / f".{out.resolve().name}.parts"
 
 
+RUN_FILE = "run.json"
+
+
 class Staging:
-    def __init__(self, out: Path) -> None:
+    """The staging folder of ``out``. ``options`` (JSON), when given, say what the images are made with
+    (``run.json``): images staged with other options are discarded (and said so), images staged with the same
+    ones, or by a run that did not say, are resumed from."""
+
+    def __init__(self, out: Path, options: Mapping[str, Any] | None = None) -> None:
         self.root = staging_dir(out)
+        run_file = self.root / RUN_FILE
+        stamp = None if options is None else json.dumps(dict(options), sort_keys=True)
+        if stamp is not None and run_file.is_file() and run_file.read_text(encoding="utf-8") != stamp:
+            print(f"{self.root}: discarding {self.count()} images staged with other options", file=sys.stderr)
+            shutil.rmtree(self.root)
         for sub in ("images", "masks", "records"):
             (self.root / sub).mkdir(parents=True, exist_ok=True)
+        if stamp is not None:
+            run_file.write_text(stamp, encoding="utf-8")
+
+    def count(self) -> int:
+        """How many images are complete."""
+        return len(list((self.root / "records").glob("*.json")))
+
+    def abandon(self, n: int) -> None:
+        """After a failed or interrupted run: remove the folder when no image is complete, else say on stderr
+        how many are kept for the next run of the same command."""
+        done = self.count() if self.root.is_dir() else 0
+        if done == 0:
+            shutil.rmtree(self.root, ignore_errors=True)
+        else:
+            print(
+                f"{done} of {n} images are kept in {self.root}: run the same command again to resume from them "
+                "(or delete that folder)",
+                file=sys.stderr,
+            )
 
     def record_path(self, i: int) -> Path:
         return self.root / "records" / f"{i:06d}.json"

@@ -106,3 +106,47 @@ def test_merge_command(tmp_path, capsys):
     assert len(doc["images"]) == 4 and (tmp_path / "out" / "data.yaml").is_file()
     assert main(["merge", str(tmp_path / "m.yaml"), "--out", str(tmp_path / "o2"), "--set", "classes=fire"]) == 2
     assert "classes: expected a list" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("command", ["convert", "validate", "stats"])
+def test_a_mistyped_drop_class_is_an_error_listing_the_classes_before_any_work(tmp_path, capsys, command):
+    write_yolo_dataset(tmp_path / "src", names=("fire", "default"))
+    out = ["--to", "coco", "--out", str(tmp_path / "o")] if command == "convert" else []
+    assert main([command, str(tmp_path / "src"), *out, "--drop-class", "defualt"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "--drop-class 'defualt': no such class (classes: 'fire', 'default')" in err
+    assert not (tmp_path / "o").exists()
+
+
+def test_validate_honours_drop_class_as_stats_does(tmp_path, capsys):
+    write_yolo_dataset(tmp_path / "src", names=("fire", "default"))
+    assert main(["validate", str(tmp_path / "src"), "--drop-class", "default", "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert main(["stats", str(tmp_path / "src"), "--drop-class", "default", "--json"]) == 0
+    stats = json.loads(capsys.readouterr().out)
+    assert (doc["boxes"], doc["negatives"]) == (stats["boxes"], stats["negatives"]) == (2, 2)
+    assert not any("not a known class" in p["reason"] for p in doc["problems"])
+    with pytest.raises(SystemExit):  # validate shows no source tag: --source is not offered
+        main(["validate", str(tmp_path / "src"), "--source", "real:x"])
+
+
+@pytest.mark.parametrize("fmt", [[], ["--from", "yolo"], ["--from", "images"]])
+def test_a_folder_of_images_without_labels_is_a_negatives_only_set(tmp_path, capsys, fmt):
+    from factories import write_image
+
+    for k in range(3):
+        write_image(tmp_path / "photos" / f"p{k}.jpg", 40, 30, seed=k)
+    assert main(["validate", str(tmp_path / "photos"), *fmt]) == 0
+    captured = capsys.readouterr()
+    assert captured.out == f"{tmp_path / 'photos'}: 3 images, no label files: a negatives-only set\n"
+    assert "0 errors, 0 warnings, 1 info" in captured.err
+    assert main(["stats", str(tmp_path / "photos"), *fmt]) == 0
+    out = capsys.readouterr().out
+    assert "images     3  (negatives 3: 3 without a label file" in out
+    assert "set        3 images, no label files: a negatives-only set" in out
+
+
+def test_an_empty_folder_is_named_as_such(tmp_path, capsys):
+    (tmp_path / "empty").mkdir()
+    assert main(["validate", str(tmp_path / "empty")]) == 2
+    assert "empty: no images, labels or annotations found" in capsys.readouterr().err

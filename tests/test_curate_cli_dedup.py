@@ -52,6 +52,8 @@ def test_dedup_writes_json_report_and_histogram(folder: Path, tmp_path: Path, ca
     assert len(doc["selected"]) == 3
     html = (out / "report.html").read_text()
     assert "KEPT" in html and "distances.png" in html and (out / "distances.png").stat().st_size > 1000
+    assert "Duplicate groups (green = kept): 3 of 3" in html and "a group can keep several images" in html
+    assert html.count("<p>2 images: 1 kept, 1 removed</p>") == 3  # each group's counts above its images
     assert len(list((tmp_path / "kept").rglob("*.*"))) == 3
     assert _snapshot(folder) == before  # originals never modified
     assert "bad.jpg" in capsys.readouterr().err

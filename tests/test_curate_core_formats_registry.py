@@ -15,10 +15,15 @@ def test_detects_each_format(tmp_path):
     assert detect_format(tmp_path / "coco" / "annotations.json") == "coco"
 
 
-def test_undetectable_and_unknown(tmp_path):
+def test_images_alone_are_a_negatives_only_set_and_nothing_is_undetectable(tmp_path):
     write_image(tmp_path / "only" / "x.jpg", 5, 5)
-    with pytest.raises(ValueError, match="cannot tell the dataset format"):
-        detect_format(tmp_path / "only")
+    assert detect_format(tmp_path / "only") == "images"
+    result = read_dataset(tmp_path / "only")
+    assert len(result.dataset.images) == 1 and not result.dataset.annotations and not result.dataset.categories
+    assert result.unlabelled == {1} and [p.code for p in result.problems] == ["negatives-only"]
+    (tmp_path / "empty" / "sub").mkdir(parents=True)
+    with pytest.raises(ValueError, match="no images, labels or annotations found"):
+        detect_format(tmp_path / "empty")
     with pytest.raises(FileNotFoundError):
         detect_format(tmp_path / "nothing")
     write_yolo_dataset(tmp_path / "yolo")
@@ -37,11 +42,14 @@ def test_drop_classes_silences_their_unknown_class_warning(tmp_path):
     assert result.drop_classes([]) is result and result.dataset.category_names == ["fire", "default"]
 
 
-def test_drop_classes_takes_comma_lists_and_reports_names_that_match_nothing(tmp_path):
+def test_drop_classes_takes_comma_lists_and_refuses_names_that_match_nothing(tmp_path):
+    from curate.core.names import UnknownNameError
+
     write_yolo_dataset(tmp_path / "ds", names=("Fire", "Default"))
     result = read_dataset(tmp_path / "ds")
-    dropped = result.drop_classes(["default,smok"])
-    assert dropped.dataset.category_names == ["fire"]
-    assert any(p.reason == "no class 'smok' to drop (classes: fire, default)" for p in dropped.problems)
-    only_typo = result.drop_classes(["smok"])
-    assert only_typo.dataset is result.dataset and any("no class 'smok'" in p.reason for p in only_typo.problems)
+    dropped = result.drop_classes(["default,fire"])
+    assert dropped.dataset.category_names == [] and not dropped.dataset.annotations
+    with pytest.raises(UnknownNameError, match=r"--drop-class 'smok': no such class \(classes: 'fire', 'default'\)"):
+        result.drop_classes(["default,smok"])
+    kept = result.drop_classes(["smok"], missing_ok=True)  # the caller checked the name against other datasets
+    assert kept is result

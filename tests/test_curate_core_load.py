@@ -50,3 +50,17 @@ def test_prepare_is_load_split_on_a_dataset_already_read(split_folder: Path) -> 
     assert prepare(ds, "test", ["fire"]) == load_split(split_folder, split="test", classes=["fire"])
     with pytest.raises(SplitError, match="nowhere: no images"):
         prepare(ds.filter_images(lambda img: False), None, where="nowhere")
+
+
+def test_a_drop_class_the_data_lacks_and_a_split_of_an_unsplit_set_are_named(split_folder: Path) -> None:
+    from curate.core.load import prepare
+    from curate.core.names import UnknownNameError
+
+    ds = load_split(split_folder)
+    assert prepare(ds, None, drop=["Smoke"]).category_names == ["fire"]  # any spelling of a class
+    with pytest.raises(UnknownNameError, match=r"drop_classes 'smok': no such class \(classes: 'fire', 'smoke'\)"):
+        prepare(ds, None, drop=["smok"])
+    unsplit = ds.__class__(ds.root, tuple(i.__class__(**{**i.__dict__, "split": ""}) for i in ds.images),
+                           ds.annotations, ds.categories)  # fmt: skip
+    with pytest.raises(SplitError, match=r"no split 'val' \(no splits: its 10 images are one set\)"):
+        pick_split(unsplit, "val")

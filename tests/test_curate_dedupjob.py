@@ -48,3 +48,14 @@ def test_apply_copies_below_root_name_and_refuses_unsafe_targets(tmp_path: Path)
     with pytest.raises(ValueError, match="unknown apply mode"):
         apply_selection([str(a)], [src], tmp_path / "x", "move")
     assert a.is_file() and b.is_file()
+
+
+def test_a_report_group_shows_its_kept_images_first_and_its_totals() -> None:
+    from curate.dedupjob import REPORT_GROUP_IMAGES, _report_group
+
+    chain = [4, 7, 9]  # 7 like 4 and like 9, 4 unlike 9: both ends kept
+    assert _report_group(chain, {7: "near"}) == ("3 images: 2 kept, 1 removed", [4, 9, 7])
+    big = list(range(128))
+    heading, shown = _report_group(big, {i: "near" for i in big if i % 40})
+    assert heading == "128 images: 4 kept, 124 removed (showing 12 of 128)"
+    assert shown[:4] == [0, 40, 80, 120] and len(shown) == REPORT_GROUP_IMAGES

@@ -32,7 +32,12 @@ def test_html_escapes_names(tmp_path: Path) -> None:
         tmp_path / "r.html",
         "t",
         ["<b>summary</b>"],
-        [[("/x/<a>.jpg", "KEPT <a>.jpg", True), ("/x/b.jpg", "near 0.1 b.jpg", False)]],
+        [
+            (
+                "2 images: 1 kept, 1 removed",
+                [("/x/<a>.jpg", "KEPT <a>.jpg", True), ("/x/b.jpg", "near 0.1 b.jpg", False)],
+            )
+        ],
         [("/x/<a>.jpg", "0.5 <a>.jpg")],
         {},
         None,

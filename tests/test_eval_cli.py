@@ -162,3 +162,36 @@ def test_errors_breakdown_from_the_cli(work, tmp_path):
     assert all(v == pytest.approx(0.0) for v in errors["delta_AP50"].values())  # the oracle makes no error
     assert errors["negatives"] >= 1 and errors["false_alarms_per_100_negatives"] == 0.0
     assert json.loads((tmp_path / "o" / "errors.json").read_text()) == errors
+
+
+def test_a_mistyped_test_set_class_is_an_error_before_scoring(work, capsys):
+    model = oracle_model(work["root"] / "typo.onnx")
+    assert main(["score", str(model), "--data", str(work["test"]), "--drop-class", "smok"]) == 2
+    captured = capsys.readouterr()
+    assert "--drop-class 'smok': no such class (classes: 'fire', 'smoke')" in captured.err and not captured.out
+
+
+def test_the_scored_split_is_named_as_the_dataset_names_it(work, tmp_path, capsys):
+    from factories import write_yolo_dataset
+
+    model = oracle_model(work["root"] / "names.onnx")
+    write_yolo_dataset(tmp_path / "ds")
+    assert main(["score", str(model), "--data", str(tmp_path / "ds"), "--split", "val"]) == 0
+    assert "\ndata   split valid: 2 images (2 negatives)" in capsys.readouterr().out
+    assert main(["score", str(model), "--data", str(work["test"])]) == 0
+    assert "\ndata   split test: 6 images" in capsys.readouterr().out
+    assert main(["score", str(model), "--data", str(tmp_path / "ds"), "--split", "all"]) == 0
+    assert "\ndata   all splits: 4 images" in capsys.readouterr().out
+
+
+def test_a_folder_of_images_without_labels_is_scored_as_negatives(work, tmp_path, capsys):
+    from factories import write_image
+
+    model = oracle_model(work["root"] / "negatives.onnx")
+    for k in range(3):
+        write_image(tmp_path / "photos" / f"p{k}.jpg", 64, 48, seed=k)
+    assert main(["score", str(model), "--data", str(tmp_path / "photos"), "--errors"]) == 0
+    captured = capsys.readouterr()
+    assert "photos: 3 images, no label files: a negatives-only set" in captured.err
+    assert "data   every image (no splits): 3 images (3 negatives), 0 boxes" in captured.out
+    assert "per 100 images without fire (0% of the 3 such images raise one)" in captured.out

@@ -68,3 +68,29 @@ def test_missing_real_folder_is_named(tmp_path: Path, capsys: pytest.CaptureFixt
     config = REPO / "configs" / "paper.yaml"
     code = main(["experiment", str(config), "--out", str(tmp_path / "out"), "--set", "real.path=/no/such/folder"])
     assert code == 2 and "/no/such/folder" in capsys.readouterr().err
+
+
+def _commands(parser, prefix=()):
+    """(argv prefix, parser) of every command and subcommand, e.g. (("synth", "method2"), parser)."""
+    for action in parser._actions:
+        if action.__class__.__name__ == "_SubParsersAction":
+            for name, sub in action.choices.items():
+                yield (*prefix, name), sub
+                yield from _commands(sub, (*prefix, name))
+
+
+def test_every_option_with_a_default_shows_it_in_help(capsys: pytest.CaptureFixture[str]) -> None:
+    checked = 0
+    for argv, parser in _commands(build_parser()):
+        with pytest.raises(SystemExit):
+            main([*argv, "--help"])
+        text = capsys.readouterr().out
+        for action in parser._actions:
+            default = action.default
+            if not action.option_strings or default in (None, [], "==SUPPRESS==") or isinstance(default, bool):
+                continue
+            start = text.index(f"  {action.option_strings[0]}")
+            block = text[start : text.find("\n  -", start + 1)]
+            assert "default" in block, (argv, action.option_strings, block)
+            checked += 1
+    assert checked > 50

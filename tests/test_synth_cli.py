@@ -62,9 +62,10 @@ def test_method1_and_method2_in_a_file_environment(tmp_path, capsys):
     assert main(flames) == 0
     for method in ("method1", "method2"):
         out = tmp_path / method
-        args = ["synth", method, "--n", "4", "--out", str(out), "--size", "96x64", "--scenes", "0"]
+        args = ["synth", method, "--n", "4", "--out", str(out), "--size", "96x64"]
         assert main([*args, "--environments", str(room.parent), "--flames", str(tmp_path / "fl")]) == 0
         manifest = json.loads((out / "manifest.json").read_text())
+        assert manifest["args"]["scenes"] == 0  # the user's environments alone: no procedural room mixed in
         assert {img["environment"] for img in manifest["args"]["per_image"]} == {"den"}
         capsys.readouterr()
         assert main(["synth", "audit", str(out), "--json"]) == 0
@@ -81,10 +82,77 @@ def test_method2_on_photographs(tmp_path, capsys):
     flames = ["synth", "flames", "--out", str(tmp_path / "fl"), "--n", "1", "--frames", "60", "--keep-every", "30"]
     assert main(flames) == 0
     out = tmp_path / "m2"
-    args = ["synth", "method2", "--n", "6", "--out", str(out), "--size", "96x64", "--scenes", "0"]
+    args = ["synth", "method2", "--n", "6", "--out", str(out), "--size", "96x64"]
     assert main([*args, "--backgrounds", str(tmp_path / "photos"), "--flames", str(tmp_path / "fl")]) == 0
     manifest = json.loads((out / "manifest.json").read_text())
-    assert {Path(img["photo"]).name for img in manifest["args"]["per_image"]} <= {"p0.jpg", "p1.jpg", "p2.jpg"}
+    assert manifest["args"]["scenes"] == 0  # the user's photos alone
+    assert [Path(img["photo"]).name in {"p0.jpg", "p1.jpg", "p2.jpg"} for img in manifest["args"]["per_image"]] == [
+        True
+    ] * 6
     capsys.readouterr()
     assert main(["synth", "audit", str(out), "--json"]) == 0
     assert json.loads(capsys.readouterr().out)["mean_iou"] == 1.0
+
+
+def _flames(tmp_path: Path) -> Path:
+    flames = ["synth", "flames", "--out", str(tmp_path / "fl"), "--n", "1", "--frames", "60", "--keep-every", "30"]
+    assert main(flames) == 0
+    return tmp_path / "fl"
+
+
+def test_what_can_be_checked_fails_in_one_line_before_rendering(tmp_path, capsys):
+    import pytest
+
+    from synth.staging import staging_dir
+
+    fl = _flames(tmp_path)
+    out = tmp_path / "m2"
+    args = ["synth", "method2", "--n", "2", "--out", str(out), "--size", "64x48", "--scenes", "1", "--flames", str(fl)]
+    assert main(args) == 0
+    capsys.readouterr()
+    cases = [
+        ([], "a fuzzyfire dataset is already there; pass --overwrite to replace it"),
+        (["--overwrite", "--environments", str(tmp_path / "nowhere")], "nowhere: no such environment file or folder"),
+        (["--overwrite", "--backgrounds", str(tmp_path / "nophotos")], "nophotos: no such file or folder"),
+        (["--overwrite", "--photo-share", "0.3"], "--photo-share is the share of views on --backgrounds photos"),
+        (["--overwrite", "--library", "3"], "--library makes procedural flames, which --flames replaces"),
+    ]
+    for extra, message in cases:
+        assert main([*args, *extra]) == 2
+        err = capsys.readouterr().err
+        assert err == f"error: {err[7:]}" and err.count("\n") == 1 and message in err, err
+        assert not staging_dir(out).exists()
+    with pytest.raises(SystemExit):
+        main([*args, "--overwrite", "--out", str(tmp_path / "x"), "--scenes", "-"])
+
+
+def test_a_failed_run_keeps_its_finished_images_and_says_so_or_leaves_nothing(tmp_path, capsys, monkeypatch):
+    import pytest
+
+    import synth.method2 as method2
+    from synth.staging import staging_dir
+
+    fl = _flames(tmp_path)
+    out = tmp_path / "m2"
+    args = ["synth", "method2", "--n", "4", "--out", str(out), "--size", "64x48", "--scenes", "1", "--flames", str(fl)]
+    make_image = method2.make_image
+    for fail_at, kept in ((0, 0), (2, 2)):
+
+        def failing(cfg, i, library, views, fail_at=fail_at):
+            if i == fail_at:
+                raise RuntimeError("renderer lost")
+            return make_image(cfg, i, library, views)
+
+        monkeypatch.setattr(method2, "make_image", failing)
+        with pytest.raises(RuntimeError):
+            main(args)
+        err = capsys.readouterr().err
+        if kept:
+            assert f"2 of 4 images are kept in {staging_dir(out)}: run the same command again to resume" in err
+            assert len(list((staging_dir(out) / "records").glob("*.json"))) == 2
+        else:
+            assert not staging_dir(out).exists() and not out.exists()
+    monkeypatch.setattr(method2, "make_image", make_image)
+    assert main([*args, "--seed", "1"]) == 0  # other options: the staged images are not theirs
+    assert "discarding 2 images staged with other options" in capsys.readouterr().err
+    assert not staging_dir(out).exists()

@@ -13,7 +13,7 @@ from curate.core.formats.registry import read_dataset
 from curate.core.problems import Problem
 from fuzzyfire.cli import main
 from synth.cutouts import cut, cutouts, filled, fire_mask, pixel_box
-from synth.sprites import load_library
+from synth.sprites import load_library, write_png
 
 ORANGE, CORE, BLUE, GREY = (240, 120, 20), (255, 240, 200), (30, 60, 200), (128, 128, 128)
 
@@ -93,8 +93,9 @@ def test_cutouts_skip_small_and_sky_boxes_and_other_classes(labelled: Path) -> N
     items = list(cutouts(ds, "fire", min_side=16, min_cover=0.08, problems=problems))
     assert [(Path(c.file).stem, c.box) for c in items] == [("a0", (30, 20, 60, 60)), ("a1", (75, 45, 50, 50))]
     assert not problems
-    with pytest.raises(ValueError, match="no class 'flame'"):
-        list(cutouts(ds, "flame"))
+    assert [c.box for c in cutouts(ds, "Flames")] == [c.box for c in items]  # a synonym of fire
+    with pytest.raises(ValueError, match=r"--class 'flamme': no such class \(classes: 'fire', 'smoke'\)"):
+        list(cutouts(ds, "flamme"))
 
 
 def test_an_unreadable_image_is_named_and_the_rest_is_cut(labelled: Path) -> None:
@@ -121,3 +122,36 @@ def test_the_command_writes_a_flame_library_and_refuses_to_overwrite(labelled: P
     assert main(["synth", "cutouts", str(labelled), "--out", str(out)]) == 2
     assert "holds cut-outs already" in capsys.readouterr().err
     assert main(["synth", "cutouts", str(labelled), "--split", "test", "--out", str(tmp_path / "x")]) == 2
+
+
+def test_a_mistyped_class_or_a_used_folder_fails_before_any_cut(labelled: Path, tmp_path: Path, capsys) -> None:
+    out = tmp_path / "cutouts"
+    assert main(["synth", "cutouts", str(labelled), "--class", "flamme", "--out", str(out)]) == 2
+    assert "--class 'flamme': no such class (classes: 'fire', 'smoke')" in capsys.readouterr().err
+    assert not out.exists()
+    (out / "mine").mkdir(parents=True)
+    assert main(["synth", "cutouts", str(labelled), "--out", str(out)]) == 2
+    assert "is not an empty folder" in capsys.readouterr().err
+    assert [p.name for p in out.iterdir()] == ["mine"]  # the user's folder untouched
+
+
+def test_a_failed_write_removes_what_it_wrote(labelled: Path, tmp_path: Path, monkeypatch) -> None:
+    import synth.cutouts as module
+
+    ds = read_dataset(labelled).dataset.select_split("train")
+    written = []
+
+    def write_once(path: Path, rgba) -> None:
+        if written:
+            raise OSError("disk full")
+        written.append(path)
+        write_png(path, rgba)
+
+    monkeypatch.setattr(module, "write_png", write_once)
+    (tmp_path / "empty").mkdir()
+    for out in (tmp_path / "new", tmp_path / "empty"):
+        written.clear()
+        with pytest.raises(OSError, match="disk full"):
+            module.write_cutouts(cutouts(ds, "fire", min_cover=0.08), out)
+        assert written and not written[0].exists()
+    assert not (tmp_path / "new").exists() and (tmp_path / "empty").is_dir()

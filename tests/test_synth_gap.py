@@ -50,8 +50,8 @@ def test_dataset_layouts_and_errors(tmp_path: Path, folders) -> None:
     assert len(dataset_images(ds)) == 4 and len(dataset_images(ds, "train")) == 4
     with pytest.raises(ValueError, match=r"no split 'test' \(splits: 'train'\)"):
         dataset_images(ds, "test")
-    with pytest.raises(ValueError, match="'images' for a plain folder"):
-        dataset_images(folders["real"])
+    plain = dataset_images(folders["real"])  # a plain folder of images: a negatives-only set, its images
+    assert [p.resolve() for p in plain] == [p.resolve() for p in dataset_images(folders["real"], None, "images")]
     with pytest.raises(ValueError, match="split needs a dataset"):
         dataset_images(folders["real"], "train", "images")
 
@@ -65,5 +65,5 @@ def test_gap_command(folders, capsys) -> None:
     assert floor["low"] <= floor["median"] <= floor["high"]
     assert main([*args, "--real-format", "images", "--draws", "20", "--no-cache"]) == 0
     assert "real vs real" in capsys.readouterr().out
-    assert main([*args, "--draws", "20"]) == 2  # REAL's layout unknown without --real-format images
-    assert "plain folder of images" in capsys.readouterr().err
+    assert main([*args, "--draws", "20", "--no-cache", "--json"]) == 0  # REAL, a plain folder, read as images
+    assert json.loads(capsys.readouterr().out) == report

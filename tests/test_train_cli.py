@@ -28,6 +28,7 @@ def test_train_command_writes_a_run(folders, tmp_path: Path, capsys) -> None:
     assert "best epoch 1" in out and "best.onnx" in out
     results = json.loads((tmp_path / "run" / "results.json").read_text())
     assert results["config"]["imgsz"] == 64 and (tmp_path / "run" / "best.onnx").is_file()
+    assert results["best"]["epoch"] == 1  # the epoch the console names, counted the same way
 
 
 def test_bad_arguments_are_errors(folders, tmp_path: Path) -> None:
@@ -52,3 +53,18 @@ def test_device_flag(folders, tmp_path: Path, capsys) -> None:
         err = capsys.readouterr().err.strip()
         assert "no CUDA GPU is available" in err and len(err.splitlines()) == 1
         assert not (tmp_path / "cuda").exists()
+
+
+@pytest.mark.parametrize(
+    ("extra", "message"),
+    [
+        (["--drop-class", "smok"], "--drop-class 'smok': no such class (classes: 'fire', 'smoke')"),
+        (["--classes", "fire,smok"], "--classes 'smok': no such class (classes: 'fire', 'smoke')"),
+        (["--val-split", "valid"], "no split 'valid' (no splits: its 4 images are one set)"),
+    ],
+)
+def test_a_name_that_matches_nothing_fails_before_training(folders, tmp_path: Path, capsys, extra, message) -> None:
+    train, val = folders
+    argv = ["train", "--train", str(train), "--val", str(val), "--out", str(tmp_path / "run"), *extra]
+    assert main(argv) == 2
+    assert message in capsys.readouterr().err and not (tmp_path / "run").exists()

@@ -50,7 +50,7 @@ def test_run_folder_is_complete(reference_run: Path) -> None:
         "results.json",
     }
     rows = _metrics(reference_run)
-    assert [r["epoch"] for r in rows] == [0, 1]
+    assert [r["epoch"] for r in rows] == [1, 2]  # counted from 1, as the console counts them
     for r in rows:
         assert {"loss_box", "loss_obj", "loss_cls", "AP", "AP50", "fitness", "lr"} <= set(r)
         assert r["fitness"] == pytest.approx(0.1 * r["AP50"] + 0.9 * r["AP"])
@@ -80,7 +80,7 @@ def _interrupted_then_resumed(cfg: TrainConfig, data, out: Path, monkeypatch, cr
     monkeypatch.setattr(loop, "evaluate", crash)
     with pytest.raises(KeyboardInterrupt):
         loop.fit(cfg, *data, out)
-    assert [r["epoch"] for r in _metrics(out)] == list(range(crash_at - 1))
+    assert [r["epoch"] for r in _metrics(out)] == list(range(1, crash_at))
     monkeypatch.setattr(loop, "evaluate", real_evaluate)
     loop.fit(cfg, *data, out)
 
@@ -90,6 +90,33 @@ def test_resume_equals_uninterrupted(data, reference_run: Path, tmp_path: Path, 
     a, b = _weights(reference_run), _weights(tmp_path / "run")
     assert all(torch.equal(a[k], b[k]) for k in a)
     assert _metrics(reference_run) == _metrics(tmp_path / "run")
+
+
+def test_a_run_begun_with_epochs_counted_from_0_resumes_counted_from_1(
+    data, reference_run: Path, tmp_path: Path, monkeypatch
+) -> None:
+    out = tmp_path / "old"
+    real_evaluate, calls = loop.evaluate, {"n": 0}
+
+    def crash(*args, **kwargs):
+        calls["n"] += 1
+        if calls["n"] == 2:
+            raise KeyboardInterrupt
+        return real_evaluate(*args, **kwargs)
+
+    monkeypatch.setattr(loop, "evaluate", crash)
+    with pytest.raises(KeyboardInterrupt):
+        loop.fit(CFG, *data, out)
+    state = torch.load(out / "last.pt", map_location="cpu", weights_only=False)  # as an older version wrote it
+    del state[loop.EPOCHS_FROM]
+    state["best"]["epoch"] -= 1
+    torch.save(state, out / "last.pt")
+    rows = _metrics(out)
+    (out / "metrics.jsonl").write_text("".join(json.dumps({**r, "epoch": r["epoch"] - 1}) + "\n" for r in rows))
+    monkeypatch.setattr(loop, "evaluate", real_evaluate)
+    results = loop.fit(CFG, *data, out)
+    assert _metrics(out) == _metrics(reference_run)
+    assert results["best"] == json.loads((reference_run / "results.json").read_text())["best"]
 
 
 def test_resume_refuses_another_config(data, reference_run: Path, tmp_path: Path) -> None:

@@ -8,6 +8,7 @@ from dataclasses import replace
 from pathlib import Path
 
 from curate.core.commands import add_command
+from curate.core.formats.registry import FORMATS
 
 _EXAMPLE = """example:
   fuzzyfire train --train out/mixtures/seed0/R500_S500 --val ../shared/data/fire-cctv-416 \\
@@ -25,18 +26,41 @@ TRAIN_SPLITS = ("train",)
 VAL_SPLITS = ("valid", "val", "validation")
 
 
-def _read(path: str, fmt: str, split: str | None, defaults: tuple[str, ...], drop: list[str]):
-    """Split ``split`` of the dataset at ``path`` (default: the first of ``defaults`` it has, else every image),
-    boxes of ``drop`` removed; the reader's errors go to stderr."""
+def _read(path: str, fmt: str):  # -> curate.core.formats.common.ReadResult
+    """The dataset at ``path``; the reader's errors go to stderr."""
     from curate.core.commands import print_problems
     from curate.core.formats.registry import read_dataset
-    from curate.core.load import pick_split
 
     result = read_dataset(path, fmt)
     errors = [p for p in result.problems if p.level == "error"]
     if errors:
         print_problems(errors, sys.stderr, limit=20)
-    return pick_split(result.drop_classes(drop).dataset, split, path, defaults)
+    return result
+
+
+def _datasets(args: argparse.Namespace):  # -> (train, val) curate.core.dataset.Dataset
+    """The training and validation splits (default: the first of :data:`TRAIN_SPLITS` / :data:`VAL_SPLITS`
+    each has, else every image) without the ``--drop-class`` boxes, the training set with the ``--classes``
+    list. Every class named must be a class of one of the two sets (:class:`~curate.core.names.UnknownNameError`)."""
+    from curate.core.classes import canonical_class
+    from curate.core.load import pick_split
+    from curate.core.names import check_names, split_names
+
+    reads = [_read(args.train, args.train_format), _read(args.val, args.val_format)]
+    known = list(dict.fromkeys(n for r in reads for n in r.dataset.category_names))
+    where = f"{args.train} and {args.val}"
+    check_names(
+        "class", [canonical_class(n) for n in split_names(args.drop_class)], known, where, "classes", "--drop-class"
+    )
+    train_read, val_read = (r.drop_classes(args.drop_class, missing_ok=True) for r in reads)
+    train_ds = pick_split(train_read.dataset, args.train_split, args.train, TRAIN_SPLITS)
+    val_ds = pick_split(val_read.dataset, args.val_split, args.val, VAL_SPLITS)
+    if args.classes:
+        classes = split_names([args.classes])
+        kept = [*train_ds.category_names, *val_ds.category_names]
+        check_names("class", classes, list(dict.fromkeys(kept)), where, "classes", "--classes")
+        train_ds = train_ds.with_categories(classes)
+    return train_ds, val_ds
 
 
 def build_config(args: argparse.Namespace):
@@ -67,10 +91,7 @@ def cmd_train(args: argparse.Namespace) -> int:
     from train.loop import ResumeError, fit
 
     cfg = build_config(args)
-    train_ds = _read(args.train, args.train_format, args.train_split, TRAIN_SPLITS, args.drop_class)
-    val_ds = _read(args.val, args.val_format, args.val_split, VAL_SPLITS, args.drop_class)
-    if args.classes:
-        train_ds = train_ds.with_categories([c for c in args.classes.split(",") if c])
+    train_ds, val_ds = _datasets(args)
     same = Path(args.train).resolve() == Path(args.val).resolve()
     if same and {i.split for i in train_ds.images} & {i.split for i in val_ds.images}:
         raise ValueError(f"{args.train}: training and validation images are the same split; pass --val-split")
@@ -82,7 +103,7 @@ def cmd_train(args: argparse.Namespace) -> int:
         return 2
     best = results["best"]
     print(
-        f"best epoch {best['epoch'] + 1}: AP {best['AP']:.4f}  AP50 {best['AP50']:.4f}  "
+        f"best epoch {best['epoch']}: AP {best['AP']:.4f}  AP50 {best['AP50']:.4f}  "
         f"fitness {best['fitness']:.4f}  -> {Path(args.out) / 'best.onnx'}"
     )
     return 0
@@ -136,8 +157,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--threads", type=int, help="torch threads (default: torch's choice)")
     p.add_argument("--train-split", help="split of --train to use (default: train when present, else all)")
     p.add_argument("--val-split", help="split of --val to use (default: valid/val when present, else all)")
-    p.add_argument("--train-format", default="auto", help="format of --train (default: detect)")
-    p.add_argument("--val-format", default="auto", help="format of --val (default: detect)")
+    formats = ("auto", *FORMATS)
+    p.add_argument("--train-format", default="auto", choices=formats, help="format of --train (default: detect)")
+    p.add_argument("--val-format", default="auto", choices=formats, help="format of --val (default: detect)")
     p.add_argument("--classes", help="training class names in output order, e.g. fire,smoke")
     p.add_argument(
         "--drop-class",

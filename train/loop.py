@@ -2,7 +2,7 @@
 
 A run folder holds ``last.pt`` (everything needed to resume, written after every epoch), ``best.pt`` (EMA
 weights of the epoch with the best fitness = 0.1 AP50 + 0.9 AP), ``metrics.jsonl`` (one JSON line per
-epoch), ``best.onnx`` (see :mod:`train.export`), ``curves.png`` and ``results.json`` (the resolved config, seed, versions,
+epoch; epochs are counted from 1 in every output, as the console counts them), ``best.onnx`` (see :mod:`train.export`), ``curves.png`` and ``results.json`` (the resolved config, seed, versions,
 anchors, best epoch and its metrics). Calling :func:`fit` again on the same folder resumes after the last
 finished epoch and gives the same weights as an uninterrupted run.
 """
@@ -152,9 +152,15 @@ def _save(path: Path, state: dict[str, Any]) -> None:
     os.replace(tmp, path)
 
 
+#: ``last.pt`` key saying its ``best`` epoch is counted from 1 (files without it count from 0).
+EPOCHS_FROM = "epochs_counted_from"
+
+
 def _checkpoint(t: Trainer, epoch: int, best: dict[str, Any]) -> dict[str, Any]:
+    """``last.pt`` after the epoch of 0-based index ``epoch`` (the loop's); ``best`` names its epoch from 1."""
     return {
         "epoch": epoch,
+        EPOCHS_FROM: 1,
         "config": asdict(t.cfg),
         "class_names": t.class_names,
         "anchors": t.anchors,
@@ -167,10 +173,11 @@ def _checkpoint(t: Trainer, epoch: int, best: dict[str, Any]) -> dict[str, Any]:
 
 
 def _resume(t: Trainer, out: Path) -> tuple[int, dict[str, Any]]:
-    """Load ``out/last.pt`` when present: returns (first epoch to run, best-so-far record)."""
+    """Load ``out/last.pt`` when present: returns (0-based index of the first epoch to run, best-so-far record
+    with its epoch counted from 1)."""
     last = out / "last.pt"
     if not last.is_file():
-        return 0, {"fitness": -1.0, "epoch": -1}
+        return 0, {"fitness": -1.0, "epoch": 0}
     state = torch.load(last, map_location=t.device, weights_only=False)
     if state["config"] != asdict(t.cfg) or state["class_names"] != t.class_names:
         raise ResumeError(f"{last}: the run there used another config or classes; choose another --out")
@@ -181,7 +188,18 @@ def _resume(t: Trainer, out: Path) -> tuple[int, dict[str, Any]]:
     t.ema.load_state_dict(state["ema"])
     t.optimizer.load_state_dict(state["optimizer"])
     t.scaler.load_state_dict(state.get("scaler", {}))
+    if EPOCHS_FROM not in state:  # a run begun by a version that counted epochs from 0
+        _count_from_one(out, state["best"])
     return int(state["epoch"]) + 1, state["best"]
+
+
+def _count_from_one(out: Path, best: dict[str, Any]) -> None:
+    """Renumber a run folder written with epochs counted from 0: ``best`` and ``metrics.jsonl``."""
+    best["epoch"] = int(best["epoch"]) + 1
+    path = out / "metrics.jsonl"
+    if path.is_file():
+        rows = [json.loads(ln) for ln in path.read_text(encoding="utf-8").splitlines() if ln.strip()]
+        path.write_text("".join(json.dumps({**r, "epoch": r["epoch"] + 1}, sort_keys=True) + "\n" for r in rows))
 
 
 def _log_epoch(out: Path, record: dict[str, Any]) -> None:
@@ -189,11 +207,12 @@ def _log_epoch(out: Path, record: dict[str, Any]) -> None:
         fh.write(json.dumps(record, sort_keys=True) + "\n")
 
 
-def _truncate_metrics(out: Path, first_epoch: int) -> None:
+def _truncate_metrics(out: Path, done: int) -> None:
+    """Keep the lines of ``metrics.jsonl`` of the first ``done`` epochs (counted from 1)."""
     path = out / "metrics.jsonl"
     if path.is_file():
         lines = [ln for ln in path.read_text(encoding="utf-8").splitlines() if ln.strip()]
-        kept = [ln for ln in lines if json.loads(ln)["epoch"] < first_epoch]
+        kept = [ln for ln in lines if json.loads(ln)["epoch"] <= done]
         path.write_text("".join(ln + "\n" for ln in kept), encoding="utf-8")
 
 
@@ -217,7 +236,7 @@ def fit(cfg: TrainConfig, train_ds: Dataset, val_ds: Dataset, out: Path | str) -
     for epoch in range(first, cfg.epochs):
         if epoch == unfreeze_epoch(cfg):
             enter_unfreeze(cfg, t.model, t.ema.ema, t.optimizer)
-        record = {"epoch": epoch, **train_one_epoch(t, epoch)}
+        record = {"epoch": epoch + 1, **train_one_epoch(t, epoch)}  # outputs count epochs from 1
         start = time.perf_counter()
         args = (t.class_names, cfg.imgsz, cfg.val_conf, cfg.val_iou, cfg.max_det)
         record.update(evaluate(t.ema.ema, val_inputs, val_ds, *args))
@@ -270,7 +289,7 @@ def load_detector(path: Path | str) -> tuple[Detector, list[str], int]:
 
 def _epoch_line(record: dict[str, Any], epochs: int) -> str:
     return (
-        f"epoch {record['epoch'] + 1}/{epochs}  loss box {record['loss_box']:.4f} obj {record['loss_obj']:.4f} "
+        f"epoch {record['epoch']}/{epochs}  loss box {record['loss_box']:.4f} obj {record['loss_obj']:.4f} "
         f"cls {record['loss_cls']:.4f}  AP50 {record['AP50']:.4f}  AP {record['AP']:.4f}  "
         f"fitness {record['fitness']:.4f}  {record['train_images_per_s']:.1f} img/s"
     )

@@ -19,7 +19,7 @@ def plot_curves(rows: list[dict[str, Any]], path: Path, title: str = "") -> Path
     """Two panels: training losses (box, obj, cls) and validation AP50 / AP, with the best epoch marked."""
     fig = Figure(figsize=(9, 3.5), dpi=110)
     FigureCanvasAgg(fig)
-    epochs = [r["epoch"] + 1 for r in rows]
+    epochs = [r["epoch"] for r in rows]  # counted from 1
     losses, scores = fig.subplots(1, 2)
     for key in ("loss_box", "loss_obj", "loss_cls"):
         losses.plot(epochs, [r[key] for r in rows], label=key.removeprefix("loss_"))
@@ -30,7 +30,7 @@ def plot_curves(rows: list[dict[str, Any]], path: Path, title: str = "") -> Path
         scores.plot(epochs, [r[key] for r in rows], marker="o", markersize=3, label=key)
     if rows:
         best = max(rows, key=lambda r: r["fitness"])
-        scores.axvline(best["epoch"] + 1, color="grey", linestyle="--", label=f"best (epoch {best['epoch'] + 1})")
+        scores.axvline(best["epoch"], color="grey", linestyle="--", label=f"best (epoch {best['epoch']})")
     scores.set_xlabel("epoch")
     scores.set_ylim(0, 1)
     scores.set_title("validation (EMA model)")

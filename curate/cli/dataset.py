@@ -42,7 +42,7 @@ def cmd_convert(args: argparse.Namespace) -> int:
 def cmd_validate(args: argparse.Namespace) -> int:
     result = validate(
         args.src, args.fmt, names=args.names, aliases=parse_aliases(args.alias), decode=not args.no_decode
-    )
+    ).drop_classes(args.drop_class)
     ds, problems = result.dataset, result.problems
     stats = dataset_stats(ds, result.unlabelled)
     if args.json:
@@ -86,6 +86,8 @@ def cmd_stats(args: argparse.Namespace) -> int:
     print("sizes      " + "  ".join(f"{k} {v}" for k, v in stats["box_sizes"].items()) + "  (COCO area buckets)")
     for split, entry in stats["per_split"].items():
         print(f"split {split:<8} " + "  ".join(f"{k} {v}" for k, v in entry.items()))
+    for note in (p for p in result.problems if p.code == "negatives-only"):
+        print(f"set        {note.reason}")
     if png is not None:
         print(f"histogram  {png}")
     return 0
@@ -150,7 +152,7 @@ def _register_inspect(sub: argparse._SubParsersAction) -> None:
     p.add_argument("src", help="dataset folder or COCO .json")
     p.add_argument("--json", action="store_true", help="print a JSON document instead of lines")
     p.add_argument("--no-decode", action="store_true", help="check headers only (faster, misses truncated images)")
-    add_reader_args(p)
+    add_reader_args(p, source=False)
     p.set_defaults(func=cmd_validate)
 
     p = add_command(
@@ -179,6 +181,6 @@ def _register_merge(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--set", action="append", default=[], metavar="KEY=VALUE", help="override a config key, e.g. classes=[fire]"
     )
-    p.add_argument("--images", default="copy", choices=("copy", "hardlink", "symlink"))
+    p.add_argument("--images", default="copy", choices=("copy", "hardlink", "symlink"), help="how images reach --out")
     p.add_argument("--overwrite", action="store_true", help="replace a fuzzyfire dataset already at --out")
     p.set_defaults(func=cmd_merge)

@@ -20,16 +20,30 @@ from curate.core.writer import OutputError, WriteResult, write_dataset
 T = TypeVar("T")
 
 
+class HelpFormatter(argparse.RawDescriptionHelpFormatter):
+    """The description (with its examples) printed as written, and every option's default in its help line:
+    ``(default: VALUE)`` is added unless the help already speaks of its default or there is none to show
+    (None, a switch, an empty list)."""
+
+    def _get_help_string(self, action: argparse.Action) -> str | None:
+        text = action.help or ""
+        default = action.default
+        if not action.option_strings or "default" in text or default in (None, argparse.SUPPRESS):
+            return text
+        if isinstance(default, bool) or default == []:
+            return text
+        return f"{text} (default: %(default)s)".lstrip()
+
+
 def add_command(sub: argparse._SubParsersAction, name: str, help: str, description: str) -> argparse.ArgumentParser:
     """The subcommand ``name`` of ``sub``: ``help`` is its line in the parent's help, ``description`` (with its
-    examples) is printed as written."""
-    return sub.add_parser(
-        name, help=help, formatter_class=argparse.RawDescriptionHelpFormatter, description=description
-    )
+    examples) is printed as written, and every option's help shows its default (:class:`HelpFormatter`)."""
+    return sub.add_parser(name, help=help, formatter_class=HelpFormatter, description=description)
 
 
-def add_reader_args(p: argparse.ArgumentParser) -> None:
-    """Options every command that reads a dataset accepts."""
+def add_reader_args(p: argparse.ArgumentParser, source: bool = True) -> None:
+    """Options every command that reads a dataset accepts; ``--source`` (the tag of every image) only where the
+    command writes or shows the tag (``source``)."""
     p.add_argument(
         "--from", dest="fmt", default="auto", choices=("auto", *FORMATS), help="source format (default: detect)"
     )
@@ -52,13 +66,15 @@ def add_reader_args(p: argparse.ArgumentParser) -> None:
         metavar="NAME",
         help="remove the boxes of a class (its images stay, possibly as negatives); repeatable or comma-separated",
     )
-    p.add_argument("--source", help="source tag for every image (default: real:<folder name>)")
+    if source:
+        p.add_argument("--source", help="source tag for every image (default: real:<folder name>)")
 
 
 def read_from_args(args: argparse.Namespace) -> ReadResult:
     """The dataset ``args.src`` as the options of :func:`add_reader_args` describe it: format, YOLO names,
     source tag and aliases applied, the ``--drop-class`` classes removed."""
-    result = read_dataset(args.src, args.fmt, names=args.names, source=args.source, aliases=parse_aliases(args.alias))
+    source = getattr(args, "source", None)
+    result = read_dataset(args.src, args.fmt, names=args.names, source=source, aliases=parse_aliases(args.alias))
     return result.drop_classes(args.drop_class)
 
 

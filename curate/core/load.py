@@ -7,8 +7,10 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
+from curate.core.classes import canonical_class
 from curate.core.dataset import Dataset
 from curate.core.formats.registry import read_dataset
+from curate.core.names import check_names
 
 
 class SplitError(ValueError):
@@ -23,12 +25,21 @@ def pick_split(ds: Dataset, split: str | None, where: Path | str = "", defaults:
         found = next((s for s in (ds.resolve_split(d) for d in defaults) if s is not None), None)
         return ds if found is None else ds.select_split(found)
     if ds.resolve_split(split) is None:
-        shown = ", ".join(repr(s) for s in ds.splits)
-        raise SplitError(f"{where or ds.root}: no split {split!r} (splits: {shown})")
+        raise SplitError(f"{where or ds.root}: no split {split!r} ({splits_found(ds)})")
     chosen = ds.select_split(split)
     if not chosen.images:
         raise SplitError(f"{where or ds.root}: no images in split {split!r}")
     return chosen
+
+
+def splits_found(ds: Dataset) -> str:
+    """What a dataset has for splits, for a message: ``splits: 'train', 'valid'``, or ``no splits: its 16
+    images are one set``."""
+    named = [s for s in ds.splits if s]
+    if not named:
+        return f"no splits: its {len(ds.images)} images are one set"
+    unsplit = " and images outside them" if "" in ds.splits else ""
+    return "splits: " + ", ".join(repr(s) for s in named) + unsplit
 
 
 def with_classes(ds: Dataset, classes: Sequence[str], drop: Sequence[str] = ()) -> Dataset:
@@ -46,7 +57,10 @@ def prepare(
     where: Path | str = "",
 ) -> Dataset:
     """Split ``split`` of ``ds`` (None = every image; :func:`pick_split`), then :func:`with_classes` (``classes``
-    None: only ``drop`` removed). Raises :class:`SplitError` for a missing or empty split or no images."""
+    None: only ``drop`` removed). Raises :class:`SplitError` for a missing or empty split or no images and
+    :class:`~curate.core.names.UnknownNameError` for a class of ``drop`` the dataset does not have."""
+    drop = [canonical_class(n) for n in drop]
+    check_names("class", drop, ds.category_names, str(where or ds.root), "classes", "drop_classes")
     chosen = pick_split(ds, split, where)
     if not chosen.images:
         raise SplitError(f"{where or ds.root}: no images")

@@ -59,6 +59,14 @@ def check_output_folder(out: Path, ds: Dataset, overwrite: bool) -> None:
     for img in ds.images:
         if ds.image_path(img).resolve().is_relative_to(out_r):
             raise OutputError(f"{out}: source image {img.file_name} lies inside the output folder")
+    check_output_target(out, overwrite)
+
+
+def check_output_target(out: Path, overwrite: bool) -> None:
+    """Raise :class:`OutputError` when ``out`` holds a user's files, or a fuzzyfire dataset and not
+    ``overwrite``: the check a command makes before its work, when what it will write is not known yet."""
+    if out.exists() and not out.is_dir():
+        raise OutputError(f"{out}: is a file, not a folder; choose another --out")
     if out.exists() and any(out.iterdir()):
         if not (out / "manifest.json").is_file():
             raise OutputError(f"{out}: folder is not empty and is not a fuzzyfire dataset; choose another --out")

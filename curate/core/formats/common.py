@@ -13,6 +13,7 @@ from curate.core import boxes
 from curate.core.classes import canonical_class, is_known
 from curate.core.dataset import Dataset
 from curate.core.imageio import ImageError, image_size, is_image_file
+from curate.core.names import check_names, split_names
 from curate.core.problems import Problem
 from curate.core.progress import progress
 from curate.core.walk import walk_files
@@ -27,27 +28,27 @@ class ReadResult:
     problems: list[Problem] = field(default_factory=list)
     unlabelled: frozenset[int] = frozenset()
 
-    def drop_classes(self, names: Iterable[str]) -> ReadResult:
+    def drop_classes(self, names: Iterable[str], missing_ok: bool = False, option: str = "--drop-class") -> ReadResult:
         """Without the boxes of the classes ``names`` (any spelling; their images stay, maybe as negatives).
 
         A name may be a comma-separated list (``"default,smoke"``). The user chose to drop them, so their "unknown
-        class" warnings go; an info line per class says how many boxes were dropped, or that the dataset has no
-        such class (a typo shows up instead of silently keeping the boxes).
+        class" warnings go and an info line per class says how many boxes were dropped. A name the dataset has
+        no class for raises :class:`~curate.core.names.UnknownNameError` listing its classes and naming the
+        ``option`` that gave it (a typo must not keep the boxes silently), unless ``missing_ok`` (the caller
+        checked the names against other datasets).
         """
-        asked = {canonical_class(part) for name in names for part in name.split(",") if part.strip()}
-        drop = asked & set(self.dataset.category_names)
+        asked = [canonical_class(n) for n in split_names(names)]
         ds = self.dataset
         where = str(ds.info.get("source_root") or ds.info.get("source_file") or ds.root)
-        absent = [
-            Problem(where, f"no class {n!r} to drop (classes: {', '.join(ds.category_names) or 'none'})", "info")
-            for n in sorted(asked - drop)
-        ]
+        if not missing_ok:
+            check_names("class", asked, ds.category_names, where, "classes", option)
+        drop = set(asked) & set(ds.category_names)
         if not drop:
-            return ReadResult(ds, [*self.problems, *absent], self.unlabelled) if absent else self
+            return self
         counts = Counter(ds.categories[a.category_id - 1].name for a in ds.annotations)
         problems = [p for p in self.problems if p.code not in {f"unknown-class:{n}" for n in drop}]
         problems += [Problem(where, f"dropped {counts[n]} boxes of class {n!r} as asked", "info") for n in sorted(drop)]
-        return ReadResult(ds.drop_categories(drop), problems + absent, self.unlabelled)
+        return ReadResult(ds.drop_categories(drop), problems, self.unlabelled)
 
 
 def list_images(folder: Path) -> list[Path]:

@@ -7,17 +7,20 @@ from pathlib import Path
 
 from curate.core.formats.coco import ANNOTATIONS_FILE, read_coco
 from curate.core.formats.common import ReadResult
+from curate.core.formats.images import read_images
 from curate.core.formats.voc import read_voc
 from curate.core.formats.yolo import read_dfire, read_yolo
+from curate.core.imageio import is_image_file
 from curate.core.walk import walk
 
-FORMATS: tuple[str, ...] = ("coco", "yolo", "voc", "dfire")
+#: ``images``: a folder of images without labels, read as a negatives-only set (:mod:`~curate.core.formats.images`).
+FORMATS: tuple[str, ...] = ("coco", "yolo", "voc", "dfire", "images")
 
 
 def detect_format(path: Path | str) -> str:
     """``coco`` for a .json file or a folder with ``annotations.json``; ``voc`` for ``Annotations/`` or XML files;
-    ``yolo`` for a dataset YAML file or a folder with ``data.yaml``, a ``label(s)`` folder or ``.txt`` files.
-    Raises ValueError otherwise."""
+    ``yolo`` for a dataset YAML file or a folder with ``data.yaml``, a ``label(s)`` folder or ``.txt`` files;
+    ``images`` for a folder of images and none of these (a negatives-only set). Raises ValueError otherwise."""
     path = Path(path)
     if not path.exists():
         raise FileNotFoundError(f"{path}: no such file or folder")
@@ -33,14 +36,17 @@ def detect_format(path: Path | str) -> str:
         return "voc"
     if (path / "data.yaml").is_file():
         return "yolo"
-    xml = False
+    xml = images = False
     for _, dirs, files in walk(path):  # one lazy walk: the first label folder or .txt file decides
         if any(d.lower() in ("labels", "label") for d in dirs) or any(f.lower().endswith(".txt") for f in files):
             return "yolo"
         xml = xml or any(f.lower().endswith(".xml") for f in files)
+        images = images or any(is_image_file(f) for f in files)
     if xml:
         return "voc"
-    raise ValueError(f"{path}: cannot tell the dataset format; pass --from coco|yolo|voc|dfire")
+    if images:
+        return "images"
+    raise ValueError(f"{path}: no images, labels or annotations found; pass --from {'|'.join(FORMATS)}")
 
 
 def read_dataset(
@@ -58,6 +64,7 @@ def read_dataset(
         "yolo": lambda: read_yolo(path, names=names, source=source, aliases=aliases),
         "voc": lambda: read_voc(path, source=source, aliases=aliases),
         "dfire": lambda: read_dfire(path, source=source),
+        "images": lambda: read_images(path, source=source),
     }
     if fmt not in readers:
         raise ValueError(f"unknown format {fmt!r}; choose one of {', '.join(FORMATS)}")

@@ -21,6 +21,7 @@ from curate.core import boxes
 from curate.core.classes import DFIRE_NAMES
 from curate.core.dataset import Dataset, DatasetBuilder
 from curate.core.formats.common import ClassResolver, ReadResult, probe_sizes, sanitize_box, source_tag
+from curate.core.formats.images import negatives_only_note
 from curate.core.formats.yolo_layout import Pair, dataset_root, missing_label_problems, pair_images
 from curate.core.imageio import ImageError
 from curate.core.problems import Problem
@@ -61,8 +62,20 @@ def read_yolo(
         for category, xywh in _parse_label_file(pair.label, width, height, class_names, problems):
             builder.add_box(image_id, category if class_names else resolver.resolve(category, problems), xywh)
     problems += missing_label_problems(root, readable)
+    if readable and not any(p.labelled for p in readable):
+        problems = _negatives_only(root, len(readable), problems)
     dataset = builder.build({"format": "yolo", "source_root": str(root.resolve())})
     return ReadResult(dataset, problems, frozenset(unlabelled))
+
+
+def _negatives_only(root: Path, count: int, problems: list[Problem]) -> list[Problem]:
+    """The problems of a dataset none of whose images has a label file: when no label file lies anywhere
+    either (none matching no image), it is a negatives-only set, said once instead of "no class names" and
+    "no label file" warnings."""
+    if any(p.code == "orphan-labels" for p in problems):
+        return problems
+    kept = [p for p in problems if p.code not in ("no-class-names", "no-labels")]
+    return [*kept, Problem(str(root), negatives_only_note(count), "info", code="negatives-only")]
 
 
 def read_dfire(root: Path | str, source: str | None = None) -> ReadResult:
@@ -93,6 +106,7 @@ def find_class_names(root: Path, problems: list[Problem]) -> list[str] | None:
             "no data.yaml or classes.txt: class ids are kept as names ('0', '1', ...); "
             "pass --names fire,smoke or --from dfire",
             "warning",
+            code="no-class-names",
         )
     )
     return None

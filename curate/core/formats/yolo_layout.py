@@ -182,7 +182,7 @@ def unpaired_labels(root: Path, pairs: Sequence[Pair], texts: Sequence[Path]) ->
         if folder not in looked_in and folder.name.lower() not in _LABEL_FOLDERS_LOWER and not matches:
             continue  # other text files (split lists, notes): not labels
         where = files[0] if len(files) == 1 else folder
-        problems.append(Problem(str(where), _unpaired_message(root, files, matches)))
+        problems.append(Problem(str(where), _unpaired_message(root, files, matches), code="orphan-labels"))
     return problems
 
 
