@@ -75,8 +75,11 @@ def plan_flames(
     depth: NDArray[np.float32],
     yfov: float,
     rng: np.random.Generator,
+    avoid: Sequence[Sequence[int]] | None = None,
 ) -> list[tuple[Placement, str]]:
-    """Random flames standing at random pixels, sized by the scene depth there (world height in metres); or,
+    """Random flames standing at random pixels, sized by the scene depth there (world height in metres); on a
+    site (``avoid`` given: a photo or panorama, :mod:`synth.sites`) only at pixels whose depth is > 0 (the ground)
+    and never over the ``avoid`` boxes [x, y, w, h] (people); or,
     for a ``cfg.closeup`` share of the fire images, one flame filling ``cfg.closeup_height`` of the frame with
     its base near the bottom edge (a fire seen from close by; the part outside the frame is cut off)."""
     if rng.random() < cfg.negatives:
@@ -91,6 +94,11 @@ def plan_flames(
         if closeup:
             bx, by = int(rng.integers(cfg.width // 4, 3 * cfg.width // 4 + 1)), int(cfg.height * rng.uniform(0.85, 1.1))
             hpx = int(round(cfg.height * rng.uniform(*cfg.closeup_height)))
+        elif avoid is not None:
+            spot = site_spot(depth, fy, sprite.size, cfg, avoid, rng)
+            if spot is None:
+                continue
+            bx, by, hpx = spot
         else:
             bx, by = int(rng.integers(0, cfg.width)), int(rng.integers(cfg.height // 3, cfg.height))
             d = float(depth[min(by, cfg.height - 1), bx]) or 10.0
@@ -104,12 +112,37 @@ def plan_flames(
     return out
 
 
+def site_spot(
+    depth: NDArray[np.float32],
+    fy: float,
+    sprite_size: tuple[int, int],
+    cfg: Method2Config,
+    avoid: Sequence[Sequence[int]],
+    rng: np.random.Generator,
+    tries: int = 10,
+) -> tuple[int, int, int] | None:
+    """(base x, base y, height px) of a flame standing on a ground pixel (depth > 0), sized by its depth, whose
+    box overlaps none of ``avoid`` ([x, y, w, h] px); None when the view has no such spot in ``tries`` draws."""
+    ground = np.flatnonzero(depth > 0)
+    if not len(ground):
+        return None
+    for _ in range(tries):
+        by, bx = divmod(int(ground[rng.integers(len(ground))]), cfg.width)
+        hpx = int(np.clip(fy * rng.uniform(*cfg.flame_height_m) / float(depth[by, bx]), 12, 0.9 * cfg.height))
+        wpx = max(int(round(hpx * sprite_size[0] / sprite_size[1])), 2)
+        x0, y0 = bx - wpx // 2, by - hpx
+        if not any(x0 < ax + aw and ax < x0 + wpx and y0 < ay + ah and ay < by for ax, ay, aw, ah in avoid):
+            return bx, by, hpx
+    return None
+
+
 def make_image(cfg: Method2Config, i: int, library: Sequence[SpriteSequence], views: ViewCache):
     """Image ``i``: ((H, W, 3) uint8, kept fire masks, record dict (boxes xywh, metadata), kept smoke masks or
     None when smoke is not a class)."""
     background, depth, view_meta = views.background(i // cfg.images_per_view)
     rng = np.random.default_rng([cfg.seed, 2, i])
-    planned = plan_flames(cfg, library, depth, view_meta["camera"]["yfov"], rng)
+    avoid = view_meta.get("people", []) if view_meta.get("site") else None
+    planned = plan_flames(cfg, library, depth, view_meta["camera"]["yfov"], rng, avoid)
     effects = sample_effects(rng, cfg.camera)
     result = composite(expose(background, effects), [p for p, _ in planned])
     image = apply_effects(result.image, effects)

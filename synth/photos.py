@@ -1,10 +1,10 @@
-"""Photographs as Method 2 backgrounds: a user's fire-free pictures (e.g. the negatives of a real dataset),
-randomly cropped to the output size, with a ground-plane pseudo depth so flames stand on the lower part of the
-picture and grow towards the bottom (nearer) as they would on a floor seen from eye height.
+"""Photographs as Method 2 backgrounds: a user's fire-free pictures (e.g. the negatives of a real dataset, or the
+fire-free frames of their own cameras) as *sites* where flames stand on the ground (:mod:`synth.sites`: a
+sidecar's floor polygon and horizon, or the estimated ground below the horizon, off sky, water and people),
+sized by a ground-plane pseudo depth, in random crops that carry the site along.
 
-Pseudo depth: a level camera ``CAMERA_HEIGHT_M`` above flat ground with vertical field of view ``YFOV`` and the
-horizon at ``horizon`` x the image height sees row ``v`` below the horizon at distance
-``CAMERA_HEIGHT_M * fy / (v - horizon_px)`` metres; rows above it get ``FAR_M``.
+Photos are used in an order drawn by the seed, every photo once before any repeats: view ``v`` shows photo
+``perm[v % n]`` with ``perm = default_rng([seed, 8]).permutation(n)``.
 """
 
 from __future__ import annotations
@@ -18,11 +18,7 @@ from numpy.typing import NDArray
 
 from curate.core.imageio import ImageError, read_image
 from curate.scan import list_image_files
-from synth import render
-
-CAMERA_HEIGHT_M = 1.6
-YFOV = np.deg2rad(60.0)
-FAR_M = 30.0
+from synth.sites import Site, estimate_site, read_site_sidecar, sidecar_files
 
 
 def list_photos(paths: Iterable[Path | str]) -> list[Path]:
@@ -34,19 +30,17 @@ def list_photos(paths: Iterable[Path | str]) -> list[Path]:
 
 
 def photo_fingerprints(paths: Iterable[Path | str]) -> list[dict[str, str]]:
-    """The photos under ``paths`` (:func:`list_photos` order) as name and sha256 of their bytes: what a pool
-    composited on them is made of, wherever the folder lies."""
+    """The photos under ``paths`` (:func:`list_photos` order) as name and sha256 of their bytes (and of their
+    site sidecar, if any): what a pool composited on them is made of, wherever the folder lies."""
     from curate.core.manifest import file_sha256
 
-    return [{"name": p.name, "sha256": file_sha256(p)} for p in list_photos(paths)]
-
-
-def ground_depth(width: int, height: int, horizon: float) -> NDArray[np.float32]:
-    """(H, W) float32 metres of the ground-plane pseudo depth (module docstring); ``horizon`` in 0..1 of H."""
-    fy = render.intrinsics(YFOV, width, height)[1, 1]
-    rows = np.arange(height, dtype=np.float64) + 0.5 - horizon * height
-    d = np.where(rows > 0.5, CAMERA_HEIGHT_M * fy / np.maximum(rows, 0.5), FAR_M)
-    return np.repeat(np.minimum(d, FAR_M).astype(np.float32)[:, None], width, axis=1)
+    out = []
+    for photo in list_photos(paths):
+        entry = {"name": photo.name, "sha256": file_sha256(photo)}
+        for sidecar in sidecar_files(photo):
+            entry["site"] = file_sha256(sidecar)
+        out.append(entry)
+    return out
 
 
 def crop_to(image: NDArray[np.uint8], width: int, height: int, rng: np.random.Generator) -> tuple[NDArray, list]:
@@ -63,28 +57,54 @@ def crop_to(image: NDArray[np.uint8], width: int, height: int, rng: np.random.Ge
 
 
 class PhotoBackgrounds:
-    """Background ``v`` is photo ``v % len(photos)`` cropped by ``default_rng([seed, 5, v])``; unreadable photos
-    are skipped (the next one is used) and named in :attr:`problems`."""
+    """Background ``v`` is photo ``perm[v % n]`` (module docstring) cropped by ``default_rng([seed, 5, v])``;
+    unreadable photos are skipped (the next one in the order is used) and named in :attr:`problems`."""
 
     def __init__(self, photos: Sequence[Path], width: int, height: int, seed: int) -> None:
         if not photos:
             raise ValueError("no background photos")
         self.photos, self.width, self.height, self.seed = list(photos), width, height, seed
+        self.order = np.random.default_rng([seed, 8]).permutation(len(self.photos))
         self.problems: dict[str, str] = {}
 
+    def photo(self, view_index: int) -> Path:
+        return self.photos[int(self.order[view_index % len(self.photos)])]
+
     def background(self, view_index: int) -> tuple[NDArray[np.uint8], NDArray[np.float32], dict]:
-        """((H, W, 3) uint8 RGB, (H, W) float32 pseudo depth, metadata) of background ``view_index``."""
+        """((H, W, 3) uint8 RGB, (H, W) float32 pseudo depth in metres, 0 off the ground, metadata) of
+        background ``view_index``."""
         rng = np.random.default_rng([self.seed, 5, view_index])
         for k in range(len(self.photos)):
-            path = self.photos[(view_index + k) % len(self.photos)]
+            path = self.photo(view_index + k)
             try:
                 image = read_image(path)
             except ImageError as exc:
                 self.problems[str(path)] = str(exc)
                 continue
-            rgb, crop = crop_to(image, self.width, self.height, rng)
-            horizon = float(rng.uniform(0.3, 0.5))
-            depth = ground_depth(self.width, self.height, horizon)
-            meta = {"photo": path.as_posix(), "crop": crop, "horizon": round(horizon, 4), "camera": {"yfov": YFOV}}
-            return rgb, depth, meta
+            site = estimate_site(image, rng, read_site_sidecar(path))
+            return self._view(image, site, path, rng)
         raise ValueError(f"none of the {len(self.photos)} background photos can be read")
+
+    def _view(self, image: NDArray[np.uint8], site: Site, path: Path, rng: np.random.Generator):
+        """A random crop of ``image`` with its site carried along: horizon, ground and focal length."""
+        rgb, (x, y, cw, ch) = crop_to(image, self.width, self.height, rng)
+        zoom = self.height / ch
+        fy = image.shape[0] / 2 / np.tan(site.yfov / 2) * zoom
+        horizon = (site.horizon - y) * zoom
+        ground = cv2.resize(
+            site.ground[y : y + ch, x : x + cw].astype(np.uint8),
+            (self.width, self.height),
+            interpolation=cv2.INTER_NEAREST,
+        ).astype(bool)
+        depth = site.depth(self.height, fy, horizon, ground)
+        people = [[round((px - x) * self.width / cw), round((py - y) * zoom), round(pw * self.width / cw), round(ph * zoom)]
+                  for px, py, pw, ph in site.people]  # fmt: skip
+        meta = {
+            "photo": path.as_posix(),
+            "crop": [x, y, cw, ch],
+            "horizon": round(horizon / self.height, 4),
+            "camera": {"yfov": float(2 * np.arctan(self.height / 2 / fy))},
+            "site": site.source,
+            "people": people,
+        }
+        return rgb, depth, meta

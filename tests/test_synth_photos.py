@@ -1,4 +1,5 @@
-"""Photo backgrounds: crops keep the aspect, pseudo depth puts near ground at the bottom, broken photos are named."""
+"""Photo backgrounds: crops keep the aspect and carry the site along, photos are drawn by the seed without
+repeats, broken photos are named."""
 
 from __future__ import annotations
 
@@ -8,15 +9,7 @@ import numpy as np
 import pytest
 from factories import write_image
 
-from synth.photos import FAR_M, PhotoBackgrounds, crop_to, ground_depth, list_photos
-
-
-def test_ground_depth_is_far_above_the_horizon_and_near_at_the_bottom() -> None:
-    d = ground_depth(40, 100, 0.4)
-    assert d.shape == (100, 40) and (d[:40] == FAR_M).all()
-    column = d[40:, 0]
-    assert (np.diff(column) <= 0).all() and (np.diff(column[column < FAR_M]) < 0).all()
-    assert column[-1] == pytest.approx(1.6 * 50 / np.tan(np.pi / 6) / 59.5, rel=1e-4)  # 1.6 m x fy / rows below
+from synth.photos import PhotoBackgrounds, crop_to, list_photos
 
 
 def test_crops_have_the_output_aspect_and_are_seeded() -> None:
@@ -31,7 +24,8 @@ def test_broken_photos_are_skipped_and_named(tmp_path: Path) -> None:
     write_image(tmp_path / "a.jpg", 120, 90, seed=1)
     (tmp_path / "b.jpg").write_bytes(b"not a jpeg")
     photos = PhotoBackgrounds(list_photos([tmp_path]), 64, 48, seed=0)
-    rgb, depth, meta = photos.background(1)  # photo 1 is broken: photo 0 is used
+    broken = next(v for v in range(2) if photos.photo(v).name == "b.jpg")
+    rgb, depth, meta = photos.background(broken)  # the next photo in the order is used
     assert rgb.shape == (48, 64, 3) and depth.shape == (48, 64) and meta["photo"].endswith("a.jpg")
     assert list(photos.problems) == [str(tmp_path / "b.jpg")]
     (tmp_path / "empty").mkdir()
@@ -50,3 +44,50 @@ def test_photo_fingerprints_name_and_hash_each_photo(tmp_path: Path) -> None:
     for p in (tmp_path / "x").iterdir():
         (tmp_path / "y" / p.name).write_bytes(p.read_bytes())
     assert photo_fingerprints([tmp_path / "y"]) == prints
+
+
+def test_every_photo_is_used_before_any_repeats_in_a_seeded_order(tmp_path: Path) -> None:
+    for i in range(5):
+        write_image(tmp_path / f"p{i}.jpg", 80, 60, seed=i)
+    files = list_photos([tmp_path])
+    orders = []
+    for seed in (0, 1):
+        photos = PhotoBackgrounds(files, 64, 48, seed=seed)
+        first = [photos.photo(v).name for v in range(5)]
+        assert sorted(first) == [f"p{i}.jpg" for i in range(5)]  # each once per cycle
+        assert [photos.photo(v).name for v in range(5, 10)] == first
+        orders.append(first)
+    assert orders[0] != orders[1]  # the seed draws the order, not the alphabet
+
+
+def test_a_crop_carries_the_sidecar_site_along(tmp_path: Path) -> None:
+    """A fixed camera's floor polygon and horizon: flames may stand only on the floor, in every crop, and the
+    pseudo depth grows towards the horizon."""
+    write_image(tmp_path / "cam.jpg", 200, 150, seed=3)
+    (tmp_path / "cam.yaml").write_text(
+        "horizon: 0.4\ncamera_height: 3.0\nground: [[0.5, 0.4], [1.0, 0.4], [1.0, 1.0], [0.5, 1.0]]\n"
+    )
+    photos = PhotoBackgrounds(list_photos([tmp_path]), 64, 48, seed=0)
+    for view in range(4):
+        rgb, depth, meta = photos.background(view)
+        x, y, w, h = meta["crop"]
+        assert meta["site"] == "sidecar" and meta["people"] == []
+        horizon_row = (0.4 * 150 - y) * 48 / h
+        assert abs(meta["horizon"] * 48 - horizon_row) < 48 * 1e-4  # rounded to 4 decimals
+        cols = (np.arange(64) + 0.5) * w / 64 + x  # photo x of each output column
+        rows = (np.arange(48) + 0.5) * h / 48 + y
+        on_floor = (cols[None, :] >= 100 + 2) & (rows[:, None] >= 60 + 20)  # 20 photo rows: nearer than 40 m
+        off_floor = (cols[None, :] < 100 - 2) | (rows[:, None] < 60 - 2)
+        assert on_floor.any() and (depth[on_floor] > 0).all() and (depth[off_floor] == 0).all()
+        column = depth[:, -1][depth[:, -1] > 0]
+        assert len(column) and (np.diff(column) <= 0).all()  # nearer towards the bottom
+
+
+def test_photo_fingerprints_cover_site_sidecars(tmp_path: Path) -> None:
+    from synth.photos import photo_fingerprints
+
+    write_image(tmp_path / "a.jpg", 32, 24)
+    plain = photo_fingerprints([tmp_path])
+    (tmp_path / "_site.yaml").write_text("camera_height: 4\n")
+    with_site = photo_fingerprints([tmp_path])
+    assert "site" not in plain[0] and len(with_site[0]["site"]) == 64
