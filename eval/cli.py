@@ -1,4 +1,5 @@
-"""``fuzzyfire score``: COCO metrics of a detector ONNX on a test set. ``cmd_*`` return an exit code."""
+"""``fuzzyfire score`` and ``compare``: COCO metrics of detector ONNX files on a test set (and the registration of
+``predict``, :mod:`eval.cli_predict`). ``cmd_*`` return an exit code."""
 
 from __future__ import annotations
 
@@ -8,28 +9,7 @@ import sys
 from pathlib import Path
 
 from curate.core.commands import add_command
-
-
-def _names(text: str) -> list[str]:
-    return [n.strip() for n in text.split(",") if n.strip()]
-
-
-def _size(text: str) -> tuple[int, int]:
-    w, _, h = text.lower().partition("x")
-    try:
-        return int(w), int(h or w)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r}: expected N or WxH, e.g. 320 or 640x480") from None
-
-
-def _device(text: str) -> str:
-    from curate.core.device import DeviceError, parse_device
-
-    try:
-        parse_device(text)
-    except DeviceError as exc:
-        raise argparse.ArgumentTypeError(str(exc)) from None
-    return text
+from eval.cli_options import add_model_args, build_detector
 
 
 def _fmt(value: float | None) -> str:
@@ -56,15 +36,10 @@ def _print_text(result, intervals: dict) -> None:  # result: eval.score.ScoreRes
 
 
 def _score_model(model: Path, args: argparse.Namespace, dataset, problems):  # -> eval.score.ScoreResult
-    from dataclasses import fields
+    from eval.score import score
 
-    from eval.score import ScoreConfig, score
-
-    cfg = ScoreConfig(**{f.name: getattr(args, f.name) for f in fields(ScoreConfig)})
-    detector = cfg.detector(model, args.format, args.names, args.imgsz)
-    if detector.device_notice:
-        print(detector.device_notice, file=sys.stderr)
-    return score(detector, dataset, cfg.predict_options(args.resize), problems)
+    detector, options = build_detector(model, args)
+    return score(detector, dataset, options, problems)
 
 
 def _load(args: argparse.Namespace):  # -> eval.score.TestSet
@@ -209,37 +184,12 @@ def _add_scoring_args(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--drop-class", action="append", default=[], metavar="NAME", help="ignore a test-set class (repeatable or a,b)"
     )
-    p.add_argument(
-        "--format", default="auto", choices=("auto", "fuzzyfire", "yolov5", "yolov8"), help="model output layout"
-    )
-    p.add_argument(
-        "--names", type=_names, help="model class names in output order, e.g. fire,smoke (default: metadata)"
-    )
-    p.add_argument("--imgsz", type=_size, help="input size N or WxH for models with a dynamic input size")
-    p.add_argument(
-        "--resize",
-        default="area",
-        choices=("area", "linear"),
-        help="letterbox resize: area when shrinking (default; ours and YOLOv5's) or always bilinear "
-        "(ultralytics 8.x's: use it to reproduce ultralytics' own numbers)",
-    )
-    p.add_argument("--conf", type=float, default=0.001, help="confidence threshold (default 0.001)")
-    p.add_argument("--iou", type=float, default=0.6, help="NMS IoU threshold (default 0.6)")
-    p.add_argument("--max-det", type=int, default=300, help="detections kept per image (default 300)")
-    p.add_argument("--batch", type=int, default=16, help="images per onnxruntime call (default 16)")
-    p.add_argument("--workers", type=int, default=2, help="image decoding threads (default 2)")
-    p.add_argument("--threads", type=int, default=0, help="onnxruntime threads (default 0 = all cores)")
-    p.add_argument(
-        "--device",
-        default="auto",
-        type=_device,
-        help="auto | cpu | cuda | cuda:N (default auto: onnxruntime's CUDA provider when installed, else the CPU)",
-    )
+    add_model_args(p)
     p.add_argument("--seed", type=int, default=0, help="bootstrap seed (default 0)")
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    """Add ``score`` and ``compare`` to the ``fuzzyfire`` parser."""
+    """Add ``score``, ``compare`` and ``predict`` (:mod:`eval.cli_predict`) to the ``fuzzyfire`` parser."""
     p = add_command(
         sub,
         "score",
@@ -286,3 +236,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--samples", type=int, default=1000, help="bootstrap resamples (default 1000)")
     p.add_argument("--json", action="store_true", help='print {"A", "B", "images", "delta": {"AP": ...}, ...}')
     p.set_defaults(func=cmd_compare)
+
+    from eval import cli_predict
+
+    cli_predict.register(sub)
