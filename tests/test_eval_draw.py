@@ -42,4 +42,3 @@ def test_label_goes_inside_when_the_box_touches_the_top():
     changed = (out != img).any(axis=-1)
     assert not changed[50:].any() and not changed[:, 61:].any()  # nothing outside the box
     assert changed[2:8, 12:40].any()  # the label, inside the top edge
-
