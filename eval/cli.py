@@ -67,8 +67,9 @@ def _report_problems(result) -> None:
 
 def cmd_score(args: argparse.Namespace) -> int:
     from curate.core.cocoeval import ClassMatchError
+    from curate.core.commands import print_problems
     from eval.onnx_model import ModelError
-    from eval.score import ScoreError, score_errors, write_outputs
+    from eval.score import ScoreError, error_pictures, score_errors, write_outputs
 
     try:
         test = _load(args)
@@ -83,6 +84,9 @@ def cmd_score(args: argparse.Namespace) -> int:
         files = write_outputs(result, args.out, intervals)
         if errors is not None:
             files["errors"] = errors.write(args.out)
+            files["error_pictures"], not_drawn = error_pictures(result, args.out)
+            if not_drawn:
+                print_problems(not_drawn, sys.stderr, limit=20)
         print(f"wrote {', '.join(str(p) for p in files.values())}", file=sys.stderr)
     if args.json:
         extra = {"errors": errors.to_dict()} if errors is not None else {}
@@ -199,7 +203,8 @@ def register(sub: argparse._SubParsersAction) -> None:
         "negative images count). Classes are matched by name between the model's metadata and the test set.\n\n"
         "example:\n  fuzzyfire score runs/R500_S500/seed0/best.onnx --data ../shared/data/fire-smoke-608 --split test\n"
         "  fuzzyfire score yolov8n.onnx --data out/test --format yolov8 --names fire --json --out out/score\n"
-        "  fuzzyfire score best.onnx --data ds/data.yaml --split val --resize linear --errors",
+        "  fuzzyfire score best.onnx --data ds/data.yaml --split val --resize linear --errors\n"
+        "  fuzzyfire score best.onnx --data ds --errors --out out/score   # + out/score/errors/*.png",
     )
     p.add_argument("model", type=Path, help="detector .onnx file")
     _add_scoring_args(p)
@@ -210,14 +215,18 @@ def register(sub: argparse._SubParsersAction) -> None:
         "--errors",
         action="store_true",
         help="TIDE-style breakdown: AP50 lost to classification, localisation, both, duplicate, background and "
-        "missed errors, and false alarms on images without fire",
+        "missed errors, and false alarms on images without fire; with --out, pictures of the worst false alarms "
+        "and misses in OUT/errors/",
     )
     p.add_argument(
         "--alarm-conf", type=float, default=0.25, help="confidence of a false alarm for --errors (default 0.25)"
     )
     p.add_argument("--json", action="store_true", help='print {"AP", "AP50", "images", "boxes", "per_class", ...}')
     p.add_argument(
-        "--out", type=Path, help="also write predictions.json, metrics.json, pr_curve.png, matches.npz (errors.json)"
+        "--out",
+        type=Path,
+        help="also write predictions.json, metrics.json, pr_curve.png, matches.npz (with --errors: errors.json "
+        "and errors/, pictures of the worst false alarms and misses)",
     )
     p.set_defaults(func=cmd_score)
 
