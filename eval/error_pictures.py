@@ -79,10 +79,10 @@ def _entry(case: ErrorCase, picture: Path, file_name: str, names: dict[int, str]
         "file_name": file_name,
         "kind": case.kind,
         "category": names.get(case.category_id, str(case.category_id)),
-        "bbox": list(case.bbox),
+        "bbox": [round(v, 3) for v in case.bbox],
         "score": case.score,
         "iou": round(case.iou, 4),
-        "detection_bbox": list(case.other) if case.other else None,
+        "detection_bbox": [round(v, 3) for v in case.other] if case.other else None,
     }
 
 
