@@ -1,4 +1,5 @@
-"""``fuzzyfire score``: COCO metrics of a detector ONNX on a test set. ``cmd_*`` return an exit code."""
+"""``fuzzyfire score`` and ``compare``: COCO metrics of detector ONNX files on a test set (and the registration of
+``predict``, :mod:`eval.cli_predict`). ``cmd_*`` return an exit code."""
 
 from __future__ import annotations
 
@@ -9,28 +10,7 @@ from pathlib import Path
 
 from curate.core.commands import add_command
 from curate.core.formats.registry import FORMATS
-
-
-def _names(text: str) -> list[str]:
-    return [n.strip() for n in text.split(",") if n.strip()]
-
-
-def _size(text: str) -> tuple[int, int]:
-    w, _, h = text.lower().partition("x")
-    try:
-        return int(w), int(h or w)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r}: expected N or WxH, e.g. 320 or 640x480") from None
-
-
-def _device(text: str) -> str:
-    from curate.core.device import DeviceError, parse_device
-
-    try:
-        parse_device(text)
-    except DeviceError as exc:
-        raise argparse.ArgumentTypeError(str(exc)) from None
-    return text
+from eval.cli_options import add_model_args, build_detector
 
 
 def _fmt(value: float | None) -> str:
@@ -66,19 +46,14 @@ def _print_text(result, intervals: dict, split: str) -> None:  # result: eval.sc
 
 
 def _score_model(model: Path, args: argparse.Namespace, dataset, problems):  # -> eval.score.ScoreResult
-    from dataclasses import fields
+    from eval.score import score
 
-    from eval.score import ScoreConfig, score
-
-    cfg = ScoreConfig(**{f.name: getattr(args, f.name) for f in fields(ScoreConfig)})
-    detector = cfg.detector(model, args.format, args.names, args.imgsz)
-    if detector.device_notice:
-        print(detector.device_notice, file=sys.stderr)
+    detector, options = build_detector(model, args)
     if not dataset.categories:  # a negatives-only set: the model's classes, none present (every detection false)
         from curate.core.classes import canonical_class
 
         dataset = dataset.with_categories(list(dict.fromkeys(canonical_class(n) for n in detector.spec.class_names)))
-    return score(detector, dataset, cfg.predict_options(args.resize), problems)
+    return score(detector, dataset, options, problems)
 
 
 def _load(args: argparse.Namespace):  # -> eval.score.TestSet
@@ -110,8 +85,9 @@ def _report_problems(result) -> None:
 
 def cmd_score(args: argparse.Namespace) -> int:
     from curate.core.cocoeval import ClassMatchError
+    from curate.core.commands import print_problems
     from eval.onnx_model import ModelError
-    from eval.score import ScoreError, score_errors, write_outputs
+    from eval.score import ScoreError, error_pictures, score_errors, write_outputs
 
     try:
         test = _load(args)
@@ -126,6 +102,9 @@ def cmd_score(args: argparse.Namespace) -> int:
         files = write_outputs(result, args.out, intervals)
         if errors is not None:
             files["errors"] = errors.write(args.out)
+            files["error_pictures"], not_drawn = error_pictures(result, args.out)
+            if not_drawn:
+                print_problems(not_drawn, sys.stderr, limit=20)
         print(f"wrote {', '.join(str(p) for p in files.values())}", file=sys.stderr)
     if args.json:
         extra = {"errors": errors.to_dict()} if errors is not None else {}
@@ -233,37 +212,12 @@ def _add_scoring_args(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--drop-class", action="append", default=[], metavar="NAME", help="ignore a test-set class (repeatable or a,b)"
     )
-    p.add_argument(
-        "--format", default="auto", choices=("auto", "fuzzyfire", "yolov5", "yolov8"), help="model output layout"
-    )
-    p.add_argument(
-        "--names", type=_names, help="model class names in output order, e.g. fire,smoke (default: metadata)"
-    )
-    p.add_argument("--imgsz", type=_size, help="input size N or WxH for models with a dynamic input size")
-    p.add_argument(
-        "--resize",
-        default="area",
-        choices=("area", "linear"),
-        help="letterbox resize: area when shrinking (default; ours and YOLOv5's) or always bilinear "
-        "(ultralytics 8.x's: use it to reproduce ultralytics' own numbers)",
-    )
-    p.add_argument("--conf", type=float, default=0.001, help="confidence threshold (default 0.001)")
-    p.add_argument("--iou", type=float, default=0.6, help="NMS IoU threshold (default 0.6)")
-    p.add_argument("--max-det", type=int, default=300, help="detections kept per image (default 300)")
-    p.add_argument("--batch", type=int, default=16, help="images per onnxruntime call (default 16)")
-    p.add_argument("--workers", type=int, default=2, help="image decoding threads (default 2)")
-    p.add_argument("--threads", type=int, default=0, help="onnxruntime threads (default 0 = all cores)")
-    p.add_argument(
-        "--device",
-        default="auto",
-        type=_device,
-        help="auto | cpu | cuda | cuda:N (default auto: onnxruntime's CUDA provider when installed, else the CPU)",
-    )
+    add_model_args(p)
     p.add_argument("--seed", type=int, default=0, help="bootstrap seed (default 0)")
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    """Add ``score`` and ``compare`` to the ``fuzzyfire`` parser."""
+    """Add ``score``, ``compare`` and ``predict`` (:mod:`eval.cli_predict`) to the ``fuzzyfire`` parser."""
     p = add_command(
         sub,
         "score",
@@ -273,7 +227,8 @@ def register(sub: argparse._SubParsersAction) -> None:
         "negative images count). Classes are matched by name between the model's metadata and the test set.\n\n"
         "example:\n  fuzzyfire score runs/R500_S500/seed0/best.onnx --data ../shared/data/fire-smoke-608 --split test\n"
         "  fuzzyfire score yolov8n.onnx --data out/test --format yolov8 --names fire --json --out out/score\n"
-        "  fuzzyfire score best.onnx --data ds/data.yaml --split val --resize linear --errors",
+        "  fuzzyfire score best.onnx --data ds/data.yaml --split val --resize linear --errors\n"
+        "  fuzzyfire score best.onnx --data ds --errors --out out/score   # + out/score/errors/*.png",
     )
     p.add_argument("model", type=Path, help="detector .onnx file")
     _add_scoring_args(p)
@@ -284,14 +239,18 @@ def register(sub: argparse._SubParsersAction) -> None:
         "--errors",
         action="store_true",
         help="TIDE-style breakdown: AP50 lost to classification, localisation, both, duplicate, background and "
-        "missed errors, and false alarms on images without fire",
+        "missed errors, and false alarms on images without fire; with --out, pictures of the worst false alarms "
+        "and misses in OUT/errors/",
     )
     p.add_argument(
         "--alarm-conf", type=float, default=0.25, help="confidence of a false alarm for --errors (default 0.25)"
     )
     p.add_argument("--json", action="store_true", help='print {"AP", "AP50", "images", "boxes", "per_class", ...}')
     p.add_argument(
-        "--out", type=Path, help="also write predictions.json, metrics.json, pr_curve.png, matches.npz (errors.json)"
+        "--out",
+        type=Path,
+        help="also write predictions.json, metrics.json, pr_curve.png, matches.npz (with --errors: errors.json "
+        "and errors/, pictures of the worst false alarms and misses)",
     )
     p.set_defaults(func=cmd_score)
 
@@ -310,3 +269,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--samples", type=int, default=1000, help="bootstrap resamples (default 1000)")
     p.add_argument("--json", action="store_true", help='print {"A", "B", "images", "delta": {"AP": ...}, ...}')
     p.set_defaults(func=cmd_compare)
+
+    from eval import cli_predict
+
+    cli_predict.register(sub)

@@ -76,6 +76,23 @@ class ErrorBreakdown:
         }
 
 
+@dataclass(frozen=True)
+class ErrorCase:
+    """One error to look at: a ``false_alarm`` (a detection on nothing: a background error) or a ``missed``
+    ground-truth box. ``bbox`` [x, y, w, h] pixels is the detection's or the missed box's, ``category_id`` its
+    class; ``score`` the detection's (a missed box: its best same-class detection's, None when there is none);
+    ``iou`` the false alarm's best IoU with any ground-truth box, or the missed box's best IoU with a detection of
+    its class, whose box is ``other`` (None when there is none)."""
+
+    kind: str
+    image_id: int
+    bbox: tuple[float, float, float, float]
+    category_id: int
+    score: float | None
+    iou: float
+    other: tuple[float, float, float, float] | None = None
+
+
 @dataclass
 class _Error:
     record: int  # index into the records
@@ -107,6 +124,47 @@ def error_breakdown(
         delta[kind] = fixed_ap - base
     negatives, per_100, share = _false_alarms(dataset, records, cats, alarm_conf)
     return ErrorBreakdown(base, counts, delta, negatives, alarm_conf, per_100, share)
+
+
+def worst_errors(
+    dataset: Dataset, records: Sequence[dict[str, Any]], cat_ids: Sequence[int], count: int
+) -> dict[str, list[ErrorCase]]:
+    """The ``count`` worst errors of each kind, classified as :func:`error_breakdown` does:
+    ``false_alarm`` the background errors by descending score, ``missed`` the missed boxes by descending area."""
+    records = top_records(list(records), Params(iouType="bbox").maxDets[-1])
+    cats = set(cat_ids)
+    errors, matched = _classify(dataset, records, cats)
+    alarms = [records[e.record] for e in errors if e.kind == "background"][:count]
+    anns = {a.id: a for a in dataset.annotations}
+    missed = sorted(_missed(dataset, cats, matched, errors), key=lambda i: (-anns[i].area, i))[:count]
+    gts = dataset.annotations_by_image()
+    return {
+        "false_alarm": [_alarm_case(r, [a for a in gts[r["image_id"]] if a.category_id in cats]) for r in alarms],
+        "missed": [_missed_case(anns[i], records) for i in missed],
+    }
+
+
+def _best_iou(box: Sequence[float], others: Sequence[Sequence[float]]) -> tuple[float, int]:
+    """(best IoU of xywh ``box`` with the xywh ``others``, its index); (0.0, -1) when there are none."""
+    if not others:
+        return 0.0, -1
+    iou = box_iou_xyxy(xywh_to_xyxy(np.array([box], float)), xywh_to_xyxy(np.array(others, float)))[0]
+    k = int(np.argmax(iou))
+    return float(iou[k]), k
+
+
+def _alarm_case(record: dict[str, Any], anns: Sequence[Any]) -> ErrorCase:
+    iou, _ = _best_iou(record["bbox"], [a.bbox for a in anns if not a.iscrowd])
+    box = tuple(float(v) for v in record["bbox"])
+    return ErrorCase("false_alarm", record["image_id"], box, record["category_id"], record["score"], iou)  # type: ignore[arg-type]
+
+
+def _missed_case(ann: Any, records: Sequence[dict[str, Any]]) -> ErrorCase:
+    same = [r for r in records if r["image_id"] == ann.image_id and r["category_id"] == ann.category_id]
+    iou, k = _best_iou(ann.bbox, [r["bbox"] for r in same])
+    other = tuple(float(v) for v in same[k]["bbox"]) if k >= 0 and iou > 0 else None
+    score = same[k]["score"] if other is not None else None
+    return ErrorCase("missed", ann.image_id, tuple(ann.bbox), ann.category_id, score, iou, other)  # type: ignore[arg-type]
 
 
 def _ap50(dataset: Dataset, records: Sequence[dict[str, Any]], cat_ids: Sequence[int]) -> float:

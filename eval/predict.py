@@ -99,7 +99,7 @@ def predict_dataset(detector: OnnxDetector, dataset: Dataset, options: PredictOp
             good = [(rec, item) for rec, item in zip(records, loaded) if not isinstance(item, ImageError)]
             for rec, item in zip(records, loaded):
                 if isinstance(item, ImageError):
-                    out.problems.append(Problem(item.path, f"not scored: {item.reason}"))
+                    out.problems.append(Problem(item.path, f"skipped: {item.reason}"))
                 elif item[1] != (rec.width, rec.height):
                     msg = f"decoded size {item[1][0]}x{item[1][1]} differs from the dataset's {rec.width}x{rec.height}"
                     out.problems.append(Problem(str(dataset.image_path(rec)), msg, "warning"))
@@ -115,3 +115,22 @@ def predict_dataset(detector: OnnxDetector, dataset: Dataset, options: PredictOp
         for image_id, future in pending:
             out.by_image[image_id] = future.result()
     return out
+
+
+def detect_images(
+    detector: OnnxDetector, images: Sequence[NDArray[np.uint8]], options: PredictOptions | None = None
+) -> list[ImageDetections]:
+    """Detections of decoded (H, W, 3) uint8 RGB ``images`` (e.g. video frames), one :class:`ImageDetections`
+    per image with xyxy boxes in that image's pixels: the letterbox and post-processing of
+    :func:`predict_dataset`, run in one onnxruntime call per ``options.batch`` images."""
+    opt = options or PredictOptions()
+    spec = detector.spec
+    input_size = (spec.input_width, spec.input_height)
+    found: list[ImageDetections] = []
+    for start in range(0, len(images), max(1, opt.batch)):
+        chunk = images[start : start + max(1, opt.batch)]
+        boxed = [letterbox_image(img, spec.input_width, spec.input_height, spec.pad_value, opt.resize) for img in chunk]
+        boxes, scores = detector(to_nchw_float(boxed))
+        sizes = [(img.shape[1], img.shape[0]) for img in chunk]
+        found += [_postprocess_one(b, s, size, opt, input_size) for b, s, size in zip(boxes, scores, sizes)]
+    return found

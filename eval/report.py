@@ -12,9 +12,9 @@ from typing import Any
 import cv2
 import numpy as np
 
-from curate.core.boxes import xywh_to_xyxy
 from curate.core.dataset import Dataset
 from curate.core.imageio import ImageError, read_image
+from eval.draw import draw_boxes
 from eval.tables import Table, marks, to_csv, to_latex, to_markdown
 
 _CSS = """body{font-family:system-ui,sans-serif;margin:2em auto;max-width:1100px;color:#222}
@@ -58,15 +58,6 @@ def runs_html(runs: Sequence[Mapping[str, Any]], columns: Sequence[str]) -> str:
     head = "".join(f"<th>{html.escape(c)}</th>" for c in columns)
     body = "".join("<tr>" + "".join(f"<td>{show(r.get(c))}</td>" for c in columns) + "</tr>" for r in runs)
     return f"<table><tr>{head}</tr>{body}</table>"
-
-
-def draw_boxes(image: np.ndarray, boxes_xywh: Sequence[Sequence[float]], colour=(255, 64, 0)) -> np.ndarray:
-    """A copy of (H, W, 3) RGB ``image`` with xywh pixel boxes outlined."""
-    out = image.copy()
-    thickness = max(1, round(max(image.shape[:2]) / 300))
-    for x0, y0, x1, y1 in xywh_to_xyxy(np.asarray(boxes_xywh, float).reshape(-1, 4)):
-        cv2.rectangle(out, (int(x0), int(y0)), (int(round(x1)) - 1, int(round(y1)) - 1), colour, thickness)
-    return out
 
 
 def samples_html(

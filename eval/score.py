@@ -16,6 +16,7 @@ from curate.core.detections import CONF_THRESHOLD, IOU_THRESHOLD, MAX_DETECTIONS
 from curate.core.formats.registry import read_dataset
 from curate.core.load import SplitError, pick_split
 from curate.core.problems import Problem
+from eval.error_pictures import WORST, write_error_pictures
 from eval.errors import ALARM_CONF, ErrorBreakdown, error_breakdown
 from eval.onnx_model import ModelSpec, OnnxDetector
 from eval.plots import plot_pr_curves, pr_curves_from_eval
@@ -137,10 +138,23 @@ def score(
     return ScoreResult(metrics, ev, records, preds, detector.spec, dataset, [*problems, *preds.problems])
 
 
+def _scored(result: ScoreResult) -> tuple[Dataset, list[int]]:
+    """The images (those that could be read) and the category ids ``result`` was scored on."""
+    scored = result.dataset.filter_images(lambda img: img.id in result.predictions.by_image)
+    return scored, list(result.evaluation.params.catIds)
+
+
 def score_errors(result: ScoreResult, alarm_conf: float = ALARM_CONF) -> ErrorBreakdown:
     """The error breakdown (:mod:`eval.errors`) of a scored result, over the images and classes it was scored on."""
-    scored = result.dataset.filter_images(lambda img: img.id in result.predictions.by_image)
-    return error_breakdown(scored, result.records, list(result.evaluation.params.catIds), alarm_conf)
+    scored, cat_ids = _scored(result)
+    return error_breakdown(scored, result.records, cat_ids, alarm_conf)
+
+
+def error_pictures(result: ScoreResult, out: Path, count: int = WORST) -> tuple[Path, list[Problem]]:
+    """Pictures of the ``count`` worst false alarms and missed boxes of a scored result in ``out/errors/``
+    (:func:`eval.error_pictures.write_error_pictures`); returns the folder and the images not drawn."""
+    scored, cat_ids = _scored(result)
+    return write_error_pictures(scored, result.records, cat_ids, out, count)
 
 
 def write_outputs(result: ScoreResult, out: Path, extra: Mapping[str, Any] | None = None) -> dict[str, Path]:

@@ -21,12 +21,14 @@ def parse_size(text: str) -> tuple[int, int]:
 def cmd_flames(args: argparse.Namespace) -> int:
     from curate.core.progress import progress
     from synth.library import procedural_library
+    from synth.preview import write_preview
     from synth.sprites import save_sequence
 
     seqs = procedural_library(args.n, args.seed, args.frames, args.keep_every, args.rare, args.generator)
     for seq in progress(seqs, total=len(seqs), desc="flames"):
         save_sequence(args.out / seq.name, seq)
-    print(f"wrote {len(seqs)} sequences ({sum(len(s.sprites) for s in seqs)} sprites) to {args.out}")
+    preview = write_preview(seqs, args.out / "preview.png")
+    print(f"wrote {len(seqs)} sequences ({sum(len(s.sprites) for s in seqs)} sprites) to {args.out}; preview {preview}")
     return 0
 
 
@@ -187,7 +189,9 @@ def _register_flames(sub: argparse._SubParsersAction) -> None:
         sub,
         "flames",
         help="simulate procedural flame sprite sequences",
-        description="Simulate flame sequences (stable fluids or noise), keep every K-th frame.\n\n"
+        description="Simulate flame sequences (stable fluids or noise), keep every K-th frame. Each sequence is a\n"
+        "folder of NNNN_emission.png (the flame's light on black), NNNN_mask.png and, for frames with smoke,\n"
+        "NNNN_smoke.png (RGBA); preview.png shows every sequence composited over a dark and a light background.\n\n"
         "example:\n  fuzzyfire synth flames --out out/flames --n 12 --seed 0 --frames 1024 --keep-every 12",
     )
     p.add_argument("--out", required=True, type=Path, help="folder for the sequence folders")

@@ -7,8 +7,13 @@ A :class:`Sprite` of size (h, w) holds
 
 Composite of one sprite: ``out = bg * (1 - a) + rgb * a``, then ``out = blend(out, emission)``.
 
-On disk a sequence is a folder: ``sequence.json`` (generator, parameters, frame indices) and per kept frame
-``NNNN_over.png``, ``NNNN_emission.png``, ``NNNN_mask.png`` (lossless, deterministic bytes).
+On disk a sequence is a folder: ``sequence.json`` (generator, parameters, frame indices, what each file
+holds) and per kept frame ``NNNN_emission.png`` (the flame's light on black: what the flame looks like),
+``NNNN_mask.png`` and, when the frame has any smoke, ``NNNN_smoke.png`` (the ``over`` layer: for a procedural
+flame it holds only the smoke, the flame being light; a frame without smoke has no file and loads as a fully
+transparent layer). Lossless, deterministic bytes. Folders written before the smoke layer had its name keep
+it as ``NNNN_over.png`` and load the same. ``fuzzyfire synth flames`` also draws ``preview.png``
+(:mod:`synth.preview`).
 A user's own RGBA sequence (e.g. EmberGen renders) is a folder of RGBA PNGs: see :func:`sprite_from_rgba`.
 """
 
@@ -29,6 +34,14 @@ from curate.core.imageio import ImageError
 #: A sprite pixel is *smoke* where its ``over`` alpha is at least this (and it is not flame): smoke a viewer sees
 #: (a quarter of the background hidden), not the faint haze at the plume's edges. Smoke boxes come from here.
 SMOKE_ALPHA = 0.25
+
+#: What each file of a sequence folder holds (written into ``sequence.json`` for whoever opens the folder).
+LAYER_FILES: dict[str, str] = {
+    "NNNN_emission.png": "the flame's light on black, added on top of the background (what the flame looks like)",
+    "NNNN_mask.png": "the flame (white): its box comes from here",
+    "NNNN_smoke.png": "smoke as straight-alpha RGBA laid over the background; no file when a frame has no smoke",
+    "preview.png (library folder)": "every sequence's frames composited over a dark and a light background",
+}
 
 
 @dataclass(frozen=True)
@@ -120,10 +133,11 @@ def save_sequence(folder: Path, seq: SpriteSequence) -> Path:
     """Write ``seq`` into ``folder`` (created); returns the folder."""
     folder.mkdir(parents=True, exist_ok=True)
     for i, sp in enumerate(seq.sprites):
-        write_png(folder / f"{i:04d}_over.png", sp.over)
+        if sp.over[..., 3].any():
+            write_png(folder / f"{i:04d}_smoke.png", sp.over)
         write_png(folder / f"{i:04d}_emission.png", sp.emission)
         write_png(folder / f"{i:04d}_mask.png", sp.mask.astype(np.uint8) * 255)
-    meta = {"name": seq.name, "frames": len(seq.sprites), **dict(seq.meta)}
+    meta = {"name": seq.name, "frames": len(seq.sprites), **dict(seq.meta), "layers": LAYER_FILES}
     (folder / "sequence.json").write_text(json.dumps(meta, indent=1, sort_keys=True) + "\n", encoding="utf-8")
     return folder
 
@@ -136,11 +150,19 @@ def load_sequence(folder: Path) -> SpriteSequence:
     meta = json.loads(meta_path.read_text(encoding="utf-8"))
     sprites = []
     for i in range(int(meta["frames"])):
-        over = _read_png(folder / f"{i:04d}_over.png")
         emission = _read_png(folder / f"{i:04d}_emission.png")
         mask = _read_png(folder / f"{i:04d}_mask.png", cv2.IMREAD_GRAYSCALE) > 127
-        sprites.append(Sprite(over, emission, mask))
+        sprites.append(Sprite(_read_over(folder, i, mask.shape), emission, mask))
     return SpriteSequence(str(meta.get("name", folder.name)), tuple(sprites), meta)
+
+
+def _read_over(folder: Path, i: int, shape: tuple[int, int]) -> NDArray[np.uint8]:
+    """Frame ``i``'s (h, w, 4) ``over`` layer: ``NNNN_smoke.png``, else an older folder's ``NNNN_over.png``, else
+    (a frame without smoke) fully transparent zeros."""
+    for name in (f"{i:04d}_smoke.png", f"{i:04d}_over.png"):
+        if (folder / name).is_file():
+            return _read_png(folder / name)
+    return np.zeros((*shape, 4), np.uint8)
 
 
 def load_rgba_folder(folder: Path) -> SpriteSequence:

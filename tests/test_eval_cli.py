@@ -195,3 +195,41 @@ def test_a_folder_of_images_without_labels_is_scored_as_negatives(work, tmp_path
     assert "photos: 3 images, no label files: a negatives-only set" in captured.err
     assert "data   every image (no splits): 3 images (3 negatives), 0 boxes" in captured.out
     assert "per 100 images without fire (0% of the 3 such images raise one)" in captured.out
+
+
+def test_errors_out_draws_the_worst_false_alarms_and_misses(work, tmp_path):
+    from detector_factories import to_input_cxcywh
+
+    from curate.core.imageio import read_image
+    from eval.draw import GROUND_TRUTH, PREDICTION
+
+    imgs = {i.name: i for i in IMAGES}
+    missed_box = imgs["big"].boxes[1][1]  # (70, 72, 40, 40): its row left out
+    rows = [r for r in rows_for(duplicates=False) if r[1] != to_input_cxcywh(imgs["big"], missed_box)]
+    alarm = (5, 5, 20, 30)
+    rows.append((imgs["neg1"].grey, to_input_cxcywh(imgs["neg1"], alarm), 0, 0.66))
+    model = oracle_model(work["root"] / "planted.onnx", rows=rows)
+    out = tmp_path / "o"
+    assert (
+        main(["score", str(model), "--data", str(work["test"]), "--format", "yolov5", "--errors", "--out", str(out)])
+        == 0
+    )
+    index = json.loads((out / "errors" / "index.json").read_text())
+    assert [(e["picture"], e["kind"], e["bbox"]) for e in index] == [
+        ("false_alarm_01_neg1.png", "false_alarm", list(alarm)),
+        ("missed_01_big.png", "missed", list(missed_box)),
+    ]
+    assert index[0]["score"] == pytest.approx(0.66) and index[0]["iou"] == 0.0
+    assert sorted(p.name for p in (out / "errors").iterdir()) == [
+        "false_alarm_01_neg1.png",
+        "index.json",
+        "missed_01_big.png",
+    ]
+    for entry, colour in zip(index, (PREDICTION, GROUND_TRUTH)):
+        original = read_image(work["test"] / entry["file_name"])
+        picture = read_image(out / "errors" / entry["picture"])
+        k = picture.shape[0] // original.shape[0]
+        assert k > 1 and picture.shape[:2] == (k * original.shape[0], k * original.shape[1])  # enlarged, whole factor
+        x, y, w, h = (k * int(v) for v in entry["bbox"])
+        assert tuple(picture[y + h - 1, x + w // 2]) == colour  # the box's bottom edge, in its colour
+        assert tuple(picture[y + h // 2, x + w // 2]) == tuple(original[0, 0])  # its inside untouched

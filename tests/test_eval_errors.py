@@ -87,3 +87,37 @@ def test_a_perfect_detector_has_no_errors_and_crowd_boxes_absorb(tmp_path):
     out = error_breakdown(ds, records, [FIRE])
     assert out.ap50 == pytest.approx(1.0)
     assert all(v == 0 for v in out.counts.values()) and all(v == 0 for v in out.delta_ap50.values())
+
+
+def test_worst_errors_are_the_top_false_alarms_and_the_largest_misses(tmp_path):
+    from eval.errors import worst_errors
+
+    ds = _dataset(
+        tmp_path,
+        [
+            [(FIRE, (10, 10, 20, 20)), (FIRE, (50, 50, 40, 40))],  # the small box found, the large one missed
+            [(FIRE, (0, 0, 10, 10))],  # missed, a weak detection beside it (localisation, not missed)
+            [(SMOKE, (60, 0, 30, 30))],  # missed (a small one), nothing near it
+            [],  # negative: two false alarms
+        ],
+    )
+    records = [
+        _rec(1, FIRE, (10, 10, 20, 20), 0.9),
+        _rec(2, FIRE, (5, 5, 10, 10), 0.3),  # IoU 25/175 with its box: localisation
+        _rec(4, FIRE, (0, 0, 10, 10), 0.8),
+        _rec(4, SMOKE, (40, 40, 10, 10), 0.5),
+        _rec(1, FIRE, (85, 85, 10, 10), 0.7),  # on (almost) nothing: IoU 25/1675 with the large box
+    ]
+    worst = worst_errors(ds, records, [FIRE, SMOKE], count=2)
+    alarms, missed = worst["false_alarm"], worst["missed"]
+    assert [(c.image_id, c.score) for c in alarms] == [(4, 0.8), (1, 0.7)]  # by score, cut at count
+    assert [c.kind for c in alarms] == ["false_alarm"] * 2 and alarms[0].iou == 0.0
+    assert alarms[1].iou == pytest.approx(25 / 1675)
+    assert [(c.image_id, c.bbox) for c in missed] == [(1, (50, 50, 40, 40)), (3, (60, 0, 30, 30))]  # by area
+    assert missed[0].other == (85.0, 85.0, 10.0, 10.0) and missed[0].score == 0.7  # its best same-class detection
+    assert missed[0].iou == pytest.approx(25 / 1675)
+    assert missed[1].other is None and missed[1].score is None and missed[1].iou == 0.0
+    everything = worst_errors(ds, records, [FIRE, SMOKE], count=10)
+    breakdown = error_breakdown(ds, records, [FIRE, SMOKE])
+    assert len(everything["false_alarm"]) == breakdown.counts["background"] == 3
+    assert len(everything["missed"]) == breakdown.counts["missed"] == 2  # the localised box is not missed

@@ -10,8 +10,9 @@ from detector_factories import IMAGES, oracle_model, write_test_set
 
 from curate.core.boxes import xyxy_to_xywh
 from curate.core.formats.registry import read_dataset
+from curate.core.imageio import read_image
 from eval.onnx_model import OnnxDetector
-from eval.predict import PredictOptions, predict_dataset
+from eval.predict import PredictOptions, detect_images, predict_dataset
 
 
 @pytest.fixture(scope="module")
@@ -51,3 +52,17 @@ def test_size_mismatch_is_a_warning(setup):
     images = (dataclasses.replace(ds.images[0], width=999), *ds.images[1:])
     preds = predict_dataset(det, dataclasses.replace(ds, images=images))
     assert [p.level for p in preds.problems] == ["warning"] and "999x" in preds.problems[0].reason
+
+
+@pytest.mark.parametrize("batch", [1, 4])
+def test_decoded_images_get_the_detections_their_files_get(setup, batch):
+    ds, det = setup
+    opt = PredictOptions(batch=batch, conf=0.2)
+    from_files = predict_dataset(det, ds, opt)
+    found = detect_images(det, [read_image(ds.image_path(img)) for img in ds.images], opt)
+    assert len(found) == len(ds.images)
+    for img, got in zip(ds.images, found):
+        want = from_files.by_image[img.id]
+        assert np.array_equal(got.boxes, want.boxes) and np.array_equal(got.scores, want.scores)
+        assert np.array_equal(got.labels, want.labels)
+    assert sum(len(d) for d in found) == sum(len(i.boxes) for i in IMAGES)  # NMS and conf applied alike

@@ -8,7 +8,6 @@ from PIL import Image
 
 from curate.core.formats.registry import read_dataset
 from eval.report import (
-    draw_boxes,
     figure_html,
     render_page,
     runs_html,
@@ -49,13 +48,6 @@ def test_samples_are_thumbnails_with_boxes(tmp_path):
     files = sorted((tmp_path / "report" / "samples").glob("*.jpg"))
     assert len(files) == 3 and body.count("<figure>") == 3 and 'src="samples/' in body
     assert all(Image.open(f).size[1] == 160 for f in files)
-
-
-def test_draw_boxes_outlines_without_touching_input():
-    img = np.zeros((20, 20, 3), np.uint8)
-    out = draw_boxes(img, [(2, 2, 10, 10)])
-    assert img.max() == 0 and tuple(out[2, 5]) == (255, 64, 0) and out[6, 6].max() == 0
-    assert draw_boxes(img, []).max() == 0
 
 
 def test_write_study_report_writes_tables_figures_and_page(tmp_path):

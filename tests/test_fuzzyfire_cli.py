@@ -35,6 +35,7 @@ def test_help_lists_the_commands_in_order() -> None:
         "train",
         "score",
         "compare",
+        "predict",
         "experiment",
     ]
 

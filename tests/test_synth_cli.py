@@ -18,6 +18,23 @@ def test_flames_method2_audit_commands(tmp_path, capsys):
     assert report["images"] == 3 and report["mean_iou"] == 1.0
 
 
+def test_flames_write_a_preview_and_no_empty_layer(tmp_path, capsys):
+    import cv2
+
+    out = tmp_path / "fl"
+    assert main(["synth", "flames", "--out", str(out), "--n", "3", "--frames", "60", "--keep-every", "30"]) == 0
+    assert f"preview {out / 'preview.png'}" in capsys.readouterr().out
+    seqs = sorted(p for p in out.iterdir() if p.is_dir())
+    sheet = cv2.imread(str(out / "preview.png"))
+    assert len(seqs) == 3 and sheet.shape == (3 * (18 + 2 * 96 + 1), 8 * 96, 3)
+    pngs = [p for p in out.rglob("*.png") if p.parent != out]
+    assert pngs and not list(out.rglob("*_over.png"))
+    for path in pngs:  # every layer file shows something (a frame without smoke has no smoke file)
+        assert cv2.imread(str(path), cv2.IMREAD_UNCHANGED).max() > 0, path
+    meta = json.loads((seqs[0] / "sequence.json").read_text())
+    assert "NNNN_emission.png" in meta["layers"]
+
+
 def test_bad_size_is_rejected(capsys):
     import pytest
 

@@ -23,6 +23,29 @@ def test_save_load_round_trip_is_lossless(tmp_path):
     assert back.meta["params"]["rows"] == 40
 
 
+def test_only_frames_with_smoke_write_a_smoke_layer_and_old_folders_still_load(tmp_path):
+    smoky = _seq()
+    clear = F.generate_sequence(
+        "c", F.FlameParams(rows=40, cols=32, frames=40, keep_every=20, warmup=30, smoke=0.0), np.random.default_rng(0)
+    )
+    assert all(sp.over[..., 3].any() for sp in smoky.sprites) and not any(sp.over[..., 3].any() for sp in clear.sprites)
+    S.save_sequence(tmp_path / "smoky", smoky)
+    S.save_sequence(tmp_path / "clear", clear)
+    assert len(list((tmp_path / "smoky").glob("*_smoke.png"))) == len(smoky.sprites)
+    assert not list((tmp_path / "clear").glob("*_smoke.png")) and not list(tmp_path.rglob("*_over.png"))
+    for folder in (tmp_path / "smoky", tmp_path / "clear"):  # no file a viewer shows as empty
+        for path in folder.glob("*.png"):
+            assert cv2.imread(str(path), cv2.IMREAD_UNCHANGED).max() > 0, path
+    back = S.load_sequence(tmp_path / "clear")
+    for a, b in zip(clear.sprites, back.sprites):  # loads as a transparent layer: composites the same
+        assert not b.over.any() and np.array_equal(a.emission, b.emission) and np.array_equal(a.mask, b.mask)
+    assert "NNNN_smoke.png" in back.meta["layers"]
+    for path in sorted((tmp_path / "smoky").glob("*_smoke.png")):  # a folder from before the rename
+        path.rename(path.with_name(path.name.replace("_smoke", "_over")))
+    old = S.load_sequence(tmp_path / "smoky")
+    assert all(np.array_equal(a.over, b.over) for a, b in zip(smoky.sprites, old.sprites))
+
+
 def test_crop_to_content_keeps_every_visible_pixel():
     over = np.zeros((20, 30, 4), np.uint8)
     over[5:8, 10:12, 3] = 200
