@@ -160,7 +160,7 @@ def standin_stage(root: Path, name: str, cfg: Any) -> tuple[Stage, DataRef]:
 
 
 #: Synth config keys added after pools were made; left out of a pool's identity while at their default.
-LATER_KEYS = ("environments", "flame_opacity", "closeup", "closeup_height")
+LATER_KEYS = ("environments", "flame_opacity", "closeup", "closeup_height", "background_holdout")
 
 
 def synth_stage(root: Path, method: str, cfg: Any, base: Path) -> tuple[Stage, DataRef]:
@@ -203,7 +203,7 @@ def content_identity(cfg: Any) -> dict[str, Any]:
     if cfg.environments:
         out["environments"] = [fingerprint(spec) for spec in find_environment_files(cfg.environments)]
     if getattr(cfg, "backgrounds", ()):
-        out["backgrounds"] = photo_fingerprints(cfg.backgrounds)
+        out["backgrounds"] = photo_fingerprints(cfg.backgrounds, cfg.background_holdout)
     return out
 
 

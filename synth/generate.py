@@ -13,7 +13,7 @@ from curate.core.progress import progress
 from curate.core.writer import WriteResult, check_output_target
 from synth import render
 from synth.envfile import find_environment_files
-from synth.photos import PhotoBackgrounds, list_photos
+from synth.photos import PhotoBackgrounds, pool_photos
 from synth.schema import to_json
 from synth.sprites import SpriteSequence
 from synth.staging import Staging, finish
@@ -45,7 +45,7 @@ def generate(
     check_output_target(out, overwrite)
     files = find_environment_files(cfg.environments) if cfg.environments else []
     backgrounds = getattr(cfg, "backgrounds", ())  # Method 2 only
-    photo_files = list_photos(backgrounds) if backgrounds else []
+    photo_files = pool_photos(backgrounds, cfg.background_holdout) if backgrounds else []
     args = {**to_json(cfg), "flame_sequences": [s.name for s in library]}
     staging = Staging(out, args)
     try:

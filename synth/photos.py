@@ -29,13 +29,30 @@ def list_photos(paths: Iterable[Path | str]) -> list[Path]:
     return photos
 
 
-def photo_fingerprints(paths: Iterable[Path | str]) -> list[dict[str, str]]:
-    """The photos under ``paths`` (:func:`list_photos` order) as name and sha256 of their bytes (and of their
-    site sidecar, if any): what a pool composited on them is made of, wherever the folder lies."""
+def held_out(photo: Path, share: float) -> bool:
+    """Whether ``photo`` is among the ``share`` of photos kept out of every pool, chosen by its content (the
+    first 8 hex digits of its sha256 as a fraction of 16^8 >= 1 - share): the same photos on every machine and
+    for every seed, e.g. a false-alarm test set that no pool composites on."""
+    from curate.core.manifest import file_sha256
+
+    return share > 0 and int(file_sha256(photo)[:8], 16) / 16**8 >= 1.0 - share
+
+
+def pool_photos(paths: Iterable[Path | str], holdout: float = 0.0) -> list[Path]:
+    """:func:`list_photos` without the :func:`held_out` ones; ValueError when none is left."""
+    photos = [p for p in list_photos(paths) if not held_out(p, holdout)]
+    if not photos:
+        raise ValueError(f"every photo in {', '.join(map(str, paths))} is held out (holdout {holdout:g})")
+    return photos
+
+
+def photo_fingerprints(paths: Iterable[Path | str], holdout: float = 0.0) -> list[dict[str, str]]:
+    """The pool's photos under ``paths`` (:func:`pool_photos` order) as name and sha256 of their bytes (and of
+    their site sidecar, if any): what a pool composited on them is made of, wherever the folder lies."""
     from curate.core.manifest import file_sha256
 
     out = []
-    for photo in list_photos(paths):
+    for photo in pool_photos(paths, holdout):
         entry = {"name": photo.name, "sha256": file_sha256(photo)}
         for sidecar in sidecar_files(photo):
             entry["site"] = file_sha256(sidecar)

@@ -11,9 +11,10 @@ A **site** is read from a sidecar when there is one (a fixed camera whose floor 
       ground: [[0.05, 0.55], [0.95, 0.55], [1.0, 1.0], [0.0, 1.0]]   # polygon (x, y fractions): fire only here
 
 - **Estimate** (no sidecar): *sky* is the smooth, bright or blue region connected to the top edge; the
-  *horizon* is the median lowest sky row over the columns that show sky (photos without sky - rooms - draw it
-  in 0.3..0.5 of the height per photo); *water* is sky-like smooth blue or bright pixels below the horizon (a
-  lake mirrors the sky); *people* are OpenCV's HOG pedestrian detections (upright people only: a seated person
+  *horizon* is the median lowest sky row over the columns that show sky when the sky spans 40 % of them
+  (otherwise - rooms, streets between buildings - it is drawn in 0.3..0.5 of the height, and never above the
+  lowest sky pixel); *water* is sky-like pixels below the horizon (a lake mirrors the sky) and fairly smooth,
+  saturated blue or blue-green ones; *people* are OpenCV's HOG pedestrian detections (upright people only: a seated person
   is missed - the README says how often a flame lands on one). Ground = below the horizon, none of those.
 
 Pseudo depth on the ground: a camera ``camera_height`` above flat ground with vertical field of view ``yfov``
@@ -38,6 +39,7 @@ YFOV_DEG = 60.0
 MAX_GROUND_M = 40.0  # farther ground is not a place for a visible fire
 _KEYS = {"horizon", "camera_height", "yfov", "ground"}
 _WORK = 160  # long side, pixels, of the picture the estimate runs on
+SKY_COLUMNS = 0.4  # the sky must span this share of the columns to place the horizon (else it is drawn)
 
 
 @dataclass(frozen=True)
@@ -113,13 +115,16 @@ def estimate_site(image: NDArray[np.uint8], rng: np.random.Generator, sidecar: d
     if "horizon" in sidecar:
         horizon = sidecar["horizon"] * h
     else:
-        horizon = _horizon_from_sky(sky, h) if sky.mean() > 0.03 else float(rng.uniform(0.3, 0.5)) * h
+        wide_sky = sky.any(axis=0).mean() >= SKY_COLUMNS and sky.mean() > 0.03
+        drawn = float(rng.uniform(0.3, 0.5)) * h
+        horizon = _horizon_from_sky(sky, h) if wide_sky else max(drawn, _lowest_sky(sky, h))
     below = (np.arange(h)[:, None] >= horizon) & np.ones((1, w), bool)
     if "ground" in sidecar:
         ground = polygon_mask(sidecar["ground"], w, h) & below
         people: tuple[tuple[int, int, int, int], ...] = ()
     else:
-        water = cv2.resize(skylike.astype(np.uint8), (w, h), interpolation=cv2.INTER_NEAREST).astype(bool)
+        wet = skylike | water_like(small)
+        water = cv2.resize(wet.astype(np.uint8), (w, h), interpolation=cv2.INTER_NEAREST).astype(bool)
         people = detect_people(image)
         ground = below & ~water
         for x, y, bw, bh in people:
@@ -146,6 +151,22 @@ def sky_like(rgb: NDArray[np.uint8]) -> NDArray[np.bool_]:
     overcast = (light > 70) & (sat < 0.18)
     night = light < 8
     return smooth & (blue | overcast | night)
+
+
+def water_like(rgb: NDArray[np.uint8]) -> NDArray[np.bool_]:
+    """(H, W) bool: fairly smooth, saturated blue or blue-green pixels (lakes, sea, pools), dilated by 2 px."""
+    hsv = cv2.cvtColor(rgb, cv2.COLOR_RGB2HSV).astype(np.float32)
+    grey = cv2.cvtColor(rgb, cv2.COLOR_RGB2GRAY).astype(np.float32)
+    texture = cv2.blur(np.abs(cv2.Laplacian(grey, cv2.CV_32F)), (5, 5))
+    hue, sat, val = hsv[..., 0] * 2, hsv[..., 1] / 255, hsv[..., 2] / 255
+    wet = (hue >= 170) & (hue <= 250) & (sat > 0.35) & (val > 0.15) & (texture < 14.0)
+    return cv2.dilate(wet.astype(np.uint8), np.ones((5, 5), np.uint8)).astype(bool)
+
+
+def _lowest_sky(sky: NDArray[np.bool_], height: int) -> float:
+    """The row below the lowest sky pixel, in ``height``-row px (0 without sky)."""
+    rows = np.flatnonzero(sky.any(axis=1))
+    return float(rows[-1] + 1) * height / sky.shape[0] if len(rows) else 0.0
 
 
 def _top_connected(mask: NDArray[np.bool_]) -> NDArray[np.bool_]:

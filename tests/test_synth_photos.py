@@ -91,3 +91,22 @@ def test_photo_fingerprints_cover_site_sidecars(tmp_path: Path) -> None:
     (tmp_path / "_site.yaml").write_text("camera_height: 4\n")
     with_site = photo_fingerprints([tmp_path])
     assert "site" not in plain[0] and len(with_site[0]["site"]) == 64
+
+
+def test_a_held_out_share_of_photos_is_chosen_by_content(tmp_path: Path) -> None:
+    from synth.photos import held_out, photo_fingerprints, pool_photos
+
+    for i in range(40):
+        write_image(tmp_path / "a" / f"p{i:02d}.png", 8, 8, seed=i)
+    photos = list_photos([tmp_path / "a"])
+    kept = pool_photos([tmp_path / "a"], 0.25)
+    out = [p for p in photos if held_out(p, 0.25)]
+    assert sorted(kept + out) == photos and 4 <= len(out) <= 18  # about a quarter
+    assert pool_photos([tmp_path / "a"]) == photos and not any(held_out(p, 0.0) for p in photos)
+    (tmp_path / "b").mkdir()
+    for p in photos:  # renamed copies: the same photos are held out
+        (tmp_path / "b" / f"x_{p.name}").write_bytes(p.read_bytes())
+    assert [p.name[2:] for p in pool_photos([tmp_path / "b"], 0.25)] == [p.name for p in kept]
+    assert [f["name"] for f in photo_fingerprints([tmp_path / "a"], 0.25)] == [p.name for p in kept]
+    with pytest.raises(ValueError, match="held out"):
+        pool_photos([tmp_path / "a"], 0.9999999)
