@@ -257,30 +257,36 @@ class PanoramaBackgrounds:
         self.panoramas, self.width, self.height, self.seed = [Path(p) for p in panoramas], width, height, seed
         self.tries = tries
         self.order = np.random.default_rng([seed, 8]).permutation(len(self.panoramas))
+        self.settings = [read_settings(p) for p in self.panoramas]  # sidecar errors now, not mid-run
         self.problems: dict[str, str] = {}
-        self._loaded: tuple[Path, NDArray, PanoramaSettings] | None = None
+        self._loaded: tuple[Path, NDArray] | None = None
 
-    def load(self, path: Path) -> tuple[NDArray, PanoramaSettings]:
-        """Panorama ``path`` (:func:`read_panorama`) and its settings; the last one is kept in memory."""
+    def load(self, path: Path) -> NDArray:
+        """Panorama ``path`` (:func:`read_panorama`); the last one loaded is kept in memory."""
         if self._loaded is None or self._loaded[0] != path:
             self._loaded = None  # release the previous one before decoding the next
-            self._loaded = (path, read_panorama(path), read_settings(path))
-        return self._loaded[1], self._loaded[2]
+            self._loaded = (path, read_panorama(path))
+        return self._loaded[1]
 
     def background(self, view_index: int) -> tuple[NDArray[np.uint8], NDArray[np.float32], dict]:
-        """((H, W, 3) uint8 RGB, (H, W) float32 ground z-depth (0 = no flame here), metadata) of view ``view_index``."""
+        """((H, W, 3) uint8 RGB, (H, W) float32 ground z-depth (0 = no flame here), metadata) of view ``view_index``.
+
+        Metadata: ``panorama`` (file name), ``yaw``, ``pitch`` (degrees), ``camera_height`` (metres), ``softness``,
+        ``exposure`` (HDR only: log2 of the factor applied to linear radiance), ``camera.yfov`` (radians) and
+        ``site: True``."""
         rng = np.random.default_rng([self.seed, 7, view_index])
         n = len(self.panoramas)
         for k in range(n):
-            path = self.panoramas[int(self.order[(view_index + k) % n])]
+            index = int(self.order[(view_index + k) % n])
+            path = self.panoramas[index]
             if str(path) in self.problems:
                 continue
             try:
-                pano, settings = self.load(path)
+                pano = self.load(path)
             except ImageError as exc:
                 self.problems[str(path)] = str(exc)
                 continue
-            return self._view(path, pano, settings, rng)
+            return self._view(path, pano, self.settings[index], rng)
         raise ValueError(f"none of the {n} panoramas can be read")
 
     def _view(self, path: Path, pano: NDArray, s: PanoramaSettings, rng: np.random.Generator):

@@ -180,10 +180,13 @@ def test_sidecars_are_strict_and_apply_key_by_key(tmp_path: Path) -> None:
     pano = write_rgb(tmp_path / "site.jpg", equirect())
     (tmp_path / "site.yaml").write_text("pitchh: [-10, 0]\n")
     with pytest.raises(ValueError, match=r"site.yaml: pitchh: unknown key"):
-        PanoramaBackgrounds([pano], 32, 24, seed=0).background(0)
+        PanoramaBackgrounds([pano], 32, 24, seed=0)
     (tmp_path / "site.yaml").write_text("pitch: -10\n")
     with pytest.raises(ValueError, match=r"site.yaml: pitch: expected a list"):
-        PanoramaBackgrounds([pano], 32, 24, seed=0).background(0)
+        PanoramaBackgrounds([pano], 32, 24, seed=0)
+    (tmp_path / "site.yaml").write_text("pitch: [5, -10]\n")
+    with pytest.raises(ValueError, match=r"site.yaml: pitch must be \[lo, hi\] with lo <= hi"):
+        PanoramaBackgrounds([pano], 32, 24, seed=0)
     (tmp_path / "panoramas.yaml").write_text("yaw: [90, 90]\ncamera_height: [2, 2]\n")
     (tmp_path / "site.yaml").write_text("pitch: [-10, -10]\nyfov: [60, 60]\n")
     meta = PanoramaBackgrounds([pano], 32, 24, seed=0).background(0)[2]
