@@ -171,6 +171,9 @@ def test_a_broken_hdr_is_named_with_its_reason(tmp_path: Path, folder: Path) -> 
         is_panorama(tmp_path / "fake.hdr")
     with pytest.raises(ImageError, match="odd.hdr: Radiance HDR: resolution line"):
         is_panorama(tmp_path / "odd.hdr")
+    (tmp_path / "x.exr").write_bytes(b"\x76\x2f\x31\x01" + bytes(100))  # this OpenCV may have no EXR decoder
+    with pytest.raises(ImageError, match=r"x.exr: OpenEXR: cannot be decoded"):
+        is_panorama(tmp_path / "x.exr")
     bg = PanoramaBackgrounds([tmp_path / "cut.hdr", folder / "a.jpg"], 32, 24, seed=0)
     assert all(bg.background(v)[2]["panorama"] == "a.jpg" for v in range(3))
     assert list(bg.problems) == [str(tmp_path / "cut.hdr")] and "Radiance HDR" in bg.problems[str(tmp_path / "cut.hdr")]
