@@ -160,7 +160,7 @@ def standin_stage(root: Path, name: str, cfg: Any) -> tuple[Stage, DataRef]:
 
 
 #: Synth config keys added after pools were made; left out of a pool's identity while at their default.
-LATER_KEYS = ("environments", "flame_opacity", "closeup", "closeup_height", "background_holdout")
+LATER_KEYS = ("environments", "flame_opacity", "closeup", "closeup_height", "background_holdout", "panorama_share")
 
 
 def synth_stage(root: Path, method: str, cfg: Any, base: Path) -> tuple[Stage, DataRef]:
@@ -194,16 +194,26 @@ def _later_keys_dropped(config: dict[str, Any], default: dict[str, Any]) -> dict
     return {k: v for k, v in config.items() if not (k in LATER_KEYS and v == default[k])}
 
 
+#: The version of the photo-site rules (:mod:`synth.sites`) in the identity of every pool with photos.
+PHOTO_SITES = 1
+
+
 def content_identity(cfg: Any) -> dict[str, Any]:
     """The environment files and background photos of ``cfg`` by content (only the keys that are set)."""
     from synth.envfile import find_environment_files, fingerprint
+    from synth.panorama import panorama_fingerprints
     from synth.photos import photo_fingerprints
+    from synth.places import split_places
 
     out: dict[str, Any] = {}
-    if cfg.environments:
-        out["environments"] = [fingerprint(spec) for spec in find_environment_files(cfg.environments)]
+    places = split_places(cfg.environments, getattr(cfg, "backgrounds", ()))
+    if places.meshes:
+        out["environments"] = [fingerprint(spec) for spec in find_environment_files(places.meshes)]
+    if places.panoramas:
+        out["panoramas"] = panorama_fingerprints(places.panoramas)
     if getattr(cfg, "backgrounds", ()):
         out["backgrounds"] = photo_fingerprints(cfg.backgrounds, cfg.background_holdout)
+        out["photo_sites"] = PHOTO_SITES  # photos became sites: pools made before that are other data
     return out
 
 

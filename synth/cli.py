@@ -95,12 +95,16 @@ def _dataset_config(args: argparse.Namespace) -> dict:
     from synth.envfile import find_environment_files
     from synth.library import FlameLibraryConfig
     from synth.photos import list_photos
+    from synth.places import split_places
 
     check_output_target(args.out, args.overwrite)
-    if args.environments:
-        find_environment_files(args.environments)
     if getattr(args, "backgrounds", None):
         list_photos(args.backgrounds)
+    places = split_places(args.environments or (), getattr(args, "backgrounds", None) or ())
+    if places.meshes:
+        find_environment_files(places.meshes)
+    if args.environments and not places.meshes and not places.panoramas:
+        raise ValueError(f"no mesh files or 2:1 panoramas in {', '.join(map(str, args.environments))}")
 
     if args.library is not None and args.flames:
         raise ValueError("--library makes procedural flames, which --flames replaces: give one of them")
@@ -263,7 +267,8 @@ def _dataset_arguments(p: argparse.ArgumentParser, photos: bool = False) -> None
         type=Path,
         nargs="+",
         metavar="PATH",
-        help="3D environments: glTF/GLB/OBJ/PLY files, folders of them, or sidecar YAMLs (see synth/envfile.py)",
+        help="places: 3D environments (glTF/GLB/OBJ/PLY files, folders of them, or sidecar YAMLs: synth/envfile.py) "
+        "and, for Method 2, 360-degree panoramas (2:1 JPEG/PNG/HDR images or folders of them: synth/panorama.py)",
     )
     p.add_argument("--flames", type=Path, nargs="*", help="sequence folders (synth flames output, or RGBA PNGs)")
     p.add_argument(
@@ -304,6 +309,7 @@ def _register_method2(sub: argparse._SubParsersAction) -> None:
         "example:\n  fuzzyfire synth method2 --n 1000 --seed 0 --out out/m2 --size 640x480 --scenes 48\n"
         "  fuzzyfire synth method2 --n 200 --out out/m2-rooms --environments configs/scenes\n"
         "  fuzzyfire synth method2 --n 200 --out out/m2-photos --backgrounds my/negatives\n"
+        "  fuzzyfire synth method2 --n 200 --out out/m2-panoramas --environments ../shared/data/panoramas\n"
         "  fuzzyfire synth method2 --n 200 --out out/m2-mixed --environments configs/scenes --scenes 24\n"
         "  fuzzyfire synth audit out/m2 --json",
     )

@@ -13,7 +13,9 @@ from curate.core.progress import progress
 from curate.core.writer import WriteResult, check_output_target
 from synth import render
 from synth.envfile import find_environment_files
-from synth.photos import PhotoBackgrounds, pool_photos
+from synth.panorama import PanoramaBackgrounds
+from synth.photos import PhotoBackgrounds, held_out
+from synth.places import split_places
 from synth.schema import to_json
 from synth.sprites import SpriteSequence
 from synth.staging import Staging, finish
@@ -43,21 +45,40 @@ def generate(
     if not library or not all(seq.sprites for seq in library):
         raise ValueError("the flame library is empty")
     check_output_target(out, overwrite)
-    files = find_environment_files(cfg.environments) if cfg.environments else []
-    backgrounds = getattr(cfg, "backgrounds", ())  # Method 2 only
-    photo_files = pool_photos(backgrounds, cfg.background_holdout) if backgrounds else []
+    places = split_places(cfg.environments, getattr(cfg, "backgrounds", ()))  # backgrounds: Method 2 only
+    if places.panoramas and method != "method2":
+        raise ValueError(f"{places.panoramas[0]}: a panorama is a Method 2 place (Method 1 needs 3D meshes)")
+    files = find_environment_files(places.meshes) if places.meshes else []
+    holdout = getattr(cfg, "background_holdout", 0.0)
+    photo_files = [p for p in places.photos if not held_out(p, holdout)]
+    if places.photos and not photo_files:
+        raise ValueError(f"every background photo is held out (background_holdout {holdout:g})")
     args = {**to_json(cfg), "flame_sequences": [s.name for s in library]}
     staging = Staging(out, args)
     try:
         with render.Renderer(cfg.width, cfg.height, platform) as renderer:
             photos = PhotoBackgrounds(photo_files, cfg.width, cfg.height, cfg.seed) if photo_files else None
+            panoramas = (
+                PanoramaBackgrounds(places.panoramas, cfg.width, cfg.height, cfg.seed) if places.panoramas else None
+            )
             share, count = getattr(cfg, "photo_share", 0.0), -(-cfg.n // cfg.images_per_view)  # views of the run
-            views = ViewCache(cfg.seed, cfg.scenes, renderer, files, photos, share, count)
+            views = ViewCache(
+                cfg.seed,
+                cfg.scenes,
+                renderer,
+                files,
+                photos,
+                share,
+                count,
+                panoramas,
+                getattr(cfg, "panorama_share", 0.5),
+            )
             todo = [i for i in range(cfg.n) if not staging.done(i)]
             for i in progress(todo, total=len(todo), desc=f"{method} images"):
                 staging.save(i, *make_image(cfg, i, library, views))
-        for path, reason in (photos.problems if photos else {}).items():
-            print(f"{path}: skipped background photo ({reason})", file=sys.stderr)
+        for source in (photos, panoramas):
+            for path, reason in (source.problems if source else {}).items():
+                print(f"{path}: skipped background ({reason})", file=sys.stderr)
         return finish(staging, out, cfg.n, f"synth:{method}", f"synth {method}", args, cfg.smoke_class, overwrite)
     except BaseException:
         staging.abandon(cfg.n)

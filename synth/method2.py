@@ -42,6 +42,7 @@ class Method2Config:
     backgrounds: tuple[Path, ...] = ()  # fire-free photos (files / folders) composited on instead of renders
     photo_share: float = 0.5  # fraction of views on a photo when there are also 3D environments
     background_holdout: float = 0.0  # share of the photos (chosen by content hash) never composited on: test data
+    panorama_share: float = 0.5  # weight of panorama views (environments that are 2:1 images) beside photos and renders
     images_per_view: int = 8  # images composited on each rendered view
     max_flames: int = 3  # flames per image: uniform in 1..max_flames
     negatives: float = 0.1  # fraction of images without flames
@@ -62,6 +63,8 @@ class Method2Config:
             raise ValueError("scenes is 0 and no environments or backgrounds are given: nothing to composite on")
         if not 0.0 <= self.background_holdout < 1.0:
             raise ValueError(f"background_holdout must be in 0..1 (exclusive), got {self.background_holdout}")
+        if not 0.0 <= self.panorama_share <= 1.0:
+            raise ValueError(f"panorama_share must be in 0..1, got {self.panorama_share}")
         if not 0.0 <= self.photo_share <= 1.0:
             raise ValueError(f"photo_share must be in 0..1, got {self.photo_share}")
         if self.max_flames < 1 or not 0.0 <= self.negatives <= 1.0 or self.min_box_px < 1:

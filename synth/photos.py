@@ -39,8 +39,12 @@ def held_out(photo: Path, share: float) -> bool:
 
 
 def pool_photos(paths: Iterable[Path | str], holdout: float = 0.0) -> list[Path]:
-    """:func:`list_photos` without the :func:`held_out` ones; ValueError when none is left."""
-    photos = [p for p in list_photos(paths) if not held_out(p, holdout)]
+    """:func:`list_photos` without the :func:`held_out` ones and without 2:1 panoramas (places of their own,
+    :mod:`synth.places`); ValueError when none is left."""
+    from synth.places import split_places
+
+    list_photos(paths)  # a folder without images is an error of its own
+    photos = [p for p in split_places((), paths).photos if not held_out(p, holdout)]
     if not photos:
         raise ValueError(f"every photo in {', '.join(map(str, paths))} is held out (holdout {holdout:g})")
     return photos

@@ -18,7 +18,9 @@ from numpy.typing import NDArray
 
 from synth import camera, render, scenes
 from synth.envfile import EnvironmentFile
+from synth.panorama import PanoramaBackgrounds
 from synth.photos import PhotoBackgrounds
+from synth.places import kind_of_view, kind_weights
 
 
 @dataclass(frozen=True)
@@ -47,11 +49,18 @@ class ViewCache:
         photos: PhotoBackgrounds | None = None,
         photo_share: float = 0.5,
         views: int = 0,
+        panoramas: PanoramaBackgrounds | None = None,
+        panorama_share: float = 0.5,
     ) -> None:
-        if scenes_count + len(files) < 1 and photos is None:
+        if scenes_count + len(files) < 1 and photos is None and panoramas is None:
             raise ValueError("at least one environment is needed")
         self.seed, self.scenes, self.renderer, self.files = seed, scenes_count, renderer, tuple(files)
-        self.photos, self.photo_share = photos, photo_share
+        self.photos, self.panoramas = photos, panoramas
+        available = [k for k, there in (("photo", photos), ("panorama", panoramas), ("render", scenes_count + len(files)))
+                     if there]  # fmt: skip
+        self.weights = kind_weights(
+            available, {"photo": photo_share, "panorama": panorama_share, "render": 1 - photo_share}
+        )
         if self.files and views < 1:
             raise ValueError("with mesh files the number of views of the run is needed (views >= 1)")
         self.views = views
@@ -96,19 +105,23 @@ class ViewCache:
         return self._view
 
     def background(self, view_index: int) -> tuple[NDArray[np.uint8], NDArray[np.float32], dict]:
-        """The background of view ``view_index``: ((H, W, 3) uint8 RGB, (H, W) float32 depth, metadata), cached
-        for reuse. With photos it is a photo (:mod:`synth.photos`) when there are no 3D environments, else with
-        probability ``photo_share`` (drawn from ``default_rng([seed, 6, view_index])``); otherwise a render."""
+        """The background of view ``view_index``: ((H, W, 3) uint8 RGB, (H, W) float32 depth, metadata with its
+        ``kind``), cached for reuse. Its kind is drawn by :func:`synth.places.kind_of_view` with the weights of the
+        kinds there are: photos ``photo_share`` (:mod:`synth.photos`), panoramas ``panorama_share``
+        (:mod:`synth.panorama`), renders ``1 - photo_share`` (with photos and renders only: a photo with
+        probability ``photo_share``)."""
         if self._background and self._background[0] == view_index:
             return self._background[1]
-        if self.photos is not None and (
-            self.scenes + len(self.files) == 0
-            or np.random.default_rng([self.seed, 6, view_index]).random() < self.photo_share
-        ):
-            made = self.photos.background(view_index)
+        kind = kind_of_view(self.seed, view_index, self.weights)
+        if kind == "photo":
+            made = self.photos.background(view_index)  # type: ignore[union-attr]
+        elif kind == "panorama":
+            made = self.panoramas.background(view_index)  # type: ignore[union-attr]
         else:
             v = self.view(view_index)
             rgb, depth = render.render_view(self.renderer, v.scene, v.camera.pose, v.camera.yfov)
             made = (rgb, depth, v.meta())
+        if len(self.weights) > 1:
+            made[2]["kind"] = kind
         self._background = (view_index, made)
         return made

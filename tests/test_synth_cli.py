@@ -173,3 +173,34 @@ def test_a_failed_run_keeps_its_finished_images_and_says_so_or_leaves_nothing(tm
     assert main([*args, "--seed", "1"]) == 0  # other options: the staged images are not theirs
     assert "discarding 2 images staged with other options" in capsys.readouterr().err
     assert not staging_dir(out).exists()
+
+
+def test_method2_on_a_fixed_camera_puts_every_flame_on_its_floor(tmp_path, capsys):
+    """A folder of one camera's fire-free frames with a site sidecar: every flame's foot is on the floor polygon
+    (the right half below the horizon), whatever the crop."""
+    import numpy as np
+    from factories import write_image
+
+    for k in range(4):
+        write_image(tmp_path / "cam" / f"f{k}.jpg", 160, 120, seed=k)
+    (tmp_path / "cam" / "_site.yaml").write_text(
+        "horizon: 0.3\ncamera_height: 3\nground: [[0.5, 0.3], [1, 0.3], [1, 1], [0.5, 1]]\n"
+    )
+    out = tmp_path / "m2"
+    args = ["synth", "method2", "--n", "16", "--out", str(out), "--size", "96x72", "--flames", str(_flames(tmp_path))]
+    assert main([*args, "--backgrounds", str(tmp_path / "cam")]) == 0
+    manifest = json.loads((out / "manifest.json").read_text())
+    coco = json.loads((out / "annotations.json").read_text())
+    metas = {img["id"]: meta for img, meta in zip(coco["images"], manifest["args"]["per_image"])}
+    feet = 0
+    for ann in coco["annotations"]:
+        meta = metas[ann["image_id"]]
+        x, y, w, h = meta["crop"]
+        bx, by, bw, bh = ann["bbox"]
+        if by + bh >= 71.5 or bx <= 0.5 or bx + bw >= 95.5:
+            continue  # cut by the frame: its foot is not the box's bottom centre
+        foot = (x + (bx + bw / 2) * w / 96, y + (by + bh) * h / 72)  # in photo pixels
+        assert foot[0] >= 80 - 2 * w / 96 and foot[1] >= 36 - 2 * h / 72, (ann, meta)
+        feet += 1
+    assert feet >= 5 and all(meta["site"] == "sidecar" for meta in metas.values())
+    assert np.mean([bool(meta["flames"]) for meta in metas.values()]) > 0.5

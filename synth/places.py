@@ -1,0 +1,91 @@
+"""The places a pool is made in, by kind: rendered 3D environments (mesh files), 360-degree panoramas and
+photographs. ``environments`` may hold meshes (or their sidecars) and equirectangular panoramas (a 2:1 image is
+a place: :mod:`synth.panorama`); ``backgrounds`` holds photos, where a 2:1 panorama is also used as a place, not
+cropped flat. Which kind a view shows is drawn per view with the kinds' weights (:func:`kind_of_view`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from curate.scan import list_image_files
+from synth.envfile import MESH_SUFFIXES
+from synth.panorama import PANORAMA_SUFFIXES, is_panorama
+
+KINDS = ("photo", "panorama", "render")  # the order of the cumulative draw in :func:`kind_of_view`
+
+
+@dataclass(frozen=True)
+class Places:
+    """``meshes``: paths for :func:`synth.envfile.find_environment_files`; ``panoramas`` and ``photos``: files."""
+
+    meshes: tuple[Path, ...]
+    panoramas: tuple[Path, ...]
+    photos: tuple[Path, ...]
+
+
+def _has_meshes(folder: Path) -> bool:
+    return any(p.suffix.lower() in MESH_SUFFIXES or p.suffix.lower() in (".yaml", ".yml") for p in folder.rglob("*"))
+
+
+def split_places(environments: Iterable[Path | str], backgrounds: Iterable[Path | str] = ()) -> Places:
+    """Sort ``environments`` into mesh paths and panorama files, and ``backgrounds`` into photos and panoramas.
+
+    A folder of environments is searched for panoramas when it holds no mesh or sidecar file; a missing path is
+    a FileNotFoundError."""
+    meshes: list[Path] = []
+    panoramas: list[Path] = []
+    for item in environments:
+        path = Path(item)
+        if not path.exists():
+            raise FileNotFoundError(f"{path}: no such environment file or folder")
+        if path.is_file():
+            (panoramas if path.suffix.lower() in PANORAMA_SUFFIXES and is_panorama(path) else meshes).append(path)
+        elif _has_meshes(path):
+            meshes.append(path)
+        else:
+            panoramas += _panoramas_in(path)
+    photos: list[Path] = []
+    backgrounds = list(backgrounds)
+    if backgrounds:
+        for image in list_image_files(backgrounds):
+            (panoramas if image.suffix.lower() in PANORAMA_SUFFIXES and is_panorama(image) else photos).append(image)
+        for item in backgrounds:  # .hdr/.exr panoramas are not photos list_image_files knows
+            if Path(item).is_dir():
+                panoramas += [p for p in _panoramas_in(Path(item)) if p.suffix.lower() in (".hdr", ".exr")]
+    return Places(tuple(meshes), tuple(dict.fromkeys(panoramas)), tuple(photos))
+
+
+def _panoramas_in(folder: Path) -> list[Path]:
+    from synth.panorama import list_panoramas
+
+    try:
+        return list_panoramas([folder])
+    except ValueError:
+        return []
+
+
+def kind_weights(available: Sequence[str], weights: Mapping[str, float]) -> dict[str, float]:
+    """The normalised weights of the ``available`` kinds (a kind missing from ``weights`` weighs 0; when all
+    available kinds weigh 0 they share equally)."""
+    raw = {k: max(float(weights.get(k, 0.0)), 0.0) for k in KINDS if k in available}
+    total = sum(raw.values())
+    return {k: (v / total if total > 0 else 1.0 / len(raw)) for k, v in raw.items()}
+
+
+def kind_of_view(seed: int, view_index: int, weights: Mapping[str, float]) -> str:
+    """The kind view ``view_index`` shows: one uniform draw from ``default_rng([seed, 6, view_index])`` against
+    the cumulative normalised ``weights`` in :data:`KINDS` order (a single kind needs no draw)."""
+    if len(weights) == 1:
+        return next(iter(weights))
+    u = np.random.default_rng([seed, 6, view_index]).random()
+    total = 0.0
+    for kind, w in weights.items():
+        total += w
+        if u < total:
+            return kind
+    return list(weights)[-1]

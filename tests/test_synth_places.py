@@ -1,0 +1,52 @@
+"""Places by kind: meshes, panoramas and photos are told apart; a view's kind is drawn by the weights."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pytest
+from factories import write_image, write_textured_room
+
+from synth.places import kind_of_view, kind_weights, split_places
+
+
+def _panorama(path: Path) -> Path:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    cv2.imwrite(str(path), np.full((64, 128, 3), 90, np.uint8))
+    return path
+
+
+def test_environments_and_backgrounds_are_sorted_by_kind(tmp_path: Path) -> None:
+    room = write_textured_room(tmp_path / "rooms" / "room.glb")
+    pano = _panorama(tmp_path / "panos" / "hall.jpg")
+    write_image(tmp_path / "panos" / "not_a_panorama.jpg", 64, 48)  # skipped in a folder of panoramas
+    photo = write_image(tmp_path / "photos" / "office.jpg", 64, 48)
+    street = _panorama(tmp_path / "photos" / "street360.png")  # a panorama among photos is a place, not a photo
+    places = split_places([tmp_path / "rooms", tmp_path / "panos"], [tmp_path / "photos"])
+    assert places.meshes == (tmp_path / "rooms",) and places.photos == (photo,)
+    assert set(places.panoramas) == {pano.absolute(), street}
+    assert split_places([room, pano]).meshes == (room,) and split_places([room, pano]).panoramas == (pano,)
+    with pytest.raises(FileNotFoundError, match="no such environment"):
+        split_places([tmp_path / "missing"])
+
+
+def test_kind_weights_and_draws() -> None:
+    assert kind_weights(["render"], {"render": 0.0}) == {"render": 1.0}
+    assert kind_weights(["photo", "render"], {"photo": 0.25, "render": 0.75, "panorama": 1}) == {
+        "photo": 0.25,
+        "render": 0.75,
+    }
+    assert kind_weights(["photo", "panorama", "render"], {"photo": 0.5, "panorama": 0.5, "render": 0.5}) == {
+        "photo": pytest.approx(1 / 3),
+        "panorama": pytest.approx(1 / 3),
+        "render": pytest.approx(1 / 3),
+    }
+    weights = kind_weights(["photo", "render"], {"photo": 0.3, "render": 0.7})
+    draws = [kind_of_view(5, v, weights) for v in range(400)]
+    # the rule photo pools were made with: a photo when default_rng([seed, 6, v]).random() < photo_share
+    assert draws == ["photo" if np.random.default_rng([5, 6, v]).random() < 0.3 else "render" for v in range(400)]
+    three = kind_weights(["photo", "panorama", "render"], {"photo": 1, "panorama": 1, "render": 1})
+    counts = {k: [kind_of_view(0, v, three) for v in range(900)].count(k) for k in three}
+    assert all(250 < n < 350 for n in counts.values())
