@@ -230,6 +230,24 @@ def mesh_bounds(meshes: Sequence[tuple[trimesh.Trimesh, NDArray[np.float64]]]) -
     return np.stack([points.min(0), points.max(0)])
 
 
+#: Sizes (largest extent after ``scale``, metres) outside which a scene is neither a room nor a street.
+PLAUSIBLE_SIZE_M = (1.5, 500.0)
+
+
+def size_warning(spec: EnvironmentFile, bounds: NDArray[np.float64]) -> str | None:
+    """One line when the scene's (2, 3) ``bounds`` (metres after ``scale``) are implausible for a room or a
+    street - a model in millimetres or centimetres without a sidecar ``scale`` - else None."""
+    extent = float(np.max(bounds[1] - bounds[0]))
+    lo, hi = PLAUSIBLE_SIZE_M
+    if lo <= extent <= hi:
+        return None
+    hint = "millimetres need scale: 0.001, centimetres 0.01" if extent > hi else "a model in km would need scale: 1000"
+    return (
+        f"{spec.sidecar or spec.file}: {extent:.4g} m across at scale {spec.scale:g}, not a room or a street "
+        f"({lo:g}..{hi:g} m): give it a sidecar with the right scale ({hint})"
+    )
+
+
 def footprint(meshes: Sequence[tuple[trimesh.Trimesh, NDArray[np.float64]]]) -> NDArray[np.float64]:
     """(2, 3) bounds of where the camera may go: :func:`mesh_bounds` without ground planes, i.e. flat meshes
     (height under 1 % of their width) covering over 4x the (x, z) area of everything else; a classroom modelled on

@@ -10,6 +10,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Literal
 
 import numpy as np
 from numpy.typing import NDArray
@@ -43,6 +44,8 @@ class Method2Config:
     photo_share: float = 0.5  # fraction of views on a photo when there are also 3D environments
     background_holdout: float = 0.0  # share of the photos (chosen by content hash) never composited on: test data
     panorama_share: float = 0.5  # weight of panorama views (environments that are 2:1 images) beside photos and renders
+    stand: Literal["surfaces", "anywhere"] = "surfaces"  # renders: flames stand on up-facing surfaces (floors, tables:
+    # synth.standing), or anywhere in the lower 2/3 (pools made before this key)
     images_per_view: int = 8  # images composited on each rendered view
     max_flames: int = 3  # flames per image: uniform in 1..max_flames
     negatives: float = 0.1  # fraction of images without flames
@@ -63,6 +66,8 @@ class Method2Config:
             raise ValueError("scenes is 0 and no environments or backgrounds are given: nothing to composite on")
         if not 0.0 <= self.background_holdout < 1.0:
             raise ValueError(f"background_holdout must be in 0..1 (exclusive), got {self.background_holdout}")
+        if self.stand not in ("surfaces", "anywhere"):
+            raise ValueError(f"stand must be surfaces or anywhere, got {self.stand!r}")
         if not 0.0 <= self.panorama_share <= 1.0:
             raise ValueError(f"panorama_share must be in 0..1, got {self.panorama_share}")
         if not 0.0 <= self.photo_share <= 1.0:

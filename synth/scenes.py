@@ -11,6 +11,7 @@ World frame: metres, +Y up, floor at y = 0.
 from __future__ import annotations
 
 import logging
+import sys
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
@@ -21,7 +22,7 @@ from numpy.typing import NDArray
 
 from synth.camera import CameraRule
 from synth.colour import blackbody_rgb
-from synth.envfile import EnvironmentFile, footprint, load_meshes
+from synth.envfile import EnvironmentFile, footprint, load_meshes, mesh_bounds, size_warning
 from synth.freespace import free_space, spread_points
 from synth.render import Renderer, rgba_opaque, textured_quad
 from synth.textures import make_texture
@@ -274,6 +275,9 @@ def file_environment(spec: EnvironmentFile, renderer: Renderer) -> tuple[Environ
     (:mod:`synth.freespace`) unless the sidecar gives ``camera.area``, and (``lights: auto``) a warm lamp over
     every ~20 m2 of free floor (at most 4) plus a sun."""
     meshes = load_meshes(spec)
+    warning = size_warning(spec, mesh_bounds(meshes))
+    if warning:
+        print(f"warning: {warning}", file=sys.stderr)
     bounds = footprint(meshes)
     pr = renderer.pyrender
     env = Environment(spec.name, "file", CameraRule((0, 0, 0, 0)), ambient=0.25, sky=(0.75, 0.8, 0.85))

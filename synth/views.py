@@ -21,6 +21,7 @@ from synth.envfile import EnvironmentFile
 from synth.panorama import PanoramaBackgrounds
 from synth.photos import PhotoBackgrounds
 from synth.places import kind_of_view, kind_weights
+from synth.standing import standing_mask
 
 
 @dataclass(frozen=True)
@@ -51,11 +52,12 @@ class ViewCache:
         views: int = 0,
         panoramas: PanoramaBackgrounds | None = None,
         panorama_share: float = 0.5,
+        surfaces: bool = False,
     ) -> None:
         if scenes_count + len(files) < 1 and photos is None and panoramas is None:
             raise ValueError("at least one environment is needed")
         self.seed, self.scenes, self.renderer, self.files = seed, scenes_count, renderer, tuple(files)
-        self.photos, self.panoramas = photos, panoramas
+        self.photos, self.panoramas, self.surfaces = photos, panoramas, surfaces
         available = [k for k, there in (("photo", photos), ("panorama", panoramas), ("render", scenes_count + len(files)))
                      if there]  # fmt: skip
         self.weights = kind_weights(
@@ -121,6 +123,9 @@ class ViewCache:
             v = self.view(view_index)
             rgb, depth = render.render_view(self.renderer, v.scene, v.camera.pose, v.camera.yfov)
             made = (rgb, depth, v.meta())
+            if self.surfaces:  # flames stand on up-facing surfaces only (a site, like a photo's ground)
+                stand = standing_mask(depth, v.camera.pose, v.camera.yfov)
+                made = (rgb, np.where(stand, depth, np.float32(0)), {**made[2], "site": "surfaces", "people": []})
         if len(self.weights) > 1:
             made[2]["kind"] = kind
         self._background = (view_index, made)
