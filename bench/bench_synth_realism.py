@@ -19,6 +19,12 @@ Variants (400 images at 416x416, seed 0, each a cached pool of the experiment pi
 - ``files_cutouts``: ``files_views`` with *real* flames in place of simulated ones: every fire box of the
   curated real train split cut out by ``fuzzyfire synth cutouts`` (never the test split). Its distance to the
   other variants is the share of the gap the flames' appearance accounts for; the rest is the scenes.
+- ``files_surfaces``: ``files_views`` with flames standing only on up-facing surfaces (``stand: surfaces``, the
+  default since; every variant above keeps ``stand: anywhere``, the rule it was measured with);
+- ``photos``: the fire-free photographs of ../shared/data as sites (a quarter held out by content hash), 2 images
+  per photo view;
+- ``panoramas``: the 29 panoramas of ../shared/data as places, 2 images per view;
+- ``photos_panoramas``: both in one pool, half the views each.
 
 Lines: ``synth_<variant>_gap`` (Fréchet distance to half the real train split, median of 200 draws),
 ``synth_<variant>_gap_ratio`` (to the real-vs-real floor), ``synth_real_floor``, and with ``--train``
@@ -43,17 +49,25 @@ NO_CAMERA = [f"synth.method2.camera.{k}=0" for k in ("low_light", "defocus", "mo
 FILES = ["synth.method2.scenes=0", f"synth.method2.environments=[{(ROOT / 'configs' / 'scenes').as_posix()}]"]
 PROCEDURAL = ["synth.method2.scenes=24", "synth.method2.environments=[]"]
 OPAQUE = ["synth.method2.flame_opacity=[0.85,1.0]"]
+ANYWHERE = ["synth.method2.stand=anywhere"]
+PHOTOS = [f"synth.method2.backgrounds=[{(SHARED / 'fire-free').as_posix()}]", "synth.method2.background_holdout=0.25"]
+PANORAMAS = [f"synth.method2.environments=[{(SHARED / 'panoramas').as_posix()}]"]
+SITES = ["synth.method2.scenes=0", "synth.method2.environments=[]", "synth.method2.images_per_view=2"]
 VARIANTS = {
-    "procedural": [*PROCEDURAL, "synth.method2.light=false", *NO_CAMERA],
-    "files": [*FILES, "synth.method2.light=false", *NO_CAMERA],
-    "files_light": [*FILES, *NO_CAMERA],
-    "files_light_camera": FILES,
-    "files_opaque": [*FILES, *OPAQUE],
-    "files_opaque_dark": [*FILES, *OPAQUE, "synth.method2.camera.low_light=0.4"],
-    "files_views": [*FILES, "synth.method2.images_per_view=2"],
-    "files_closeups": [*FILES, "synth.method2.images_per_view=2", "synth.method2.closeup=0.3"],
-    "files_natural": [*FILES, "synth.method2.images_per_view=2", *OPAQUE, "synth.method2.flames.rare=0"],
-    "files_cutouts": [*FILES, "synth.method2.images_per_view=2"],  # + flames.folders, see _cutout_library
+    "procedural": [*ANYWHERE, *PROCEDURAL, "synth.method2.light=false", *NO_CAMERA],
+    "files": [*ANYWHERE, *FILES, "synth.method2.light=false", *NO_CAMERA],
+    "files_light": [*ANYWHERE, *FILES, *NO_CAMERA],
+    "files_light_camera": [*ANYWHERE, *FILES],
+    "files_opaque": [*ANYWHERE, *FILES, *OPAQUE],
+    "files_opaque_dark": [*ANYWHERE, *FILES, *OPAQUE, "synth.method2.camera.low_light=0.4"],
+    "files_views": [*ANYWHERE, *FILES, "synth.method2.images_per_view=2"],
+    "files_closeups": [*ANYWHERE, *FILES, "synth.method2.images_per_view=2", "synth.method2.closeup=0.3"],
+    "files_natural": [*ANYWHERE, *FILES, "synth.method2.images_per_view=2", *OPAQUE, "synth.method2.flames.rare=0"],
+    "files_cutouts": [*ANYWHERE, *FILES, "synth.method2.images_per_view=2"],  # + flames.folders, see _cutout_library
+    "files_surfaces": [*FILES, "synth.method2.images_per_view=2", "synth.method2.stand=surfaces"],
+    "photos": [*SITES, *PHOTOS],
+    "panoramas": [*SITES, *PANORAMAS],
+    "photos_panoramas": [*SITES, *PHOTOS, *PANORAMAS, "synth.method2.photo_share=0.5"],
 }
 #: Variants whose flames are cut from the curated real train split.
 CUTOUT_VARIANTS = ("files_cutouts",)
