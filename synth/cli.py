@@ -172,7 +172,7 @@ def cmd_gap(args: argparse.Namespace) -> int:
 
     from curate.cli.dedup import load_model_from_args
     from curate.core.commands import print_problems
-    from synth.gap import dataset_images, embed_set, measure_gap
+    from synth.gap import dataset_images, embed_set, image_kinds, measure_gap, split_by_kind
 
     sides = [
         (args.synthetic, dataset_images(args.synthetic, args.synthetic_split, args.format)),
@@ -184,7 +184,15 @@ def cmd_gap(args: argparse.Namespace) -> int:
     if problems:
         print_problems(problems, sys.stderr, limit=20)
     report = measure_gap(synthetic, real, embedder.model_id, np.random.default_rng(args.seed), args.draws, args.size)
-    print(json.dumps(report.to_json()) if args.json else "\n".join(report.lines()))
+    by_kind = split_by_kind(synthetic, sides[0][1], image_kinds(args.synthetic))
+    kinds = {k: measure_gap(s, real, embedder.model_id, np.random.default_rng(args.seed), args.draws, args.size)
+             for k, s in by_kind.items() if len(s.vectors) >= 20}  # fmt: skip
+    if args.json:
+        print(json.dumps({**report.to_json(), "kinds": {k: r.to_json() for k, r in kinds.items()}}))
+    else:
+        print("\n".join(report.lines()))
+        for kind, r in kinds.items():
+            print(f"  {kind:<9} {len(r.synthetic.vectors)} images: {r.gap.synthetic}  ratio {r.gap.ratio.median:.2f}")
     return 0
 
 

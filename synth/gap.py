@@ -90,6 +90,37 @@ def dataset_images(path: Path, split: str | None = None, fmt: str = "auto") -> l
     return [ds.image_path(im) for im in ds.images]
 
 
+def image_kinds(folder: Path) -> dict[str, str]:
+    """Image file (resolved path) -> the kind of place it was made in (``photo``, ``panorama``, ``render``), for a
+    mixed pool whose ``manifest.json`` records it per image; {} for anything else."""
+    import json
+
+    manifest = folder / "manifest.json"
+    if not manifest.is_file():
+        return {}
+    doc = json.loads(manifest.read_text(encoding="utf-8"))
+    per_image = doc.get("args", {}).get("per_image") or []
+    files = [entry["file"] for entry in doc.get("images", [])]
+    if len(files) != len(per_image):
+        return {}
+    return {
+        (folder / name).resolve().as_posix(): meta["kind"]
+        for name, meta in zip(files, per_image)
+        if isinstance(meta, dict) and "kind" in meta
+    }
+
+
+def split_by_kind(images: ImageSet, paths: Sequence[Path], kinds: dict[str, str]) -> dict[str, ImageSet]:
+    """``images`` (embedded from ``paths``, in order, all readable) divided by the kind of each path."""
+    if not kinds or len(paths) != len(images.vectors):
+        return {}
+    labels = [kinds.get(Path(p).resolve().as_posix()) for p in paths]
+    return {
+        kind: ImageSet(f"{images.label} [{kind}]", images.vectors[[k for k, x in enumerate(labels) if x == kind]], ())
+        for kind in sorted({x for x in labels if x})
+    }
+
+
 def embed_set(
     label: str, paths: Sequence[Path], embedder: OnnxEmbedder, cache: EmbeddingCache | None, workers: int = 0
 ) -> ImageSet:

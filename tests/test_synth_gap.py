@@ -67,3 +67,29 @@ def test_gap_command(folders, capsys) -> None:
     assert "real vs real" in capsys.readouterr().out
     assert main([*args, "--draws", "20", "--no-cache", "--json"]) == 0  # REAL, a plain folder, read as images
     assert json.loads(capsys.readouterr().out) == report
+
+
+def test_a_mixed_pool_gets_a_gap_per_kind(folders, tmp_path, capsys) -> None:
+    """Method 2 on photos and panoramas in one pool: the gap of each kind's images beside the whole pool's."""
+    import cv2
+    from factories import write_image
+
+    for k in range(4):
+        write_image(tmp_path / "photos" / f"p{k}.jpg", 160, 120, seed=k)
+        pano = np.full((128, 256, 3), 60 + 40 * k, np.uint8)
+        pano[64:] = np.random.default_rng(k).integers(0, 255, (64, 256, 3))
+        cv2.imwrite(
+            str(tmp_path / "panos" / f"h{k}.jpg") if (tmp_path / "panos").mkdir(exist_ok=True) is None else "", pano
+        )
+    flames = ["synth", "flames", "--out", str(tmp_path / "fl"), "--n", "1", "--frames", "60", "--keep-every", "30"]
+    assert main(flames) == 0
+    pool = tmp_path / "pool"
+    args = ["synth", "method2", "--n", "60", "--out", str(pool), "--size", "64x48", "--flames", str(tmp_path / "fl")]
+    assert main([*args, "--backgrounds", str(tmp_path / "photos"), "--environments", str(tmp_path / "panos")]) == 0
+    capsys.readouterr()
+    gap = ["synth", "gap", str(pool), str(folders["real"]), "--real-format", "images", "--draws", "10", "--json"]
+    assert main([*gap, "--no-cache"]) == 0
+    report = json.loads(capsys.readouterr().out)
+    assert set(report["kinds"]) == {"photo", "panorama"}
+    counts = [report["kinds"][k]["sets"]["synthetic"]["images"] for k in ("photo", "panorama")]
+    assert sum(counts) == report["sets"]["synthetic"]["images"] == 60 and min(counts) >= 20
