@@ -1,8 +1,10 @@
 """Vectorised 2D compositing of flame sprites onto a background, tracking each flame's visible mask.
 
 Per sprite, in order: the ``over`` layer (smoke) is alpha-blended and the background behind the flame dimmed by
-its luminous coverage (``opacity`` x emission brightness: a bright flame outshines a bright wall, as a camera
-exposed for the fire sees it), then the emission is added (``add``) or screened (``screen``), plus a soft glow
+its luminous coverage (``opacity`` x :func:`coverage` of the emission brightness: full from
+:data:`OPAQUE_BRIGHTNESS` up, so a flame's bright body hides what is behind it, as a camera exposed for the
+fire sees it, while its dim edge lets the background through), then the emission is added (``add``) or
+screened (``screen``), plus a soft glow
 (blurred emission) and a warm cast: the surroundings lit in the flame's mean colour with a Gaussian falloff
 around its base (light on the floor and walls; never part of the flame's mask or box). A flame pixel stays visible unless a later sprite is
 opaque there (its smoke alpha >= 0.5 or its own flame mask); a smoke pixel (see ``synth.sprites.SMOKE_ALPHA``)
@@ -22,6 +24,15 @@ from numpy.typing import NDArray
 from synth.sprites import Sprite
 
 BLEND_MODES: tuple[str, ...] = ("screen", "add")
+#: Emission brightness (brightest channel, 0..1) from which a flame covers the background fully (x opacity).
+OPAQUE_BRIGHTNESS = 0.6
+
+
+def coverage(brightness: NDArray[np.float32]) -> NDArray[np.float32]:
+    """Luminous coverage in [0, 1] of emission ``brightness`` (any shape, 0..1): ``(b / OPAQUE_BRIGHTNESS)^1.5``
+    up to 1: the dim edge stays see-through (it adds light and hardly darkens a bright wall: no dark outline),
+    the bright body is opaque."""
+    return np.clip(brightness / OPAQUE_BRIGHTNESS, 0.0, 1.0) ** 1.5
 
 
 @dataclass(frozen=True)
@@ -35,7 +46,7 @@ class Placement:
     height: int
     blend: str = "screen"
     glow: float = 0.3
-    opacity: float = 0.8  # luminous coverage: the background behind the flame dims by opacity x its brightness
+    opacity: float = 0.8  # luminous coverage: the background behind the flame dims by opacity x coverage()
     cast: bool = True  # light the surroundings warm (with ``glow`` > 0)
 
     def __post_init__(self) -> None:
@@ -128,7 +139,7 @@ def composite(background: NDArray[np.uint8], placements: Sequence[Placement]) ->
             ys, xs, sy, sx = c
             a = over[sy, sx, 3:4]
             light = emission[sy, sx]
-            cover = a + (1.0 - a) * p.opacity * light.max(axis=-1, keepdims=True)
+            cover = a + (1.0 - a) * p.opacity * coverage(light.max(axis=-1, keepdims=True))
             img[ys, xs] = img[ys, xs] * (1.0 - cover) + over[sy, sx, :3] * a
             img[ys, xs] = _add_light(img[ys, xs], light, p.blend)
             if p.glow > 0:
