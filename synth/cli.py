@@ -162,6 +162,14 @@ def cmd_audit(args: argparse.Namespace) -> int:
         parts = {**report.get("modes", {}), **({"smoke": report["smoke"]} if "smoke" in report else {})}
         for name, rep in parts.items():
             print(f"  {name} boxes: {rep['boxes']}, {_ious(rep)}")
+        if "visibility" in report:
+            v = report["visibility"]
+            seen = (
+                ""
+                if not v["boxes"]
+                else f", contrast ΔE min {v['min_contrast']:.1f}, median {v['median_contrast']:.1f}"
+            )
+            print(f"  visibility: {v['boxes']} fire boxes{seen}; {v['erased']} flames erased as unseen")
     return 0
 
 
@@ -209,7 +217,7 @@ def _register_flames(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--generator", default="fluid", choices=("fluid", "noise"), help="flame simulation")
     p.add_argument("--frames", type=int, default=1024, help="simulation steps per sequence")
     p.add_argument("--keep-every", type=int, default=12, help="keep one frame every K steps")
-    p.add_argument("--rare", type=float, default=0.1, help="fraction of chemical-colour (rare) flames")
+    p.add_argument("--rare", type=float, default=0.05, help="fraction of chemical-colour (rare) flames")
     p.set_defaults(func=cmd_flames)
 
 
@@ -332,8 +340,10 @@ def _register_audit(sub: argparse._SubParsersAction) -> None:
     p = add_command(
         sub,
         "audit",
-        help="IoU of written boxes vs pixel-truth mask boxes",
-        description="Compare a synthetic dataset's boxes with the boxes of its kept flame masks.\n\n"
+        help="IoU of written boxes vs pixel-truth mask boxes, and the boxed flames' visibility",
+        description="Compare a synthetic dataset's boxes with the boxes of its kept flame masks; for Method 2,\n"
+        "also the boxed flames' contrast against the flame-free background (ΔE*ab, min and median) and how\n"
+        "many flames were erased because nobody could see them (synth/visibility.py).\n\n"
         "example:\n  fuzzyfire synth audit out/m2 --json",
     )
     p.add_argument("folder", type=Path, help="a dataset written by synth method1 or method2")

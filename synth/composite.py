@@ -1,8 +1,8 @@
 """Vectorised 2D compositing of flame sprites onto a background, tracking each flame's visible mask.
 
 Per sprite, in order: the ``over`` layer (smoke) is alpha-blended and the background behind the flame dimmed by
-its luminous coverage (``opacity`` x :func:`coverage` of the emission brightness: full from
-:data:`OPAQUE_BRIGHTNESS` up, so a flame's bright body hides what is behind it, as a camera exposed for the
+its luminous coverage (``opacity`` x :func:`coverage` of the emission brightness: none below
+:data:`CLEAR_BRIGHTNESS`, full from :data:`OPAQUE_BRIGHTNESS` up, so a flame's bright body hides what is behind it, as a camera exposed for the
 fire sees it, while its dim edge lets the background through), then the emission is added (``add``) or
 screened (``screen``), plus a soft glow
 (blurred emission) and a warm cast: the surroundings lit in the flame's mean colour with a Gaussian falloff
@@ -24,15 +24,18 @@ from numpy.typing import NDArray
 from synth.sprites import Sprite
 
 BLEND_MODES: tuple[str, ...] = ("screen", "add")
-#: Emission brightness (brightest channel, 0..1) from which a flame covers the background fully (x opacity).
+#: Emission brightness (brightest channel, 0..1) from which a flame covers the background fully (x opacity) ...
 OPAQUE_BRIGHTNESS = 0.6
+#: ... and below which it covers nothing (only adds its light).
+CLEAR_BRIGHTNESS = 0.15
 
 
 def coverage(brightness: NDArray[np.float32]) -> NDArray[np.float32]:
-    """Luminous coverage in [0, 1] of emission ``brightness`` (any shape, 0..1): ``(b / OPAQUE_BRIGHTNESS)^1.5``
-    up to 1: the dim edge stays see-through (it adds light and hardly darkens a bright wall: no dark outline),
-    the bright body is opaque."""
-    return np.clip(brightness / OPAQUE_BRIGHTNESS, 0.0, 1.0) ** 1.5
+    """Luminous coverage in [0, 1] of emission ``brightness`` (any shape, 0..1): a smoothstep from 0 at
+    :data:`CLEAR_BRIGHTNESS` to 1 at :data:`OPAQUE_BRIGHTNESS`. The dim edge only adds light (a bright wall
+    behind it is reddened, never outlined in a darker colour); the bright body is opaque."""
+    r = np.clip((brightness - CLEAR_BRIGHTNESS) / (OPAQUE_BRIGHTNESS - CLEAR_BRIGHTNESS), 0.0, 1.0)
+    return (r * r * (3.0 - 2.0 * r)).astype(np.float32)
 
 
 @dataclass(frozen=True)
@@ -96,12 +99,12 @@ def _glow(img: NDArray[np.float32], emission: NDArray[np.float32], p: Placement,
 
 def _cast(img: NDArray[np.float32], emission: NDArray[np.float32], mask: NDArray[np.bool_], p: Placement) -> None:
     """Multiply the image by ``1 + strength * falloff * colour``, in place: ``colour`` the flame's mean emission
-    (scaled to max 1), ``falloff`` a Gaussian of 1.2 x the sprite's larger side around the base of the flame,
+    (scaled to max 1 when its brightest channel is at least :data:`OPAQUE_BRIGHTNESS`, by 1 / that otherwise), ``falloff`` a Gaussian of 1.2 x the sprite's larger side around the base of the flame,
     ``strength`` 0.8 x ``glow``."""
     if not mask.any():
         return
     colour = emission[mask].mean(axis=0)
-    colour = colour / max(float(colour.max()), 1e-6)
+    colour = colour / max(float(colour.max()), OPAQUE_BRIGHTNESS)  # a dim flame lights its surroundings dimly
     h, w = img.shape[:2]
     sigma = 1.2 * max(p.width, p.height)
     cx, cy = p.x + p.width / 2, p.y + 0.85 * p.height

@@ -44,7 +44,7 @@ F32 = NDArray[np.float32]
 RARE_PALETTES: dict[str, float] = {"methane": 0.5, "copper": 0.35, "boron": 0.15}
 #: How a chemical palette tints a black-body flame: (weight at the base, weight at the top, height in units of
 #: the burning body over which the weight goes from one to the other). Methane: blue only at the base.
-TINTS: dict[str, tuple[float, float, float]] = {"methane": (1.0, 0.0, 0.6)}
+TINTS: dict[str, tuple[float, float, float]] = {"methane": (1.0, 0.0, 1.0)}
 DEFAULT_TINT = (0.6, 0.15, 2.5)  # metal salts: the lower flame coloured, yellow soot at the tips
 #: Box aspect ratio (width / height) of real flames: fire-cctv-416's 4,844 train boxes have 5/10/50/90/95 %
 #: percentiles 0.23/0.29/0.57/1.33/1.70; :func:`sample_params` draws a log-normal of this median and spread
@@ -243,13 +243,16 @@ def fluid_step(s: FluidState, p: FlameParams, src: F32, grid: tuple[F32, F32], r
     s.temperature = cooled.astype(np.float32)
 
 
-def _border_window(shape: tuple[int, int], fraction: float = 0.12) -> F32:
-    """(h, w) factor fading smoke to 0 towards the left, right and top borders (no hard edge where the plume
-    leaves the simulated domain)."""
+def _border_window(shape: tuple[int, int], fraction: float = 0.25) -> F32:
+    """(h, w) factor fading smoke to 0 towards the left, right and top borders over ``fraction`` of the side (the
+    bottom over 0.4 of that), in a smoothstep: no hard or straight edge where the plume leaves the domain or
+    where the sprite ends under a plume blown down beside the flame."""
     h, w = shape
     ramp_x = np.clip(np.minimum(np.arange(w), np.arange(w)[::-1]) / max(fraction * w, 1.0), 0, 1)
     ramp_y = np.clip(np.arange(h) / max(fraction * h, 1.0), 0, 1)
-    return (ramp_y[:, None] * ramp_x[None, :]).astype(np.float32)
+    ramp_y = np.minimum(ramp_y, np.clip(np.arange(h)[::-1] / max(0.4 * fraction * h, 1.0), 0, 1))
+    smooth = lambda r: r * r * (3 - 2 * r)  # noqa: E731
+    return (smooth(ramp_y)[:, None] * smooth(ramp_x)[None, :]).astype(np.float32)
 
 
 def tint_weight(p: FlameParams, bottom: int) -> F32 | None:

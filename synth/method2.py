@@ -1,5 +1,7 @@
 """Method 2: render each camera view of a procedural environment once, then composite flame sprites onto it
-many times; each flame's box is the box of its final visible mask (after clipping, truncation and occlusion).
+many times; each flame's box is the box of its final visible mask (after clipping, truncation and occlusion),
+restricted to the pixels whose contrast a person would notice (:mod:`synth.visibility`); a flame with too few
+such pixels is erased from the image (composited again without it), so no visible flame goes unboxed.
 
 Image ``i`` uses view ``i // images_per_view`` (see :mod:`synth.views`) and its own rng
 ``default_rng([seed, 2, i])``, so any image can be (re)made alone: runs resume and are byte-reproducible.
@@ -14,6 +16,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
+from curate.core.boxes import mask_to_xywh
 from synth import render
 from synth.composite import BLEND_MODES, Placement, composite
 from synth.effects import CameraConfig, apply_effects, expose, sample_effects
@@ -23,6 +26,7 @@ from synth.schema import check_range
 from synth.sprites import Sprite, SpriteSequence
 from synth.staging import boxes_from_masks
 from synth.views import ViewCache
+from synth.visibility import delta_e, measure
 
 SITE_MAX_HEIGHT = 0.6  # tallest flame on a photo or panorama site, fraction of the image height
 
@@ -165,27 +169,48 @@ def site_spot(
     return None
 
 
+def visible_composite(scene: NDArray[np.uint8], planned: Sequence[tuple[Placement, str]], effects, min_box_px: int):
+    """Composite ``planned`` on the exposed ``scene`` and take it through the camera (``effects``), erasing every
+    flame that cannot be seen (:mod:`synth.visibility`: contrast against the plate, the scene through the same
+    camera without flames) or whose seen part is smaller than ``min_box_px``, and compositing again without it
+    until every flame left is seen (erasing one can unhide another). Returns (image (H, W, 3) uint8, the
+    composite, the flames kept (a sublist of ``planned``), their :class:`synth.visibility.Visibility`)."""
+    plate = apply_effects(scene, effects)
+    shown = list(planned)
+    while True:
+        result = composite(scene, [p for p, _ in shown])
+        image = apply_effects(result.image, effects)
+        delta = delta_e(image, plate)
+        seen = [measure(delta, m) for m in result.flames]
+        keep = [k for k, v in enumerate(seen) if v.visible and min(mask_to_xywh(v.part)[2:]) >= min_box_px]
+        if len(keep) == len(shown):
+            return image, result, shown, seen
+        shown = [shown[k] for k in keep]
+
+
 def make_image(cfg: Method2Config, i: int, library: Sequence[SpriteSequence], views: ViewCache):
     """Image ``i``: ((H, W, 3) uint8, kept fire masks, record dict (boxes xywh, metadata), kept smoke masks or
-    None when smoke is not a class)."""
+    None when smoke is not a class). A flame nobody could see is erased, not left unboxed
+    (:func:`visible_composite`); a kept flame's mask and box are its seen part."""
     background, depth, view_meta = views.background(i // cfg.images_per_view)
     rng = np.random.default_rng([cfg.seed, 2, i])
     avoid = view_meta.get("people", []) if view_meta.get("site") else None
     planned = plan_flames(cfg, library, depth, view_meta["camera"]["yfov"], rng, avoid)
     effects = sample_effects(rng, cfg.camera)
-    result = composite(expose(background, effects), [p for p, _ in planned])
-    image = apply_effects(result.image, effects)
-    kept, boxes, index = boxes_from_masks(result.flames, cfg.min_box_px)
+    image, result, shown, seen = visible_composite(expose(background, effects), planned, effects, cfg.min_box_px)
+    kept, boxes, index = boxes_from_masks([v.part for v in seen], cfg.min_box_px)
     flames = [
         {
-            "flame": planned[k][1],
-            "blend": planned[k][0].blend,
-            "glow": round(planned[k][0].glow, 4),
-            "opacity": round(planned[k][0].opacity, 4),
+            "flame": shown[k][1],
+            "blend": shown[k][0].blend,
+            "glow": round(shown[k][0].glow, 4),
+            "opacity": round(shown[k][0].opacity, 4),
+            "contrast": round(seen[k].contrast, 2),
+            "seen": round(seen[k].seen / max(seen[k].pixels, 1), 4),
         }
         for k in index
     ]
-    meta = {**view_meta, "flames": flames, "effects": effects.to_json()}
+    meta = {**view_meta, "flames": flames, "erased": len(planned) - len(shown), "effects": effects.to_json()}
     record = {"width": cfg.width, "height": cfg.height, "boxes": boxes, "meta": meta}
     if not cfg.smoke_class:
         return image, kept, record, None
