@@ -71,8 +71,8 @@ def visibility_summary(folder: Path) -> dict[str, Any] | None:
         return None
     return {
         "boxes": len(contrast),
-        "min_contrast": float(np.min(contrast)) if contrast else None,
-        "median_contrast": float(np.median(contrast)) if contrast else None,
+        "min_contrast": round(float(np.min(contrast)), 2) if contrast else None,
+        "median_contrast": round(float(np.median(contrast)), 2) if contrast else None,
         "erased": int(sum(meta.get("erased", 0) for meta in per_image)),
     }
 

@@ -125,10 +125,10 @@ def sample_params(rng: np.random.Generator, generator: str = "fluid", rare: bool
         smoke=float(rng.choice([0.0, rng.uniform(0.2, 1.0), rng.uniform(1.5, 4.0)], p=[0.3, 0.5, 0.2])),
         smoke_grey=float(rng.uniform(0.12, 0.45)),
         palette=palette,
-        exposure=float(rng.uniform(14.0, 30.0)),
-        peak=float(rng.uniform(2.0, 4.5)),
+        exposure=float(rng.uniform(8.0, 13.0)),  # measured on the flame gap: a wide orange-yellow gradient
+        peak=float(rng.uniform(1.3, 2.0)),  # beats a body clipped flat to pale yellow (see the README)
         body=float(rng.uniform(0.15, 0.35)),
-        detail=float(rng.uniform(0.6, 1.6)),
+        detail=float(rng.uniform(1.5, 2.5)),
         aspect=aspect,
     )
     return replace(p, **fixed)

@@ -96,7 +96,7 @@ def test_a_sequence_is_stretched_to_its_aspect():
         assert all(s.mask.shape == s.emission.shape[:2] == s.over.shape[:2] for s in seq.sprites)
 
 
-def test_sampled_flames_have_a_saturated_yellow_white_core_and_a_thin_red_edge():
+def test_sampled_flames_have_a_saturated_yellow_core_and_are_mostly_bright():
     bright = []
     for k in range(4):
         rng = np.random.default_rng([7, k])
@@ -104,9 +104,9 @@ def test_sampled_flames_have_a_saturated_yellow_white_core_and_a_thin_red_edge()
         sprites = F.generate_sequence("c", p, rng).sprites
         e = np.concatenate([s.emission[s.mask] for s in sprites]).astype(int)
         core = e[e.max(axis=1) >= np.percentile(e.max(axis=1), 90)]
-        assert np.median(core[:, 0]) >= 250 and np.median(core[:, 1]) >= 230  # clipped yellow-white
-        assert np.median(core[:, 2]) >= 40  # yellow-white, not a pure orange
-        bright.append((e[:, 1] >= 180).mean())  # yellow or whiter
+        assert np.median(core[:, 0]) >= 250 and np.median(core[:, 1]) >= 180  # saturated: yellow to yellow-white
+        assert np.median(core[:, 2]) >= 40  # not a pure orange
+        bright.append((e[:, 1] >= 140).mean())  # orange-yellow or brighter
         assert np.all(e[:, 0] >= e[:, 1]) and np.all(e[:, 1] >= e[:, 2] - 1)  # black-body order: red >= green >= blue
     assert min(bright) > 0.3 and np.median(bright) > 0.5  # mostly bright, not a dim red ribbon (a jet is thinnest)
 
