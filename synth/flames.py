@@ -14,8 +14,9 @@ each alpha-cropped, coloured by :func:`synth.colour.flame_palette`.
 
 What makes them read as fire (issue 23): the fuel burns in a *body* at the base (one or more tapered tongues,
 ``body`` of the grid high) held at full temperature, so a flame is a bright saturated mass with tongues torn off
-its top, not a thin ribbon of hot gas; the palette is exposed so that the body clips to yellow-white and only a
-thin band at the edge is orange to red; the rendered field is warped by sub-grid noise (``detail`` cells) for
+its top, not a thin ribbon of hot gas; the palette is exposed so that the core saturates to yellow (yellow-white
+at the higher peaks) over an orange gradient to a red edge (on the flame gap a wide gradient beats a body clipped
+flat to pale yellow: see the README); the rendered field is warped by sub-grid noise (``detail`` cells) for
 crisp, turbulent edges; frames are kept only after ``warmup`` steps (the first plume's mushroom cap has left);
 a sequence is stretched sideways to a sampled box aspect ratio (``aspect``, the real boxes' distribution).
 Chemical palettes tint a black-body flame (:data:`TINTS`): methane is blue at the base, metal salts colour
