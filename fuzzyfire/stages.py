@@ -175,6 +175,7 @@ def synth_stage(root: Path, method: str, cfg: Any, base: Path) -> tuple[Stage, D
     runner = {"method1": run_method1, "method2": run_method2}[method]
     cfg = replace(cfg, environments=tuple(_absolute(Path(p), base) for p in cfg.environments))
     by_path = _later_keys_dropped(to_dict(cfg), to_dict(type(cfg)()))  # the identity before content hashing
+    by_path["flame_look"] = FLAME_LOOK  # pools of earlier flames and compositing are other data
     if getattr(cfg, "backgrounds", ()):
         cfg = replace(cfg, backgrounds=tuple(_absolute(Path(p), base) for p in cfg.backgrounds))
     files = content_identity(cfg)  # replaces the environments and backgrounds of by_path when they are set
@@ -193,6 +194,11 @@ def _later_keys_dropped(config: dict[str, Any], default: dict[str, Any]) -> dict
     their identity)."""
     return {k: v for k, v in config.items() if not (k in LATER_KEYS and v == default[k])}
 
+
+#: The version of how flames are simulated, composited and boxed (synth.flames, synth.composite,
+#: synth.visibility), in the identity of every Method 1 and Method 2 pool: 2 = issue 23 (opaque bright bodies,
+#: real aspect ratios, boxes only on flames a person can see).
+FLAME_LOOK = 2
 
 #: The version of the photo-site rules (:mod:`synth.sites`) in the identity of every pool with photos.
 PHOTO_SITES = 1

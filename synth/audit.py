@@ -5,6 +5,9 @@ image (annotations in id order). ``masks/box_modes.json`` (Method 1) may hold al
 audited too: ``{file_name: {mode: [xywh | null, ...]}}``, entry k against instance k + 1 (no mask: IoU 0;
 ``null``: the mode gives no box for that flame, skipped). Smoke boxes (category ``smoke``) are audited against
 ``masks/<name>.smoke.png`` the same way.
+
+Visibility (Method 2): each fire box's contrast against the flame-free plate (median ΔE*ab over its flame, see
+:mod:`synth.visibility`) as recorded in ``manifest.json``, and how many flames were erased as unseen.
 """
 
 from __future__ import annotations
@@ -55,9 +58,29 @@ def _ious(boxes: list, truths: list[np.ndarray]) -> list[float]:
     return [_iou(b, truths[k]) if k < len(truths) else 0.0 for k, b in enumerate(boxes) if b is not None]
 
 
+def visibility_summary(folder: Path) -> dict[str, Any] | None:
+    """``{"boxes", "min_contrast", "median_contrast", "erased"}`` from the per-image records of
+    ``manifest.json`` (fire boxes with a recorded contrast, ΔE*ab; flames erased as unseen); None when no image
+    recorded any (Method 1, or a pool made before visibility was measured)."""
+    path = folder / "manifest.json"
+    if not path.is_file():
+        return None
+    per_image = json.loads(path.read_text(encoding="utf-8")).get("args", {}).get("per_image") or []
+    contrast = [f["contrast"] for meta in per_image for f in meta.get("flames", []) if "contrast" in f]
+    if not any("erased" in meta for meta in per_image):
+        return None
+    return {
+        "boxes": len(contrast),
+        "min_contrast": round(float(np.min(contrast)), 2) if contrast else None,
+        "median_contrast": round(float(np.median(contrast)), 2) if contrast else None,
+        "erased": int(sum(meta.get("erased", 0) for meta in per_image)),
+    }
+
+
 def audit_dataset(folder: Path) -> dict[str, Any]:
     """``{"images", "boxes", "mean_iou", "min_iou"}`` of the written fire boxes vs their mask boxes, plus
-    ``"modes": {mode: {...}}`` when alternative box sets were kept and ``"smoke": {...}`` for smoke boxes."""
+    ``"modes": {mode: {...}}`` when alternative box sets were kept, ``"smoke": {...}`` for smoke boxes and
+    ``"visibility": {...}`` (:func:`visibility_summary`) when the images recorded it."""
     coco = json.loads((folder / "annotations.json").read_text(encoding="utf-8"))
     fire = _boxes_by_image(coco, "fire")
     if fire is None:
@@ -81,4 +104,7 @@ def audit_dataset(folder: Path) -> dict[str, Any]:
         result["modes"] = {m: _summary(v, len(coco["images"])) for m, v in sorted(mode_ious.items())}
     if smoke is not None:
         result["smoke"] = _summary(smoke_ious, len(coco["images"]))
+    visibility = visibility_summary(folder)
+    if visibility is not None:
+        result["visibility"] = visibility
     return result

@@ -162,6 +162,14 @@ def cmd_audit(args: argparse.Namespace) -> int:
         parts = {**report.get("modes", {}), **({"smoke": report["smoke"]} if "smoke" in report else {})}
         for name, rep in parts.items():
             print(f"  {name} boxes: {rep['boxes']}, {_ious(rep)}")
+        if "visibility" in report:
+            v = report["visibility"]
+            seen = (
+                ""
+                if not v["boxes"]
+                else f", contrast ΔE min {v['min_contrast']:.1f}, median {v['median_contrast']:.1f}"
+            )
+            print(f"  visibility: {v['boxes']} fire boxes{seen}; {v['erased']} flames erased as unseen")
     return 0
 
 
@@ -172,19 +180,32 @@ def cmd_gap(args: argparse.Namespace) -> int:
 
     from curate.cli.dedup import load_model_from_args
     from curate.core.commands import print_problems
-    from synth.gap import dataset_images, embed_set, image_kinds, measure_gap, split_by_kind
+    from synth.gap import (
+        dataset_boxes,
+        dataset_images,
+        embed_crops,
+        embed_set,
+        image_kinds,
+        measure_gap,
+        split_by_kind,
+    )
 
-    sides = [
-        (args.synthetic, dataset_images(args.synthetic, args.synthetic_split, args.format)),
-        (args.real, dataset_images(args.real, args.real_split, args.real_format)),
-    ]
-    embedder, cache = load_model_from_args(args)
-    synthetic, real = (embed_set(str(path), paths, embedder, cache, args.workers) for path, paths in sides)
+    sides = [(args.synthetic, args.synthetic_split, args.format), (args.real, args.real_split, args.real_format)]
+    if args.crops:
+        boxes = [dataset_boxes(path, split, fmt, args.class_name) for path, split, fmt in sides]
+        embedder, _ = load_model_from_args(args)
+        synthetic, real = (embed_crops(str(s[0]), b, embedder, args.context) for s, b in zip(sides, boxes))
+    else:
+        images = [dataset_images(path, split, fmt) for path, split, fmt in sides]
+        embedder, cache = load_model_from_args(args)
+        synthetic, real = (embed_set(str(s[0]), p, embedder, cache, args.workers) for s, p in zip(sides, images))
     problems = [*synthetic.problems, *real.problems]
     if problems:
         print_problems(problems, sys.stderr, limit=20)
-    report = measure_gap(synthetic, real, embedder.model_id, np.random.default_rng(args.seed), args.draws, args.size)
-    by_kind = split_by_kind(synthetic, sides[0][1], image_kinds(args.synthetic))
+    rng = np.random.default_rng(args.seed)
+    unit = "crops" if args.crops else "images"
+    report = measure_gap(synthetic, real, embedder.model_id, rng, args.draws, args.size, unit)
+    by_kind = {} if args.crops else split_by_kind(synthetic, images[0], image_kinds(args.synthetic))
     kinds = {k: measure_gap(s, real, embedder.model_id, np.random.default_rng(args.seed), args.draws, args.size)
              for k, s in by_kind.items() if len(s.vectors) >= 20}  # fmt: skip
     if args.json:
@@ -212,7 +233,7 @@ def _register_flames(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--generator", default="fluid", choices=("fluid", "noise"), help="flame simulation")
     p.add_argument("--frames", type=int, default=1024, help="simulation steps per sequence")
     p.add_argument("--keep-every", type=int, default=12, help="keep one frame every K steps")
-    p.add_argument("--rare", type=float, default=0.1, help="fraction of chemical-colour (rare) flames")
+    p.add_argument("--rare", type=float, default=0.05, help="fraction of chemical-colour (rare) flames")
     p.set_defaults(func=cmd_flames)
 
 
@@ -335,8 +356,10 @@ def _register_audit(sub: argparse._SubParsersAction) -> None:
     p = add_command(
         sub,
         "audit",
-        help="IoU of written boxes vs pixel-truth mask boxes",
-        description="Compare a synthetic dataset's boxes with the boxes of its kept flame masks.\n\n"
+        help="IoU of written boxes vs pixel-truth mask boxes, and the boxed flames' visibility",
+        description="Compare a synthetic dataset's boxes with the boxes of its kept flame masks; for Method 2,\n"
+        "also the boxed flames' contrast against the flame-free background (ΔE*ab, min and median) and how\n"
+        "many flames were erased because nobody could see them (synth/visibility.py).\n\n"
         "example:\n  fuzzyfire synth audit out/m2 --json",
     )
     p.add_argument("folder", type=Path, help="a dataset written by synth method1 or method2")
@@ -354,8 +377,10 @@ def _register_gap(sub: argparse._SubParsersAction) -> None:
         description="How far a synthetic set is from a real one: the Fréchet distance between the Gaussians of\n"
         "their CNN embeddings (ImageNet EfficientNet-Lite0 unless --model), at equal sizes against half of the\n"
         "real set, next to the distance of the real set's other half (the floor). Median and 2.5-97.5 % range\n"
-        "over --draws random splits; embeddings are cached like curation's.\n\n"
+        "over --draws random splits; embeddings are cached like curation's. --crops measures the flame gap\n"
+        "instead: the same distance over the boxes of --class cut out with --context around them (not cached).\n\n"
         "example:\n  fuzzyfire synth gap out/m2 ../shared/data/fire-cctv-416 --real-split train\n"
+        "  fuzzyfire synth gap out/m2 ../shared/data/fire-cctv-416 --real-split train --crops\n"
         "  fuzzyfire synth gap renders/ photos/ --format images --real-format images --json",
     )
     p.add_argument("synthetic", type=Path, help="synthetic dataset (or image folder with --format images)")
@@ -366,7 +391,12 @@ def _register_gap(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--synthetic-split", help="only this split of SYNTHETIC (default: every image)")
     p.add_argument("--real-split", help="only this split of REAL (default: every image)")
     p.add_argument("--draws", type=int, default=200, help="random equal-size draws (default 200)")
-    p.add_argument("--size", type=int, help="images per side (default min(synthetic, real / 2))")
+    p.add_argument("--size", type=int, help="images (crops) per side (default min(synthetic, real / 2))")
+    p.add_argument("--crops", action="store_true", help="the flame gap: compare box crops, not whole images")
+    p.add_argument("--class", dest="class_name", default="fire", help="with --crops: the boxes' class (default fire)")
+    p.add_argument(
+        "--context", type=float, default=0.1, help="with --crops: context around a box, fraction of its size (0.1)"
+    )
     p.add_argument("--seed", type=int, default=0, help="seed of the draws (default 0)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     add_model_args(p)

@@ -1,8 +1,10 @@
 """Vectorised 2D compositing of flame sprites onto a background, tracking each flame's visible mask.
 
 Per sprite, in order: the ``over`` layer (smoke) is alpha-blended and the background behind the flame dimmed by
-its luminous coverage (``opacity`` x emission brightness: a bright flame outshines a bright wall, as a camera
-exposed for the fire sees it), then the emission is added (``add``) or screened (``screen``), plus a soft glow
+its luminous coverage (``opacity`` x :func:`coverage` of the emission brightness: none below
+:data:`CLEAR_BRIGHTNESS`, full from :data:`OPAQUE_BRIGHTNESS` up, so a flame's bright body hides what is behind it, as a camera exposed for the
+fire sees it, while its dim edge lets the background through), then the emission is added (``add``) or
+screened (``screen``), plus a soft glow
 (blurred emission) and a warm cast: the surroundings lit in the flame's mean colour with a Gaussian falloff
 around its base (light on the floor and walls; never part of the flame's mask or box). A flame pixel stays visible unless a later sprite is
 opaque there (its smoke alpha >= 0.5 or its own flame mask); a smoke pixel (see ``synth.sprites.SMOKE_ALPHA``)
@@ -22,6 +24,18 @@ from numpy.typing import NDArray
 from synth.sprites import Sprite
 
 BLEND_MODES: tuple[str, ...] = ("screen", "add")
+#: Emission brightness (brightest channel, 0..1) from which a flame covers the background fully (x opacity) ...
+OPAQUE_BRIGHTNESS = 0.6
+#: ... and below which it covers nothing (only adds its light).
+CLEAR_BRIGHTNESS = 0.15
+
+
+def coverage(brightness: NDArray[np.float32]) -> NDArray[np.float32]:
+    """Luminous coverage in [0, 1] of emission ``brightness`` (any shape, 0..1): a smoothstep from 0 at
+    :data:`CLEAR_BRIGHTNESS` to 1 at :data:`OPAQUE_BRIGHTNESS`. The dim edge only adds light (a bright wall
+    behind it is reddened, never outlined in a darker colour); the bright body is opaque."""
+    r = np.clip((brightness - CLEAR_BRIGHTNESS) / (OPAQUE_BRIGHTNESS - CLEAR_BRIGHTNESS), 0.0, 1.0)
+    return (r * r * (3.0 - 2.0 * r)).astype(np.float32)
 
 
 @dataclass(frozen=True)
@@ -35,7 +49,7 @@ class Placement:
     height: int
     blend: str = "screen"
     glow: float = 0.3
-    opacity: float = 0.8  # luminous coverage: the background behind the flame dims by opacity x its brightness
+    opacity: float = 0.8  # luminous coverage: the background behind the flame dims by opacity x coverage()
     cast: bool = True  # light the surroundings warm (with ``glow`` > 0)
 
     def __post_init__(self) -> None:
@@ -85,12 +99,12 @@ def _glow(img: NDArray[np.float32], emission: NDArray[np.float32], p: Placement,
 
 def _cast(img: NDArray[np.float32], emission: NDArray[np.float32], mask: NDArray[np.bool_], p: Placement) -> None:
     """Multiply the image by ``1 + strength * falloff * colour``, in place: ``colour`` the flame's mean emission
-    (scaled to max 1), ``falloff`` a Gaussian of 1.2 x the sprite's larger side around the base of the flame,
+    (scaled to max 1 when its brightest channel is at least :data:`OPAQUE_BRIGHTNESS`, by 1 / that otherwise), ``falloff`` a Gaussian of 1.2 x the sprite's larger side around the base of the flame,
     ``strength`` 0.8 x ``glow``."""
     if not mask.any():
         return
     colour = emission[mask].mean(axis=0)
-    colour = colour / max(float(colour.max()), 1e-6)
+    colour = colour / max(float(colour.max()), OPAQUE_BRIGHTNESS)  # a dim flame lights its surroundings dimly
     h, w = img.shape[:2]
     sigma = 1.2 * max(p.width, p.height)
     cx, cy = p.x + p.width / 2, p.y + 0.85 * p.height
@@ -128,7 +142,7 @@ def composite(background: NDArray[np.uint8], placements: Sequence[Placement]) ->
             ys, xs, sy, sx = c
             a = over[sy, sx, 3:4]
             light = emission[sy, sx]
-            cover = a + (1.0 - a) * p.opacity * light.max(axis=-1, keepdims=True)
+            cover = a + (1.0 - a) * p.opacity * coverage(light.max(axis=-1, keepdims=True))
             img[ys, xs] = img[ys, xs] * (1.0 - cover) + over[sy, sx, :3] * a
             img[ys, xs] = _add_light(img[ys, xs], light, p.blend)
             if p.glow > 0:

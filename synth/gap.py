@@ -4,6 +4,11 @@ Images are embedded as curation embeds them (the built-in ImageNet EfficientNet-
 L2-normalised whole-image embeddings, cached by content hash), so a rerun costs only hashing. The distance is
 measured at equal set sizes against half of the real set, next to the real set's distance to its own other
 half (the floor a perfect generator reaches); see :mod:`curate.frechet`.
+
+The *flame gap* (``--crops``) compares the objects instead of the whole images: every box of a class (``fire``)
+is cut out with :data:`CROP_CONTEXT` of its size as context on each side (clipped to the image), resized by the
+embedder's own preprocessing and embedded (no cache: crops are not files). The same Fréchet distance and floor
+are then taken over crops rather than images.
 """
 
 from __future__ import annotations
@@ -16,8 +21,9 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from curate.core.imageio import ImageError, read_image
 from curate.core.problems import Problem
-from curate.embed import OnnxEmbedder
+from curate.embed import OnnxEmbedder, l2_normalize
 from curate.embedcache import EmbeddingCache
 from curate.frechet import Gap, gap_interval
 from curate.scan import list_image_files, scan_images
@@ -32,22 +38,29 @@ class ImageSet:
     problems: tuple[Problem, ...]
 
 
+#: Context around a box when it is cut out for the flame gap: this fraction of the box's width (height) on the
+#: left and right (top and bottom).
+CROP_CONTEXT = 0.1
+
+
 @dataclass(frozen=True)
 class GapReport:
     synthetic: ImageSet
     real: ImageSet
     gap: Gap
     model: str
+    unit: str = "images"  # what a vector is: "images", or "crops" (boxes with context: the flame gap)
 
     def to_json(self) -> dict[str, Any]:
-        """``{"sets": {synthetic, real: {path, images}}, "model", "size", "draws", "frechet": {synthetic, floor,
-        ratio: {median, low, high}}}``."""
+        """``{"sets": {synthetic, real: {path, images}}, "unit", "model", "size", "draws", "frechet": {synthetic,
+        floor, ratio: {median, low, high}}}``; ``images`` counts vectors: crops when ``unit`` is ``crops``."""
         g = self.gap
         return {
             "sets": {
                 "synthetic": {"path": self.synthetic.label, "images": len(self.synthetic.vectors)},
                 "real": {"path": self.real.label, "images": len(self.real.vectors)},
             },
+            "unit": self.unit,
             "model": self.model,
             "size": g.size,
             "draws": g.draws,
@@ -55,11 +68,11 @@ class GapReport:
         }
 
     def lines(self) -> list[str]:
-        g = self.gap
+        g, u = self.gap, self.unit
         return [
-            f"synthetic {self.synthetic.label}: {len(self.synthetic.vectors)} images; "
-            f"real {self.real.label}: {len(self.real.vectors)} images",
-            f"Fréchet distance of embeddings, {g.size} images per side, median [2.5%, 97.5%] of {g.draws} draws:",
+            f"synthetic {self.synthetic.label}: {len(self.synthetic.vectors)} {u}; "
+            f"real {self.real.label}: {len(self.real.vectors)} {u}",
+            f"Fréchet distance of embeddings, {g.size} {u} per side, median [2.5%, 97.5%] of {g.draws} draws:",
             f"  synthetic vs real  {g.synthetic}",
             f"  real vs real       {g.floor}   (the floor)",
             f"  ratio              {g.ratio.median:.2f} [{g.ratio.low:.2f}, {g.ratio.high:.2f}]"
@@ -121,6 +134,72 @@ def split_by_kind(images: ImageSet, paths: Sequence[Path], kinds: dict[str, str]
     }
 
 
+def dataset_boxes(
+    path: Path, split: str | None = None, fmt: str = "auto", category: str = "fire"
+) -> list[tuple[Path, list[tuple[float, float, float, float]]]]:
+    """(image path, its ``category`` boxes [x, y, w, h] in pixels) of every image of the dataset at ``path`` (of
+    ``split`` when given) that has such a box; ValueError when there is none (or ``fmt`` is ``images``)."""
+    from curate.core.classes import canonical_class
+    from curate.core.formats.registry import read_dataset
+    from curate.core.load import pick_split
+
+    if fmt == "images":
+        raise ValueError(f"{path}: crops need boxes, a plain folder of images has none")
+    ds = pick_split(read_dataset(path, fmt).dataset, split, path)
+    ids = {c.id for c in ds.categories if c.name == canonical_class(category)}
+    by_image = ds.annotations_by_image()
+    out = [
+        (ds.image_path(im), [tuple(a.bbox) for a in by_image[im.id] if a.category_id in ids and not a.iscrowd])
+        for im in ds.images
+    ]
+    out = [(p, boxes) for p, boxes in out if boxes]
+    if not out:
+        raise ValueError(f"{path}: no {category!r} boxes")
+    return out
+
+
+def crop_box(rgb: NDArray[np.uint8], box: Sequence[float], context: float = CROP_CONTEXT) -> NDArray[np.uint8] | None:
+    """The (h, w, 3) part of ``rgb`` inside ``box`` [x, y, w, h] (pixels) grown by ``context`` x its size on each
+    side, clipped to the image; None when nothing of it is inside."""
+    x, y, w, h = (float(v) for v in box)
+    height, width = rgb.shape[:2]
+    x0, y0 = max(int(np.floor(x - context * w)), 0), max(int(np.floor(y - context * h)), 0)
+    x1, y1 = min(int(np.ceil(x + w + context * w)), width), min(int(np.ceil(y + h + context * h)), height)
+    return rgb[y0:y1, x0:x1] if x1 > x0 and y1 > y0 else None
+
+
+def embed_crops(
+    label: str,
+    items: Sequence[tuple[Path, Sequence[Sequence[float]]]],
+    embedder: OnnxEmbedder,
+    context: float = CROP_CONTEXT,
+    batch: int = 64,
+) -> ImageSet:
+    """L2-normalised embeddings (N, D) of every box of ``items`` (from :func:`dataset_boxes`) cut out by
+    :func:`crop_box` and resized by ``embedder.preprocess``; unreadable images are kept as problems."""
+    from curate.core.progress import progress
+
+    pending: list[NDArray[np.uint8]] = []
+    vectors: list[NDArray[np.float32]] = []
+    problems: list[Problem] = []
+    for path, boxes in progress(items, total=len(items), desc=f"crops of {label}", unit="img"):
+        try:
+            rgb = read_image(path)
+        except ImageError as exc:
+            problems.append(Problem(str(path), f"skipped: {exc.reason}"))
+            continue
+        crops = (crop_box(rgb, box, context) for box in boxes)
+        pending += [embedder.preprocess.resize(c) for c in crops if c is not None]
+        while len(pending) >= batch:
+            vectors.append(embedder.embed(np.stack(pending[:batch])))
+            pending = pending[batch:]
+    if pending:
+        vectors.append(embedder.embed(np.stack(pending)))
+    if not vectors:
+        raise ValueError(f"{label}: no readable crops")
+    return ImageSet(label, l2_normalize(np.concatenate(vectors)), tuple(problems))
+
+
 def embed_set(
     label: str, paths: Sequence[Path], embedder: OnnxEmbedder, cache: EmbeddingCache | None, workers: int = 0
 ) -> ImageSet:
@@ -136,6 +215,9 @@ def measure_gap(
     rng: np.random.Generator,
     draws: int = 200,
     size: int | None = None,
+    unit: str = "images",
 ) -> GapReport:
-    """The gap of ``synthetic`` to ``real`` with its floor (see :func:`curate.frechet.gap_interval`)."""
-    return GapReport(synthetic, real, gap_interval(synthetic.vectors, real.vectors, rng, draws, size), model)
+    """The gap of ``synthetic`` to ``real`` with its floor (see :func:`curate.frechet.gap_interval`); ``unit``
+    names what the vectors are (``images`` or ``crops``)."""
+    gap = gap_interval(synthetic.vectors, real.vectors, rng, draws, size)
+    return GapReport(synthetic, real, gap, model, unit)

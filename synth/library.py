@@ -19,7 +19,7 @@ class FlameLibraryConfig:
     generator: Literal["fluid", "noise"] = "fluid"
     frames: int = 240  # simulation steps per sequence
     keep_every: int = 12  # keep one frame every K steps
-    rare: float = 0.1  # fraction of chemical-colour (rare) flames
+    rare: float = 0.05  # fraction of chemical-colour (rare) flames
     seed: int = 0
     folders: tuple[Path, ...] = ()  # sequence folders to load instead of simulating
 

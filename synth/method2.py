@@ -1,5 +1,7 @@
 """Method 2: render each camera view of a procedural environment once, then composite flame sprites onto it
-many times; each flame's box is the box of its final visible mask (after clipping, truncation and occlusion).
+many times; each flame's box is the box of its final visible mask (after clipping, truncation and occlusion),
+restricted to the pixels whose contrast a person would notice (:mod:`synth.visibility`); a flame with too few
+such pixels is erased from the image (composited again without it), so no visible flame goes unboxed.
 
 Image ``i`` uses view ``i // images_per_view`` (see :mod:`synth.views`) and its own rng
 ``default_rng([seed, 2, i])``, so any image can be (re)made alone: runs resume and are byte-reproducible.
@@ -15,15 +17,17 @@ from typing import Literal
 import numpy as np
 from numpy.typing import NDArray
 
+from curate.core.boxes import mask_to_xywh
 from synth import render
 from synth.composite import BLEND_MODES, Placement, composite
 from synth.effects import CameraConfig, apply_effects, expose, sample_effects
 from synth.generate import generate
 from synth.library import FlameLibraryConfig
 from synth.schema import check_range
-from synth.sprites import SpriteSequence
+from synth.sprites import Sprite, SpriteSequence
 from synth.staging import boxes_from_masks
 from synth.views import ViewCache
+from synth.visibility import delta_e, measure
 
 SITE_MAX_HEIGHT = 0.6  # tallest flame on a photo or panorama site, fraction of the image height
 
@@ -50,7 +54,7 @@ class Method2Config:
     max_flames: int = 3  # flames per image: uniform in 1..max_flames
     negatives: float = 0.1  # fraction of images without flames
     flame_height_m: tuple[float, float] = (0.3, 2.5)  # flame height in the scene, metres
-    flame_opacity: tuple[float, float] = (0.5, 0.95)  # luminous coverage of a flame (1 = hides what is behind)
+    flame_opacity: tuple[float, float] = (0.85, 1.0)  # luminous coverage of a flame's body (1 = hides what is behind)
     closeup: float = 0.0  # fraction of fire images framed as a close-up: one flame of closeup_height x the image
     closeup_height: tuple[float, float] = (0.4, 1.0)  # close-up flame height, fraction of the image height
     min_box_px: int = 4  # visible flames smaller than this (either side) are dropped
@@ -90,7 +94,8 @@ def plan_flames(
     rng: np.random.Generator,
     avoid: Sequence[Sequence[int]] | None = None,
 ) -> list[tuple[Placement, str]]:
-    """Random flames standing at random pixels, sized by the scene depth there (world height in metres); on a
+    """Random flames standing at random pixels, sized by the scene depth there (world height in metres of the flame
+    itself, its mask: the sprite, smoke included, is scaled to match); on a
     site (``avoid`` given: a photo or panorama, :mod:`synth.sites`) only at pixels whose depth is > 0 (the ground)
     and never over the ``avoid`` boxes [x, y, w, h] (people); or,
     for a ``cfg.closeup`` share of the fire images, one flame filling ``cfg.closeup_height`` of the frame with
@@ -104,11 +109,12 @@ def plan_flames(
         seq = library[int(rng.integers(len(library)))]
         frame = int(rng.integers(len(seq.sprites)))
         sprite = seq.sprites[frame]
+        flame_size = flame_extent(sprite)
         if closeup:
             bx, by = int(rng.integers(cfg.width // 4, 3 * cfg.width // 4 + 1)), int(cfg.height * rng.uniform(0.85, 1.1))
             hpx = int(round(cfg.height * rng.uniform(*cfg.closeup_height)))
         elif avoid is not None:
-            spot = site_spot(depth, fy, sprite.size, cfg, avoid, rng)
+            spot = site_spot(depth, fy, flame_size, cfg, avoid, rng)
             if spot is None:
                 continue
             bx, by, hpx = spot
@@ -116,25 +122,41 @@ def plan_flames(
             bx, by = int(rng.integers(0, cfg.width)), int(rng.integers(cfg.height // 3, cfg.height))
             d = float(depth[min(by, cfg.height - 1), bx]) or 10.0
             hpx = int(np.clip(fy * rng.uniform(*cfg.flame_height_m) / d, 12, 0.9 * cfg.height))
-        sw, sh = sprite.size
-        wpx = max(int(round(hpx * sw / sh)), 2)
+        wpx, spx = sprite_pixels(sprite, hpx)
         blend = str(rng.choice(BLEND_MODES))
         glow, opacity = float(rng.uniform(0.1, 0.5)), float(rng.uniform(*cfg.flame_opacity))
-        place = Placement(sprite, bx - wpx // 2, by - hpx, wpx, hpx, blend, glow, opacity, cfg.light)
+        place = Placement(sprite, bx - wpx // 2, by - spx, wpx, spx, blend, glow, opacity, cfg.light)
         out.append((place, f"{seq.name}/{frame}"))
     return out
+
+
+def flame_extent(sprite: Sprite) -> tuple[int, int]:
+    """(width, height) in sprite pixels of the box of the sprite's flame mask (the sprite's size when the mask is
+    empty): what a flame's size in the scene refers to (smoke above it is not the flame)."""
+    rows, cols = np.nonzero(sprite.mask.any(axis=1))[0], np.nonzero(sprite.mask.any(axis=0))[0]
+    if not rows.size:
+        return sprite.size
+    return int(cols[-1] - cols[0] + 1), int(rows[-1] - rows[0] + 1)
+
+
+def sprite_pixels(sprite: Sprite, flame_px: int) -> tuple[int, int]:
+    """(width, height) in image pixels of ``sprite`` scaled so that its flame is ``flame_px`` high."""
+    sw, sh = sprite.size
+    scale = flame_px / flame_extent(sprite)[1]
+    return max(int(round(sw * scale)), 2), max(int(round(sh * scale)), 2)
 
 
 def site_spot(
     depth: NDArray[np.float32],
     fy: float,
-    sprite_size: tuple[int, int],
+    flame_size: tuple[int, int],
     cfg: Method2Config,
     avoid: Sequence[Sequence[int]],
     rng: np.random.Generator,
     tries: int = 10,
 ) -> tuple[int, int, int] | None:
-    """(base x, base y, height px) of a flame standing on a ground pixel (depth > 0), sized by its depth, no
+    """(base x, base y, height px) of a flame (its mask box ``flame_size`` (w, h) in any unit: only the ratio
+    counts) standing on a ground pixel (depth > 0), sized by its depth, no
     taller than :data:`SITE_MAX_HEIGHT` of the image (a spot nearer than that is redrawn: 95 % of fire-cctv-416's
     boxes are lower) and overlapping none of ``avoid`` ([x, y, w, h] px); None when ``tries`` draws find none."""
     ground = np.flatnonzero(depth > 0)
@@ -143,7 +165,7 @@ def site_spot(
     for _ in range(tries):
         by, bx = divmod(int(ground[rng.integers(len(ground))]), cfg.width)
         hpx = max(int(fy * rng.uniform(*cfg.flame_height_m) / float(depth[by, bx])), 12)
-        wpx = max(int(round(hpx * sprite_size[0] / sprite_size[1])), 2)
+        wpx = max(int(round(hpx * flame_size[0] / flame_size[1])), 2)
         x0, y0 = bx - wpx // 2, by - hpx
         if hpx <= SITE_MAX_HEIGHT * cfg.height and not any(
             x0 < ax + aw and ax < x0 + wpx and y0 < ay + ah and ay < by for ax, ay, aw, ah in avoid
@@ -152,27 +174,48 @@ def site_spot(
     return None
 
 
+def visible_composite(scene: NDArray[np.uint8], planned: Sequence[tuple[Placement, str]], effects, min_box_px: int):
+    """Composite ``planned`` on the exposed ``scene`` and take it through the camera (``effects``), erasing every
+    flame that cannot be seen (:mod:`synth.visibility`: contrast against the plate, the scene through the same
+    camera without flames) or whose seen part is smaller than ``min_box_px``, and compositing again without it
+    until every flame left is seen (erasing one can unhide another). Returns (image (H, W, 3) uint8, the
+    composite, the flames kept (a sublist of ``planned``), their :class:`synth.visibility.Visibility`)."""
+    plate = apply_effects(scene, effects)
+    shown = list(planned)
+    while True:
+        result = composite(scene, [p for p, _ in shown])
+        image = apply_effects(result.image, effects)
+        delta = delta_e(image, plate)
+        seen = [measure(delta, m) for m in result.flames]
+        keep = [k for k, v in enumerate(seen) if v.visible and min(mask_to_xywh(v.part)[2:]) >= min_box_px]
+        if len(keep) == len(shown):
+            return image, result, shown, seen
+        shown = [shown[k] for k in keep]
+
+
 def make_image(cfg: Method2Config, i: int, library: Sequence[SpriteSequence], views: ViewCache):
     """Image ``i``: ((H, W, 3) uint8, kept fire masks, record dict (boxes xywh, metadata), kept smoke masks or
-    None when smoke is not a class)."""
+    None when smoke is not a class). A flame nobody could see is erased, not left unboxed
+    (:func:`visible_composite`); a kept flame's mask and box are its seen part."""
     background, depth, view_meta = views.background(i // cfg.images_per_view)
     rng = np.random.default_rng([cfg.seed, 2, i])
     avoid = view_meta.get("people", []) if view_meta.get("site") else None
     planned = plan_flames(cfg, library, depth, view_meta["camera"]["yfov"], rng, avoid)
     effects = sample_effects(rng, cfg.camera)
-    result = composite(expose(background, effects), [p for p, _ in planned])
-    image = apply_effects(result.image, effects)
-    kept, boxes, index = boxes_from_masks(result.flames, cfg.min_box_px)
+    image, result, shown, seen = visible_composite(expose(background, effects), planned, effects, cfg.min_box_px)
+    kept, boxes, index = boxes_from_masks([v.part for v in seen], cfg.min_box_px)
     flames = [
         {
-            "flame": planned[k][1],
-            "blend": planned[k][0].blend,
-            "glow": round(planned[k][0].glow, 4),
-            "opacity": round(planned[k][0].opacity, 4),
+            "flame": shown[k][1],
+            "blend": shown[k][0].blend,
+            "glow": round(shown[k][0].glow, 4),
+            "opacity": round(shown[k][0].opacity, 4),
+            "contrast": round(seen[k].contrast, 2),
+            "seen": round(seen[k].seen / max(seen[k].pixels, 1), 4),
         }
         for k in index
     ]
-    meta = {**view_meta, "flames": flames, "effects": effects.to_json()}
+    meta = {**view_meta, "flames": flames, "erased": len(planned) - len(shown), "effects": effects.to_json()}
     record = {"width": cfg.width, "height": cfg.height, "boxes": boxes, "meta": meta}
     if not cfg.smoke_class:
         return image, kept, record, None

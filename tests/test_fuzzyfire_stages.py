@@ -59,7 +59,7 @@ def test_synth_stage_resolves_environments_and_keeps_old_identities(tmp_path: Pa
 
     from factories import write_textured_room
 
-    from fuzzyfire.stages import synth_stage
+    from fuzzyfire.stages import FLAME_LOOK, synth_stage
     from synth.library import FlameLibraryConfig
     from synth.method2 import Method2Config
 
@@ -69,6 +69,7 @@ def test_synth_stage_resolves_environments_and_keeps_old_identities(tmp_path: Pa
     identity = json.loads((stage.folder / "stage.json").read_text())["identity"]
     assert "environments" not in identity["config"]  # pools made before environments existed are still found
     assert "flame_opacity" not in identity["config"]  # nor flame_opacity, while it holds its default
+    assert identity["config"]["flame_look"] == FLAME_LOOK  # pools of older flames are not reused
     opaque, _ = synth_stage(tmp_path / "data", "method2", replace(cfg, flame_opacity=(0.9, 1.0)), tmp_path)
     assert opaque.hash != stage.hash
     write_textured_room(tmp_path / "scenes" / "den.glb")
@@ -121,7 +122,7 @@ def test_pools_made_by_path_before_content_identities_are_still_found(tmp_path: 
     from factories import write_textured_room
 
     from curate.core.config import to_dict
-    from fuzzyfire.stages import _later_keys_dropped, cached_stage, synth_stage
+    from fuzzyfire.stages import FLAME_LOOK, _later_keys_dropped, cached_stage, synth_stage
     from synth.library import FlameLibraryConfig
     from synth.method2 import Method2Config
 
@@ -131,11 +132,16 @@ def test_pools_made_by_path_before_content_identities_are_still_found(tmp_path: 
                         environments=(Path("scenes"),))  # fmt: skip
     absolute = replace(cfg, environments=((tmp_path / "scenes").resolve(),))
     by_path = _later_keys_dropped(to_dict(absolute), to_dict(Method2Config()))
+    older_flames = cached_stage(
+        tmp_path / "older", "method2", {"kind": "method2", "config": by_path}, lambda f: f.mkdir(parents=True)
+    )
+    by_path["flame_look"] = FLAME_LOOK
     old = cached_stage(
         tmp_path / "data", "method2", {"kind": "method2", "config": by_path}, lambda f: f.mkdir(parents=True)
     )
     found, ref = synth_stage(tmp_path / "data", "method2", cfg, tmp_path)
     assert found.cached and found.folder == old.folder and ref.identity == {"kind": "method2", "hash": old.hash}
+    assert older_flames.hash != old.hash  # a pool of the flames before FLAME_LOOK is other data
 
 
 def _dataset_builder(n: int, seeds: list[int]):

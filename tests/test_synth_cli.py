@@ -16,6 +16,9 @@ def test_flames_method2_audit_commands(tmp_path, capsys):
     assert main(["synth", "audit", str(out), "--json"]) == 0
     report = json.loads(capsys.readouterr().out)
     assert report["images"] == 3 and report["mean_iou"] == 1.0
+    assert report["visibility"]["boxes"] == report["boxes"]
+    assert main(["synth", "audit", str(out)]) == 0
+    assert "visibility: " in capsys.readouterr().out
 
 
 def test_flames_write_a_preview_and_no_empty_layer(tmp_path, capsys):

@@ -54,3 +54,17 @@ def test_peak_above_one_turns_the_core_yellow_white():
     assert plain[-1][1] < 0.85 and hot[-1][1] > 0.95  # the core: orange vs clipped yellow-white
     assert np.all(hot >= plain - 1e-6) and np.all(hot <= 1.0)
     assert hot[0].max() == 0.0  # cold stays dark
+
+
+@pytest.mark.parametrize(("exposure", "peak"), [(8.0, 1.3), (10.0, 1.6), (13.0, 2.0)])
+def test_sampled_exposures_saturate_the_core_and_keep_a_red_orange_edge(exposure, peak):
+    """The exposure and peak range :func:`synth.flames.sample_params` draws from (8-13, 1.3-2)."""
+    pal = C.flame_palette("blackbody", exposure=exposure, peak=peak)
+    core = pal[-1]
+    assert core[0] == 1.0 and core[1] > 0.8 and core[2] > 0.45  # saturated red channel: yellow to yellow-white
+    bright = pal.max(axis=1)
+    edge = pal[(bright > 0.2) & (bright < 0.6)]  # the visible but dim edge: red to orange, no blue
+    assert len(edge) and np.all(edge[:, 0] == edge.max(axis=1)) and np.all(edge[:, 2] < 0.1)
+    assert np.all(edge[:, 1] < 0.7 * edge[:, 0])
+    yellow = np.argmax(pal[:, 1] >= 0.6)  # orange-yellow from here on: the upper third or more of the temperatures
+    assert yellow < 0.67 * len(pal)

@@ -82,3 +82,24 @@ def test_a_flame_casts_warm_light_around_its_base_outside_its_mask():
     assert np.array_equal(lit.flames[0], dark.flames[0])  # the light is never part of the box
     unlit = composite(grey, [Placement(sprite, 35, 30, 10, 10, "screen", glow=0.5, opacity=0.8, cast=False)])
     assert tuple(unlit.image[50, 40]) == (100, 100, 100)  # light: false
+
+
+def test_a_bright_flame_body_hides_what_is_behind_it_and_a_dim_edge_does_not_darken_a_wall():
+    from synth.composite import OPAQUE_BRIGHTNESS, coverage
+
+    assert coverage(np.float32(OPAQUE_BRIGHTNESS)) == 1.0 and coverage(np.float32(0.1)) == 0.0
+    core = _flame(value=0)
+    core.emission[:] = (255, 240, 150)  # a yellow-white core
+    rng = np.random.default_rng(0)
+    outs = [
+        composite(rng.integers(0, 256, (10, 10, 3), dtype=np.uint8), [Placement(core, 0, 0, 10, 10, b, 0.0, 1.0)])
+        for b in ("screen", "add")
+        for _ in range(3)
+    ]
+    for out in outs:  # whatever the background, the core shows its own colour
+        assert np.abs(out.image.astype(int) - (255, 240, 150)).max() <= 1
+    edge = _flame(value=0)
+    edge.emission[:] = (45, 8, 0)  # the dim red edge
+    white = np.full((10, 10, 3), 230, np.uint8)
+    lit = composite(white, [Placement(edge, 0, 0, 10, 10, "screen", 0.0, 1.0)]).image
+    assert lit[5, 5, 0] >= 230 and lit[5, 5].astype(int).mean() >= 200  # reddened, not a dark outline

@@ -76,3 +76,51 @@ def test_flame_base_is_irregular_not_a_straight_cut():
     assert len(set(first_lit.tolist())) > 1
     flat = F.base_attenuation(F.FlameParams(base_fade=0.0, **SMALL), 45, np.random.default_rng(0))
     assert np.all(flat == 1.0)
+
+
+def test_sampled_aspect_ratios_lie_in_the_real_range():
+    rng = np.random.default_rng(0)
+    aspects = np.array([F.sample_aspect(rng) for _ in range(4000)])
+    assert aspects.min() >= F.ASPECT_RANGE[0] and aspects.max() <= F.ASPECT_RANGE[1]
+    low, median, high = np.percentile(aspects, [10, 50, 90])
+    assert 0.5 < median < 0.65  # fire-cctv-416 train boxes: median 0.57
+    assert 0.22 < low < 0.36 and 1.0 < high < 1.45  # ... 10-90 %: 0.29-1.33
+
+
+def test_a_sequence_is_stretched_to_its_aspect():
+    for aspect in (0.35, 1.1):
+        p = F.FlameParams(aspect=aspect, **SMALL)
+        seq = F.generate_sequence("a", p, np.random.default_rng(2))
+        got = float(np.median([F.mask_aspect(s) for s in seq.sprites]))
+        assert abs(got - aspect) < 0.08 or seq.meta["stretch"] in (1 / F.MAX_STRETCH, F.MAX_STRETCH)
+        assert all(s.mask.shape == s.emission.shape[:2] == s.over.shape[:2] for s in seq.sprites)
+
+
+def test_sampled_flames_have_a_saturated_yellow_core_and_are_mostly_bright():
+    bright = []
+    for k in range(4):
+        rng = np.random.default_rng([7, k])
+        p = F.sample_params(rng, frames=30, keep_every=15)  # the shipped grid and warmup
+        sprites = F.generate_sequence("c", p, rng).sprites
+        e = np.concatenate([s.emission[s.mask] for s in sprites]).astype(int)
+        core = e[e.max(axis=1) >= np.percentile(e.max(axis=1), 90)]
+        assert np.median(core[:, 0]) >= 250 and np.median(core[:, 1]) >= 180  # saturated: yellow to yellow-white
+        assert np.median(core[:, 2]) >= 40  # not a pure orange
+        bright.append((e[:, 1] >= 140).mean())  # orange-yellow or brighter
+        assert np.all(e[:, 0] >= e[:, 1]) and np.all(e[:, 1] >= e[:, 2] - 1)  # black-body order: red >= green >= blue
+    assert min(bright) > 0.3 and np.median(bright) > 0.5  # mostly bright, not a dim red ribbon (a jet is thinnest)
+
+
+def test_rare_flames_are_tinted_plausibly():
+    rng = np.random.default_rng(0)
+    drawn = {F.sample_params(rng, rare=True).palette for _ in range(200)}
+    assert drawn == set(F.RARE_PALETTES)  # no lilac, crimson or red clouds
+    p = F.FlameParams(palette="methane", **SMALL)
+    w = F.tint_weight(p, p.rows - 3)
+    assert w[p.rows - 3, 0] == 1.0 and w[0, 0] == 0.0  # blue at the base, black-body above
+    sp = F.generate_sequence("m", p, np.random.default_rng(1)).sprites[-1]
+    e, rows = sp.emission.astype(int), np.nonzero(sp.mask.any(axis=1))[0]
+    base, top = slice(rows[-1] - 8, rows[-1] + 1), slice(rows[0], (rows[0] + rows[-1]) // 2)
+    blueness = lambda cut: float((e[cut][:, :, 2] - e[cut][:, :, 0])[sp.mask[cut]].mean())  # noqa: E731
+    assert blueness(base) > blueness(top) + 60 and blueness(top) < -60  # blue base, a yellow-orange flame above
+    assert F.tint_weight(F.FlameParams(**SMALL), 45) is None

@@ -11,7 +11,7 @@ from curate_helpers import save, scene, transformed, use_session_cache, write_sc
 
 from curate.embed import load_embedder
 from fuzzyfire.cli import main
-from synth.gap import dataset_images, embed_set, measure_gap
+from synth.gap import crop_box, dataset_boxes, dataset_images, embed_crops, embed_set, measure_gap
 
 
 @pytest.fixture
@@ -93,3 +93,49 @@ def test_a_mixed_pool_gets_a_gap_per_kind(folders, tmp_path, capsys) -> None:
     assert set(report["kinds"]) == {"photo", "panorama"}
     counts = [report["kinds"][k]["sets"]["synthetic"]["images"] for k in ("photo", "panorama")]
     assert sum(counts) == report["sets"]["synthetic"]["images"] == 60 and min(counts) >= 20
+
+
+def _flat_dataset(root: Path, n: int) -> Path:
+    """A YOLO folder like :func:`write_scene_dataset`'s, of flat grey images with one fire box each."""
+    for i in range(n):
+        save(np.full((120, 160, 3), 90 + 3 * i, np.uint8), root / "train" / "images" / f"f{i}.png")
+        (root / "train" / "labels").mkdir(parents=True, exist_ok=True)
+        (root / "train" / "labels" / f"f{i}.txt").write_text(f"0 0.5 0.5 {0.1 + 0.01 * i:.2f} 0.25\n")
+    (root / "data.yaml").write_text("train: train/images\nnc: 1\nnames: [fire]\n")
+    return root
+
+
+def test_crop_box_adds_context_and_clips() -> None:
+    rgb = np.arange(100 * 80 * 3, dtype=np.uint8).reshape(100, 80, 3)
+    assert crop_box(rgb, [20, 30, 10, 20]).shape == (24, 12, 3)  # 10 % of 10 x 20 on each side
+    assert crop_box(rgb, [20, 30, 10, 20], context=0.0).shape == (20, 10, 3)
+    assert np.array_equal(crop_box(rgb, [-5, 90, 20, 20], 0.0), rgb[90:100, 0:15])  # clipped to the image
+    assert crop_box(rgb, [200, 10, 5, 5]) is None
+
+
+def test_flame_gap_of_like_crops_is_near_the_floor_and_flat_crops_are_far(tmp_path: Path, folders) -> None:
+    real = write_scene_dataset(tmp_path / "real", {f"r{i}": (100 + i, None) for i in range(24)}, ("fire",))
+    alike = write_scene_dataset(tmp_path / "alike", {f"a{i}": (200 + i, "hflip") for i in range(12)}, ("fire",))
+    flat = _flat_dataset(tmp_path / "flat", 12)
+    embedder = load_embedder()
+    sets = {
+        k: embed_crops(k, dataset_boxes(p), embedder) for k, p in {"real": real, "alike": alike, "flat": flat}.items()
+    }
+    assert len(sets["real"].vectors) == 24 and len(sets["flat"].vectors) == 12
+    near = measure_gap(sets["alike"], sets["real"], embedder.model_id, np.random.default_rng(0), 30, unit="crops")
+    far = measure_gap(sets["flat"], sets["real"], embedder.model_id, np.random.default_rng(0), 30, unit="crops")
+    assert near.gap.floor.median < far.gap.synthetic.low and near.gap.synthetic.high < far.gap.synthetic.low
+    assert "12 crops per side" in "\n".join(far.lines()) and far.to_json()["unit"] == "crops"
+    with pytest.raises(ValueError, match="no 'smoke' boxes"):
+        dataset_boxes(real, category="smoke")
+    with pytest.raises(ValueError, match="crops need boxes"):
+        dataset_boxes(folders["real"], fmt="images")
+
+
+def test_gap_command_with_crops(tmp_path: Path, capsys) -> None:
+    real = write_scene_dataset(tmp_path / "real", {f"r{i}": (100 + i, None) for i in range(24)}, ("fire",))
+    flat = _flat_dataset(tmp_path / "flat", 12)
+    assert main(["synth", "gap", str(flat), str(real), "--crops", "--draws", "20", "--json"]) == 0
+    report = json.loads(capsys.readouterr().out)
+    assert report["unit"] == "crops" and report["size"] == 12 and report["sets"]["real"]["images"] == 24
+    assert report["frechet"]["ratio"]["low"] > 1.0

@@ -93,12 +93,43 @@ def test_closeups_frame_one_large_flame_at_the_bottom(library) -> None:
     depth = np.full((cfg.height, cfg.width), 4.0, np.float32)
     for i in range(20):
         (placed,) = [p for p, _ in M.plan_flames(cfg, library, depth, 1.0, np.random.default_rng(i))]
-        assert 0.6 * cfg.height - 1 <= placed.height <= cfg.height
+        flame = placed.height * M.flame_extent(placed.sprite)[1] / placed.sprite.size[1]  # the flame, not its smoke
+        assert 0.6 * cfg.height - 1 <= flame <= cfg.height + 1
         bottom = placed.y + placed.height
         assert 0.85 * cfg.height - 1 <= bottom <= 1.1 * cfg.height + 1
         assert cfg.width // 4 <= placed.x + placed.width // 2 <= 3 * cfg.width // 4 + 1
     far = [p for i in range(20) for p, _ in M.plan_flames(replace(CFG, negatives=0.0), library, depth, 1.0,
                                                           np.random.default_rng(i))]  # fmt: skip
-    assert max(p.height for p in far) < 0.6 * cfg.height  # at 4 m the flames of 0.3-2.5 m stay smaller
+    flames = [p.height * M.flame_extent(p.sprite)[1] / p.sprite.size[1] for p in far]
+    assert max(flames) < 0.6 * cfg.height  # at 4 m the flames of 0.3-2.5 m stay smaller
     with pytest.raises(ValueError, match="closeup"):
         M.Method2Config(closeup=1.5)
+
+
+def _plain_flame(colour: tuple[int, int, int]) -> F.Sprite:
+    emission = np.zeros((12, 8, 3), np.uint8)
+    emission[:] = colour
+    return F.Sprite(np.zeros((12, 8, 4), np.uint8), emission, np.ones((12, 8), bool))
+
+
+def test_an_unseen_flame_is_erased_and_a_seen_one_boxed():
+    from synth.composite import Placement
+    from synth.effects import Effects
+
+    wall = np.full((40, 40, 3), 235, np.uint8)
+    faint = (Placement(_plain_flame((40, 12, 0)), 4, 4, 8, 12, glow=0.3), "faint")
+    bright = (Placement(_plain_flame((255, 200, 60)), 24, 20, 8, 12, glow=0.3), "bright")
+    effects = Effects(noise_sigma=3.0, noise_seed=1, jpeg_quality=80)
+    image, result, shown, seen = M.visible_composite(wall, [faint, bright], effects, 4)
+    assert [name for _, name in shown] == ["bright"] and len(result.flames) == len(seen) == 1
+    assert seen[0].visible and M.mask_to_xywh(seen[0].part).tolist() == [24, 20, 8, 12]
+    alone, *_ = M.visible_composite(wall, [bright], effects, 4)
+    assert np.array_equal(image, alone)  # the faint flame and its glow are gone, not left unboxed
+    plate, _, none, _ = M.visible_composite(wall, [faint], effects, 4)
+    assert none == [] and np.array_equal(plate, M.apply_effects(wall, effects))
+
+
+def test_audit_reports_the_visibility_of_the_boxes(written):
+    v = audit_dataset(written)["visibility"]
+    assert v["boxes"] == audit_dataset(written)["boxes"] and v["erased"] >= 0
+    assert 10.0 <= v["min_contrast"] <= v["median_contrast"]  # every box is seen: ΔE >= MIN_DELTA_E
