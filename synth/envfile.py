@@ -124,6 +124,15 @@ def environment_file(path: Path) -> EnvironmentFile:
     return spec
 
 
+def is_environment_sidecar(path: Path) -> bool:
+    """Whether ``path`` is a YAML naming a mesh (a ``file:`` key): other YAMLs in a folder (a panorama's or a
+    photo's sidecar) are not environments."""
+    if path.suffix.lower() not in (".yaml", ".yml"):
+        return False
+    data = yaml.safe_load(path.read_text())
+    return isinstance(data, dict) and "file" in data
+
+
 def find_environment_files(paths: Iterable[Path | str]) -> list[EnvironmentFile]:
     """Every environment under ``paths`` (files, or folders searched recursively), sorted by path. In a folder a
     mesh with a sidecar beside it counts once, and a YAML counts only when it has a ``file:`` key."""
@@ -139,11 +148,9 @@ def find_environment_files(paths: Iterable[Path | str]) -> list[EnvironmentFile]
         for mesh in sorted(p for p in path.rglob("*") if p.suffix.lower() in MESH_SUFFIXES):
             spec = environment_file(mesh)
             found.setdefault(spec.file.resolve(), spec)
-        for side in sorted(p for p in path.rglob("*") if p.suffix.lower() in (".yaml", ".yml")):
-            data = yaml.safe_load(side.read_text())
-            if isinstance(data, dict) and "file" in data:
-                spec = read_sidecar(side)
-                found[spec.file.resolve()] = spec
+        for side in sorted(p for p in path.rglob("*") if is_environment_sidecar(p)):
+            spec = read_sidecar(side)
+            found[spec.file.resolve()] = spec
     if not found:
         raise ValueError(f"no mesh files ({', '.join(MESH_SUFFIXES)}) in {', '.join(map(str, paths))}")
     return [found[k] for k in sorted(found)]

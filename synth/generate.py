@@ -14,7 +14,7 @@ from curate.core.writer import WriteResult, check_output_target
 from synth import render
 from synth.envfile import find_environment_files
 from synth.panorama import PanoramaBackgrounds
-from synth.photos import PhotoBackgrounds, held_out
+from synth.photos import PhotoBackgrounds, keep_in_pool
 from synth.places import split_places
 from synth.schema import to_json
 from synth.sprites import SpriteSequence
@@ -49,10 +49,7 @@ def generate(
     if places.panoramas and method != "method2":
         raise ValueError(f"{places.panoramas[0]}: a panorama is a Method 2 place (Method 1 needs 3D meshes)")
     files = find_environment_files(places.meshes) if places.meshes else []
-    holdout = getattr(cfg, "background_holdout", 0.0)
-    photo_files = [p for p in places.photos if not held_out(p, holdout)]
-    if places.photos and not photo_files:
-        raise ValueError(f"every background photo is held out (background_holdout {holdout:g})")
+    photo_files = keep_in_pool(places.photos, getattr(cfg, "background_holdout", 0.0))
     args = {**to_json(cfg), "flame_sequences": [s.name for s in library]}
     staging = Staging(out, args)
     try:

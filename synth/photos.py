@@ -40,14 +40,19 @@ def held_out(photo: Path, share: float) -> bool:
 
 def pool_photos(paths: Iterable[Path | str], holdout: float = 0.0) -> list[Path]:
     """:func:`list_photos` without the :func:`held_out` ones and without 2:1 panoramas (places of their own,
-    :mod:`synth.places`); ValueError when none is left."""
+    :mod:`synth.places`); see :func:`keep_in_pool`."""
     from synth.places import split_places
 
     list_photos(paths)  # a folder without images is an error of its own
-    photos = [p for p in split_places((), paths).photos if not held_out(p, holdout)]
-    if not photos:
-        raise ValueError(f"every photo in {', '.join(map(str, paths))} is held out (holdout {holdout:g})")
-    return photos
+    return keep_in_pool(split_places((), paths).photos, holdout)
+
+
+def keep_in_pool(photos: Sequence[Path], holdout: float) -> list[Path]:
+    """``photos`` without the :func:`held_out` ones; ValueError when there were photos and every one is held out."""
+    kept = [p for p in photos if not held_out(p, holdout)]
+    if photos and not kept:
+        raise ValueError(f"every one of the {len(photos)} background photos is held out (holdout {holdout:g})")
+    return kept
 
 
 def photo_fingerprints(paths: Iterable[Path | str], holdout: float = 0.0) -> list[dict[str, str]]:

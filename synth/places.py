@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from curate.scan import list_image_files
-from synth.envfile import MESH_SUFFIXES
+from synth.envfile import MESH_SUFFIXES, is_environment_sidecar
 from synth.panorama import PANORAMA_SUFFIXES, is_panorama
 
 KINDS = ("photo", "panorama", "render")  # the order of the cumulative draw in :func:`kind_of_view`
@@ -29,7 +29,9 @@ class Places:
 
 
 def _has_meshes(folder: Path) -> bool:
-    return any(p.suffix.lower() in MESH_SUFFIXES or p.suffix.lower() in (".yaml", ".yml") for p in folder.rglob("*"))
+    """Whether ``folder`` holds what :func:`synth.envfile.find_environment_files` finds (a mesh, or a sidecar
+    naming one); a panorama folder's ``panoramas.yaml`` does not count."""
+    return any(p.suffix.lower() in MESH_SUFFIXES or is_environment_sidecar(p) for p in folder.rglob("*"))
 
 
 def split_places(environments: Iterable[Path | str], backgrounds: Iterable[Path | str] = ()) -> Places:

@@ -28,6 +28,10 @@ def test_environments_and_backgrounds_are_sorted_by_kind(tmp_path: Path) -> None
     assert places.meshes == (tmp_path / "rooms",) and places.photos == (photo,)
     assert set(places.panoramas) == {pano.absolute(), street}
     assert split_places([room, pano]).meshes == (room,) and split_places([room, pano]).panoramas == (pano,)
+    (tmp_path / "panos" / "panoramas.yaml").write_text("camera_height: [1.5, 2.0]\n")  # a panorama sidecar
+    assert split_places([tmp_path / "panos"]).meshes == ()  # is not a mesh environment
+    only_panoramas = split_places((), [tmp_path / "panos"])
+    assert only_panoramas.photos == (tmp_path / "panos" / "not_a_panorama.jpg",)
     with pytest.raises(FileNotFoundError, match="no such environment"):
         split_places([tmp_path / "missing"])
 
