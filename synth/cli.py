@@ -43,7 +43,8 @@ def cmd_cutouts(args: argparse.Namespace) -> int:
     try:
         ds = pick_split(result.dataset, args.split, args.src)
         problems: list = []
-        n = write_cutouts(cutouts(ds, args.class_name, args.min_side, args.min_cover, problems), args.out)
+        items = cutouts(ds, args.class_name, args.min_side, args.min_cover, problems, args.mask)
+        n = write_cutouts(items, args.out)
     except (SplitError, ValueError, FileExistsError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
@@ -244,7 +245,8 @@ def _register_cutouts(sub: argparse._SubParsersAction) -> None:
         sub,
         "cutouts",
         help="cut real flames out of a labelled dataset (RGBA sprites for --flames)",
-        description="Cut the fire-coloured pixels of each box of a labelled real dataset into RGBA PNG sprites,\n"
+        description="Cut the flame pixels of each box of a labelled real dataset into RGBA PNG sprites (--mask:\n"
+        "grabcut refines the fire-coloured pixels with the image's own colours; colour keeps them as they are),\n"
         "25 per sequence folder, with cutouts.json naming each one's source image and box. Method 1 and 2 take\n"
         "the folder as a flame library (--flames, or flames.folders in a config): real flames in rendered\n"
         "scenes, which separates the flames' share of the realism gap from the scenes' share.\n\n"
@@ -259,6 +261,7 @@ def _register_cutouts(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--min-cover", type=float, default=0.08, help="skip boxes less fire-coloured than this share (default 0.08)"
     )
+    p.add_argument("--mask", default="grabcut", choices=("colour", "grabcut"), help="flame mask rule (default grabcut)")
     add_reader_args(p, source=False)
     p.set_defaults(func=cmd_cutouts)
 

@@ -1,14 +1,19 @@
-"""Flame cut-outs from a labelled real dataset: the fire-coloured pixels inside each box as an RGBA sprite.
+"""Flame cut-outs from a labelled real dataset: the flame pixels inside each box as an RGBA sprite.
 
 A flame library of real flames (Method 1 and 2 take it with ``--flames`` / ``flames.folders``) measures how
 much of the synthetic-to-real gap is the flames' appearance and how much the scenes around them: the same
 pipeline with real flames in place of simulated ones. It is also copy-paste augmentation (real flames put in
 new surroundings) for a user who has labelled fire images.
 
-The mask is a colour rule, not a segmentation: a pixel is fire when it is warm (R > 0.5, R >= G >= 0.9 B,
+Two mask rules (:data:`MASK_RULES`). ``colour``: a pixel is fire when it is warm (R > 0.5, R >= G >= 0.9 B,
 R - B > 0.25, channels in [0, 1]) or a bright core (R > 0.8, G > 0.65, R >= B); the mask is closed (5x5) and
-its holes filled, then softened into the alpha channel. Warm surfaces lit by the fire pass the rule too; boxes
-whose fire-coloured share is below ``min_cover`` are skipped.
+its holes filled. Warm or bright surfaces lit by the fire pass it too, so a box on a lit wall becomes a filled
+rectangle. ``grabcut`` (the default): that mask only starts ``cv2.grabCut`` (its pixels probable flame, the
+box's other pixels probable background, a ring of :data:`CONTEXT` x the box's longer side around the box
+background), which learns the image's own flame and background colours and cuts along their edges; when it
+keeps under :data:`MIN_KEPT` of the box (or the box has no background pixel to learn from) the colour mask is
+kept. ``bench/bench_cutout_masks.py`` measures both against true masks. Either mask is softened into the alpha
+channel; boxes whose colour-rule share is below ``min_cover`` are skipped.
 """
 
 from __future__ import annotations
@@ -33,6 +38,18 @@ from synth.sprites import write_png
 
 #: Cut-outs per sequence folder (Method 1/2 pick a sequence, then one of its frames).
 PER_SEQUENCE = 25
+
+#: The mask rules of :func:`cut` (module docstring); ``grabcut`` is the default.
+MASK_RULES: tuple[str, ...] = ("colour", "grabcut")
+
+#: GrabCut's background ring around a box: this fraction of the box's longer side (clipped to the image).
+CONTEXT = 0.3
+
+#: GrabCut iterations (colour models re-fitted, graph cut again).
+GRABCUT_ITERATIONS = 5
+
+#: A GrabCut mask keeping less than this share of the box is discarded for the colour mask.
+MIN_KEPT = 0.05
 
 
 @dataclass(frozen=True)
@@ -62,18 +79,42 @@ def filled(mask: NDArray[np.bool_]) -> NDArray[np.bool_]:
     return cv2.drawContours(np.zeros_like(m), contours, -1, 1, thickness=-1).astype(bool)
 
 
+def grabcut_mask(rgb: NDArray[np.uint8], box: tuple[int, int, int, int], start: NDArray[np.bool_]) -> NDArray[np.bool_]:
+    """(h, w) bool flame mask of integer box (x, y, w, h) of the (H, W, 3) RGB image ``rgb``: GrabCut started
+    from ``start`` ((h, w) bool, the colour mask) as the module docstring says; ``start`` itself when GrabCut
+    keeps too little or has no background to learn from. Deterministic: OpenCV draws its k-means start from the
+    calling thread's RNG, which is reset before the call, so a mask never depends on what was cut before it."""
+    x, y, w, h = box
+    height, width = rgb.shape[:2]
+    pad = max(4, int(round(CONTEXT * max(w, h))))
+    x0, y0, x1, y1 = max(x - pad, 0), max(y - pad, 0), min(x + w + pad, width), min(y + h + pad, height)
+    labels = np.full((y1 - y0, x1 - x0), cv2.GC_BGD, np.uint8)
+    labels[y - y0 : y - y0 + h, x - x0 : x - x0 + w] = np.where(start, cv2.GC_PR_FGD, cv2.GC_PR_BGD)
+    if not start.any() or not (labels != cv2.GC_PR_FGD).any():
+        return start
+    bgr = np.ascontiguousarray(rgb[y0:y1, x0:x1, ::-1])
+    cv2.setRNGSeed(0)
+    models = (np.zeros((1, 65), np.float64), np.zeros((1, 65), np.float64))
+    cv2.grabCut(bgr, labels, None, models[0], models[1], GRABCUT_ITERATIONS, cv2.GC_INIT_WITH_MASK)
+    kept = np.isin(labels[y - y0 : y - y0 + h, x - x0 : x - x0 + w], (cv2.GC_FGD, cv2.GC_PR_FGD))
+    return kept if kept.mean() >= MIN_KEPT else start
+
+
 def cut(
-    rgb: NDArray[np.uint8], box: tuple[int, int, int, int], min_cover: float
+    rgb: NDArray[np.uint8], box: tuple[int, int, int, int], min_cover: float, mask: str = "grabcut"
 ) -> tuple[NDArray[np.uint8], float] | None:
-    """The RGBA cut-out (h, w, 4) of integer box (x, y, w, h) of ``rgb`` and its fire share, or None when less
-    than ``min_cover`` of the box is fire-coloured."""
+    """The RGBA cut-out (h, w, 4) of integer box (x, y, w, h) of ``rgb`` and its fire share (colour rule), or
+    None when less than ``min_cover`` of the box is fire-coloured. ``mask``: one of :data:`MASK_RULES`."""
+    if mask not in MASK_RULES:
+        raise ValueError(f"unknown cut-out mask rule {mask!r}; choose one of {', '.join(MASK_RULES)}")
     x, y, w, h = box
     crop = rgb[y : y + h, x : x + w]
     raw = fire_mask(crop)
     cover = float(raw.mean())
     if cover < min_cover:
         return None
-    alpha = cv2.GaussianBlur(filled(raw).astype(np.float32), (0, 0), 1.0)
+    flame = filled(raw) if mask == "colour" else grabcut_mask(rgb, box, filled(raw))
+    alpha = cv2.GaussianBlur(flame.astype(np.float32), (0, 0), 1.0)
     return np.dstack([crop, np.round(np.clip(alpha, 0.0, 1.0) * 255.0).astype(np.uint8)]), cover
 
 
@@ -87,10 +128,16 @@ def pixel_box(bbox: tuple[float, float, float, float], width: int, height: int) 
 
 
 def cutouts(
-    ds: Dataset, category: str, min_side: int = 16, min_cover: float = 0.08, problems: list[Problem] | None = None
+    ds: Dataset,
+    category: str,
+    min_side: int = 16,
+    min_cover: float = 0.08,
+    problems: list[Problem] | None = None,
+    mask: str = "grabcut",
 ) -> Iterator[Cutout]:
     """Cut-outs of every ``category`` box of ``ds`` at least ``min_side`` pixels on both sides, image by image
-    in the dataset's order (each image read once). Unreadable images are appended to ``problems``."""
+    in the dataset's order (each image read once), with the ``mask`` rule (:data:`MASK_RULES`). Unreadable
+    images are appended to ``problems``."""
     category = canonical_class(category)
     check_names("class", [category], ds.category_names, str(ds.root), "classes", "--class")
     cat_ids = {c.id for c in ds.categories if c.name == category}
@@ -110,7 +157,7 @@ def cutouts(
         height, width = rgb.shape[:2]
         for bbox in boxes[img.id]:
             box = pixel_box(bbox, width, height)
-            got = cut(rgb, box, min_cover) if min(box[2], box[3]) >= min_side else None
+            got = cut(rgb, box, min_cover, mask) if min(box[2], box[3]) >= min_side else None
             if got is not None:
                 yield Cutout(got[0], str(img.file_name), box, got[1])
 
