@@ -104,6 +104,14 @@ def source_orders(real: Dataset, synth: Dataset, seed: int) -> tuple[list[ImageR
     return draw_order(real, np.random.default_rng(real_seq)), draw_order(synth, np.random.default_rng(synth_seq))
 
 
+def real_subset(real: Dataset, mix: Mixture, seed: int) -> Dataset:
+    """The real images ``mix`` trains on for ``seed`` (the first ``mix.real`` of the seed's real order, which
+    does not depend on the synthetic pool), as a dataset of ``real``'s images, splits and boxes."""
+    real_seq, _ = np.random.SeedSequence(seed).spawn(2)
+    ids = {img.id for img in draw_order(real, np.random.default_rng(real_seq))[: mix.real]}
+    return real.filter_images(lambda img: img.id in ids)
+
+
 def _tagged(ds: Dataset, role: str, default: str) -> Dataset:
     """Every image's ``source`` starts with ``role:`` (``real:``/``synth:``); others get ``role:default``."""
     images = tuple(

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import functools
 import shutil
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
@@ -26,6 +26,7 @@ from curate.core.load import SplitError
 from curate.core.lock import lock_status, lock_summary
 from curate.mix import mixture_dir, parse_mixture, write_mixture
 from fuzzyfire.aggregate import STANDIN_NOTICE, result_rows, write_report, write_summary
+from fuzzyfire.cutout_pools import cutout_pools, simulated
 from fuzzyfire.datasets import DataRef, Datasets
 from fuzzyfire.executors import Outcome
 from fuzzyfire.experiment_config import METHODS, ExperimentConfig
@@ -55,7 +56,9 @@ def prepare_data(cfg: ExperimentConfig, base: Path, out: Path, methods: Sequence
         rare_ref = _stage("rare (stand-in)", standin_stage, root, "rare-standin", rare.standin)
     pools = {}
     for method in methods:
-        pools[method] = _stage(method, synth_stage, root, method, getattr(cfg.synth, method), base)
+        synth = getattr(cfg.synth, method)
+        synth = simulated(synth) if method == "method2" else synth  # own cut-out pools: fuzzyfire.cutout_pools
+        pools[method] = _stage(method, synth_stage, root, method, synth, base)
     return Prepared(real_ref, rare_ref, pools)
 
 
@@ -103,21 +106,29 @@ def _empty(root: Path, classes: Sequence[str]) -> Dataset:
 
 
 def write_mixtures(
-    cfg: ExperimentConfig, grid: Sequence[GridEntry], data: Prepared, datasets: Datasets, out: Path
+    cfg: ExperimentConfig,
+    grid: Sequence[GridEntry],
+    data: Prepared,
+    datasets: Datasets,
+    out: Path,
+    own: Mapping[tuple[str, str, int], DataRef] | None = None,
 ) -> dict[tuple[str, str | None, int], DataRef]:
-    """Write every (mixture, method, seed) training set of ``grid``; returns their references."""
+    """Write every (mixture, method, seed) training set of ``grid``; returns their references. ``own``: the
+    pool of a (mixture, method, seed) that has its own (:func:`fuzzyfire.cutout_pools.cutout_pools`) instead of
+    the method's shared one."""
     real_train = data.real.with_split(cfg.real.train_split)
     real_pool = datasets.get(real_train)
     val_ref = data.real.with_split(cfg.real.val_split)
     val = functools.cache(lambda: _yolo_validation(datasets, val_ref, cfg.classes))  # only if a mixture is written
     refs = {}
     for method in dict.fromkeys(e.method for e in grid):
-        synth = data.pools[method].with_split(None) if method else None
-        pool = datasets.get(synth) if synth else _empty(real_pool.root, cfg.classes)
-        key = {"real": real_train.key(), "synth": synth.key() if synth else None, "classes": list(cfg.classes)}
-        root = out / "mixtures" / f"{method or 'real'}-{digest(key)}"
+        shared = data.pools[method].with_split(None) if method else None
         for seed in cfg.grid.seeds:
             for name in (e.mixture for e in grid if e.method == method):
+                synth = (own or {}).get((name, method, seed), shared) if method else None
+                pool = datasets.get(synth) if synth else _empty(real_pool.root, cfg.classes)
+                key = {"real": real_train.key(), "synth": synth.key() if synth else None, "classes": list(cfg.classes)}
+                root = out / "mixtures" / f"{method or 'real'}-{digest(key)}"
                 folder = _write_mixture(cfg, real_pool, pool, name, seed, root, val)
                 identity = {"kind": "mixture", "mixture": name, "seed": seed, **key}
                 refs[(name, method, seed)] = DataRef(folder, identity, "coco")
@@ -249,7 +260,8 @@ def run_experiment(cfg: ExperimentConfig, base: Path, out: Path, executor=None) 
             datasets.get(data.real.with_split(split))
         except SplitError as exc:
             raise SplitError(f"{exc}: curate the real set (real.curate) or name its splits (real.*_split)") from None
-    specs = plan_runs(cfg, grid, data, write_mixtures(cfg, grid, data, datasets, out), out)
+    own = cutout_pools(cfg, grid, data.real.with_split(cfg.real.train_split), datasets, base, out)
+    specs = plan_runs(cfg, grid, data, write_mixtures(cfg, grid, data, datasets, out, own), out)
     results = run_grid(specs, datasets, executor) if executor is not None else finished_runs(specs)
     rows = result_rows(specs, results, out, datasets)
     write_summary(cfg, specs, results, rows, out, data.standin)

@@ -162,13 +162,18 @@ def standin_stage(root: Path, name: str, cfg: Any) -> tuple[Stage, DataRef]:
 #: Synth config keys added after pools were made; left out of a pool's identity while at their default.
 LATER_KEYS = ("environments", "flame_opacity", "closeup", "closeup_height", "background_holdout", "panorama_share")
 
+#: Keys of a pool's ``flames`` added after pools were made; left out of its identity while at their default.
+LATER_FLAME_KEYS = ("source", "cutout_share")
 
-def synth_stage(root: Path, method: str, cfg: Any, base: Path) -> tuple[Stage, DataRef]:
+
+def synth_stage(root: Path, method: str, cfg: Any, base: Path, cutouts: Stage | None = None) -> tuple[Stage, DataRef]:
     """A Method 1 or Method 2 pool, its flame library built from ``cfg.flames``; ``cfg.environments`` (and
     Method 2's ``backgrounds``) resolve against ``base``. They enter the pool's identity by content
     (:func:`synth.envfile.fingerprint`, :func:`synth.photos.photo_fingerprints`), not by path, so a study
-    moved to another folder or machine finds its pools (and runs) again."""
-    from synth.library import build_library
+    moved to another folder or machine finds its pools (and runs) again. ``cutouts``: a stage of real flame
+    cut-outs (:mod:`fuzzyfire.cutout_pools`) for a ``flames.source`` cutouts | both pool, named
+    ``<method>-cutouts-<hash>``; its hash enters the pool's identity."""
+    from synth.library import build_library, cutout_library
     from synth.method1 import run_method1
     from synth.method2 import run_method2
 
@@ -179,20 +184,25 @@ def synth_stage(root: Path, method: str, cfg: Any, base: Path) -> tuple[Stage, D
     if getattr(cfg, "backgrounds", ()):
         cfg = replace(cfg, backgrounds=tuple(_absolute(Path(p), base) for p in cfg.backgrounds))
     files = content_identity(cfg)  # replaces the environments and backgrounds of by_path when they are set
+    flames = {"cutouts": cutouts.hash} if cutouts is not None else {}
     stage = cached_stage(
         root,
-        method,
-        {"kind": method, "config": {**by_path, **files}},
-        lambda out: runner(cfg, build_library(cfg.flames), out),
-        legacy={"kind": method, "config": by_path} if files else None,  # pools made by path before this version
+        f"{method}-cutouts" if cutouts is not None else method,
+        {"kind": method, "config": {**by_path, **files, **flames}},
+        lambda out: runner(cfg, build_library(cfg.flames, cutout_library(cutouts.folder) if cutouts else ()), out),
+        legacy={"kind": method, "config": by_path} if files and not flames else None,  # pools made by path before
     )
     return stage, DataRef(stage.folder, {"kind": method, "hash": stage.hash}, "coco")
 
 
 def _later_keys_dropped(config: dict[str, Any], default: dict[str, Any]) -> dict[str, Any]:
-    """``config`` without the :data:`LATER_KEYS` that hold their default (pools made before they existed keep
-    their identity)."""
-    return {k: v for k, v in config.items() if not (k in LATER_KEYS and v == default[k])}
+    """``config`` without the :data:`LATER_KEYS` (and ``flames``' :data:`LATER_FLAME_KEYS`) that hold their
+    default (pools made before they existed keep their identity)."""
+    out = {k: v for k, v in config.items() if not (k in LATER_KEYS and v == default[k])}
+    if isinstance(out.get("flames"), dict):
+        flames, was = out["flames"], default["flames"]
+        out["flames"] = {k: v for k, v in flames.items() if not (k in LATER_FLAME_KEYS and v == was[k])}
+    return out
 
 
 #: The version of how flames are simulated, composited and boxed (synth.flames, synth.composite,

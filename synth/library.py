@@ -1,9 +1,13 @@
 """The flame library a synthetic run draws sprites from: procedural sequences (:mod:`synth.flames`) made on the
-fly, or sequence folders on disk (``fuzzyfire synth flames`` output, or a user's RGBA renders)."""
+fly, or sequence folders on disk (``fuzzyfire synth flames`` output, or a user's RGBA renders), and, with
+``source: cutouts | both``, real flames cut out of labelled images (:mod:`synth.cutouts`), which the caller
+supplies (``fuzzyfire experiment`` cuts them from each mixture's own real training images:
+:mod:`fuzzyfire.cutout_pools`)."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from collections.abc import Sequence
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Literal
 
@@ -11,6 +15,12 @@ import numpy as np
 
 from synth.flames import GENERATORS, generate_sequence, sample_params
 from synth.sprites import SpriteSequence, load_library
+
+#: Where a library's flames come from (``FlameLibraryConfig.source``).
+FLAME_SOURCES: tuple[str, ...] = ("simulated", "cutouts", "both")
+
+#: ``meta["generator"]`` of a cut-out sequence (:func:`cutout_library`).
+CUTOUT_GENERATOR = "cutouts"
 
 
 @dataclass(frozen=True)
@@ -22,12 +32,22 @@ class FlameLibraryConfig:
     rare: float = 0.05  # fraction of chemical-colour (rare) flames
     seed: int = 0
     folders: tuple[Path, ...] = ()  # sequence folders to load instead of simulating
+    source: Literal["simulated", "cutouts", "both"] = "simulated"  # simulated (or folders) | real cut-outs | both
+    cutout_share: float = 0.5  # source both: share of flames drawn from the cut-outs, 0..1
 
     def __post_init__(self) -> None:
         if self.generator not in GENERATORS:
             raise ValueError(f"unknown flame generator {self.generator!r}; choose one of {', '.join(GENERATORS)}")
         if self.sequences < 1 or self.frames < 1 or self.keep_every < 1 or not 0.0 <= self.rare <= 1.0:
             raise ValueError(f"invalid flame library config: {self}")
+        if self.source not in FLAME_SOURCES:
+            raise ValueError(f"unknown flames.source {self.source!r}; choose one of {', '.join(FLAME_SOURCES)}")
+        if not 0.0 <= self.cutout_share <= 1.0:
+            raise ValueError(f"flames.cutout_share must be in 0..1, got {self.cutout_share}")
+        if self.source != "both" and self.cutout_share != FlameLibraryConfig.cutout_share:
+            raise ValueError(f"flames.cutout_share is the cut-outs' share with source both (source is {self.source})")
+        if self.source == "cutouts" and self.folders:
+            raise ValueError("flames.folders are simulated flames' stand-ins: give them with source simulated or both")
 
 
 def procedural_library(
@@ -43,8 +63,40 @@ def procedural_library(
     return seqs
 
 
-def build_library(cfg: FlameLibraryConfig) -> list[SpriteSequence]:
-    """The sequences ``cfg`` describes (loaded from ``folders`` when given, else simulated)."""
+def build_library(cfg: FlameLibraryConfig, cutouts: Sequence[SpriteSequence] = ()) -> list[SpriteSequence]:
+    """The sequences ``cfg`` describes: ``source`` simulated: loaded from ``folders`` when given, else simulated;
+    cutouts: ``cutouts`` (:func:`cutout_library`); both: ``cutouts`` then the simulated ones. ValueError when
+    ``cutouts`` are missing for a source that needs them or given to one that does not."""
+    if cfg.source == "simulated" and cutouts:
+        raise ValueError("cut-outs given to a flame library whose source is simulated")
+    if cfg.source != "simulated" and not cutouts:
+        raise ValueError(
+            f"flames.source {cfg.source}: no cut-outs given (fuzzyfire experiment cuts them from each mixture's real "
+            "images; for one pool, cut them with fuzzyfire synth cutouts and give flames.folders)"
+        )
+    if cfg.source == "cutouts":
+        return list(cutouts)
     if cfg.folders:
-        return load_library(list(cfg.folders))
-    return procedural_library(cfg.sequences, cfg.seed, cfg.frames, cfg.keep_every, cfg.rare, cfg.generator)
+        simulated = load_library(list(cfg.folders))
+    else:
+        simulated = procedural_library(cfg.sequences, cfg.seed, cfg.frames, cfg.keep_every, cfg.rare, cfg.generator)
+    return list(cutouts) + simulated
+
+
+def cutout_library(folder: Path) -> list[SpriteSequence]:
+    """The sequence folders of a ``fuzzyfire synth cutouts`` output ``folder`` (:func:`synth.cutouts.write_cutouts`),
+    each marked as cut-outs (``meta["generator"]`` = :data:`CUTOUT_GENERATOR`)."""
+    return [replace(seq, meta={**seq.meta, "generator": CUTOUT_GENERATOR}) for seq in load_library([folder])]
+
+
+def pick_sequence(
+    library: Sequence[SpriteSequence], cfg: FlameLibraryConfig, rng: np.random.Generator
+) -> SpriteSequence:
+    """One sequence of ``library`` for a flame: uniform (one ``rng.integers`` draw, as every pool made before
+    ``source`` existed); with ``cfg.source`` both, first a cut-out sequence with probability ``cfg.cutout_share``
+    (else a simulated one; ``rng.random``), then uniform within that group (a group left empty takes the other)."""
+    if cfg.source != "both":
+        return library[int(rng.integers(len(library)))]
+    cut = rng.random() < cfg.cutout_share
+    group = [s for s in library if (s.meta.get("generator") == CUTOUT_GENERATOR) == cut] or list(library)
+    return group[int(rng.integers(len(group)))]

@@ -73,6 +73,8 @@ class Method1Config:
     def __post_init__(self) -> None:
         if self.box_mode not in BOX_MODES:
             raise ValueError(f"unknown box mode {self.box_mode!r}; choose one of {', '.join(BOX_MODES)}")
+        if self.flames.source != "simulated":
+            raise ValueError(f"flames.source {self.flames.source}: cut-out flames are for Method 2 pools only")
         if self.n < 1 or self.scenes < 0 or self.images_per_view < 1 or self.width < 16 or self.height < 16:
             raise ValueError(f"invalid Method 1 config: {self}")
         if self.scenes == 0 and not self.environments:

@@ -22,7 +22,7 @@ from synth import render
 from synth.composite import BLEND_MODES, Placement, composite
 from synth.effects import CameraConfig, apply_effects, expose, sample_effects
 from synth.generate import generate
-from synth.library import FlameLibraryConfig
+from synth.library import FlameLibraryConfig, pick_sequence
 from synth.schema import check_range
 from synth.sprites import Sprite, SpriteSequence
 from synth.staging import boxes_from_masks
@@ -106,7 +106,7 @@ def plan_flames(
     fy = render.intrinsics(yfov, cfg.width, cfg.height)[1, 1]
     out = []
     for _ in range(1 if closeup else int(rng.integers(1, cfg.max_flames + 1))):
-        seq = library[int(rng.integers(len(library)))]
+        seq = pick_sequence(library, cfg.flames, rng)
         frame = int(rng.integers(len(seq.sprites)))
         sprite = seq.sprites[frame]
         flame_size = flame_extent(sprite)

@@ -12,7 +12,7 @@ import pytest
 from curate.core.formats.registry import read_dataset
 from curate.core.problems import Problem
 from fuzzyfire.cli import main
-from synth.cutouts import cut, cutouts, filled, fire_mask, pixel_box
+from synth.cutouts import MIN_KEPT, cut, cutouts, filled, fire_mask, grabcut_mask, pixel_box
 from synth.sprites import load_library, write_png
 
 ORANGE, CORE, BLUE, GREY = (240, 120, 20), (255, 240, 200), (30, 60, 200), (128, 128, 128)
@@ -48,6 +48,61 @@ def test_a_cutout_is_the_crop_with_the_flame_as_alpha() -> None:
     assert rgba[30, 30, 3] == 255 and rgba[0, 0, 3] == 0  # disc centre opaque, blue corner transparent
     assert 0.25 < cover < 0.45  # pi 20^2 / 60^2 = 0.35
     assert cut(img, (100, 0, 50, 30), min_cover=0.08) is None  # only sky
+
+
+WALL = (190, 110, 60)  # a warm wall lit by the fire: fire-coloured by the colour rule
+
+
+def _flame_on_a_lit_wall() -> tuple[np.ndarray, np.ndarray]:
+    """(h, w, 3) RGB: a flame disc (r 22 at (80, 60)) on a lit wall wider than its box; and the disc's true mask."""
+    img = np.zeros((120, 160, 3), np.uint8)
+    img[:] = (60, 70, 90)
+    img[10:110, 20:140] = WALL
+    cv2.circle(img, (80, 60), 22, ORANGE, -1)
+    cv2.circle(img, (80, 60), 9, CORE, -1)
+    truth = np.zeros((120, 160), np.uint8)
+    cv2.circle(truth, (80, 60), 22, 1, -1)
+    return img, truth.astype(bool)
+
+
+def _iou(a: np.ndarray, b: np.ndarray) -> float:
+    return float((a & b).sum() / (a | b).sum())
+
+
+def test_grabcut_cuts_the_flame_out_of_a_fire_lit_wall_the_colour_rule_takes_whole() -> None:
+    img, truth = _flame_on_a_lit_wall()
+    box = (50, 30, 60, 60)
+    inside = truth[30:90, 50:110]
+    colour, cover = cut(img, box, 0.08, mask="colour")
+    grab, same_cover = cut(img, box, 0.08, mask="grabcut")
+    assert cover == same_cover == 1.0  # the whole box passes the colour rule: the skip rule is unchanged
+    assert (colour[..., 3] >= 128).all()  # a filled rectangle
+    assert _iou(grab[..., 3] >= 128, inside) > 0.95 and grab[0, 0, 3] == 0 and grab[30, 30, 3] == 255
+    assert np.array_equal(grab[..., :3], colour[..., :3])  # the same pixels, another alpha
+    assert cut(_image_with_disc(), (30, 20, 60, 60), 0.08)[0][0, 0, 3] == 0  # sky corner stays out (default rule)
+    with pytest.raises(ValueError, match="unknown cut-out mask rule 'snake'; choose one of colour, grabcut"):
+        cut(img, box, 0.08, mask="snake")
+
+
+def test_grabcut_masks_are_deterministic_and_independent_of_earlier_cuts() -> None:
+    img, _ = _flame_on_a_lit_wall()
+    other = _image_with_disc(centre=(100, 70), r=25)
+    alone = cut(img, (50, 30, 60, 60), 0.08)[0]
+    cut(other, (75, 45, 50, 50), 0.08)  # k-means draws from OpenCV's RNG: reset before each cut
+    cv2.setRNGSeed(12345)
+    assert cut(img, (50, 30, 60, 60), 0.08)[0].tobytes() == alone.tobytes()
+
+
+def test_grabcut_keeps_the_colour_mask_without_background_to_learn_from_or_when_it_keeps_too_little() -> None:
+    orange = np.zeros((40, 40, 3), np.uint8)
+    orange[:] = ORANGE
+    start = filled(fire_mask(orange))
+    assert grabcut_mask(orange, (0, 0, 40, 40), start) is start  # the box is the image and all flame
+    img, _ = _flame_on_a_lit_wall()
+    speck = np.zeros((60, 60), bool)
+    speck[0, 0] = True  # a start GrabCut reduces to under MIN_KEPT of the box
+    got = grabcut_mask(img, (50, 30, 60, 60), speck)
+    assert got is speck or got.mean() >= MIN_KEPT
 
 
 def test_pixel_boxes_cover_the_float_box_and_stay_in_the_image() -> None:

@@ -45,3 +45,53 @@ def test_procedural_library_is_seeded_and_folders_load(tmp_path):
     save_sequence(tmp_path / "lib" / "one", a[0])
     loaded = L.build_library(L.FlameLibraryConfig(folders=(tmp_path / "lib",)))
     assert [s.name for s in loaded] == ["fluid-7-000"] and len(loaded[0].sprites) == len(a[0].sprites)
+
+
+def _tagged(name: str, generator: str) -> L.SpriteSequence:
+    seq = L.procedural_library(1, 3, 24, 12, 0.0)[0]
+    return L.SpriteSequence(name, seq.sprites, {"generator": generator})
+
+
+def test_flame_sources_are_checked_in_one_line():
+    with pytest.raises(ValueError, match="unknown flames.source 'real'"):
+        L.FlameLibraryConfig(source="real")
+    with pytest.raises(ValueError, match="cutout_share must be in 0..1"):
+        L.FlameLibraryConfig(source="both", cutout_share=1.5)
+    with pytest.raises(ValueError, match="cutout_share is the cut-outs' share with source both"):
+        L.FlameLibraryConfig(cutout_share=0.3)
+    with pytest.raises(ValueError, match="folders are simulated flames' stand-ins"):
+        L.FlameLibraryConfig(source="cutouts", folders=(Path("x"),))
+    with pytest.raises(ValueError, match="cut-out flames are for Method 2 pools only"):
+        Method1Config(flames=L.FlameLibraryConfig(source="cutouts"))
+    with pytest.raises(ConfigError, match="flames.source"):
+        load_config(CONFIGS / "synth-method2.yaml", Method2Config, ["flames.source=5"])
+
+
+def test_a_library_takes_the_cutouts_its_source_names():
+    cut = [_tagged("real-000", L.CUTOUT_GENERATOR)]
+    small = {"sequences": 1, "frames": 24, "keep_every": 12}
+    assert [s.name for s in L.build_library(L.FlameLibraryConfig(source="cutouts", **small), cut)] == ["real-000"]
+    both = L.build_library(L.FlameLibraryConfig(source="both", **small), cut)
+    assert [s.name for s in both] == ["real-000", "fluid-0-000"]
+    with pytest.raises(ValueError, match="flames.source cutouts: no cut-outs given"):
+        L.build_library(L.FlameLibraryConfig(source="cutouts"))
+    with pytest.raises(ValueError, match="source is simulated"):
+        L.build_library(L.FlameLibraryConfig(**small), cut)
+
+
+def test_picks_keep_old_draws_and_share_flames_by_cutout_share():
+    library = [_tagged(f"real-{k}", L.CUTOUT_GENERATOR) for k in range(3)] + [_tagged("sim", "fluid")]
+    old = np.random.default_rng(5)
+    expected = [library[int(old.integers(len(library)))].name for _ in range(50)]
+    rng = np.random.default_rng(5)
+    assert [L.pick_sequence(library, L.FlameLibraryConfig(), rng).name for _ in range(50)] == expected
+    for share in (0.2, 0.8):
+        cfg, rng = L.FlameLibraryConfig(source="both", cutout_share=share), np.random.default_rng(0)
+        picks = [L.pick_sequence(library, cfg, rng).meta["generator"] for _ in range(4000)]
+        assert abs(picks.count(L.CUTOUT_GENERATOR) / 4000 - share) < 0.03  # not the 3/4 of a uniform pick
+    only = L.FlameLibraryConfig(source="both", cutout_share=1.0)
+    assert {L.pick_sequence(library, only, np.random.default_rng(k)).name for k in range(20)} <= {
+        "real-0",
+        "real-1",
+        "real-2",
+    }

@@ -1,0 +1,128 @@
+"""Method 2 pools whose flames are each mixture's own real flames (``synth.method2.flames.source``: cutouts | both).
+
+For a mixture R<m>_S<n> with m > 0 and a seed, the real training subset is the m real images the mixture trains
+on (:func:`curate.mix.real_subset`, drawn from ``real.train_split`` only). Its fire boxes are cut out
+(:mod:`synth.cutouts`, the ``grabcut`` mask rule) into a stage ``cutouts-<hash>``, and a Method 2 pool
+``method2-cutouts-<hash>`` is composited with those flames (alone, or beside the simulated ones with ``both``);
+the mixture's n synthetic images are drawn from that pool. Both stages live in ``OUT/data`` and are identified
+by the subset's content (:func:`curate.core.fingerprint.fingerprint`: image bytes, split and boxes), the mask
+rule's parameters and the pool's config, so mixtures and seeds that draw the same subset share them, and a
+change of the mask rule makes new cut-outs and pools. Validation and test images never reach a pool.
+
+R0_S<n> mixtures have no real images of their own: they keep the experiment's simulated pool (their runs are the
+runs of the config without ``flames.source``) and the experiment prints a note saying so. Cutting their flames
+from the whole train split instead would make a synthetic-only run train on real pixels; refusing would make
+the study's synthetic-only rows (Table 1, Table 2's R0 mixtures) impossible in the same config.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import replace
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from curate.mix import parse_mixture, real_subset
+from fuzzyfire.datasets import DataRef, Datasets
+from fuzzyfire.stages import Stage, cached_stage, synth_stage
+
+if TYPE_CHECKING:
+    from curate.core.dataset import Dataset
+    from fuzzyfire.experiment import GridEntry
+    from fuzzyfire.experiment_config import ExperimentConfig
+    from synth.method2 import Method2Config
+
+#: The class whose boxes are cut out.
+FIRE = "fire"
+
+#: Cut-out settings: boxes at least this many pixels on both sides and this share fire-coloured (the command's
+#: defaults).
+MIN_SIDE, MIN_COVER = 16, 0.08
+
+#: Key of an own pool in :func:`cutout_pools`: (mixture, method, seed).
+PoolKey = tuple[str, str, int]
+
+
+def simulated(cfg: Method2Config) -> Method2Config:
+    """``cfg`` with simulated flames: the experiment's shared pool (the same identity as a config without
+    ``flames.source``), which R0 mixtures and the report's samples and gap use."""
+    flames = replace(cfg.flames, source="simulated", cutout_share=type(cfg.flames)().cutout_share)
+    return replace(cfg, flames=flames)
+
+
+def mask_identity() -> dict[str, Any]:
+    """The cut-out mask rule and its parameters (in every cut-out stage's identity)."""
+    from synth import cutouts
+
+    return {
+        "rule": "grabcut",
+        "context": cutouts.CONTEXT,
+        "iterations": cutouts.GRABCUT_ITERATIONS,
+        "min_kept": cutouts.MIN_KEPT,
+    }
+
+
+def cutout_stage(root: Path, subset: Dataset) -> Stage:
+    """The cut-outs of ``subset``'s fire boxes (``fuzzyfire synth cutouts`` layout, ``cutouts.json`` naming each
+    one's image) as a cached stage; ValueError when no box gives one."""
+    import json
+
+    from curate.core.fingerprint import fingerprint
+    from synth.cutouts import cutouts, write_cutouts
+
+    identity = {
+        "kind": "cutouts",
+        "real": fingerprint(subset).to_dict(),
+        "class": FIRE,
+        "min_side": MIN_SIDE,
+        "min_cover": MIN_COVER,
+        "mask": mask_identity(),
+    }
+    stage = cached_stage(
+        root, "cutouts", identity, lambda out: write_cutouts(cutouts(subset, FIRE, MIN_SIDE, MIN_COVER), out)
+    )
+    if not json.loads((stage.folder / "cutouts.json").read_text(encoding="utf-8")):
+        raise ValueError(
+            f"flames.source: the {len(subset.images)} real images of a mixture give no cut-out (fire boxes of at "
+            f"least {MIN_SIDE} px and {MIN_COVER:.0%} fire colour): use flames.source simulated ({stage.folder})"
+        )
+    return stage
+
+
+def own_pool(root: Path, cfg: Method2Config, subset: Dataset, base: Path) -> tuple[Stage, Stage, DataRef]:
+    """(cut-out stage, pool stage, pool reference) of the Method 2 pool whose flames are ``subset``'s."""
+    cut = cutout_stage(root, subset)
+    stage, ref = synth_stage(root, "method2", cfg, base, cutouts=cut)
+    return cut, stage, ref
+
+
+def _say(message: str) -> None:
+    print(message, flush=True)
+
+
+def cutout_pools(
+    cfg: ExperimentConfig, grid: Sequence[GridEntry], real_train: DataRef, datasets: Datasets, base: Path, out: Path
+) -> dict[PoolKey, DataRef]:
+    """The own Method 2 pool of each (mixture, ``method2``, seed) of ``grid`` with real images, when
+    ``synth.method2.flames.source`` is cutouts or both (else none: every mixture keeps the shared pool);
+    ``real_train``: the real training split, the only images cut. Prints one line per pool and a note naming
+    the R0 mixtures, which keep simulated flames (module docstring)."""
+    m2 = cfg.synth.method2
+    if m2 is None or m2.flames.source == "simulated":
+        return {}
+    if FIRE not in cfg.classes:
+        raise ValueError(f"flames.source {m2.flames.source}: cuts '{FIRE}' boxes, but classes are {list(cfg.classes)}")
+    entries = [e.mixture for e in grid if e.method == "method2"]
+    kept = [name for name in entries if parse_mixture(name).real == 0]
+    if kept:
+        _say(f"data   method2 flames: {', '.join(kept)} have no real images to cut flames from: simulated flames")
+    real = datasets.get(real_train)
+    pools: dict[PoolKey, DataRef] = {}
+    for seed in cfg.grid.seeds:
+        for name in (n for n in entries if n not in kept):
+            subset = real_subset(real, parse_mixture(name), seed)
+            cut, stage, ref = own_pool(out / "data", m2, subset, base)
+            cached = "  (cached)" if stage.cached else ""
+            _say(f"data   method2 {name} seed {seed}: flames of {cut.folder.name}, pool {stage.folder}{cached}")
+            pools[(name, "method2", seed)] = ref.with_split(None)
+    return pools
