@@ -18,6 +18,7 @@ from curate.mix import (
     parse_mixture,
     parse_mixtures,
     parse_seeds,
+    real_subset,
     write_mixture,
 )
 
@@ -65,6 +66,16 @@ def test_nested_draws_and_constant_totals(pools: tuple[Dataset, Dataset], tmp_pa
         assert _files(built[large], "synth:") <= _files(built[small], "synth:")
     other_seed = build_mixture(real, synth, Mixture(20, 20), 4, tmp_path)
     assert _files(other_seed, "real:") != _files(built[Mixture(20, 20)], "real:")
+
+
+def test_the_real_subset_is_what_the_mixture_trains_on(pools: tuple[Dataset, Dataset], tmp_path: Path) -> None:
+    real, synth = pools
+    for mix, seed in ((Mixture(15, 25), 3), (Mixture(15, 0), 3), (Mixture(30, 10), 4)):
+        subset = real_subset(real, mix, seed)
+        files = {real.image_path(img).resolve().as_posix() for img in subset.images}
+        assert files == _files(build_mixture(real, synth, mix, seed, tmp_path), "real:")  # whatever the synthetic side
+        assert len(subset.annotations) == sum(a.image_id in {i.id for i in subset.images} for a in real.annotations)
+    assert real_subset(real, Mixture(0, 40), 3).images == ()
 
 
 def test_draw_ignores_reader_order(pools: tuple[Dataset, Dataset], tmp_path: Path) -> None:

@@ -1,0 +1,179 @@
+"""Own Method 2 pools per (mixture's real training subset, seed): flames only from that subset (no leakage), one
+pool per subset content, R0 mixtures on the shared simulated pool, byte-identical rebuilds, and the identities of
+configs without ``flames.source`` unchanged."""
+
+from __future__ import annotations
+
+import contextlib
+import hashlib
+import io
+import json
+from pathlib import Path
+from typing import Any
+
+import pytest
+from factories import tiny_pool
+from factories_experiment import toy_dict
+
+import fuzzyfire.stages as stages
+from curate.core.config import build_config, load_config
+from curate.core.formats.coco import read_coco
+from fuzzyfire.cutout_pools import cutout_pools, cutout_stage, simulated
+from fuzzyfire.datasets import Datasets
+from fuzzyfire.experiment import grid_entries, needed_methods, prepare_data, write_mixtures
+from fuzzyfire.experiment_config import ExperimentConfig
+
+CONFIGS = Path(__file__).resolve().parents[1] / "configs"
+SEEDS = [0, 1]
+
+
+def _config(source: str | None, **grid: Any) -> ExperimentConfig:
+    """The toy config with 160x120 real images (flames large enough to cut), no Method 1, Method 2 flames from
+    ``source`` (None: the key left out)."""
+    d = toy_dict(**{"mixtures": ["R6_S6", "R6_S3", "R0_S6"], "table1": [], "seeds": SEEDS, **grid})
+    d["real"]["standin"].update(width=160, height=120, flame_height=[0.3, 0.6], negatives=0.0)
+    d["synth"]["method1"] = None
+    if source is not None:
+        d["synth"]["method2"]["flames"] = {**d["synth"]["method2"]["flames"], "source": source}
+    d["report"] = {"bootstrap": 0, "samples": False, "gap_draws": 0}
+    return build_config(d, ExperimentConfig)
+
+
+def _prepare(cfg: ExperimentConfig, out: Path) -> tuple[Any, dict, dict, str]:
+    """(data, own pools, mixture refs, what was printed) of ``cfg`` in ``out``, nothing trained."""
+    printed = io.StringIO()
+    with contextlib.redirect_stdout(printed):
+        grid = grid_entries(cfg)
+        data = prepare_data(cfg, out, out, needed_methods(grid))
+        datasets = Datasets(cfg.classes)
+        own = cutout_pools(cfg, grid, data.real.with_split(cfg.real.train_split), datasets, out, out)
+        refs = write_mixtures(cfg, grid, data, datasets, out, own)
+    return data, own, refs, printed.getvalue()
+
+
+@pytest.fixture(scope="module")
+def built(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Any, dict, dict, str]:
+    out = tmp_path_factory.mktemp("cutout-pools")
+    return (out, *_prepare(_config("cutouts"), out))
+
+
+def _cut_stage(out: Path, pool: Path) -> Path:
+    identity = json.loads((pool / "stage.json").read_text())["identity"]
+    return out / "data" / f"cutouts-{identity['config']['cutouts']}"
+
+
+def _files(root: Path, names: list[str]) -> set[str]:
+    return {(root / n).resolve().as_posix() for n in names}
+
+
+def test_every_cutout_comes_from_its_mixtures_own_real_training_images(built) -> None:
+    out, data, own, refs, _ = built
+    real = read_coco(data.real.path).dataset
+    held_out = {real.image_path(i).resolve().as_posix() for i in real.images if i.split != "train"}
+    assert sorted(own) == sorted((m, "method2", s) for s in SEEDS for m in ("R6_S6", "R6_S3"))
+    for (name, method, seed), pool in own.items():
+        record = json.loads((refs[(name, method, seed)].path / "mixture.json").read_text())
+        trained = {e["from"] for e in record["images"] if e["source"].startswith("real:")}
+        synthetic = {e["from"] for e in record["images"] if e["source"].startswith("synth:")}
+        index = json.loads((_cut_stage(out, pool.path) / "cutouts.json").read_text())
+        cut_from = _files(data.real.path, [e["file"] for e in index])
+        assert index and cut_from <= trained and not cut_from & held_out  # no validation or test flame
+        assert synthetic <= _files(pool.path, [i.file_name for i in read_coco(pool.path).dataset.images])
+        assert refs[(name, method, seed)].identity["synth"] == pool.key()
+
+
+def test_one_pool_per_subset_content_and_seed(built) -> None:
+    out, _, own, _, _ = built
+    for seed in SEEDS:  # R6_S6 and R6_S3 train on the same 6 real images: one cut-out set, one pool
+        assert own[("R6_S6", "method2", seed)] == own[("R6_S3", "method2", seed)]
+    assert own[("R6_S6", "method2", 0)] != own[("R6_S6", "method2", 1)]  # another draw, other flames
+    pools = sorted(p.name for p in (out / "data").iterdir() if p.name.startswith("method2-cutouts-"))
+    assert len(pools) == 2 and len(list((out / "data").glob("cutouts-*"))) == 2
+    identity = json.loads((own[("R6_S6", "method2", 0)].path / "stage.json").read_text())["identity"]["config"]
+    assert identity["flames"]["source"] == "cutouts"  # a non-default key is in the identity
+
+
+def test_r0_mixtures_keep_the_shared_simulated_pool_and_say_so(built) -> None:
+    _, data, _, refs, printed = built
+    for seed in SEEDS:
+        assert refs[("R0_S6", "method2", seed)].identity["synth"] == data.pools["method2"].with_split(None).key()
+    assert "R0_S6 have no real images to cut flames from: simulated flames" in printed
+
+
+def test_configs_without_the_key_keep_their_pools_and_mixtures(built) -> None:
+    out, data, _, refs, _ = built
+    for source in (None, "simulated"):
+        plain_data, plain_own, plain_refs, printed = _prepare(_config(source), out)
+        assert plain_own == {} and plain_data.pools == data.pools  # the shared pool: the same stage, reused
+        assert f"{data.pools['method2'].path}  (cached)" in printed
+        for seed in SEEDS:
+            key = ("R0_S6", "method2", seed)
+            assert plain_refs[key].identity == refs[key].identity and plain_refs[key].path == refs[key].path
+
+
+def _identity_digest(cfg: Any, method: str, base: Path, monkeypatch: pytest.MonkeyPatch) -> str:
+    """The digest of the identity :func:`fuzzyfire.stages.synth_stage` gives a pool (fuzzyfire's version left out),
+    captured before anything is built."""
+
+    class Captured(Exception):
+        pass
+
+    def capture(root, name, identity, build, legacy=None, verify=False):
+        raise Captured(stages.digest(identity))
+
+    monkeypatch.setattr(stages, "cached_stage", capture)
+    with pytest.raises(Captured) as got:
+        stages.synth_stage(Path("unused"), method, cfg, base)
+    return str(got.value)
+
+
+@pytest.mark.parametrize(
+    ("config", "pinned"),
+    [("demo.yaml", {"method1": "1533ad5335d6", "method2": "3b80515735cd"}),
+     ("paper.yaml", {"method1": "929127593223", "method2": "10807076ecec"})],
+)  # fmt: skip
+def test_shipped_configs_keep_the_pool_identities_they_had_before_flames_source(
+    config: str, pinned: dict, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The digests are those the version before ``flames.source`` gave these configs' pools."""
+    cfg = load_config(CONFIGS / config, ExperimentConfig)
+    got = {m: _identity_digest(getattr(cfg.synth, m), m, CONFIGS, monkeypatch) for m in pinned}
+    assert got == pinned
+    cut = load_config(CONFIGS / config, ExperimentConfig, ["synth.method2.flames.source=both"])
+    shared = simulated(cut.synth.method2)  # the experiment's shared pool of a cut-out config is the same pool
+    assert _identity_digest(shared, "method2", CONFIGS, monkeypatch) == pinned["method2"]
+    assert _identity_digest(cut.synth.method2, "method2", CONFIGS, monkeypatch) != pinned["method2"]
+
+
+def _hashes(folder: Path) -> dict[str, str]:
+    return {
+        p.relative_to(folder).as_posix(): hashlib.sha256(p.read_bytes()).hexdigest()
+        for p in sorted(folder.rglob("*"))
+        if p.is_file() and p.suffix in (".png", ".jpg")
+    }
+
+
+def test_a_rebuild_elsewhere_gives_the_same_stages_byte_for_byte(built, tmp_path: Path) -> None:
+    out, _, own, _, _ = built
+    _, again, _, _ = _prepare(_config("cutouts", seeds=[0]), tmp_path)
+    first, second = own[("R6_S6", "method2", 0)], again[("R6_S6", "method2", 0)]
+    assert first.identity == second.identity
+    assert _hashes(first.path) == _hashes(second.path) and _hashes(first.path)
+    cut_a, cut_b = _cut_stage(out, first.path), _cut_stage(tmp_path, second.path)
+    assert (
+        _hashes(cut_a) == _hashes(cut_b)
+        and (cut_a / "cutouts.json").read_bytes() == (cut_b / "cutouts.json").read_bytes()
+    )
+
+
+def test_a_subset_without_cutouts_or_a_grid_without_fire_is_refused_in_one_line(tmp_path: Path) -> None:
+    with pytest.raises(
+        ValueError, match=r"the 4 real images of a mixture give no cut-out \(fire boxes of at least 16 px"
+    ):
+        cutout_stage(tmp_path / "data", tiny_pool(tmp_path / "tiny", 4, "real:tiny"))  # 16x12 images, 4-8 px boxes
+    d = toy_dict(mixtures=["R6_S6"], table1=[], seeds=[0])
+    d["classes"], d["synth"]["method1"] = ["smoke"], None
+    d["synth"]["method2"]["flames"] = {**d["synth"]["method2"]["flames"], "source": "cutouts"}
+    cfg = build_config(d, ExperimentConfig)
+    with pytest.raises(ValueError, match=r"flames.source cutouts: cuts 'fire' boxes, but classes are \['smoke'\]"):
+        cutout_pools(cfg, grid_entries(cfg), None, Datasets(cfg.classes), tmp_path, tmp_path)
