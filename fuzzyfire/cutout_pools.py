@@ -28,7 +28,6 @@ from fuzzyfire.stages import Stage, cached_stage, synth_stage
 
 if TYPE_CHECKING:
     from curate.core.dataset import Dataset
-    from fuzzyfire.experiment import GridEntry
     from fuzzyfire.experiment_config import ExperimentConfig
     from synth.method2 import Method2Config
 
@@ -101,9 +100,9 @@ def _say(message: str) -> None:
 
 
 def cutout_pools(
-    cfg: ExperimentConfig, grid: Sequence[GridEntry], real_train: DataRef, datasets: Datasets, base: Path, out: Path
+    cfg: ExperimentConfig, mixtures: Sequence[str], real_train: DataRef, datasets: Datasets, base: Path, out: Path
 ) -> dict[PoolKey, DataRef]:
-    """The own Method 2 pool of each (mixture, ``method2``, seed) of ``grid`` with real images, when
+    """The own Method 2 pool of each (mixture, ``method2``, seed) of the Method 2 ``mixtures`` with real images, when
     ``synth.method2.flames.source`` is cutouts or both (else none: every mixture keeps the shared pool);
     ``real_train``: the real training split, the only images cut. Prints one line per pool and a note naming
     the R0 mixtures, which keep simulated flames (module docstring)."""
@@ -112,7 +111,7 @@ def cutout_pools(
         return {}
     if FIRE not in cfg.classes:
         raise ValueError(f"flames.source {m2.flames.source}: cuts '{FIRE}' boxes, but classes are {list(cfg.classes)}")
-    entries = [e.mixture for e in grid if e.method == "method2"]
+    entries = list(dict.fromkeys(mixtures))
     kept = [name for name in entries if parse_mixture(name).real == 0]
     if kept:
         _say(f"data   method2 flames: {', '.join(kept)} have no real images to cut flames from: simulated flames")

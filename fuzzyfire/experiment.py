@@ -260,7 +260,8 @@ def run_experiment(cfg: ExperimentConfig, base: Path, out: Path, executor=None) 
             datasets.get(data.real.with_split(split))
         except SplitError as exc:
             raise SplitError(f"{exc}: curate the real set (real.curate) or name its splits (real.*_split)") from None
-    own = cutout_pools(cfg, grid, data.real.with_split(cfg.real.train_split), datasets, base, out)
+    drawn = [e.mixture for e in grid if e.method == "method2"]
+    own = cutout_pools(cfg, drawn, data.real.with_split(cfg.real.train_split), datasets, base, out)
     specs = plan_runs(cfg, grid, data, write_mixtures(cfg, grid, data, datasets, out, own), out)
     results = run_grid(specs, datasets, executor) if executor is not None else finished_runs(specs)
     rows = result_rows(specs, results, out, datasets)

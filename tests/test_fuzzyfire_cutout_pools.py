@@ -46,7 +46,8 @@ def _prepare(cfg: ExperimentConfig, out: Path) -> tuple[Any, dict, dict, str]:
         grid = grid_entries(cfg)
         data = prepare_data(cfg, out, out, needed_methods(grid))
         datasets = Datasets(cfg.classes)
-        own = cutout_pools(cfg, grid, data.real.with_split(cfg.real.train_split), datasets, out, out)
+        drawn = [e.mixture for e in grid if e.method == "method2"]
+        own = cutout_pools(cfg, drawn, data.real.with_split(cfg.real.train_split), datasets, out, out)
         refs = write_mixtures(cfg, grid, data, datasets, out, own)
     return data, own, refs, printed.getvalue()
 
@@ -176,4 +177,4 @@ def test_a_subset_without_cutouts_or_a_grid_without_fire_is_refused_in_one_line(
     d["synth"]["method2"]["flames"] = {**d["synth"]["method2"]["flames"], "source": "cutouts"}
     cfg = build_config(d, ExperimentConfig)
     with pytest.raises(ValueError, match=r"flames.source cutouts: cuts 'fire' boxes, but classes are \['smoke'\]"):
-        cutout_pools(cfg, grid_entries(cfg), None, Datasets(cfg.classes), tmp_path, tmp_path)
+        cutout_pools(cfg, ["R6_S6"], None, Datasets(cfg.classes), tmp_path, tmp_path)
