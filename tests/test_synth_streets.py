@@ -9,8 +9,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-
 from factories import write_tiny_kits
+
 from synth import flames as F
 from synth import render, streets
 from synth.audit import audit_dataset
@@ -116,7 +116,9 @@ def test_method2_on_kit_streets_is_exact_deterministic_and_credits_the_kits(kit_
     assert sum(Path(s["path"]).name == "LICENSE.txt" for s in manifest["sources"]) == 2
     run_method2(cfg, library, tmp_path / "b")
     images = sorted((tmp_path / "a" / "images").rglob("*.jpg"))
-    assert images and all(p.read_bytes() == (tmp_path / "b" / p.relative_to(tmp_path / "a")).read_bytes() for p in images)
+    assert images and all(
+        p.read_bytes() == (tmp_path / "b" / p.relative_to(tmp_path / "a")).read_bytes() for p in images
+    )
 
 
 def test_method1_planes_stand_in_the_fire_zones(kit_root, library, tmp_path) -> None:
