@@ -52,7 +52,7 @@ def generate(
     if places.panoramas and method != "method2":
         raise ValueError(f"{places.panoramas[0]}: a panorama is a Method 2 place (Method 1 needs 3D meshes)")
     files = find_environment_files(places.meshes) if places.meshes else []
-    kit_folders = find_kits(cfg.kits) if cfg.streets else []
+    kit_folders = find_kits(cfg.kits) if getattr(cfg, "streets", 0) else []  # Method 1 and 2 configs have them
     photo_files = keep_in_pool(places.photos, getattr(cfg, "background_holdout", 0.0))
     args = {**to_json(cfg), "flame_sequences": [s.name for s in library]}
     if kit_folders:
@@ -76,7 +76,7 @@ def generate(
                 panoramas,
                 getattr(cfg, "panorama_share", 0.5),
                 kits=[load_kit(folder) for folder in kit_folders],
-                streets_count=cfg.streets,
+                streets_count=getattr(cfg, "streets", 0),
             )
             todo = [i for i in range(cfg.n) if not staging.done(i)]
             for i in progress(todo, total=len(todo), desc=f"{method} images"):
