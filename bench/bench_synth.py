@@ -12,7 +12,12 @@
 With ``--environments PATH`` (e.g. ``configs/scenes``) the Method runs use those 3D files instead of the 48
 procedural environments (the issue's file-scene targets: Method 2 <= 3 min, Method 1 <= 6 min, RSS flat).
 
-Usage: ``python bench/bench_synth.py [--n 1000] [--only flames,composite,method2,method1] [--environments P]``.
+``--only streets``: Method 2 on ``--streets`` (8) procedural kit streets from ``--kits`` (default
+``../shared/data/kits`` beside the repository), 640x480 (issue 22's target: 1,000 images in <= 3 min, RSS flat;
+each street is built for its block of views and released after it, so RSS should not grow across streets).
+
+Usage: ``python bench/bench_synth.py [--n 1000] [--only flames,composite,method2,method1,streets]
+[--environments P] [--kits DIR] [--streets 8]``.
 Figures depend on the machine and on other load: take them on an otherwise idle machine.
 """
 
@@ -106,6 +111,9 @@ def main() -> None:
     ap.add_argument("--n", type=int, default=1000, help="images per Method run")
     ap.add_argument("--only", default="flames,composite,method2,method1")
     ap.add_argument("--environments", type=Path, help="3D files / folders / sidecars instead of procedural scenes")
+    kits = Path(__file__).resolve().parents[2] / "shared" / "data" / "kits"
+    ap.add_argument("--kits", type=Path, default=kits, help=f"building kits for --only streets (default {kits})")
+    ap.add_argument("--streets", type=int, default=8, help="kit streets for --only streets (default 8)")
     args = ap.parse_args()
     scenes = {"scenes": 0, "environments": (args.environments,)} if args.environments else {"scenes": 48}
     tag = "_files" if args.environments else ""
@@ -123,6 +131,10 @@ def main() -> None:
     if "method1" in only:
         cfg1 = Method1Config(n=args.n, width=640, height=480, **scenes)
         bench_run(f"method1{tag}", lambda out: run_method1(cfg1, library, out), args.n)
+    if "streets" in only:
+        streets = {"scenes": 0, "streets": args.streets, "kits": (args.kits,)}
+        cfg3 = Method2Config(n=args.n, width=640, height=480, **streets)
+        bench_run("method2_streets", lambda out: run_method2(cfg3, library, out), args.n)
 
 
 if __name__ == "__main__":

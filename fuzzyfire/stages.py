@@ -160,15 +160,18 @@ def standin_stage(root: Path, name: str, cfg: Any) -> tuple[Stage, DataRef]:
 
 
 #: Synth config keys added after pools were made; left out of a pool's identity while at their default.
-LATER_KEYS = ("environments", "flame_opacity", "closeup", "closeup_height", "background_holdout", "panorama_share")
+LATER_KEYS = (
+    "environments", "flame_opacity", "closeup", "closeup_height", "background_holdout", "panorama_share", "streets",
+    "kits",
+)  # fmt: skip
 
 #: Keys of a pool's ``flames`` added after pools were made; left out of its identity while at their default.
 LATER_FLAME_KEYS = ("source", "cutout_share")
 
 
 def synth_stage(root: Path, method: str, cfg: Any, base: Path, cutouts: Stage | None = None) -> tuple[Stage, DataRef]:
-    """A Method 1 or Method 2 pool, its flame library built from ``cfg.flames``; ``cfg.environments`` (and
-    Method 2's ``backgrounds``) resolve against ``base``. They enter the pool's identity by content
+    """A Method 1 or Method 2 pool, its flame library built from ``cfg.flames``; ``cfg.environments``, ``cfg.kits``
+    (and Method 2's ``backgrounds``) resolve against ``base``. They enter the pool's identity by content
     (:func:`synth.envfile.fingerprint`, :func:`synth.photos.photo_fingerprints`), not by path, so a study
     moved to another folder or machine finds its pools (and runs) again. ``cutouts``: a stage of real flame
     cut-outs (:mod:`fuzzyfire.cutout_pools`) for a ``flames.source`` cutouts | both pool, named
@@ -179,6 +182,7 @@ def synth_stage(root: Path, method: str, cfg: Any, base: Path, cutouts: Stage | 
 
     runner = {"method1": run_method1, "method2": run_method2}[method]
     cfg = replace(cfg, environments=tuple(_absolute(Path(p), base) for p in cfg.environments))
+    cfg = replace(cfg, kits=tuple(_absolute(Path(p), base) for p in cfg.kits))
     by_path = _later_keys_dropped(to_dict(cfg), to_dict(type(cfg)()))  # the identity before content hashing
     by_path["flame_look"] = FLAME_LOOK  # pools of earlier flames and compositing are other data
     if getattr(cfg, "backgrounds", ()):
@@ -215,8 +219,10 @@ PHOTO_SITES = 1
 
 
 def content_identity(cfg: Any) -> dict[str, Any]:
-    """The environment files and background photos of ``cfg`` by content (only the keys that are set)."""
+    """The environment files, building kits and background photos of ``cfg`` by content (only the keys that are
+    set)."""
     from synth.envfile import find_environment_files, fingerprint
+    from synth.kits import find_kits, kit_fingerprint
     from synth.panorama import panorama_fingerprints
     from synth.photos import photo_fingerprints
     from synth.places import split_places
@@ -227,6 +233,8 @@ def content_identity(cfg: Any) -> dict[str, Any]:
         out["environments"] = [fingerprint(spec) for spec in find_environment_files(places.meshes)]
     if places.panoramas:
         out["panoramas"] = panorama_fingerprints(places.panoramas)
+    if cfg.kits:
+        out["kits"] = [kit_fingerprint(folder) for folder in find_kits(cfg.kits)]
     if getattr(cfg, "backgrounds", ()):
         out["backgrounds"] = photo_fingerprints(cfg.backgrounds, cfg.background_holdout)
         out["photo_sites"] = PHOTO_SITES  # photos became sites: pools made before that are other data

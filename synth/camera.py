@@ -106,11 +106,17 @@ class NoViewError(RuntimeError):
 
 
 def find_view(
-    rule: CameraRule, rng: np.random.Generator, depth_of: Callable[[CameraView], NDArray[np.float32]], tries: int = 20
+    rule: CameraRule,
+    rng: np.random.Generator,
+    depth_of: Callable[[CameraView], NDArray[np.float32]],
+    tries: int = 20,
+    accept: Callable[[CameraView, NDArray[np.float32]], bool] | None = None,
 ) -> CameraView:
-    """The first sampled view whose depth (from ``depth_of``) is not blocked by a nearby wall."""
+    """The first sampled view whose depth (from ``depth_of``) is not blocked by a nearby wall and, with
+    ``accept``, that ``accept(view, depth)`` takes (e.g. a street view showing some of its fire zones)."""
     for _ in range(tries):
         view = sample_view(rule, rng)
-        if not view_blocked(depth_of(view), rule):
+        depth = depth_of(view)
+        if not view_blocked(depth, rule) and (accept is None or accept(view, depth)):
             return view
     raise NoViewError(f"no unblocked view in {tries} tries (area {rule.area})")

@@ -83,10 +83,10 @@ DEFAULT_LIBRARY = 12  # procedural flame sequences when --flames is absent
 
 
 def _scenes(args: argparse.Namespace) -> int:
-    """``--scenes``, else none when the user brings environments or photos (theirs alone), else 48."""
+    """``--scenes``, else none when the user brings environments, photos or kit streets (theirs alone), else 48."""
     if args.scenes is not None:
         return args.scenes
-    return 0 if args.environments or getattr(args, "backgrounds", None) else DEFAULT_SCENES
+    return 0 if args.environments or getattr(args, "backgrounds", None) or args.streets else DEFAULT_SCENES
 
 
 def _dataset_config(args: argparse.Namespace) -> dict:
@@ -94,6 +94,7 @@ def _dataset_config(args: argparse.Namespace) -> dict:
     checked before the flame library is made: the output folder, the environment files and the photos."""
     from curate.core.writer import check_output_target
     from synth.envfile import find_environment_files
+    from synth.kits import find_kits
     from synth.library import FlameLibraryConfig
     from synth.photos import list_photos
     from synth.places import split_places
@@ -106,6 +107,12 @@ def _dataset_config(args: argparse.Namespace) -> dict:
         find_environment_files(places.meshes)
     if args.environments and not places.meshes and not places.panoramas:
         raise ValueError(f"no mesh files or 2:1 panoramas in {', '.join(map(str, args.environments))}")
+    if args.kits and not args.streets:
+        raise ValueError("--kits are the building kits of --streets N, which is not given")
+    if args.streets:
+        if not args.kits:
+            raise ValueError("--streets needs --kits DIR (building kits, e.g. ../shared/data/kits)")
+        find_kits(args.kits)
 
     if args.library is not None and args.flames:
         raise ValueError("--library makes procedural flames, which --flames replaces: give one of them")
@@ -119,6 +126,8 @@ def _dataset_config(args: argparse.Namespace) -> dict:
         "height": h,
         "scenes": _scenes(args),
         "environments": tuple(args.environments or ()),
+        "streets": args.streets or 0,
+        "kits": tuple(args.kits or ()),
         "smoke_class": args.smoke,
         "flames": flames,
     }
@@ -302,6 +311,19 @@ def _dataset_arguments(p: argparse.ArgumentParser, photos: bool = False) -> None
         help="places: 3D environments (glTF/GLB/OBJ/PLY files, folders of them, or sidecar YAMLs: synth/envfile.py) "
         "and, for Method 2, 360-degree panoramas (2:1 JPEG/PNG/HDR images or folders of them: synth/panorama.py)",
     )
+    p.add_argument(
+        "--streets",
+        type=int,
+        metavar="N",
+        help="N procedural streets laid out from the building kits of --kits (synth/streets.py; default 0)",
+    )
+    p.add_argument(
+        "--kits",
+        type=Path,
+        nargs="+",
+        metavar="DIR",
+        help="building kit folders, or a folder of them (Kenney City Kit Suburban, Retro Urban: synth/kits.py)",
+    )
     p.add_argument("--flames", type=Path, nargs="*", help="sequence folders (synth flames output, or RGBA PNGs)")
     p.add_argument(
         "--library",
@@ -323,6 +345,7 @@ def _register_method1(sub: argparse._SubParsersAction) -> None:
         "masks/box_modes.json; `synth audit` reports both. Resumes an interrupted run.\n\n"
         "example:\n  fuzzyfire synth method1 --n 1000 --seed 0 --out out/m1 --size 640x480 --scenes 48\n"
         "  fuzzyfire synth method1 --n 200 --out out/m1-paper --box-mode paper\n"
+        "  fuzzyfire synth method1 --n 200 --out out/m1-streets --streets 8 --kits ../shared/data/kits\n"
         "  fuzzyfire synth audit out/m1 --json",
     )
     _dataset_arguments(p)
@@ -343,6 +366,7 @@ def _register_method2(sub: argparse._SubParsersAction) -> None:
         "  fuzzyfire synth method2 --n 200 --out out/m2-photos --backgrounds my/negatives\n"
         "  fuzzyfire synth method2 --n 200 --out out/m2-panoramas --environments ../shared/data/panoramas\n"
         "  fuzzyfire synth method2 --n 200 --out out/m2-mixed --environments configs/scenes --scenes 24\n"
+        "  fuzzyfire synth method2 --n 200 --out out/m2-streets --streets 8 --kits ../shared/data/kits\n"
         "  fuzzyfire synth audit out/m2 --json",
     )
     _dataset_arguments(p, photos=True)

@@ -13,6 +13,7 @@ from curate.core.progress import progress
 from curate.core.writer import WriteResult, check_output_target
 from synth import render
 from synth.envfile import find_environment_files
+from synth.kits import credits, find_kits, licence_files, load_kit
 from synth.panorama import PanoramaBackgrounds
 from synth.photos import PhotoBackgrounds, keep_in_pool
 from synth.places import split_places
@@ -36,9 +37,11 @@ def generate(
     """Generate (or resume) ``cfg.n`` images with ``make_image(cfg, i, library, views)`` and write ``out``.
 
     ``method`` names the source tag (``synth:<method>``) and the command in the manifest; ``cfg`` is a
-    Method1Config or Method2Config (``n``, ``seed``, ``scenes``, ``environments``, ``width``, ``height``, ``smoke_class``).
-    The output folder, the environment files and the background photos are checked before anything is rendered
-    (:class:`~curate.core.writer.OutputError`, FileNotFoundError, ValueError). A run that fails or is interrupted
+    Method1Config or Method2Config (``n``, ``seed``, ``scenes``, ``environments``, ``streets``, ``kits``, ``width``,
+    ``height``, ``smoke_class``). With kit streets the manifest credits the kits (``args.kit_credits``) and lists
+    their licence files among its ``sources``. The output folder, the environment files, the kits and the
+    background photos are checked before anything is rendered (:class:`~curate.core.writer.OutputError`,
+    FileNotFoundError, ValueError). A run that fails or is interrupted
     keeps the images it finished in the staging folder and says so (the same command resumes from them); one
     that finished none leaves nothing behind.
     """
@@ -49,8 +52,11 @@ def generate(
     if places.panoramas and method != "method2":
         raise ValueError(f"{places.panoramas[0]}: a panorama is a Method 2 place (Method 1 needs 3D meshes)")
     files = find_environment_files(places.meshes) if places.meshes else []
+    kit_folders = find_kits(cfg.kits) if getattr(cfg, "streets", 0) else []  # Method 1 and 2 configs have them
     photo_files = keep_in_pool(places.photos, getattr(cfg, "background_holdout", 0.0))
     args = {**to_json(cfg), "flame_sequences": [s.name for s in library]}
+    if kit_folders:
+        args["kit_credits"] = credits(kit_folders)
     staging = Staging(out, args)
     try:
         with render.Renderer(cfg.width, cfg.height, platform) as renderer:
@@ -69,6 +75,8 @@ def generate(
                 count,
                 panoramas,
                 getattr(cfg, "panorama_share", 0.5),
+                kits=[load_kit(folder) for folder in kit_folders],
+                streets_count=getattr(cfg, "streets", 0),
             )
             todo = [i for i in range(cfg.n) if not staging.done(i)]
             for i in progress(todo, total=len(todo), desc=f"{method} images"):
@@ -76,7 +84,9 @@ def generate(
         for source in (photos, panoramas):
             for path, reason in (source.problems if source else {}).items():
                 print(f"{path}: skipped background ({reason})", file=sys.stderr)
-        return finish(staging, out, cfg.n, f"synth:{method}", f"synth {method}", args, cfg.smoke_class, overwrite)
+        sources = [path for folder in kit_folders for path in licence_files(folder)]
+        return finish(staging, out, cfg.n, f"synth:{method}", f"synth {method}", args, cfg.smoke_class, overwrite,
+                      sources)  # fmt: skip
     except BaseException:
         staging.abandon(cfg.n)
         raise

@@ -35,7 +35,7 @@ from synth.effects import CameraConfig, Effects, apply_effects, expose, sample_e
 from synth.generate import generate
 from synth.library import FlameLibraryConfig
 from synth.scenes import translate
-from synth.schema import check_range
+from synth.schema import check_range, check_streets
 from synth.sprites import Sprite, SpriteSequence, flatten_rgba
 from synth.staging import boxes_from_masks
 from synth.views import View, ViewCache
@@ -55,6 +55,8 @@ class Method1Config:
     scenes: int = 48  # procedural environments (0 = only the files of ``environments``)
     environments: tuple[Path, ...] = ()  # mesh files / folders / sidecars (synth.envfile), rendered first; with
     # files the views go to the environments in consecutive blocks (synth.views)
+    streets: int = 0  # procedural streets laid out from building kits (synth.streets), after the files; 0 = none
+    kits: tuple[Path, ...] = ()  # kit folders (synth.kits), or folders of them, for the streets
     images_per_view: int = 1  # images (different planes) per camera view
     max_flames: int = 3  # planes per image: uniform in 1..max_flames
     negatives: float = 0.1  # fraction of images without flames
@@ -77,8 +79,9 @@ class Method1Config:
             raise ValueError(f"flames.source {self.flames.source}: cut-out flames are for Method 2 pools only")
         if self.n < 1 or self.scenes < 0 or self.images_per_view < 1 or self.width < 16 or self.height < 16:
             raise ValueError(f"invalid Method 1 config: {self}")
-        if self.scenes == 0 and not self.environments:
-            raise ValueError("scenes is 0 and no environments are given: nothing to render")
+        if self.scenes == 0 and not self.environments and not self.streets:
+            raise ValueError("scenes is 0 and no environments or streets are given: nothing to render")
+        check_streets(self.streets, self.kits)
         if self.max_flames < 1 or not 0.0 <= self.negatives <= 1.0 or self.min_box_px < 1:
             raise ValueError(f"invalid Method 1 config: {self}")
         check_range("flame_height_m", self.flame_height_m, 0.01)
@@ -113,9 +116,17 @@ FLAME_LIGHT = 6.0  # point-light intensity per metre of flame height at full bri
 
 
 def _stand(cfg: Method1Config, view: View, k: NDArray[np.float64], rng: np.random.Generator):
-    """A random base point on the surface seen in the lower two thirds of the view, moved ``clearance_m``
-    towards the camera; None when the pixel shows sky or lies outside ``distance_m``."""
-    u, v = rng.uniform(0, cfg.width), rng.uniform(cfg.height / 3, cfg.height)
+    """A random base point on the surface seen in the lower two thirds of the view (in a kit street: on the
+    up-facing ground of its fire zones, ``view.ground``), moved ``clearance_m`` towards the camera; None when the
+    pixel shows sky or lies outside ``distance_m``."""
+    if view.ground is not None:
+        rows, cols = np.nonzero(view.ground)
+        if not len(rows):
+            return None
+        pick = int(rng.integers(len(rows)))
+        u, v = cols[pick] + rng.uniform(0, 1), rows[pick] + rng.uniform(0, 1)
+    else:
+        u, v = rng.uniform(0, cfg.width), rng.uniform(cfg.height / 3, cfg.height)
     d = float(view.depth[min(int(v), cfg.height - 1), min(int(u), cfg.width - 1)])
     if d <= 0:
         return None

@@ -23,7 +23,7 @@ from synth.composite import BLEND_MODES, Placement, composite
 from synth.effects import CameraConfig, apply_effects, expose, sample_effects
 from synth.generate import generate
 from synth.library import FlameLibraryConfig, pick_sequence
-from synth.schema import check_range
+from synth.schema import check_range, check_streets
 from synth.sprites import Sprite, SpriteSequence
 from synth.staging import boxes_from_masks
 from synth.views import ViewCache
@@ -44,6 +44,8 @@ class Method2Config:
     scenes: int = 48  # procedural environments (0 = only the files of ``environments``)
     environments: tuple[Path, ...] = ()  # mesh files / folders / sidecars (synth.envfile), rendered first; with
     # files the views go to the environments in consecutive blocks (synth.views)
+    streets: int = 0  # procedural streets laid out from building kits (synth.streets), after the files; 0 = none
+    kits: tuple[Path, ...] = ()  # kit folders (synth.kits), or folders of them, for the streets
     backgrounds: tuple[Path, ...] = ()  # fire-free photos (files / folders) composited on instead of renders
     photo_share: float = 0.5  # fraction of views on a photo when there are also 3D environments
     background_holdout: float = 0.0  # share of the photos (chosen by content hash) never composited on: test data
@@ -66,8 +68,11 @@ class Method2Config:
     def __post_init__(self) -> None:
         if self.n < 1 or self.scenes < 0 or self.images_per_view < 1 or self.width < 16 or self.height < 16:
             raise ValueError(f"invalid Method 2 config: {self}")
-        if self.scenes == 0 and not self.environments and not self.backgrounds:
-            raise ValueError("scenes is 0 and no environments or backgrounds are given: nothing to composite on")
+        if self.scenes == 0 and not self.environments and not self.backgrounds and not self.streets:
+            raise ValueError(
+                "scenes is 0 and no environments, streets or backgrounds are given: nothing to composite on"
+            )
+        check_streets(self.streets, self.kits)
         if not 0.0 <= self.background_holdout < 1.0:
             raise ValueError(f"background_holdout must be in 0..1 (exclusive), got {self.background_holdout}")
         if self.stand not in ("surfaces", "anywhere"):

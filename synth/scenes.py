@@ -65,6 +65,8 @@ class Environment:
     panels: list[Panel] = field(default_factory=list)
     lights: list[Light] = field(default_factory=list)
     meshes: list[tuple[trimesh.Trimesh, Pose]] = field(default_factory=list)  # file meshes, visuals as loaded
+    zones: list[tuple[float, float, float, float]] = field(default_factory=list)  # (x0, x1, z0, z1) metres of
+    # the ground where flames stand (synth.standing.zone_mask); empty: no zones (flames stand as the method says)
     ambient: float = 0.15
     sky: tuple[float, float, float] = (0.0, 0.0, 0.0)
     seed: int = 0
@@ -338,8 +340,11 @@ def to_pyrender(env: Environment, pr: Any, texture_size: int = 128) -> Any:
     for solid in env.solids:
         mat = pr.MetallicRoughnessMaterial(baseColorFactor=(*solid.color, 1.0), metallicFactor=0.0, roughnessFactor=0.8)
         scene.add(pr.Mesh.from_trimesh(solid.mesh, material=mat, smooth=False), pose=solid.pose)
+    drawn: dict[int, Any] = {}  # one pyrender mesh per trimesh placed several times (a kit part, an instance)
     for mesh, pose in env.meshes:
-        scene.add(_pyrender_mesh(mesh, pr), pose=pose)
+        if id(mesh) not in drawn:
+            drawn[id(mesh)] = _pyrender_mesh(mesh, pr)
+        scene.add(drawn[id(mesh)], pose=pose)
     for light in env.lights:
         scene.add(_pyrender_light(light, pr), pose=light.pose)
     return scene

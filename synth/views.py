@@ -3,7 +3,9 @@
 View ``v`` of a run seeded ``seed`` looks at environment ``v % scenes`` when all environments are procedural.
 With mesh files (first, then the procedural environments) the ``views`` views of a run go to the environments in
 equal consecutive blocks (``v * environments // views``), so each file scene is loaded, searched and kept in
-memory once, then released. The camera is drawn by the environment's camera rules with ``default_rng([seed, 1, v])`` (blocked views rejected), so a view can be
+memory once, then released. Procedural kit streets (:mod:`synth.streets`) come after the files and are shared out
+the same way (each built once, released after its block); their views show some of their fire zones, flames
+stand only on the up-facing ground of those zones, and their images are of kind ``street``. The camera is drawn by the environment's camera rules with ``default_rng([seed, 1, v])`` (blocked views rejected), so a view can be
 (re)made alone: runs resume and are byte-reproducible.
 """
 
@@ -16,12 +18,15 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from synth import camera, render, scenes
+from synth import camera, render, scenes, streets
 from synth.envfile import EnvironmentFile
+from synth.kits import Kit
 from synth.panorama import PanoramaBackgrounds
 from synth.photos import PhotoBackgrounds
 from synth.places import kind_of_view, kind_weights
-from synth.standing import standing_mask
+from synth.standing import standing_mask, zone_standing_mask
+
+MIN_ZONE_SHARE = 0.01  # a street view shows at least this share of pixels a flame may stand on
 
 
 @dataclass(frozen=True)
@@ -33,9 +38,13 @@ class View:
     scene: Any
     camera: camera.CameraView
     depth: NDArray[np.float32]
+    ground: NDArray[np.bool_] | None = None  # (H, W) where a flame may stand (a kit street's fire zones); None:
+    # the method's own rule
+    kind: str | None = None  # "street" or "render" in a run with kit streets (None: not recorded)
 
     def meta(self) -> dict:
-        return {"environment": self.env.name, "family": self.env.family, "camera": self.camera.to_json()}
+        out = {"environment": self.env.name, "family": self.env.family, "camera": self.camera.to_json()}
+        return out if self.kind is None else {**out, "kind": self.kind}
 
 
 class ViewCache:
@@ -53,18 +62,23 @@ class ViewCache:
         panoramas: PanoramaBackgrounds | None = None,
         panorama_share: float = 0.5,
         surfaces: bool = False,
+        kits: Sequence[Kit] = (),
+        streets_count: int = 0,
     ) -> None:
-        if scenes_count + len(files) < 1 and photos is None and panoramas is None:
+        if scenes_count + len(files) + streets_count < 1 and photos is None and panoramas is None:
             raise ValueError("at least one environment is needed")
+        if streets_count and not kits:
+            raise ValueError("kit streets need kits (synth.kits)")
         self.seed, self.scenes, self.renderer, self.files = seed, scenes_count, renderer, tuple(files)
         self.photos, self.panoramas, self.surfaces = photos, panoramas, surfaces
-        available = [k for k, there in (("photo", photos), ("panorama", panoramas), ("render", scenes_count + len(files)))
-                     if there]  # fmt: skip
+        self.kits, self.streets = tuple(kits), streets_count
+        renders = scenes_count + len(files) + streets_count
+        available = [k for k, there in (("photo", photos), ("panorama", panoramas), ("render", renders)) if there]
         self.weights = kind_weights(
             available, {"photo": photo_share, "panorama": panorama_share, "render": 1 - photo_share}
         )
-        if self.files and views < 1:
-            raise ValueError("with mesh files the number of views of the run is needed (views >= 1)")
+        if (self.files or self.streets) and views < 1:
+            raise ValueError("with mesh files or kit streets the number of views of the run is needed (views >= 1)")
         self.views = views
         self._scenes: dict[int, tuple[scenes.Environment, Any]] = {}
         self._view: View | None = None
@@ -73,20 +87,26 @@ class ViewCache:
 
     def environment_index(self, view_index: int) -> int:
         """The environment view ``view_index`` looks at (module docstring)."""
-        total = len(self.files) + self.scenes
-        if not self.files:
+        total = len(self.files) + self.streets + self.scenes
+        if not self.files and not self.streets:
             return view_index % total
         return min(view_index * total // self.views, total - 1)
 
     def environment(self, env_index: int) -> tuple[scenes.Environment, Any]:
-        """Environment ``env_index`` and its pyrender scene; a file scene replaces the previous one in memory."""
+        """Environment ``env_index`` and its pyrender scene; a file scene or a street replaces the previous one
+        in memory."""
         if env_index not in self._scenes:
-            if env_index < len(self.files):
-                for old in [k for k in self._scenes if k < len(self.files)]:
+            loaded = len(self.files) + self.streets  # files, then streets: one in memory at a time
+            if env_index < loaded:
+                for old in [k for k in self._scenes if k < loaded]:
                     del self._scenes[old]
+            if env_index < len(self.files):
                 self._scenes[env_index] = scenes.file_environment(self.files[env_index], self.renderer)
             else:
-                env = scenes.build_environment(env_index - len(self.files), self.seed)
+                if env_index < loaded:
+                    env = streets.build_street(self.kits, env_index - len(self.files), self.seed)
+                else:
+                    env = scenes.build_environment(env_index - loaded, self.seed)
                 self._scenes[env_index] = (env, scenes.to_pyrender(env, self.renderer.pyrender))
         return self._scenes[env_index]
 
@@ -102,8 +122,18 @@ class ViewCache:
             depths.append(render.render_view(self.renderer, scene, v.pose, v.yfov, True)[1])
             return depths[-1]
 
-        cam = camera.find_view(env.camera, rng, depth_of)
-        self._view, self._view_index = View(env, scene, cam, depths[-1]), view_index
+        if not env.zones:
+            cam = camera.find_view(env.camera, rng, depth_of)
+            kind = None if not self.streets else "render"
+            self._view, self._view_index = View(env, scene, cam, depths[-1], kind=kind), view_index
+            return self._view
+
+        def shows_zones(v: camera.CameraView, depth: NDArray[np.float32]) -> bool:
+            return float(zone_standing_mask(depth, v.pose, v.yfov, env.zones).mean()) >= MIN_ZONE_SHARE
+
+        cam = camera.find_view(env.camera, rng, depth_of, accept=shows_zones)
+        ground = zone_standing_mask(depths[-1], cam.pose, cam.yfov, env.zones)
+        self._view, self._view_index = View(env, scene, cam, depths[-1], ground, "street"), view_index
         return self._view
 
     def background(self, view_index: int) -> tuple[NDArray[np.uint8], NDArray[np.float32], dict]:
@@ -111,7 +141,7 @@ class ViewCache:
         ``kind``), cached for reuse. Its kind is drawn by :func:`synth.places.kind_of_view` with the weights of the
         kinds there are: photos ``photo_share`` (:mod:`synth.photos`), panoramas ``panorama_share``
         (:mod:`synth.panorama`), renders ``1 - photo_share`` (with photos and renders only: a photo with
-        probability ``photo_share``)."""
+        probability ``photo_share``); a render of a kit street is of kind ``street``."""
         if self._background and self._background[0] == view_index:
             return self._background[1]
         kind = kind_of_view(self.seed, view_index, self.weights)
@@ -123,10 +153,13 @@ class ViewCache:
             v = self.view(view_index)
             rgb, depth = render.render_view(self.renderer, v.scene, v.camera.pose, v.camera.yfov)
             made = (rgb, depth, v.meta())
-            if self.surfaces:  # flames stand on up-facing surfaces only (a site, like a photo's ground)
+            if v.ground is not None:  # a kit street: flames stand on the up-facing ground of its fire zones
+                stand = zone_standing_mask(depth, v.camera.pose, v.camera.yfov, v.env.zones)
+                made = (rgb, np.where(stand, depth, np.float32(0)), {**made[2], "site": "surfaces", "people": []})
+            elif self.surfaces:  # flames stand on up-facing surfaces only (a site, like a photo's ground)
                 stand = standing_mask(depth, v.camera.pose, v.camera.yfov)
                 made = (rgb, np.where(stand, depth, np.float32(0)), {**made[2], "site": "surfaces", "people": []})
-        if len(self.weights) > 1:
+        if len(self.weights) > 1 and "kind" not in made[2]:  # with streets a render names its own kind
             made[2]["kind"] = kind
         self._background = (view_index, made)
         return made

@@ -104,3 +104,53 @@ def write_textured_room(path: Path, up: str = "+y", scale: float = 1.0, table: b
     path.parent.mkdir(parents=True, exist_ok=True)
     scene.export(path)
     return path
+
+
+def _kit_part(path: Path, size: tuple[float, float, float], colour: tuple[int, int, int], door: int = 0) -> None:
+    """A box of ``size`` (x, y, z kit units) standing on y = 0, centred in x and z, with a thin 'door' slab on its
+    +Z (``door`` 1) or -Z (``door`` -1) face: the facade side, as the kit draws it."""
+    import trimesh
+
+    box = trimesh.creation.box(extents=size)
+    box.apply_translation((0, size[1] / 2, 0))
+    parts = [box]
+    if door:
+        slab = trimesh.creation.box(extents=(size[0] / 3, size[1] / 2, 0.02))
+        slab.apply_translation((0, size[1] / 4, door * (size[2] / 2 + 0.01)))
+        parts.append(slab)
+    mesh = trimesh.util.concatenate(parts)
+    mesh.visual.vertex_colors = np.tile([*colour, 255], (len(mesh.vertices), 1)).astype(np.uint8)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    mesh.export(path)
+
+
+def write_tiny_kits(root: Path) -> Path:
+    """Two tiny building kits in ``root`` named like the Kenney kits' files: ``kenney_retro_urban/glb`` (facades
+    face -Z, 1-unit wall blocks) and ``kenney_city_kit_suburban/glb`` (facades face +Z, roads in ``roads/``),
+    each with a LICENSE.txt. Returns ``root``."""
+    retro = root / "kenney_retro_urban" / "glb"
+    for name, size, colour, door in [
+        ("road-asphalt-center", (1, 0.004, 1), (40, 40, 45), 0),
+        ("road-asphalt-side", (1, 0.05, 1), (120, 120, 115), 0),
+        ("wall-a", (1, 1, 1), (150, 70, 50), 0),
+        ("wall-a-door", (1, 1, 1), (150, 70, 50), -1),
+        ("wall-a-window", (1, 1, 1), (140, 75, 55), -1),
+        ("wall-a-garage", (1, 1, 1), (130, 80, 60), -1),
+        ("detail-dumpster-closed", (0.6, 0.54, 0.45), (40, 90, 40), -1),
+        ("detail-barrier-type-a", (0.44, 0.4, 0.14), (200, 200, 200), 0),
+        ("tree-large", (0.3, 1.7, 0.3), (30, 110, 30), 0),
+    ]:
+        _kit_part(retro / f"{name}.glb", size, colour, door)
+    suburban = root / "kenney_city_kit_suburban" / "glb"
+    for name, size, colour, door in [
+        ("roads/road-straight", (1, 0.02, 1), (70, 70, 80), 0),
+        ("building-type-a", (1.3, 0.83, 1.0), (220, 220, 215), 1),
+        ("building-type-b", (0.9, 1.1, 0.9), (210, 200, 190), 1),
+        ("driveway-long", (0.36, 0.01, 0.4), (100, 100, 100), 0),
+        ("fence", (0.48, 0.27, 0.08), (180, 110, 60), 0),
+        ("tree-small", (0.2, 0.57, 0.2), (40, 140, 60), 0),
+    ]:
+        _kit_part(suburban / f"{name}.glb", size, colour, door)
+    for kit in ("kenney_retro_urban", "kenney_city_kit_suburban"):
+        (root / kit / "LICENSE.txt").write_text("License: (Creative Commons Zero, CC0)\n")
+    return root

@@ -69,6 +69,7 @@ def test_synth_stage_resolves_environments_and_keeps_old_identities(tmp_path: Pa
     identity = json.loads((stage.folder / "stage.json").read_text())["identity"]
     assert "environments" not in identity["config"]  # pools made before environments existed are still found
     assert "flame_opacity" not in identity["config"]  # nor flame_opacity, while it holds its default
+    assert "streets" not in identity["config"] and "kits" not in identity["config"]  # nor kit streets while off
     assert identity["config"]["flame_look"] == FLAME_LOOK  # pools of older flames are not reused
     opaque, _ = synth_stage(tmp_path / "data", "method2", replace(cfg, flame_opacity=(0.9, 1.0)), tmp_path)
     assert opaque.hash != stage.hash
@@ -199,3 +200,26 @@ def test_a_stage_built_with_other_versions_says_so(tmp_path: Path) -> None:
     again = cached_stage(tmp_path, "data", {"n": 2}, _dataset_builder(2, []))
     assert again.cached and again.note is not None
     assert again.note.startswith("built with onnxruntime 0.0.1 (now ") and again.note.endswith("a rebuild may differ")
+
+
+def test_kit_streets_enter_a_pool_identity_by_the_kits_content(tmp_path: Path) -> None:
+    import shutil
+    from dataclasses import replace
+
+    from factories import write_tiny_kits
+
+    from fuzzyfire.stages import LATER_KEYS, _later_keys_dropped, content_identity
+    from synth.method2 import Method2Config
+    from synth.schema import to_json
+
+    cfg = Method2Config(n=2, width=64, height=48, scenes=1)
+    assert {"streets", "kits"} <= set(LATER_KEYS)
+    plain = _later_keys_dropped(to_json(cfg), to_json(Method2Config()))
+    assert "streets" not in plain and "kits" not in plain and content_identity(cfg) == {}  # identities as before
+    kits = write_tiny_kits(tmp_path / "a")
+    streets = replace(cfg, streets=2, kits=(kits,))
+    assert _later_keys_dropped(to_json(streets), to_json(Method2Config()))["streets"] == 2
+    first = content_identity(streets)["kits"]
+    assert [k["kit"] for k in first] == ["kenney_city_kit_suburban", "kenney_retro_urban"]
+    moved = shutil.copytree(kits, tmp_path / "b")
+    assert content_identity(replace(streets, kits=(moved,)))["kits"] == first  # by content, not by path

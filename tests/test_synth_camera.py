@@ -38,3 +38,20 @@ def test_area_rules_draw_as_before() -> None:
 def test_flat_or_empty_views_are_rejected_when_asked(depth: np.ndarray, blocked: bool) -> None:
     assert C.view_blocked(depth, C.CameraRule((0, 0, 0, 0), min_depth_spread=0.5, max_empty=0.5)) is blocked
     assert C.view_blocked(depth, C.CameraRule((0, 0, 0, 0))) is False  # procedural rules: no depth check
+
+
+def test_find_view_also_asks_accept_and_keeps_the_old_draws_without_it() -> None:
+    from synth.camera import CameraRule, find_view
+
+    rule = CameraRule((-1, 1, -1, 1))
+    flat = np.linspace(1, 5, 48 * 64, dtype=np.float32).reshape(48, 64)
+    seen: list = []
+
+    def third(view, depth) -> bool:
+        seen.append(view)
+        return len(seen) == 3
+
+    chosen = find_view(rule, np.random.default_rng(0), lambda v: flat, accept=third)
+    assert chosen is seen[2]
+    plain = find_view(rule, np.random.default_rng(0), lambda v: flat)
+    assert np.array_equal(plain.pose, seen[0].pose)  # the same first draw: accept changes nothing else

@@ -136,6 +136,10 @@ def test_what_can_be_checked_fails_in_one_line_before_rendering(tmp_path, capsys
         (["--overwrite", "--backgrounds", str(tmp_path / "nophotos")], "nophotos: no such file or folder"),
         (["--overwrite", "--photo-share", "0.3"], "--photo-share is the share of views on --backgrounds photos"),
         (["--overwrite", "--library", "3"], "--library makes procedural flames, which --flames replaces"),
+        (["--overwrite", "--streets", "2"], "--streets needs --kits DIR"),
+        (["--overwrite", "--kits", str(tmp_path)], "--kits are the building kits of --streets N"),
+        (["--overwrite", "--streets", "2", "--kits", str(tmp_path / "nokits")], "nokits: no such kit folder"),
+        (["--overwrite", "--streets", "2", "--kits", str(fl)], "not a building kit this street layout knows"),
     ]
     for extra, message in cases:
         assert main([*args, *extra]) == 2
@@ -207,3 +211,15 @@ def test_method2_on_a_fixed_camera_puts_every_flame_on_its_floor(tmp_path, capsy
         feet += 1
     assert feet >= 5 and all(meta["site"] == "sidecar" for meta in metas.values())
     assert np.mean([bool(meta["flames"]) for meta in metas.values()]) > 0.5
+
+
+def test_method2_on_kit_streets_from_the_command_line(tmp_path, capsys):
+    from factories import write_tiny_kits
+
+    kits = write_tiny_kits(tmp_path / "kits")
+    out = tmp_path / "m2"
+    args = ["synth", "method2", "--n", "2", "--out", str(out), "--size", "64x48", "--flames", str(_flames(tmp_path))]
+    assert main([*args, "--streets", "1", "--kits", str(kits)]) == 0
+    manifest = json.loads((out / "manifest.json").read_text())
+    assert manifest["args"]["scenes"] == 0 and manifest["args"]["streets"] == 1  # kit streets alone by default
+    assert {m["kind"] for m in manifest["args"]["per_image"]} == {"street"}

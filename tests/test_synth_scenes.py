@@ -102,3 +102,13 @@ def test_walls_are_plausible_paints_and_lamps_are_white_balanced():
         assert r - g < 30 and not (r - g > 12 and b - g > 12), (seed, r, g, b)  # never pink or purple
     warm = S.white_balanced(2500.0)
     assert warm.max() == 1.0 and warm[0] > warm[1] > warm[2] > 0.3
+
+
+def test_a_file_mesh_placed_twice_is_one_pyrender_mesh(renderer):
+    box = trimesh.creation.box(extents=(1, 1, 1))
+    env = S.Environment("twice", "file", C.CameraRule((0, 0, 0, 0)))
+    env.meshes = [(box, S.translate(0, 0.5, -3)), (box, S.translate(2, 0.5, -3))]
+    scene = S.to_pyrender(env, renderer.pyrender)
+    nodes = list(scene.mesh_nodes)
+    assert len(nodes) == 2 and nodes[0].mesh is nodes[1].mesh
+    assert sorted(n.translation[0] for n in nodes) == [0.0, 2.0]
