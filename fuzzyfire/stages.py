@@ -185,6 +185,8 @@ def synth_stage(root: Path, method: str, cfg: Any, base: Path, cutouts: Stage | 
     cfg = replace(cfg, kits=tuple(_absolute(Path(p), base) for p in cfg.kits))
     by_path = _later_keys_dropped(to_dict(cfg), to_dict(type(cfg)()))  # the identity before content hashing
     by_path["flame_look"] = FLAME_LOOK  # pools of earlier flames and compositing are other data
+    if getattr(cfg, "stand", "anywhere") == "surfaces" and (cfg.scenes or cfg.environments):
+        by_path["standing"] = STANDING  # renders' flames on up-facing surfaces: pools made before were other data
     if getattr(cfg, "backgrounds", ()):
         cfg = replace(cfg, backgrounds=tuple(_absolute(Path(p), base) for p in cfg.backgrounds))
     files = content_identity(cfg)  # replaces the environments and backgrounds of by_path when they are set
@@ -213,6 +215,11 @@ def _later_keys_dropped(config: dict[str, Any], default: dict[str, Any]) -> dict
 #: synth.visibility), in the identity of every Method 1 and Method 2 pool: 2 = issue 23 (opaque bright bodies,
 #: real aspect ratios, boxes only on flames a person can see).
 FLAME_LOOK = 2
+
+#: The version of where Method 2 flames stand in rendered views (``stand: surfaces``, :mod:`synth.standing`), in
+#: the identity of every Method 2 pool with renders: 1 = the rule applied (pools made before it said "surfaces"
+#: in their config but were composited anywhere in the lower 2/3 of the view).
+STANDING = 1
 
 #: The version of the photo-site rules (:mod:`synth.sites`) in the identity of every pool with photos.
 PHOTO_SITES = 1

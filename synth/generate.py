@@ -75,6 +75,7 @@ def generate(
                 count,
                 panoramas,
                 getattr(cfg, "panorama_share", 0.5),
+                surfaces=getattr(cfg, "stand", "anywhere") == "surfaces",  # Method 2's rule; Method 1 has its own
                 kits=[load_kit(folder) for folder in kit_folders],
                 streets_count=getattr(cfg, "streets", 0),
             )

@@ -26,7 +26,9 @@ from synth.photos import PhotoBackgrounds
 from synth.places import kind_of_view, kind_weights
 from synth.standing import standing_mask, zone_standing_mask
 
-MIN_ZONE_SHARE = 0.01  # a street view shows at least this share of pixels a flame may stand on
+MIN_ZONE_SHARE = (
+    0.01  # a street (or, with surfaces, a room) view shows at least this share of pixels a flame may stand on
+)
 
 
 @dataclass(frozen=True)
@@ -123,7 +125,7 @@ class ViewCache:
             return depths[-1]
 
         if not env.zones:
-            cam = camera.find_view(env.camera, rng, depth_of)
+            cam = camera.find_view(env.camera, rng, depth_of, accept=self._shows_surfaces if self.surfaces else None)
             kind = None if not self.streets else "render"
             self._view, self._view_index = View(env, scene, cam, depths[-1], kind=kind), view_index
             return self._view
@@ -135,6 +137,11 @@ class ViewCache:
         ground = zone_standing_mask(depths[-1], cam.pose, cam.yfov, env.zones)
         self._view, self._view_index = View(env, scene, cam, depths[-1], ground, "street"), view_index
         return self._view
+
+    @staticmethod
+    def _shows_surfaces(v: camera.CameraView, depth: NDArray[np.float32]) -> bool:
+        """Whether a room view (``surfaces``) shows enough up-facing surface for a flame to stand on."""
+        return float(standing_mask(depth, v.pose, v.yfov).mean()) >= MIN_ZONE_SHARE
 
     def background(self, view_index: int) -> tuple[NDArray[np.uint8], NDArray[np.float32], dict]:
         """The background of view ``view_index``: ((H, W, 3) uint8 RGB, (H, W) float32 depth, metadata with its

@@ -59,7 +59,7 @@ def test_synth_stage_resolves_environments_and_keeps_old_identities(tmp_path: Pa
 
     from factories import write_textured_room
 
-    from fuzzyfire.stages import FLAME_LOOK, synth_stage
+    from fuzzyfire.stages import FLAME_LOOK, STANDING, synth_stage
     from synth.library import FlameLibraryConfig
     from synth.method2 import Method2Config
 
@@ -71,6 +71,9 @@ def test_synth_stage_resolves_environments_and_keeps_old_identities(tmp_path: Pa
     assert "flame_opacity" not in identity["config"]  # nor flame_opacity, while it holds its default
     assert "streets" not in identity["config"] and "kits" not in identity["config"]  # nor kit streets while off
     assert identity["config"]["flame_look"] == FLAME_LOOK  # pools of older flames are not reused
+    assert identity["config"]["standing"] == STANDING  # renders' flames on up-facing surfaces: new pools
+    anywhere, _ = synth_stage(tmp_path / "data", "method2", replace(cfg, stand="anywhere"), tmp_path)
+    assert "standing" not in json.loads((anywhere.folder / "stage.json").read_text())["identity"]["config"]
     opaque, _ = synth_stage(tmp_path / "data", "method2", replace(cfg, flame_opacity=(0.9, 1.0)), tmp_path)
     assert opaque.hash != stage.hash
     write_textured_room(tmp_path / "scenes" / "den.glb")
@@ -129,8 +132,16 @@ def test_pools_made_by_path_before_content_identities_are_still_found(tmp_path: 
 
     write_textured_room(tmp_path / "scenes" / "den.glb")
     flames = FlameLibraryConfig(sequences=1, frames=60, keep_every=30)
-    cfg = Method2Config(n=2, width=64, height=48, scenes=0, images_per_view=2, flames=flames,
-                        environments=(Path("scenes"),))  # fmt: skip
+    cfg = Method2Config(
+        n=2,
+        width=64,
+        height=48,
+        scenes=0,
+        images_per_view=2,
+        flames=flames,
+        environments=(Path("scenes"),),
+        stand="anywhere",
+    )  # fmt: skip  (the rule of those pools)
     absolute = replace(cfg, environments=((tmp_path / "scenes").resolve(),))
     by_path = _later_keys_dropped(to_dict(absolute), to_dict(Method2Config()))
     older_flames = cached_stage(

@@ -80,3 +80,20 @@ def test_kit_streets_come_after_the_files_in_blocks_and_name_their_kind(renderer
     assert "kind" not in ViewCache(0, 1, renderer).view(0).meta()  # runs without streets record no kind
     with pytest.raises(ValueError, match="kit streets need kits"):
         ViewCache(0, 0, renderer, views=2, streets_count=2)
+
+
+def test_surfaces_keep_only_up_facing_ground_and_views_that_show_some(renderer):
+    from synth.standing import standing_mask
+    from synth.views import MIN_ZONE_SHARE
+
+    views = ViewCache(0, 2, renderer, surfaces=True)
+    for i in range(4):
+        v = views.view(i)
+        assert standing_mask(v.depth, v.camera.pose, v.camera.yfov).mean() >= MIN_ZONE_SHARE  # else redrawn
+        full = R.render_view(renderer, v.scene, v.camera.pose, v.camera.yfov)[1]
+        stand = standing_mask(full, v.camera.pose, v.camera.yfov)
+        rgb, depth, meta = views.background(i)
+        assert meta["site"] == "surfaces"
+        assert np.all(depth[~stand] == 0) and np.any(depth[stand] > 0)  # flames may stand only on those pixels
+    plain = ViewCache(0, 2, renderer).background(0)
+    assert "site" not in plain[2] and plain[1].min() >= 0
