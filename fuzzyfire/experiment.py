@@ -31,7 +31,7 @@ from eval.errors import ALARMS
 from fuzzyfire.aggregate import STANDIN_NOTICE, result_rows, write_report, write_summary
 from fuzzyfire.datasets import DataRef, Datasets
 from fuzzyfire.executors import Outcome
-from fuzzyfire.experiment_config import METHODS, ExperimentConfig, TestSetConfig
+from fuzzyfire.experiment_config import METHODS, EvalSetConfig, ExperimentConfig
 from fuzzyfire.leakage import check_leakage, pool_photos
 from fuzzyfire.runs import EvalSet, RunSpec, RunTask, execute_task, finished, missing_evals, run_data
 from fuzzyfire.stages import Prepared, curate_stage, digest, folder_ref, label, standin_stage, synth_stage
@@ -66,7 +66,7 @@ def prepare_pools(cfg: ExperimentConfig, base: Path, out: Path, methods: Sequenc
     return {m: _stage(m, synth_stage, out / "data", m, getattr(cfg.synth, m), base) for m in methods}
 
 
-def _test_ref(t: TestSetConfig, what: str, stage: str, base: Path, root: Path) -> DataRef:
+def _test_ref(t: EvalSetConfig, what: str, stage: str, base: Path, root: Path) -> DataRef:
     """A test set's data: its folder read in place, or its stand-in built as stage ``stage``."""
     if t.source() == "path":
         return folder_ref(t.path, base, t.format, t.aliases, t.drop_classes, t.split, t.holdout)

@@ -69,7 +69,7 @@ class RealConfig:
 
 
 @dataclass(frozen=True)
-class TestSetConfig:
+class EvalSetConfig:
     """A test set: a dataset folder (``path``, optionally one ``split``) or a generated stand-in (``standin``).
     A folder of images without labels is a negatives-only set (no AP: its false alarms per 100 images are
     reported). ``holdout`` keeps only the images :func:`synth.photos.held_out` picks at that share: the photos a
@@ -97,8 +97,8 @@ class TestSetConfig:
 
 
 @dataclass(frozen=True)
-class RareConfig(TestSetConfig):
-    """The rare test set (:class:`TestSetConfig` labelled ``rare``)."""
+class RareConfig(EvalSetConfig):
+    """The rare test set (:class:`EvalSetConfig` labelled ``rare``)."""
 
     name: str = "rare"  # type: ignore[assignment]  # always labelled
 
@@ -151,7 +151,7 @@ class ReportConfig:
 class ExperimentConfig:
     real: RealConfig
     rare: Optional[RareConfig] = None
-    tests: dict[str, TestSetConfig] = field(default_factory=dict)  # more test sets, by name (scored, not trained on)
+    tests: dict[str, EvalSetConfig] = field(default_factory=dict)  # more test sets, by name (scored, not trained on)
     classes: tuple[str, ...] = ("fire",)  # trained and scored classes; other classes' boxes are dropped
     synth: SynthConfig = field(default_factory=SynthConfig)
     grid: GridConfig = field(default_factory=GridConfig)
