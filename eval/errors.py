@@ -40,6 +40,7 @@ from curate.core.dataset import Dataset
 T_FG = 0.5  # foreground IoU: a detection at or above it is on its object
 T_BG = 0.1  # background IoU: a detection below it with every box is on nothing
 ALARM_CONF = 0.25  # confidence at which a detection would raise an alarm (ultralytics' predict default)
+ALARMS = "alarms_per_100"  # result key of the alarm rate of a set without fire: false alarms per 100 images
 ERROR_TYPES = ("classification", "localisation", "both", "duplicate", "background", "missed")
 ERRORS_FILE = "errors.json"  # where a breakdown is kept beside a scoring's other outputs
 

@@ -82,16 +82,21 @@ def plot_bars(
 
 
 def plot_figure5(results: Sequence[Mapping[str, object]], path: Path, metric: str = "AP", title: str = "") -> Path:
-    """Figure 5 of the paper: ``metric`` (mean ± std over seeds) per training mixture, one bar per test set,
-    mixtures in Table 2 order. ``results`` as for :func:`eval.tables.table2`."""
-    from eval.tables import table2
+    """Figure 5 of the paper: ``metric`` (mean ± std over seeds) per training mixture, one bar per test set that
+    has it, mixtures in Table 2 order. ``results`` as for :func:`eval.tables.table2`; AP metrics in percent,
+    :data:`eval.errors.ALARMS` (the sets without fire) as false alarms per 100 images."""
+    from eval.errors import ALARMS
+    from eval.tables import shown_scale, table2
 
     table = table2(results, metrics=(metric,))  # type: ignore[arg-type]
     groups = table.rows
+    f = shown_scale(metric, 100.0)
     series = {}
-    for test_set, _ in table.columns:
+    for test_set, _ in (c for c in table.columns if c[1] == metric):
         cells = [table.cell(row, (test_set, metric)) for row in groups]
-        means = [c.mean * 100 if c else np.nan for c in cells]
-        stds = [c.std * 100 if c and c.std is not None else np.nan for c in cells]
+        means = [c.mean * f if c else np.nan for c in cells]
+        stds = [c.std * f if c and c.std is not None else np.nan for c in cells]
         series[test_set] = (means, stds)
-    return plot_bars(groups, series, path, ylabel=f"{metric} (%)", title=title or f"{metric} by training mixture")
+    ylabel = "false alarms per 100 images" if metric == ALARMS else f"{metric} (%)"
+    name = "false alarms" if metric == ALARMS else metric
+    return plot_bars(groups, series, path, ylabel=ylabel, title=title or f"{name} by training mixture")

@@ -15,7 +15,8 @@ import numpy as np
 from curate.core.dataset import Dataset
 from curate.core.imageio import ImageError, read_image
 from eval.draw import draw_boxes
-from eval.tables import Table, marks, to_csv, to_latex, to_markdown
+from eval.errors import ALARMS
+from eval.tables import METRIC_LABELS, Table, heading, marks, shown_scale, to_csv, to_latex, to_markdown
 
 _CSS = """body{font-family:system-ui,sans-serif;margin:2em auto;max-width:1100px;color:#222}
 table{border-collapse:collapse;margin:1em 0}td,th{padding:.3em .7em;border-bottom:1px solid #ddd;text-align:right}
@@ -27,7 +28,7 @@ figure{display:inline-block;margin:.5em}figcaption{font-size:.85em;color:#555}im
 def table_html(table: Table, scale: float = 100.0, digits: int = 1) -> str:
     """An HTML table of ``table``: best cells bold, second italic, a shaded row per group."""
     mk = marks(table, scale, digits)
-    head = "".join(f"<th>{html.escape(f'{g} {m}')}</th>" for g, m in table.columns)
+    head = "".join(f"<th>{html.escape(heading(c))}</th>" for c in table.columns)
     rows = [f"<caption>{html.escape(table.title)}</caption>", f"<tr><th></th>{head}</tr>"]
     for group, members in table.row_groups:
         rows.append(f'<tr class="group"><td colspan="{len(table.columns) + 1}">{html.escape(group)}</td></tr>')
@@ -35,7 +36,7 @@ def table_html(table: Table, scale: float = 100.0, digits: int = 1) -> str:
             cells = []
             for col in table.columns:
                 cell = table.cell(row, col)
-                text = html.escape(cell.format(scale, digits)) if cell else "–"
+                text = html.escape(cell.format(shown_scale(col[1], scale), digits)) if cell else "–"
                 tag = {"best": "b", "second": "i"}.get(mk.get((row, "/".join(col)), ""))
                 cells.append(f"<td><{tag}>{text}</{tag}></td>" if tag else f"<td>{text}</td>")
             rows.append(f"<tr><td>{html.escape(table.label(row))}</td>{''.join(cells)}</tr>")
@@ -50,13 +51,16 @@ def figure_html(path: Path, base: Path, caption: str = "") -> str:
 
 
 def runs_html(runs: Sequence[Mapping[str, Any]], columns: Sequence[str]) -> str:
-    """The run list: one row per run, the given ``columns`` (floats in [0, 1] shown as percent)."""
+    """The run list: one row per run, the given ``columns`` (floats in [0, 1] shown as percent, alarm rates as
+    they are: per 100 images)."""
 
-    def show(v: Any) -> str:
-        return "–" if v is None else f"{100 * v:.1f}" if isinstance(v, float) else html.escape(str(v))
+    def show(v: Any, column: str) -> str:
+        if v is None:
+            return "–"
+        return f"{shown_scale(column, 100.0) * v:.1f}" if isinstance(v, float) else html.escape(str(v))
 
-    head = "".join(f"<th>{html.escape(c)}</th>" for c in columns)
-    body = "".join("<tr>" + "".join(f"<td>{show(r.get(c))}</td>" for c in columns) + "</tr>" for r in runs)
+    head = "".join(f"<th>{html.escape(METRIC_LABELS.get(c, c))}</th>" for c in columns)
+    body = "".join("<tr>" + "".join(f"<td>{show(r.get(c), c)}</td>" for c in columns) + "</tr>" for r in runs)
     return f"<table><tr>{head}</tr>{body}</table>"
 
 
@@ -216,7 +220,8 @@ def write_study_report(
     if results:
         t2 = table2(results, metrics=table_metrics(results))
         write_table_files(t2, out / "tables", "table2")
-        figures = [plot_figure5(results, out / "figures" / f"figure5_{m}.png", m) for m in ("AP", "AP50")]
+        shown = ("AP", "AP50", *((ALARMS,) if any(r.get(ALARMS) is not None for r in results) else ()))
+        figures = [plot_figure5(results, out / "figures" / f"figure5_{m}.png", m) for m in shown]
         sections.append(("Table 2 — training mixtures", table_html(t2)))
         sections.append(("Figure 5", "".join(figure_html(f, out, f.stem) for f in figures)))
     if comparisons:
@@ -234,9 +239,10 @@ def write_study_report(
 
 
 def table_metrics(results: Sequence[Mapping[str, Any]]) -> tuple[str, ...]:
-    """The paper's AP and AP50, and AP25 (:mod:`curate.core.cocoeval`) when every row has it (runs scored before
-    AP25 existed do not)."""
-    return ("AP", "AP50", "AP25") if results and all(r.get("AP25") is not None for r in results) else ("AP", "AP50")
+    """The paper's AP and AP50, and AP25 (:mod:`curate.core.cocoeval`) when every row of a set with fire has it
+    (runs scored before AP25 existed do not); the sets without fire have their alarm column whatever this says."""
+    fire = [r for r in results if r.get(ALARMS) is None]
+    return ("AP", "AP50", "AP25") if fire and all(r.get("AP25") is not None for r in fire) else ("AP", "AP50")
 
 
 def _slug(label: str) -> str:

@@ -3,7 +3,9 @@
 italic; rendered as Markdown, CSV and LaTeX.
 
 A run result is a mapping with ``mixture`` (``R750_S250``), ``seed``, ``test_set`` and metric values
-(``AP``, ``AP50`` in [0, 1]); Table 1 results also carry ``method`` (``method1`` / ``method2``).
+(``AP``, ``AP50`` in [0, 1]); Table 1 results also carry ``method`` (``method1`` / ``method2``). A result of a
+test set without fire carries :data:`eval.errors.ALARMS` (false alarms per 100 images) instead of AP: that set's
+one column is its alarm rate, shown as is (not in percent), lower being better.
 """
 
 from __future__ import annotations
@@ -16,17 +18,19 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from curate.mix import Mixture, parse_mixture
+from eval.errors import ALARMS
 from eval.stats import MeanStd, mean_std
 
 Key = tuple[str, str]  # (row label, column label)
 STRATEGIES: tuple[str, ...] = ("Real only", "Real + synthetic", "Synthetic only")
 METHOD_LABELS: Mapping[str, str] = {"method1": "Method 1 (3D)", "method2": "Method 2 (2D)"}
+METRIC_LABELS: Mapping[str, str] = {ALARMS: "alarms/100"}  # column headings of metrics not named as they are keyed
 
 
 @dataclass(frozen=True)
 class Table:
     """Rows in labelled groups; columns ``(group, metric)`` such as ``("common", "AP")``; cells by
-    ``(row, "group/metric")``. Higher values are better."""
+    ``(row, "group/metric")``. Higher values are better, but for :data:`eval.errors.ALARMS`."""
 
     title: str
     row_groups: tuple[tuple[str, tuple[str, ...]], ...]
@@ -45,13 +49,24 @@ class Table:
         return self.cells.get((row, "/".join(column)))
 
 
+def shown_scale(metric: str, scale: float) -> float:
+    """The factor a metric is shown with: ``scale`` for a fraction (AP), 1 for a rate already per 100 images."""
+    return 1.0 if metric == ALARMS else scale
+
+
+def heading(column: tuple[str, str]) -> str:
+    """``"<test set> <metric>"`` as a column is titled."""
+    return f"{column[0]} {METRIC_LABELS.get(column[1], column[1])}"
+
+
 def marks(table: Table, scale: float = 100.0, digits: int = 1) -> dict[Key, str]:
     """``"best"`` / ``"second"`` per column by mean as displayed (``mean * scale`` rounded to ``digits``, so
-    cells that read the same share a mark); unmarked cells are not listed."""
+    cells that read the same share a mark; the lowest alarm rates are best); unmarked cells are not listed."""
     out: dict[Key, str] = {}
     for col in table.columns:
-        values = {row: round(c.mean * scale, digits) for row in table.rows if (c := table.cell(row, col)) is not None}
-        ranked = sorted(set(values.values()), reverse=True)
+        f = shown_scale(col[1], scale)
+        values = {row: round(c.mean * f, digits) for row in table.rows if (c := table.cell(row, col)) is not None}
+        ranked = sorted(set(values.values()), reverse=col[1] != ALARMS)
         for row, v in values.items():
             if v == ranked[0]:
                 out[(row, "/".join(col))] = "best"
@@ -75,8 +90,11 @@ def strategy(mix: Mixture) -> str:
 
 
 def _columns(results: Sequence[Mapping[str, Any]], test_sets, metrics) -> tuple[tuple[str, str], ...]:
+    """Test set x ``metrics``; a set without fire (its results carry :data:`eval.errors.ALARMS`) has the alarm
+    column alone."""
     sets = list(test_sets) if test_sets else list(dict.fromkeys(r["test_set"] for r in results))
-    return tuple((s, m) for s in sets for m in metrics)
+    negatives = {r["test_set"] for r in results if r.get(ALARMS) is not None}
+    return tuple((s, m) for s in sets for m in ((ALARMS,) if s in negatives else [m for m in metrics if m != ALARMS]))
 
 
 def table2(
@@ -92,7 +110,7 @@ def table2(
         for s in STRATEGIES
         if any(strategy(m) == s for m in mixtures)
     )
-    cells = _collect(results, lambda r: r["mixture"], metrics)
+    cells = _collect(results, lambda r: r["mixture"], tuple(dict.fromkeys((*metrics, ALARMS))))
     return Table(
         "Table 2: AP by training mixture (mean ± std over seeds)", groups, _columns(results, test_sets, metrics), cells
     )
@@ -112,7 +130,7 @@ def table1(
         mixes = sorted({parse_mixture(r["mixture"]) for r in results if r["method"] == method}, key=lambda m: m.synth)
         label = METHOD_LABELS.get(method, method)
         groups.append((label, tuple(f"{label} {m.name}" for m in mixes)))
-    cells = _collect(results, row, metrics)
+    cells = _collect(results, row, tuple(dict.fromkeys((*metrics, ALARMS))))
     labels = {key: key.split(" ")[-1] for _, rows in groups for key in rows}
     title = "Table 1: synthetic-only training, Method 1 vs Method 2 (mean ± std over seeds)"
     return Table(title, tuple(groups), _columns(results, test_sets, metrics), cells, labels)
@@ -125,28 +143,35 @@ def _text(cell: MeanStd | None, mark: str | None, scale: float, digits: int, sty
     return style[mark].format(text) if mark else text
 
 
+def _cell_text(
+    table: Table, row: str, col: tuple[str, str], mk: Mapping[Key, str], scale: float, digits: int, style
+) -> str:
+    """The text of one cell as :func:`_text` gives it, at the column's own scale (:func:`shown_scale`)."""
+    return _text(table.cell(row, col), mk.get((row, "/".join(col))), shown_scale(col[1], scale), digits, style)
+
+
 def to_markdown(table: Table, scale: float = 100.0, digits: int = 1) -> str:
     """A GitHub Markdown table: a bold group row before each group, values in percent by default."""
     mk = marks(table, scale, digits)
     style = {"best": "**{}**", "second": "*{}*"}
-    head = ["", *[f"{g} {m}" for g, m in table.columns]]
+    head = ["", *[heading(c) for c in table.columns]]
     lines = [f"**{table.title}**", "", "| " + " | ".join(head) + " |", "|" + "---|" + "---:|" * len(table.columns)]
     for group, rows in table.row_groups:
         lines.append(f"| *{group}* |" + " |" * len(table.columns))
         for row in rows:
-            cells = [_text(table.cell(row, c), mk.get((row, "/".join(c))), scale, digits, style) for c in table.columns]
+            cells = [_cell_text(table, row, c, mk, scale, digits, style) for c in table.columns]
             lines.append("| " + " | ".join([table.label(row), *cells]) + " |")
     return "\n".join(lines) + "\n"
 
 
 def to_csv(table: Table) -> str:
     """One line per row: group, row, then ``<set> <metric> mean``, ``std``, ``n``, ``rank`` per column
-    (raw values in [0, 1]; rank is best/second/empty)."""
+    (raw values: AP in [0, 1], alarm rates per 100 images; rank is best/second/empty)."""
     buf = io.StringIO()
     writer = csv.writer(buf, lineterminator="\n")
     header = ["group", "row"]
-    for g, m in table.columns:
-        header += [f"{g} {m} mean", f"{g} {m} std", f"{g} {m} n", f"{g} {m} rank"]
+    for col in table.columns:
+        header += [f"{heading(col)} {part}" for part in ("mean", "std", "n", "rank")]
     writer.writerow(header)
     mk = marks(table, 1.0, 6)
     for group, rows in table.row_groups:
@@ -179,13 +204,13 @@ def to_latex(table: Table, scale: float = 100.0, digits: int = 1) -> str:
     per_set = [sum(1 for g, _ in table.columns if g == s) for s in sets]
     lines = [r"\begin{tabular}{l" + "c" * len(table.columns) + "}", r"\toprule"]
     lines.append(" & " + " & ".join(rf"\multicolumn{{{n}}}{{c}}{{{_tex(s)}}}" for s, n in zip(sets, per_set)) + r" \\")
-    lines.append(" & " + " & ".join(_tex(m) for _, m in table.columns) + r" \\")
+    lines.append(" & " + " & ".join(_tex(METRIC_LABELS.get(m, m)) for _, m in table.columns) + r" \\")
     for group, rows in table.row_groups:
         lines += [r"\midrule", rf"\multicolumn{{{len(table.columns) + 1}}}{{l}}{{\emph{{{_tex(group)}}}}} \\"]
         for row in rows:
             cells = []
             for col in table.columns:
-                text = _text(table.cell(row, col), None, scale, digits, style).replace("±", r"$\pm$")
+                text = _cell_text(table, row, col, {}, scale, digits, style).replace("±", r"$\pm$")
                 mark = mk.get((row, "/".join(col)))
                 cells.append(style[mark].format(text) if mark else text)
             lines.append(" & ".join([_tex(table.label(row)), *cells]) + r" \\")

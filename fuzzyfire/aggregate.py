@@ -12,6 +12,7 @@ import numpy as np
 
 from curate.core.config import to_dict
 from curate.mix import parse_mixture
+from eval.errors import ALARMS
 from fuzzyfire.datasets import DataRef, Datasets
 from fuzzyfire.experiment_config import ExperimentConfig
 from fuzzyfire.runs import EvalSet, RunSpec
@@ -28,7 +29,7 @@ def _scored(specs: Sequence[RunSpec], results: Sequence[dict | None]) -> Iterato
     """Every (finished run, test set it was scored on): its spec, the test set, its headline metrics (from
     ``results.json``) and its ``scores/<test>`` folder."""
     for spec, res in zip(specs, results):
-        for test in spec.tests if res is not None else ():
+        for test in spec.test_sets if res is not None else ():
             if test.name in res["tests"]:
                 scored = res["tests"][test.name]
                 yield spec, test, scored, spec.out / scored["scores"]
@@ -38,15 +39,18 @@ def result_rows(
     specs: Sequence[RunSpec], results: Sequence[dict | None], out: Path, datasets: Datasets | None = None
 ) -> list[dict]:
     """One row per (finished run, test set): mixture, method, seed, test_set, AP, AP50, AP25, run folder (relative
-    to ``out``), the tables it belongs to (as its spec says) and its matches file. Runs scored before AP25
-    existed get it from their predictions once (:func:`run_ap25`) when ``datasets`` is given, else None."""
+    to ``out``), the tables it belongs to (as its spec says) and its matches file; a set without boxes (AP None)
+    also :data:`eval.errors.ALARMS`, its false alarms per 100 images. Runs scored before AP25 existed get it
+    from their predictions once (:func:`run_ap25`) when ``datasets`` is given, else None."""
     rows = []
     for spec, test, m, folder in _scored(specs, results):
-        ap25 = m.get("AP25") if datasets is None else run_ap25(datasets, folder, test.data, m)
+        negatives = m.get(ALARMS) is not None
+        ap25 = m.get("AP25") if datasets is None or negatives else run_ap25(datasets, folder, test.data, m)
         rows.append({
             "mixture": spec.mixture, "method": spec.method or "-", "seed": spec.seed, "test_set": test.name,
-            "AP": m["AP"], "AP50": m["AP50"], "AP25": ap25, "run": spec.out.relative_to(out).as_posix(),
-            "tables": list(spec.tables), "matches": (folder / "matches.npz").as_posix(),
+            "AP": m["AP"], "AP50": m["AP50"], "AP25": ap25, **({ALARMS: m[ALARMS]} if negatives else {}),
+            "run": spec.out.relative_to(out).as_posix(), "tables": list(spec.tables),
+            "matches": (folder / "matches.npz").as_posix(),
         })  # fmt: skip
     return rows
 
@@ -76,11 +80,11 @@ def _predictions(folder: Path) -> list[dict]:
 
 
 def comparisons(cfg: ExperimentConfig, rows: Sequence[dict]) -> list[dict]:
-    """Paired image-level bootstrap of every Table-2 mixture against the baseline, per test set and metric
-    (seeds averaged per resample)."""
+    """Paired image-level bootstrap of every Table-2 mixture against the baseline, per test set with boxes and
+    metric (seeds averaged per resample); sets without boxes have no AP to compare."""
     from eval.stats import MatchTable, paired_bootstrap
 
-    t2 = [r for r in rows if "table2" in r["tables"]]
+    t2 = [r for r in rows if "table2" in r["tables"] and ALARMS not in r]
     names = list(dict.fromkeys(r["mixture"] for r in t2))
     real_only = [n for n in names if parse_mixture(n).synth == 0]
     baseline = cfg.report.baseline or (max(real_only, key=lambda n: parse_mixture(n).real) if real_only else None)
@@ -121,8 +125,10 @@ def write_report(
     if data.rare is not None:
         samples[label(cfg.rare.name, data.rare.standin)] = data.rare
     samples.update({f"synthetic {m}": ref for m, ref in data.pools.items()})
+    samples.update(data.tests)
     shown = {k: datasets.get(ref) for k, ref in samples.items()} if cfg.report.samples else {}
-    columns = ("mixture", "method", "seed", "test_set", "AP", "AP50", "AP25", "run")
+    alarms = (ALARMS,) if any(ALARMS in r for r in rows) else ()
+    columns = ("mixture", "method", "seed", "test_set", "AP", "AP50", "AP25", *alarms, "run")
     title = cfg.report.title + (" — STAND-IN DATA" if data.standin else "")
     return write_study_report(
         out, t2, np.random.default_rng(0), method_results=t1, gaps=realism_gaps(cfg, data, datasets, out),

@@ -5,7 +5,7 @@ experiment's classes)."""
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -17,8 +17,9 @@ from curate.core.load import load_split, prepare
 @dataclass(frozen=True)
 class DataRef:
     """A labelled dataset a run reads: ``path`` (folder or COCO .json) in ``format``, one ``split`` of it (None =
-    every image), classes renamed by ``aliases`` and ``drop`` removed. ``identity``: what made it (hashable
-    JSON; no absolute output paths, so two experiment folders give the same run identities)."""
+    every image), classes renamed by ``aliases`` and ``drop`` removed, and with ``holdout`` > 0 only the images
+    :func:`synth.photos.held_out` picks at that share (:func:`held_out_images`). ``identity``: what made it
+    (hashable JSON; no absolute output paths, so two experiment folders give the same run identities)."""
 
     path: Path
     identity: Mapping[str, Any]
@@ -27,9 +28,10 @@ class DataRef:
     aliases: Mapping[str, str] = field(default_factory=dict)
     drop: tuple[str, ...] = ()
     standin: bool = False
+    holdout: float = 0.0
 
     def with_split(self, split: str | None) -> DataRef:
-        return DataRef(self.path, self.identity, self.format, split, self.aliases, self.drop, self.standin)
+        return replace(self, split=split)
 
     def key(self) -> dict[str, Any]:
         """The identity of this split of the data."""
@@ -61,12 +63,26 @@ class Datasets:
     def get(self, ref: DataRef) -> Dataset:
         """Split ``ref.split`` (None = every image) with exactly the experiment's classes, in their order.
         Raises ValueError when the split is missing or has no images."""
-        key = (ref.source(), ref.split, ref.drop)
+        key = (ref.source(), ref.split, ref.drop, ref.holdout)
         if key not in self._prepared:
-            self._prepared[key] = prepare(self.read(ref), ref.split, self.classes, ref.drop, ref.path)
+            ds = prepare(self.read(ref), ref.split, self.classes, ref.drop, ref.path)
+            self._prepared[key] = held_out_images(ds, ref.holdout, ref.path) if ref.holdout else ds
         return self._prepared[key]
 
 
 def load_data(ref: DataRef, classes: Sequence[str]) -> Dataset:
     """``ref``'s split with exactly ``classes``, read from disk now (a run outside an experiment)."""
-    return load_split(ref.path, ref.format, ref.split, classes, dict(ref.aliases), ref.drop)
+    ds = load_split(ref.path, ref.format, ref.split, classes, dict(ref.aliases), ref.drop)
+    return held_out_images(ds, ref.holdout, ref.path) if ref.holdout else ds
+
+
+def held_out_images(ds: Dataset, share: float, where: Path | str = "") -> Dataset:
+    """The images of ``ds`` that :func:`synth.photos.held_out` keeps out of every pool at ``share`` (0..1, by
+    content hash): the test set of photos that a Method 2 pool with ``background_holdout: share`` never shows.
+    Raises ValueError when none is held out."""
+    from synth.photos import held_out
+
+    kept = ds.filter_images(lambda img: held_out(ds.image_path(img), share))
+    if not kept.images:
+        raise ValueError(f"{where or ds.root}: none of its {len(ds.images)} images is held out at share {share:g}")
+    return kept

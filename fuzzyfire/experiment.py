@@ -1,7 +1,8 @@
 """``fuzzyfire experiment``: the study in one call. Wiring only; the work lives in the stages, runs and eval.
 
 curate (optional) -> synth Method 1 and Method 2 -> mix -> train each mixture x seed -> score every run on
-every test set -> aggregate -> report. Output folder::
+every test set (common, rare and the named ``tests:``; a test set holding a pool's background photo is refused
+first, :mod:`fuzzyfire.leakage`) -> aggregate -> report. Output folder::
 
     OUT/experiment.json            resolved config, versions, git commit, stages, runs and their status
     OUT/data/<stage>-<hash>/       real / rare / method1 / method2 datasets (cached by config hash)
@@ -15,6 +16,7 @@ from __future__ import annotations
 
 import functools
 import shutil
+from collections import Counter
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -25,12 +27,14 @@ from curate.core.formats.yolo import ultralytics_val_folders
 from curate.core.load import SplitError
 from curate.core.lock import lock_status, lock_summary
 from curate.mix import mixture_dir, parse_mixture, write_mixture
+from eval.errors import ALARMS
 from fuzzyfire.aggregate import STANDIN_NOTICE, result_rows, write_report, write_summary
 from fuzzyfire.cutout_pools import cutout_pools, simulated
 from fuzzyfire.datasets import DataRef, Datasets
 from fuzzyfire.executors import Outcome
-from fuzzyfire.experiment_config import METHODS, ExperimentConfig
-from fuzzyfire.runs import EvalSet, RunSpec, RunTask, execute_task, finished, run_data
+from fuzzyfire.experiment_config import METHODS, EvalSetConfig, ExperimentConfig
+from fuzzyfire.leakage import check_leakage, pool_photos
+from fuzzyfire.runs import EvalSet, RunSpec, RunTask, execute_task, finished, missing_evals, run_data
 from fuzzyfire.stages import Prepared, curate_stage, digest, folder_ref, label, standin_stage, synth_stage
 
 
@@ -39,9 +43,10 @@ def _say(message: str) -> None:
 
 
 def prepare_data(cfg: ExperimentConfig, base: Path, out: Path, methods: Sequence[str]) -> Prepared:
-    """Build (or reuse) every data stage: the real set, the rare set and the pools of ``methods``."""
+    """Build (or reuse) every data stage: the real set, the rare set, the named test sets and the pools of
+    ``methods``."""
     root = out / "data"
-    real, rare = cfg.real, cfg.rare
+    real = cfg.real
     kind = real.source()
     if kind == "path":
         real_ref = folder_ref(real.path, base, real.format, real.aliases, real.drop_classes)
@@ -49,17 +54,29 @@ def prepare_data(cfg: ExperimentConfig, base: Path, out: Path, methods: Sequence
         real_ref = _stage("real (curated)", curate_stage, root, real.curate_config(), base)
     else:
         real_ref = _stage("real (stand-in)", standin_stage, root, "real-standin", real.standin)
-    rare_ref = None
-    if rare is not None and rare.source() == "path":
-        rare_ref = folder_ref(rare.path, base, rare.format, rare.aliases, rare.drop_classes, rare.split)
-    elif rare is not None:
-        rare_ref = _stage("rare (stand-in)", standin_stage, root, "rare-standin", rare.standin)
+    rare_ref = _test_ref(cfg.rare, "rare", "rare-standin", base, root) if cfg.rare is not None else None
+    tests = {}
+    for key, name in cfg.test_names().items():
+        ref = _test_ref(cfg.tests[key], f"test {key}", "test-standin", base, root)
+        tests[label(name, ref.standin)] = ref
+    return Prepared(real_ref, rare_ref, prepare_pools(cfg, base, out, methods), tests)
+
+
+def prepare_pools(cfg: ExperimentConfig, base: Path, out: Path, methods: Sequence[str]) -> dict[str, DataRef]:
+    """Build (or reuse) the synthetic pools of ``methods``."""
     pools = {}
     for method in methods:
         synth = getattr(cfg.synth, method)
         synth = simulated(synth) if method == "method2" else synth  # own cut-out pools: fuzzyfire.cutout_pools
-        pools[method] = _stage(method, synth_stage, root, method, synth, base)
-    return Prepared(real_ref, rare_ref, pools)
+        pools[method] = _stage(method, synth_stage, out / "data", method, synth, base)
+    return pools
+
+
+def _test_ref(t: EvalSetConfig, what: str, stage: str, base: Path, root: Path) -> DataRef:
+    """A test set's data: its folder read in place, or its stand-in built as stage ``stage``."""
+    if t.source() == "path":
+        return folder_ref(t.path, base, t.format, t.aliases, t.drop_classes, t.split, t.holdout)
+    return _stage(f"{what} (stand-in)", standin_stage, root, stage, t.standin)
 
 
 def _stage(what: str, make, *args) -> DataRef:
@@ -176,9 +193,7 @@ def plan_runs(
     """One fully resolved spec per (seed, grid entry): seed-major, so a partial grid has whole tables for early
     seeds. Each run's train config carries its seed and threads, its score config its threads (``0`` in the
     config = the executor's CPUs per run)."""
-    tests = [EvalSet(label(cfg.real.name, data.real.standin), data.real.with_split(cfg.real.test_split))]
-    if data.rare is not None:
-        tests.append(EvalSet(label(cfg.rare.name, data.rare.standin), data.rare))
+    tests, evals = test_sets(cfg, data)
     threads = max(1, int(cfg.executor.num_cpus))
     train = replace(cfg.train, threads=cfg.train.threads or threads)
     score = replace(cfg.score, threads=cfg.score.threads or threads)
@@ -190,17 +205,27 @@ def plan_runs(
             e.method,
             mixtures[(e.mixture, e.method, seed)],
             val,
-            tuple(tests),
+            tests,
             cfg.classes,
             replace(train, seed=seed),
             score,
             out,
             engine,
             e.tables,
+            evals,
         )  # fmt: skip
         for seed in cfg.grid.seeds
         for e in grid
     ]
+
+
+def test_sets(cfg: ExperimentConfig, data: Prepared) -> tuple[tuple[EvalSet, ...], tuple[EvalSet, ...]]:
+    """The test sets of every run: the common and rare sets (in the run identity, as always) and the named sets
+    of ``tests:`` (not in it: adding one scores the finished runs, it trains nothing)."""
+    tests = [EvalSet(label(cfg.real.name, data.real.standin), data.real.with_split(cfg.real.test_split))]
+    if data.rare is not None:
+        tests.append(EvalSet(label(cfg.rare.name, data.rare.standin), data.rare))
+    return tuple(tests), tuple(EvalSet(name, ref) for name, ref in data.tests.items())
 
 
 def run_grid(specs: Sequence[RunSpec], datasets: Datasets, executor) -> list[dict[str, Any] | None]:
@@ -220,8 +245,16 @@ def _outcome_text(outcome: Outcome) -> str:
     if outcome.error:
         return f"FAILED {outcome.error}"
     res = outcome.result
-    scores = "  ".join(f"{name} AP {_pct(m['AP'])} AP50 {_pct(m['AP50'])}" for name, m in res["tests"].items())
+    scores = "  ".join(_scores_text(name, m) for name, m in res["tests"].items())
+    if res.get("scored"):
+        return f"{scores}  (trained before; scored now on {', '.join(res['scored'])})"
     return f"{scores}{'  (done before)' if res.get('skipped') else ''}"
+
+
+def _scores_text(name: str, m: dict[str, Any]) -> str:
+    if m.get(ALARMS) is not None:
+        return f"{name} alarms/100 {m[ALARMS]:.1f}"
+    return f"{name} AP {_pct(m['AP'])} AP50 {_pct(m['AP50'])}"
 
 
 def _pct(value: float | None) -> str:
@@ -240,7 +273,22 @@ def finished_runs(specs: Sequence[RunSpec]) -> list[dict[str, Any] | None]:
     """The results of the specs that already finished (None for the others); trains nothing."""
     results = [finished(spec) for spec in specs]
     _say(f"runs   {sum(r is not None for r in results)} of {len(specs)} runs finished (report only)")
+    missing = Counter(t.name for s, r in zip(specs, results) if r is not None for t in missing_evals(s, r))
+    for name, count in missing.items():
+        _say(f"runs   {name}: {count} finished runs not scored on it yet (run without --report-only: no training)")
     return results
+
+
+def check_data(cfg: ExperimentConfig, data: Prepared, datasets: Datasets, photos: dict[str, list[Path]]) -> None:
+    """Fail now, not after the first training: the real set must have its validation and test splits, and no
+    test set may hold a background photo of a pool (``photos``: :func:`fuzzyfire.leakage.pool_photos`)."""
+    for split in (cfg.real.val_split, cfg.real.test_split):
+        try:
+            datasets.get(data.real.with_split(split))
+        except SplitError as exc:
+            raise SplitError(f"{exc}: curate the real set (real.curate) or name its splits (real.*_split)") from None
+    every = [t for group in test_sets(cfg, data) for t in group]
+    check_leakage(photos, {t.name: datasets.get(t.data) for t in every} if photos else {})
 
 
 def run_experiment(cfg: ExperimentConfig, base: Path, out: Path, executor=None) -> ExperimentResult:
@@ -251,15 +299,12 @@ def run_experiment(cfg: ExperimentConfig, base: Path, out: Path, executor=None) 
     out.mkdir(parents=True, exist_ok=True)
     _say(f"env    {lock_summary(lock_status())}")
     grid = grid_entries(cfg)
-    data = prepare_data(cfg, base, out, needed_methods(grid))
+    datasets = Datasets(cfg.classes)
+    data = prepare_data(cfg, base, out, ())  # the real and test sets, checked before any pool is built
+    check_data(cfg, data, datasets, pool_photos(cfg.synth, needed_methods(grid), base))
+    data = replace(data, pools=prepare_pools(cfg, base, out, needed_methods(grid)))
     if data.standin:
         _say(STANDIN_NOTICE)
-    datasets = Datasets(cfg.classes)
-    for split in (cfg.real.val_split, cfg.real.test_split):  # fail now, not after the first training
-        try:
-            datasets.get(data.real.with_split(split))
-        except SplitError as exc:
-            raise SplitError(f"{exc}: curate the real set (real.curate) or name its splits (real.*_split)") from None
     drawn = [e.mixture for e in grid if e.method == "method2"]
     own = cutout_pools(cfg, drawn, data.real.with_split(cfg.real.train_split), datasets, base, out)
     specs = plan_runs(cfg, grid, data, write_mixtures(cfg, grid, data, datasets, out, own), out)

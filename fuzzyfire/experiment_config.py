@@ -69,22 +69,41 @@ class RealConfig:
 
 
 @dataclass(frozen=True)
-class RareConfig:
-    """The rare test set: a dataset folder (``path``, optionally one ``split``) or a generated stand-in."""
+class EvalSetConfig:
+    """A test set: a dataset folder (``path``, optionally one ``split``) or a generated stand-in (``standin``).
+    A folder of images without labels is a negatives-only set (no AP: its false alarms per 100 images are
+    reported). ``holdout`` keeps only the images :func:`synth.photos.held_out` picks at that share: the photos a
+    Method 2 pool with the same ``background_holdout`` never composites on."""
 
     path: Optional[Path] = None
-    format: Literal["auto", "coco", "yolo", "voc", "dfire"] = "auto"
+    format: Literal["auto", "coco", "yolo", "voc", "dfire", "images"] = "auto"
     split: Optional[str] = None  # null = every image of the folder
     aliases: dict[str, str] = field(default_factory=dict)
     drop_classes: tuple[str, ...] = ()
     standin: Optional[StandInConfig] = None
-    name: str = "rare"
+    holdout: float = 0.0  # 0 = every image; 0 < share <= 1 = only the held-out share (chosen by content hash)
+    name: Optional[str] = None  # label in tables and figures; null = the key under ``tests:``
 
-    def source(self) -> str:
+    def source(self, where: str = "test set") -> str:
+        """``"path"`` or ``"standin"``; raises when the keys contradict each other (``where`` names the set)."""
         given = [k for k in ("path", "standin") if getattr(self, k) is not None]
         if len(given) != 1:
-            raise ExperimentConfigError(f"rare: give exactly one of path, standin (got {given or 'none'})")
+            raise ExperimentConfigError(f"{where}: give exactly one of path, standin (got {given or 'none'})")
+        if not 0.0 <= self.holdout <= 1.0:
+            raise ExperimentConfigError(f"{where}: holdout must be in 0..1, got {self.holdout:g}")
+        if self.holdout and given[0] != "path":
+            raise ExperimentConfigError(f"{where}: holdout picks photos of a folder (path), not of a stand-in")
         return given[0]
+
+
+@dataclass(frozen=True)
+class RareConfig(EvalSetConfig):
+    """The rare test set (:class:`EvalSetConfig` labelled ``rare``)."""
+
+    name: str = "rare"  # type: ignore[assignment]  # always labelled
+
+    def source(self, where: str = "rare") -> str:
+        return super().source(where)
 
 
 @dataclass(frozen=True)
@@ -132,6 +151,7 @@ class ReportConfig:
 class ExperimentConfig:
     real: RealConfig
     rare: Optional[RareConfig] = None
+    tests: dict[str, EvalSetConfig] = field(default_factory=dict)  # more test sets, by name (scored, not trained on)
     classes: tuple[str, ...] = ("fire",)  # trained and scored classes; other classes' boxes are dropped
     synth: SynthConfig = field(default_factory=SynthConfig)
     grid: GridConfig = field(default_factory=GridConfig)
@@ -147,6 +167,7 @@ class ExperimentConfig:
         self.real.source()
         if self.rare is not None:
             self.rare.source()
+        self.check_test_names()
         if getattr(self.synth, self.grid.synthetic) is None:
             raise ExperimentConfigError(
                 f"grid.synthetic is {self.grid.synthetic} but synth.{self.grid.synthetic} is null"
@@ -161,3 +182,19 @@ class ExperimentConfig:
             self.engine.check()
         except EngineError as exc:
             raise ExperimentConfigError(str(exc)) from None
+
+    def test_names(self) -> dict[str, str]:
+        """The label of every named test set (``tests:``), by key."""
+        return {key: t.name or key for key, t in self.tests.items()}
+
+    def check_test_names(self) -> None:
+        """Every named test set has a source; no two test sets (common, rare, named) share a label or the folder
+        name of their scores (:func:`fuzzyfire.runs.slug`)."""
+        from fuzzyfire.runs import slug
+
+        seen = [slug(self.real.name), *([slug(self.rare.name)] if self.rare is not None else [])]
+        for key, name in self.test_names().items():
+            self.tests[key].source(f"tests.{key}")
+            if slug(name) in seen:
+                raise ExperimentConfigError(f"tests.{key}: the label {name!r} is taken by another test set")
+            seen.append(slug(name))

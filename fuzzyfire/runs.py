@@ -4,9 +4,10 @@ A run is a pure function of its :class:`RunSpec` (config, mixture, seed and the 
 writes into ``spec.out``: ``run.json`` (the spec) first, ``train/`` (the training run folder, resumable from
 its ``last.pt``), ``scores/<test set>/`` (metrics.json, predictions.json, matches.npz, pr_curve.png,
 errors.json), ``timing.json``
-and, last, ``results.json``. A run whose ``results.json`` carries the same identity hash is skipped, so a
-rerun does nothing and an interrupted grid resumes. ``results.json`` holds no timings or absolute paths: the
-same spec gives byte-identical files.
+and, last, ``results.json``. A run whose ``results.json`` carries the same identity hash is not trained again,
+so a rerun does nothing and an interrupted grid resumes; the named test sets (``spec.evals``) are no part of
+that identity: one added later (or redefined) is scored with the finished run's model and added to its
+``results.json``. ``results.json`` holds no timings or absolute paths: the same spec gives byte-identical files.
 """
 
 from __future__ import annotations
@@ -14,18 +15,21 @@ from __future__ import annotations
 import json
 import os
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, NamedTuple
 
 from curate.core.config import to_dict
+from eval.errors import ALARMS
 from fuzzyfire.datasets import DataRef, load_data
 from fuzzyfire.engine import CommandJob, command_train
 from fuzzyfire.stages import digest
 
 if TYPE_CHECKING:
+    from curate.core.cocoeval import CocoMetrics
     from curate.core.dataset import Dataset
+    from eval.errors import ErrorBreakdown
     from eval.score import ScoreConfig
     from fuzzyfire.engine import EngineConfig
     from train.config import TrainConfig
@@ -52,7 +56,8 @@ class RunSpec:
     ``seed`` is the run's seed, its ``threads`` resolved); ``score`` eval's own scoring options; ``engine`` an
     external trainer (:mod:`fuzzyfire.engine`; None = our detector); ``tables`` the study tables the run's rows
     belong to (``table1``, ``table2``); ``root`` the experiment folder (the run's own folder, :attr:`out`,
-    follows from its label, seed and identity hash)."""
+    follows from its label, seed and identity hash); ``tests`` the common and rare sets (in the identity, as
+    they always were), ``evals`` the named test sets (not in it)."""
 
     mixture: str
     method: str | None
@@ -65,6 +70,7 @@ class RunSpec:
     root: Path
     engine: EngineConfig | None = None
     tables: tuple[str, ...] = ()
+    evals: tuple[EvalSet, ...] = ()  # named test sets: scored, but not in the identity (added ones need no training)
 
     @property
     def seed(self) -> int:
@@ -97,6 +103,11 @@ class RunSpec:
 
     def hash(self) -> str:
         return digest(self.identity())
+
+    @property
+    def test_sets(self) -> tuple[EvalSet, ...]:
+        """Every test set the run is scored on: :attr:`tests`, then :attr:`evals`."""
+        return (*self.tests, *self.evals)
 
     def record(self) -> dict[str, Any]:
         """The resolved spec as ``run.json`` and ``results.json`` keep it: identity, hash and tables."""
@@ -142,7 +153,7 @@ def run_data(spec: RunSpec, load: Callable[[DataRef], Dataset] | None = None) ->
     """The shared datasets of ``spec``, each from ``load`` (the experiment's :meth:`fuzzyfire.datasets.Datasets.get`);
     without it read from disk now (a run outside an experiment)."""
     load = load or (lambda ref: load_data(ref, spec.classes))
-    return RunData(load(spec.val_data), {t.name: load(t.data) for t in spec.tests})
+    return RunData(load(spec.val_data), {t.name: load(t.data) for t in spec.test_sets})
 
 
 def train_run(spec: RunSpec, val: Dataset) -> dict[str, Any]:
@@ -153,9 +164,12 @@ def train_run(spec: RunSpec, val: Dataset) -> dict[str, Any]:
     return fit(spec.train, load_data(spec.train_data, spec.classes), val, spec.out / "train")
 
 
-def score_run(spec: RunSpec, model: Path, tests: dict[str, Dataset]) -> dict[str, dict[str, Any]]:
-    """Score ``model`` on every test set (``tests``: their datasets by name); writes ``scores/<name>/``; returns
-    headline metrics per test set."""
+def score_run(
+    spec: RunSpec, model: Path, tests: dict[str, Dataset], which: Sequence[EvalSet] | None = None
+) -> dict[str, dict[str, Any]]:
+    """Score ``model`` on the test sets ``which`` (None = every one of ``spec``; ``tests``: their datasets by
+    name); writes ``scores/<name>/``; returns headline metrics per test set (:func:`headline`). A named test
+    set's entry carries its data's digest (:func:`eval_key`): a redefined set is scored again."""
     from eval.score import score, score_errors, write_outputs
 
     detector = spec.score.detector(model)
@@ -163,21 +177,65 @@ def score_run(spec: RunSpec, model: Path, tests: dict[str, Dataset]) -> dict[str
         print(detector.device_notice, flush=True)
     options = spec.score.predict_options()
     out = {}
-    for test in spec.tests:
+    for test in spec.test_sets if which is None else which:
         result = score(detector, tests[test.name], options)
         folder = spec.out / "scores" / slug(test.name)
         write_outputs(result, folder)
-        score_errors(result).write(folder)
-        m = result.metrics
-        out[test.name] = {
-            **{k: m.summary.get(k) for k in METRICS},
-            "images": m.images,
-            "boxes": m.boxes,
-            "detections": m.detections,
-            "per_class": m.per_class,
-            "scores": f"scores/{slug(test.name)}",
-        }
+        errors = score_errors(result)
+        errors.write(folder)
+        out[test.name] = headline(result.metrics, errors, f"scores/{slug(test.name)}")
+        if test in spec.evals:
+            out[test.name]["data"] = eval_key(test)
     return out
+
+
+def headline(m: CocoMetrics, errors: ErrorBreakdown, folder: str) -> dict[str, Any]:
+    """What ``results.json`` keeps of one scoring: :data:`METRICS` (0..1, None when undefined), counts, per-class
+    metrics and the scores folder; for a set without boxes (negatives only: AP undefined) also :data:`ALARMS`,
+    the breakdown's detections at ``errors.alarm_conf`` per 100 images (:mod:`eval.errors`)."""
+    doc = {
+        **{k: m.summary.get(k) for k in METRICS},
+        "images": m.images,
+        "boxes": m.boxes,
+        "detections": m.detections,
+        "per_class": m.per_class,
+        "scores": folder,
+    }
+    if m.boxes == 0:
+        doc[ALARMS] = errors.false_alarms_per_100
+    return doc
+
+
+def eval_key(test: EvalSet) -> str:
+    """The digest of a named test set's data (its identity and split) as its results entry records it."""
+    return digest(test.data.key())
+
+
+def missing_evals(spec: RunSpec, results: dict[str, Any]) -> list[EvalSet]:
+    """The named test sets of ``spec`` that its finished ``results`` were not scored on (or on other data)."""
+    return [t for t in spec.evals if results["tests"].get(t.name, {}).get("data") != eval_key(t)]
+
+
+def exported_model(spec: RunSpec) -> Path:
+    """The ONNX a finished run exported; trains nothing (a command engine's finished commands are not rerun,
+    :func:`fuzzyfire.engine.command_train`). Raises :class:`RunError` when it is gone."""
+    if spec.engine is not None:
+        return command_train(CommandJob(spec.train, Path(spec.train_data.path), spec.out, spec.hash()), spec.engine)
+    path = spec.out / "train" / RESULTS_FILE
+    name = json.loads(path.read_text(encoding="utf-8")).get("onnx") if path.is_file() else None
+    if not name or not (spec.out / "train" / name).is_file():
+        raise RunError(f"{spec.out}: its exported model (train/best.onnx) is gone: nothing to score new test sets on")
+    return spec.out / "train" / name
+
+
+def score_finished(spec: RunSpec, done: dict[str, Any], which: Sequence[EvalSet], data: RunData | None) -> dict:
+    """Score a finished run's model on the test sets ``which`` and add them to its ``results.json``; returns
+    the new results (``skipped``: not trained, ``scored``: the names of the sets scored now)."""
+    data = run_data(spec) if data is None else data
+    tests = score_run(spec, exported_model(spec), data.tests, which)
+    results = {**done, "tests": {**done["tests"], **tests}}
+    _write_json(spec.out / RESULTS_FILE, results)
+    return {**results, "skipped": True, "scored": [t.name for t in which]}
 
 
 def slug(name: str) -> str:
@@ -187,11 +245,13 @@ def slug(name: str) -> str:
 
 
 def execute_run(spec: RunSpec, data: RunData | None = None) -> dict[str, Any]:
-    """Run ``spec`` (module docstring) unless it already finished; returns its ``results.json`` content.
+    """Run ``spec`` (module docstring) unless it already finished (then only score it on the named test sets
+    its results lack); returns its ``results.json`` content.
     ``data``: its shared datasets as the experiment prepared them (None: read here)."""
     done = finished(spec)
     if done is not None:
-        return {**done, "skipped": True}
+        missing = missing_evals(spec, done)
+        return score_finished(spec, done, missing, data) if missing else {**done, "skipped": True}
     data = run_data(spec) if data is None else data
     spec.out.mkdir(parents=True, exist_ok=True)
     _write_json(spec.out / "run.json", spec.record())

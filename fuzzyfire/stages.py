@@ -14,7 +14,7 @@ import hashlib
 import json
 import shutil
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -142,13 +142,18 @@ def _absolute(path: Path, base: Path) -> Path:
     return (path if path.is_absolute() else base / path).resolve()
 
 
-def folder_ref(path: Path, base: Path, fmt: str, aliases, drop, split: str | None = None) -> DataRef:
-    """A user's dataset read in place (identity = its resolved path and reading options)."""
+def folder_ref(
+    path: Path, base: Path, fmt: str, aliases, drop, split: str | None = None, holdout: float = 0.0
+) -> DataRef:
+    """A user's dataset read in place (identity = its resolved path and reading options; ``holdout``, the share
+    of held-out photos it is cut to, only when set)."""
     where = _absolute(path, base)
     if not where.exists():
         raise FileNotFoundError(f"{where}: dataset not found")
     identity = {"kind": "folder", "path": where.as_posix(), "format": fmt, "aliases": dict(aliases), "drop": list(drop)}
-    return DataRef(where, identity, fmt, split, dict(aliases), tuple(drop))
+    if holdout:
+        identity["holdout"] = holdout
+    return DataRef(where, identity, fmt, split, dict(aliases), tuple(drop), holdout=holdout)
 
 
 def standin_stage(root: Path, name: str, cfg: Any) -> tuple[Stage, DataRef]:
@@ -275,11 +280,13 @@ def _curate(cfg: Any, base: Path, out: Path) -> None:
 
 @dataclass(frozen=True)
 class Prepared:
-    """The experiment's data: the real set (with splits), the rare test set and the synthetic pools."""
+    """The experiment's data: the real set (with splits), the rare test set, the synthetic pools and the named
+    test sets (``tests:``) by label."""
 
     real: DataRef
     rare: DataRef | None
     pools: dict[str, DataRef]
+    tests: dict[str, DataRef] = field(default_factory=dict)
 
     @property
     def standin(self) -> bool:

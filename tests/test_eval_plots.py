@@ -32,3 +32,21 @@ def test_figure5_and_bars(tmp_path):
     ]
     _png(plot_figure5(results, tmp_path / "fig5.png"))
     _png(plot_bars(["a", "b"], {"x": ([1.0, 2.0], [0.1, float("nan")])}, tmp_path / "bars.png"))
+
+
+def test_figure5_of_a_metric_has_a_bar_per_set_that_has_it(tmp_path, monkeypatch):
+    import eval.plots as plots
+    from eval.errors import ALARMS
+
+    drawn = {}
+
+    def record(groups, series, path, ylabel="AP", title=""):
+        drawn[ylabel] = {name: means for name, (means, _) in series.items()}
+        return plot_bars(groups, series, path, ylabel, title)
+
+    monkeypatch.setattr(plots, "plot_bars", record)
+    rows = [{"mixture": m, "seed": 0, "test_set": "common", "AP": 0.25} for m in ("R1000_S0", "R0_S1000")]
+    rows += [{"mixture": m, "seed": 0, "test_set": "free", "AP": None, ALARMS: 40.0} for m in ("R1000_S0", "R0_S1000")]
+    _png(plot_figure5(rows, tmp_path / "ap.png", "AP"))
+    _png(plot_figure5(rows, tmp_path / "alarms.png", ALARMS))
+    assert drawn == {"AP (%)": {"common": [25.0, 25.0]}, "false alarms per 100 images": {"free": [40.0, 40.0]}}

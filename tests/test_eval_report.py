@@ -117,3 +117,28 @@ def test_tables_show_ap25_only_when_every_run_has_it() -> None:
     assert table_metrics(rows) == ("AP", "AP50", "AP25")
     assert table_metrics([*rows, {**rows[0], "seed": 2, "AP25": None}]) == ("AP", "AP50")  # scored before AP25
     assert table_metrics([]) == ("AP", "AP50")
+
+
+def test_a_set_without_fire_shows_its_alarm_rate_in_tables_figures_and_runs(tmp_path):
+    from eval.errors import ALARMS
+    from eval.report import table_metrics
+
+    fire = [
+        {"mixture": m, "seed": s, "test_set": "common", "AP": 0.3 + 0.1 * i, "AP50": 0.6, "AP25": 0.7}
+        for i, m in enumerate(["R1000_S0", "R0_S1000"])
+        for s in (0, 1)
+    ]
+    free = [
+        {"mixture": m, "seed": s, "test_set": "fire-free", "AP": None, "AP50": None, "AP25": None, ALARMS: 12.5 + s}
+        for m in ("R1000_S0", "R0_S1000")
+        for s in (0, 1)
+    ]
+    assert table_metrics([*fire, *free]) == ("AP", "AP50", "AP25")  # the set without fire has no AP25 to lack
+    out = tmp_path / "study"
+    columns = ("mixture", "seed", "test_set", "AP", ALARMS)
+    page = write_study_report(out, [*fire, *free], np.random.default_rng(0), run_columns=columns).read_text()
+    figures = {p.name for p in (out / "figures").iterdir()}
+    assert figures == {"figure5_AP.png", "figure5_AP50.png", "figure5_alarms_per_100.png"}
+    assert "<th>fire-free alarms/100</th>" in page and "<td><b>13.0 ± 0.7</b></td>" in page  # as is, not in percent
+    assert "<th>alarms/100</th>" in page and "<td>12.5</td>" in page and "<td>30.0</td>" in page  # the run list
+    assert "fire-free alarms/100" in (out / "tables" / "table2.md").read_text()

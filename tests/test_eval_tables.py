@@ -1,4 +1,5 @@
-"""Tables 1 and 2: grouping and order, mean ± std over seeds, best bold / second italic in every format."""
+"""Tables 1 and 2: grouping and order, mean ± std over seeds, best bold / second italic in every format; a set
+without fire as one alarm-rate column (per 100 images, lowest best)."""
 
 from __future__ import annotations
 
@@ -7,6 +8,7 @@ import io
 
 import pytest
 
+from eval.errors import ALARMS
 from eval.tables import marks, table1, table2, to_csv, to_latex, to_markdown
 
 
@@ -62,3 +64,42 @@ def test_table1_rows_per_method():
     md = to_markdown(t)
     assert "| *Method 2 (2D)* |" in md and "| R0_S1000 | **30.0 ± 1.4** |" in md
     assert marks(t)[("Method 1 (3D) R0_S1000", "common/AP")] == "second"
+
+
+def _with_fire_free(rows):
+    """``rows`` plus a fire-free set: false alarms per 100 images, fewest for R750_S250, AP undefined."""
+    alarms = {"R1000_S0": 20.0, "R500_S0": 30.0, "R750_S250": 5.0, "R500_S500": 10.0, "R0_S1000": 80.0}
+    extra = [
+        {"mixture": m, "seed": s, "test_set": "fire-free", "AP": None, "AP50": None, ALARMS: a + 2 * s - 1}
+        for m, a in alarms.items()
+        for s in (0, 1)
+    ]
+    return [*rows, *extra]
+
+
+def test_a_set_without_fire_has_one_column_its_alarm_rate_lowest_best():
+    t = table2(_with_fire_free(results()), metrics=("AP", "AP50", "AP25"))
+    assert [c for c in t.columns if c[0] == "fire-free"] == [("fire-free", ALARMS)]
+    assert ("common", ALARMS) not in t.columns and ("common", "AP") in t.columns
+    cell = t.cell("R750_S250", ("fire-free", ALARMS))
+    assert cell.mean == pytest.approx(5.0) and cell.n == 2
+    mk = marks(t)
+    assert mk[("R750_S250", f"fire-free/{ALARMS}")] == "best" and mk[("R500_S500", f"fire-free/{ALARMS}")] == "second"
+    assert ("R0_S1000", f"fire-free/{ALARMS}") not in mk
+    md = to_markdown(t)  # per 100 images as they are, not in percent
+    assert "fire-free alarms/100 |" in md.splitlines()[2] and "**5.0 ± 1.4**" in md and "80.0 ± 1.4" in md
+    row = next(r for r in csv.DictReader(io.StringIO(to_csv(t))) if r["row"] == "R750_S250")
+    assert float(row["fire-free alarms/100 mean"]) == pytest.approx(5.0) and row["fire-free alarms/100 rank"] == "best"
+    assert r"\textbf{5.0 $\pm$ 1.4}" in to_latex(t) and "alarms/100" in to_latex(t)
+    assert table2(results()).columns == table2(_with_fire_free(results())).columns[:4]  # the other sets unchanged
+
+
+def test_table1_has_the_alarm_column_too():
+    res = [
+        dict(r, method=m)
+        for r in _with_fire_free(results())
+        if r["mixture"] == "R0_S1000"
+        for m in ("method1", "method2")
+    ]
+    t = table1(res)
+    assert t.columns[-1] == ("fire-free", ALARMS) and t.cell("Method 1 (3D) R0_S1000", t.columns[-1]).mean == 80.0

@@ -1,9 +1,11 @@
-"""Aggregation: rows carry the tables their run's spec names, and when comparisons are skipped."""
+"""Aggregation: rows carry the tables their run's spec names, and when comparisons are skipped; a named set
+without fire gives rows with its alarm rate and no comparison."""
 
 from __future__ import annotations
 
 from pathlib import Path
 
+import pytest
 from factories_experiment import toy_config
 
 from eval.score import ScoreConfig
@@ -50,3 +52,28 @@ def test_no_comparisons_without_bootstrap_or_baseline(tmp_path: Path) -> None:
     cfg = toy_config(mixtures=["R12_S0", "R6_S6"])
     no_bootstrap = cfg.__class__(**{**cfg.__dict__, "report": cfg.report.__class__(bootstrap=0)})
     assert comparisons(no_bootstrap, rows) == []
+
+
+def test_a_named_set_without_fire_gives_alarm_rows_and_no_comparison(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from dataclasses import replace
+
+    import eval.stats as stats
+    from eval.errors import ALARMS
+
+    ref = DataRef(Path("/d"), {"kind": "x"})
+    specs = [
+        replace(_spec(tmp_path, m, method, tables=("table2",)), evals=(EvalSet("fire-free", ref),))
+        for m, method in (("R12_S0", None), ("R6_S6", "method2"))
+    ]
+    free = {"AP": None, "AP50": None, "AP25": None, ALARMS: 25.0, "scores": "scores/fire-free"}
+    results = [{"tests": {**_result(0.1)["tests"], "fire-free": free}}, _result(0.2)]  # the second: not scored yet
+    rows = result_rows(specs, results, tmp_path)
+    assert [r["test_set"] for r in rows] == ["common", "rare", "fire-free", "common", "rare"]
+    assert rows[2][ALARMS] == 25.0 and rows[2]["AP"] is None and not any(ALARMS in r for r in rows if r is not rows[2])
+    loaded: list[str] = []
+    monkeypatch.setattr(stats.MatchTable, "load", staticmethod(lambda path: loaded.append(Path(path).parent.name)))
+    monkeypatch.setattr(stats, "paired_bootstrap", lambda *a: {})
+    assert comparisons(toy_config(mixtures=["R12_S0", "R6_S6"]), rows) == []
+    assert sorted(set(loaded)) == ["common", "rare"]  # no AP on the set without fire: nothing to compare

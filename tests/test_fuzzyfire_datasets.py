@@ -56,3 +56,27 @@ def test_a_dataset_read_under_other_aliases_is_another_read(split_folder: Path, 
     renamed = folder_ref(split_folder, Path("/"), "coco", {"smoke": "fire"}, ())
     assert len(datasets.get(renamed).annotations) == len(datasets.get(plain).annotations)
     assert {a.category_id for a in datasets.get(renamed).annotations} == {1} and len(coco_reads) == 2
+
+
+def test_a_holdout_share_keeps_exactly_the_held_out_photos(tmp_path: Path) -> None:
+    from factories_experiment import fire_free_photos
+
+    from fuzzyfire.datasets import held_out_images
+    from synth.photos import held_out
+
+    folder = fire_free_photos(tmp_path / "photos", 10)
+    ref = folder_ref(folder, tmp_path, "auto", {}, (), None, 0.5)
+    assert ref.identity["holdout"] == 0.5 and "holdout" not in folder_ref(folder, tmp_path, "auto", {}, ()).identity
+    assert ref.with_split(None).holdout == 0.5
+    ds = Datasets(("fire",)).get(ref)
+    expected = {p.name for p in folder.iterdir() if held_out(p, 0.5)}
+    assert {Path(img.file_name).name for img in ds.images} == expected and 0 < len(expected) < 10
+    assert ds.category_names == ["fire"] and not ds.annotations  # a negatives-only set with the experiment's class
+    assert [img.file_name for img in load_data(ref, ("fire",)).images] == [img.file_name for img in ds.images]
+    with pytest.raises(ValueError, match="none of its 10 images is held out at share 1e-09"):
+        held_out_images(Datasets(("fire",)).get(folder_ref(folder, tmp_path, "auto", {}, ())), 1e-9, folder)
+
+
+def test_the_shared_fire_free_photos_hold_out_68_at_a_quarter(shared_data: Path) -> None:
+    ref = folder_ref(shared_data / "fire-free", shared_data, "auto", {}, (), None, 0.25)
+    assert len(Datasets(("fire",)).get(ref).images) == 68  # of 295: the photos no pool with holdout 0.25 shows

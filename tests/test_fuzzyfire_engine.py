@@ -11,7 +11,7 @@ from dataclasses import replace
 from pathlib import Path
 
 import pytest
-from factories_experiment import run_local_and_ray, toy_dict
+from factories_experiment import TRAIN, command_engine, run_local_and_ray, toy_dict
 
 from curate.core.config import build_config
 from fuzzyfire.cli import main
@@ -22,20 +22,10 @@ from fuzzyfire.experiment import grid_entries, needed_methods, plan_runs, prepar
 from fuzzyfire.experiment_config import ExperimentConfig, ExperimentConfigError
 from fuzzyfire.runs import RESULTS_FILE, execute_run
 
-FAKE = Path(__file__).with_name("fake_trainer.py")
-TRAIN = f"{{python}} {FAKE} train data={{data_yaml}} seed={{seed}} project={{run_dir}}/train name=yolo"
-EXPORT = f"{{python}} {FAKE} export model={{run_dir}}/train/yolo/weights/best.pt"
-
 
 def _config(**engine) -> ExperimentConfig:
     doc = toy_dict(mixtures=["R12_S0", "R6_S6"], table1=[])
-    doc["engine"] = {
-        "name": "command",
-        "train": TRAIN,
-        "export": EXPORT,
-        "onnx": "train/yolo/weights/best.onnx",
-        **engine,
-    }
+    doc["engine"] = command_engine(**engine)
     return build_config(doc, ExperimentConfig)
 
 

@@ -1,5 +1,6 @@
-"""The experiment end to end on a toy grid: stages, mixtures, runs, report; resume after an interruption skips
-finished runs; the same seeds give byte-identical results.json in another folder; stand-in data says so."""
+"""The experiment end to end on a toy grid: stages, mixtures, runs, report (with a fire-free test set and its
+alarm column); resume after an interruption skips finished runs; the same seeds give byte-identical results.json
+in another folder; stand-in data says so; a test set added to a finished study is scored without training."""
 
 from __future__ import annotations
 
@@ -12,9 +13,11 @@ import yaml
 from factories_experiment import toy_config, write_toy_config
 
 import fuzzyfire.experiment as experiment
+from eval.errors import ALARMS
 from fuzzyfire.cli import main
 from fuzzyfire.executors import LocalExecutor
 from fuzzyfire.experiment import GridEntry, grid_entries, needed_methods, run_experiment
+from fuzzyfire.experiment_config import ExperimentConfig
 from fuzzyfire.stages import label
 
 RUNS = ["R12_S0", "R6_S6-method2", "R0_S12-method1", "R0_S12-method2"]
@@ -48,7 +51,7 @@ def full_run(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, str, Count
     import curate.core.formats.registry as registry
 
     root = tmp_path_factory.mktemp("experiment")
-    config = write_toy_config(root / "toy.yaml")
+    config = write_toy_config(root / "toy.yaml", fire_free=True)
     capture = root / "stdout.txt"
     reads: Counter = Counter()
     real_read = registry.read_coco
@@ -73,7 +76,7 @@ def test_each_dataset_is_read_once(full_run: tuple[Path, str, Counter]) -> None:
     out, _, reads = full_run
     data = {p.resolve() for p in (out / "data").glob("*-*") if p.is_dir()}
     mixtures = {p.parent.resolve() for p in (out / "mixtures").rglob("mixture.json")}
-    assert len(data) == 4 and len(mixtures) == 4  # real, rare, method1, method2; one mixture per run
+    assert len(data) == 5 and len(mixtures) == 4  # real, rare, fire-free, method1, method2; one mixture per run
     assert set(reads) == data | mixtures
     assert all(count == 1 for count in reads.values()), {p.name: c for p, c in reads.items() if c > 1}
 
@@ -91,24 +94,38 @@ def test_report_files_exist_and_say_stand_in(full_run: tuple[Path, str, Counter]
     for name in ("table1.md", "table1.csv", "table1.tex", "table2.md", "table2.csv", "table2.tex"):
         assert (out / "tables" / name).stat().st_size > 0
         assert "(stand-in)" in (out / "tables" / name).read_text()
-    assert {p.name for p in (out / "figures").iterdir()} == {"figure5_AP.png", "figure5_AP50.png"}
+    figures = {p.name for p in (out / "figures").iterdir()}
+    assert figures == {"figure5_AP.png", "figure5_AP50.png", "figure5_alarms_per_100.png"}
     page = (out / "report.html").read_text()
     assert "STAND-IN DATA" in page and "Paired comparisons" in page and "R6_S6" in page
     gaps = json.loads((out / "tables" / "gap.json").read_text())["gaps"]
     assert [g["method"] for g in gaps] == ["method1", "method2"] and "Realism gap" in page
     assert all(g["frechet"]["synthetic"]["median"] > 0 for g in gaps)
     assert "STAND-IN DATA" in printed and f"report: {out.resolve() / 'report.html'}" in printed
-    assert "**Table 2" in printed and "common (stand-in) AP" in printed
+    assert "**Table 2" in printed and "common (stand-in) AP" in printed and "fire-free (stand-in) alarms/100" in printed
+    for table in ("table1.md", "table2.md"):  # the negatives set has one column: its alarm rate
+        head = (out / "tables" / table).read_text().splitlines()[2]
+        assert "fire-free (stand-in) alarms/100" in head and "fire-free (stand-in) AP" not in head
+    assert "fire-free (stand-in) alarms/100" in page and "Samples: fire-free (stand-in)" in page
     summary = json.loads((out / "experiment.json").read_text())
     assert summary["standin"] is True and [r["status"] for r in summary["runs"]] == ["done"] * 4
     rows = [json.loads(line) for line in (out / "results.jsonl").read_text().splitlines()]
-    assert len(rows) == 8 and {r["test_set"] for r in rows} == {"common (stand-in)", "rare (stand-in)"}
+    sets = {"common (stand-in)", "rare (stand-in)", "fire-free (stand-in)"}
+    assert len(rows) == 12 and {r["test_set"] for r in rows} == sets
+    free = [r for r in rows if r["test_set"] == "fire-free (stand-in)"]
+    assert len(free) == 4 and all(r["AP"] is None and r[ALARMS] >= 0 for r in free)
+    for run in (out / "runs").glob("*/*/results.json"):  # a set without boxes has its breakdown's alarm rate
+        tests = json.loads(run.read_text())["tests"]
+        for scored in tests.values():  # (the toy's rare stand-in has no box big enough to label either)
+            breakdown = json.loads((run.parent / scored["scores"] / "errors.json").read_text())
+            assert scored.get(ALARMS) == (breakdown["false_alarms_per_100_negatives"] if not scored["boxes"] else None)
+        assert tests["fire-free (stand-in)"]["images"] == 6 and tests["common (stand-in)"]["boxes"] > 0
     assert sorted({k.split("/")[0] for k in _results(out)}) == sorted(RUNS)
-    assert (out / "data").is_dir() and len(list((out / "data").glob("*/stage.json"))) == 4
+    assert (out / "data").is_dir() and len(list((out / "data").glob("*/stage.json"))) == 5
     for data_yaml in (out / "mixtures").rglob("data.yaml"):  # ultralytics validates on the real valid split
         assert Path(yaml.safe_load(data_yaml.read_text())["val"]).parts[-2:] == ("images", "valid")
     errors = sorted((out / "runs").glob("*/*/scores/*/errors.json"))
-    assert len(errors) == 8 and "Where AP50 goes" in page
+    assert len(errors) == 12 and "Where AP50 goes" in page
     first = json.loads(errors[0].read_text())
     assert set(first["delta_AP50"]) == {"classification", "localisation", "both", "duplicate", "background", "missed"}
 
@@ -120,7 +137,7 @@ def test_report_gives_runs_scored_before_the_breakdown_theirs(full_run: tuple[Pa
     path = sorted((out / "runs").glob("*/*/scores/*/errors.json"))[0]
     at_run_time = json.loads(path.read_text())
     path.unlink()
-    run_experiment(toy_config(), out.parent, out)  # report only
+    run_experiment(toy_config(fire_free=True), out.parent, out)  # report only
     assert json.loads(path.read_text()) == at_run_time
 
 
@@ -132,15 +149,16 @@ def test_runs_scored_before_ap25_get_it_from_their_predictions(full_run: tuple[P
     path = sorted((out / "runs").glob("*/*/results.json"))[0]
     original = path.read_bytes()
     doc = json.loads(original)
-    at_run_time = {name: m["AP25"] for name, m in doc["tests"].items()}
+    at_run_time = {name: m["AP25"] for name, m in doc["tests"].items() if ALARMS not in m}  # sets with fire
     try:
         for m in doc["tests"].values():
             del m["AP25"]
         path.write_text(json.dumps(doc))
-        run_experiment(toy_config(), out.parent, out)  # report only
+        run_experiment(toy_config(fire_free=True), out.parent, out)  # report only
         run = path.parent.relative_to(out).as_posix()
         rows = [json.loads(line) for line in (out / "results.jsonl").read_text().splitlines()]
-        assert {r["test_set"]: r["AP25"] for r in rows if r["run"] == run} == pytest.approx(at_run_time)
+        ap25 = {r["test_set"]: r["AP25"] for r in rows if r["run"] == run and r["test_set"] in at_run_time}
+        assert ap25 == pytest.approx(at_run_time)
         assert len(list(path.parent.glob("scores/*/ap25.json"))) == len(at_run_time)
     finally:
         path.write_bytes(original)
@@ -164,12 +182,12 @@ def test_interrupted_grid_resumes_and_gives_identical_results(
 
     monkeypatch.setattr(experiment, "execute_task", interrupted)
     with pytest.raises(KeyboardInterrupt):
-        run_experiment(toy_config(), tmp_path, out, LocalExecutor())
+        run_experiment(toy_config(fire_free=True), tmp_path, out, LocalExecutor())
     first = _results(out)
     assert len(first) == 2
     stamps = {p: p.stat().st_mtime_ns for p in (out / "runs").glob("*/*/results.json")}
-    partial = run_experiment(toy_config(), tmp_path, out)  # no executor: report the finished runs only
-    assert len(partial.failed) == 2 and len(partial.rows) == 4 and partial.report.is_file()
+    partial = run_experiment(toy_config(fire_free=True), tmp_path, out)  # no executor: the finished runs only
+    assert len(partial.failed) == 2 and len(partial.rows) == 6 and partial.report.is_file()
 
     skipped: list[bool] = []
 
@@ -179,7 +197,7 @@ def test_interrupted_grid_resumes_and_gives_identical_results(
         return result
 
     monkeypatch.setattr(experiment, "execute_task", recording)
-    result = run_experiment(toy_config(), tmp_path, out, LocalExecutor())
+    result = run_experiment(toy_config(fire_free=True), tmp_path, out, LocalExecutor())
     assert skipped == [True, True, False, False] and not result.failed
     assert all(p.stat().st_mtime_ns == t for p, t in stamps.items())  # finished runs untouched
     assert _results(out) == _results(full_run[0])  # same seeds, another folder: byte-identical results.json
@@ -200,3 +218,60 @@ def test_missing_test_split_fails_before_training(tmp_path: Path) -> None:
     with pytest.raises(ValueError, match="no split 'test'"):
         run_experiment(cfg, tmp_path, tmp_path / "out", LocalExecutor())
     assert not (tmp_path / "out" / "runs").exists()
+
+
+def _fake_yolo_study(**doc) -> ExperimentConfig:
+    """One run (R12_S0, seed 0) of the fake ``yolo`` engine on the toy's stand-in, no pools, no rare set."""
+    from factories_experiment import command_engine, toy_dict
+
+    from curate.core.config import build_config
+
+    base = {**toy_dict(mixtures=["R12_S0"], table1=[]), "rare": None, "engine": command_engine()}
+    base["report"] = {"bootstrap": 0, "samples": False, "gap_draws": 0}
+    return build_config({**base, **doc}, ExperimentConfig)
+
+
+def test_a_test_set_added_to_a_finished_study_is_scored_without_training(
+    tmp_path: Path, capsys: pytest.CaptureFixture
+) -> None:
+    """The run keeps its identity and folder; --report-only says what is not scored yet; the next call scores the
+    run's model on the new set, trains nothing, and the tables gain its alarm column."""
+    from factories_experiment import fire_free_photos
+
+    out = tmp_path / "study"
+    first = run_experiment(_fake_yolo_study(), tmp_path, out, LocalExecutor())
+    [run] = list((out / "runs").glob("*/*/results.json"))
+    log = run.parent / "train" / "command.log"
+    stamp = log.stat().st_mtime_ns
+    fire_free_photos(tmp_path / "photos", 5)
+    cfg = _fake_yolo_study(tests={"fire-free": {"path": "photos"}})
+    capsys.readouterr()
+    pending = run_experiment(cfg, tmp_path, out)  # report only
+    assert "fire-free: 1 finished runs not scored on it yet" in capsys.readouterr().out
+    assert [r["test_set"] for r in pending.rows] == [r["test_set"] for r in first.rows] == ["common (stand-in)"]
+    done = run_experiment(cfg, tmp_path, out, LocalExecutor())
+    assert "(trained before; scored now on fire-free)" in capsys.readouterr().out
+    assert list((out / "runs").glob("*/*/results.json")) == [run] and log.stat().st_mtime_ns == stamp
+    free = next(r for r in done.rows if r["test_set"] == "fire-free")
+    assert free["AP"] is None and free[ALARMS] == 100.0  # the fake detector: one box at 0.5 in every photo
+    assert "| fire-free alarms/100 |" in (out / "tables" / "table2.md").read_text()
+    run_experiment(cfg, tmp_path, out, LocalExecutor())
+    assert "(done before)" in capsys.readouterr().out
+
+
+def test_named_test_sets_leave_every_run_identity_as_it_was(tmp_path: Path) -> None:
+    """A config without ``tests:`` plans the runs it always did; adding named sets changes no run's hash."""
+    from fuzzyfire.datasets import DataRef
+    from fuzzyfire.experiment import plan_runs
+    from fuzzyfire.stages import Prepared
+
+    plain, named = toy_config(), toy_config(fire_free=True)
+    ref = DataRef(tmp_path, {"kind": "standin", "hash": "x"}, "coco", standin=True)
+    mixtures = {(e.mixture, e.method, 0): ref for e in grid_entries(plain)}
+    pools = {"method1": ref, "method2": ref}
+    before = plan_runs(plain, grid_entries(plain), Prepared(ref, ref, pools), mixtures, tmp_path)
+    after = plan_runs(named, grid_entries(named), Prepared(ref, ref, pools, {"fire-free": ref}), mixtures, tmp_path)
+    assert [s.hash() for s in before] == [s.hash() for s in after] and all(not s.evals for s in before)
+    assert all([t.name for t in s.evals] == ["fire-free"] for s in after)
+    assert set(before[0].identity()) == {"mixture", "method", "seed", "train_data", "val_data", "tests", "classes",
+                                         "train", "score"}  # fmt: skip

@@ -1,4 +1,5 @@
-"""Experiment schema: every shipped config loads strictly; the paper's protocol is exact; contradictions raise."""
+"""Experiment schema: every shipped config loads strictly; the paper's protocol is exact; contradictions raise;
+named test sets parse strictly and their labels are unique."""
 
 from __future__ import annotations
 
@@ -9,7 +10,7 @@ from conftest import REPO
 
 from curate.core.config import ConfigError, build_config, load_config
 from curate.mix import paper_grid, parse_mixture
-from fuzzyfire.experiment_config import ExperimentConfig, ExperimentConfigError
+from fuzzyfire.experiment_config import EvalSetConfig, ExperimentConfig, ExperimentConfigError
 
 CONFIGS = REPO / "configs"
 
@@ -85,3 +86,47 @@ def test_contradictions_raise() -> None:
         build_config({"real": {"path": "x"}, "synth": {"method2": None}}, ExperimentConfig).check()
     with pytest.raises(ExperimentConfigError, match="rare"):
         build_config({"real": {"path": "x"}, "rare": {}}, ExperimentConfig).check()
+
+
+def test_named_test_sets_parse_and_refuse_unknown_keys() -> None:
+    cfg = build_config(
+        {
+            "real": {"path": "x"},
+            "tests": {"fire-free": {"path": "photos", "holdout": 0.25}, "b": {"path": "y", "name": "B"}},
+        },
+        ExperimentConfig,
+    )
+    cfg.check()
+    assert isinstance(cfg.tests["fire-free"], EvalSetConfig) and cfg.tests["fire-free"].holdout == 0.25
+    assert cfg.test_names() == {"fire-free": "fire-free", "b": "B"} and cfg.tests["b"].split is None
+    with pytest.raises(ConfigError, match="tests.fire-free.holdot: unknown key"):
+        build_config({"real": {"path": "x"}, "tests": {"fire-free": {"holdot": 0.25}}}, ExperimentConfig)
+    with pytest.raises(ConfigError, match="tests.fire-free.holdout: expected a number"):
+        build_config({"real": {"path": "x"}, "tests": {"fire-free": {"holdout": "a"}}}, ExperimentConfig)
+    assert build_config({"real": {"path": "x"}}, ExperimentConfig).tests == {}
+
+
+@pytest.mark.parametrize(
+    ("tests", "message"),
+    [
+        ({"a": {}}, "tests.a: give exactly one of path, standin"),
+        ({"a": {"path": "p", "standin": {}}}, "tests.a: give exactly one of path, standin"),
+        ({"a": {"path": "p", "holdout": 1.5}}, "tests.a: holdout must be in 0..1"),
+        ({"a": {"standin": {}, "holdout": 0.5}}, "tests.a: holdout picks photos of a folder"),
+        ({"common": {"path": "p"}}, "tests.common: the label 'common' is taken"),
+        ({"a": {"path": "p", "name": "rare"}}, "the label 'rare' is taken"),
+        ({"a b": {"path": "p"}, "a_b": {"path": "q"}}, "tests.a_b: the label 'a_b' is taken"),  # one scores folder
+    ],
+)
+def test_named_test_sets_that_do_not_fit_raise(tests: dict, message: str) -> None:
+    cfg = build_config({"real": {"path": "x"}, "rare": {"path": "r"}, "tests": tests}, ExperimentConfig)
+    with pytest.raises(ExperimentConfigError, match=message):
+        cfg.check()
+
+
+def test_shipped_configs_have_a_fire_free_set() -> None:
+    shared, demo = _load("shared-data.yaml"), _load("demo.yaml")
+    free = shared.tests["fire-free"]
+    assert free.path.as_posix().endswith("shared/data/fire-free") and free.holdout == 0.25 and free.split is None
+    assert demo.tests["fire-free"].standin.negatives == 1.0 and demo.tests["fire-free"].source() == "standin"
+    assert _load("paper.yaml").tests == {} and shared.rare.name == "rare" and shared.rare.holdout == 0.0

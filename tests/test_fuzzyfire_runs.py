@@ -1,4 +1,5 @@
-"""Run specs: identities free of output paths, finished runs recognised by hash, test-set folder names."""
+"""Run specs: identities free of output paths, finished runs recognised by hash, test-set folder names; named
+test sets out of the identity, scored on finished runs without training (with their alarm rate)."""
 
 from __future__ import annotations
 
@@ -6,8 +7,21 @@ import json
 from dataclasses import replace
 from pathlib import Path
 
+import pytest
+
+from eval.errors import ALARMS
 from eval.score import ScoreConfig
-from fuzzyfire.runs import RESULTS_FILE, EvalSet, RunSpec, execute_run, finished, slug
+from fuzzyfire.runs import (
+    RESULTS_FILE,
+    EvalSet,
+    RunError,
+    RunSpec,
+    execute_run,
+    exported_model,
+    finished,
+    missing_evals,
+    slug,
+)
 from fuzzyfire.stages import DataRef
 from train.config import TrainConfig
 
@@ -45,3 +59,76 @@ def test_finished_runs_are_skipped_only_with_the_same_spec(tmp_path: Path) -> No
 def test_slug_makes_folder_names() -> None:
     assert slug("common (stand-in)") == "common_stand-in"
     assert slug("rare") == "rare" and slug("(((") == "test"
+
+
+def _fake_yolo_run(tmp_path: Path) -> RunSpec:
+    """A run of the fake ``yolo`` engine (its detector finds one box of half the image, score 0.5, in every
+    image) scored on painted 64x64 images with fire boxes."""
+    from factories_experiment import command_engine
+    from factories_train import painted_dataset
+
+    from curate.core.config import build_config
+    from curate.core.writer import write_dataset
+    from fuzzyfire.engine import EngineConfig
+
+    write_dataset(painted_dataset(tmp_path / "src", 5, seed=0, size=(64, 64)), tmp_path / "real", ("coco",))
+    (tmp_path / "mix").mkdir()
+    (tmp_path / "mix" / "data.yaml").write_text("train: images\nnames: {0: fire}\n")
+    real = DataRef(tmp_path / "real", {"kind": "folder", "path": "real"}, "coco")
+    mix = DataRef(tmp_path / "mix", {"kind": "mixture"}, "coco")
+    engine = build_config(command_engine(), EngineConfig)
+    train, tests = TrainConfig(epochs=1, imgsz=64), (EvalSet("common", real),)
+    return RunSpec("R4_S0", None, mix, real, tests, ("fire",), train, ScoreConfig(), tmp_path / "out", engine)
+
+
+def test_a_named_test_set_added_later_is_scored_without_training(tmp_path: Path) -> None:
+    """Adding a named test set keeps the run's identity: the finished run's model is scored on it (alarms per 100
+    fire-free photos from eval's error breakdown) and nothing is trained; the results equal a fresh run's."""
+    from factories_experiment import fire_free_photos
+
+    spec = _fake_yolo_run(tmp_path)
+    first = execute_run(spec)
+    assert first["skipped"] is False and set(first["tests"]) == {"common"} and first["tests"]["common"]["boxes"] > 0
+    log = spec.out / "train" / "command.log"
+    stamp = log.stat().st_mtime_ns
+    photos = DataRef(fire_free_photos(tmp_path / "photos", 4), {"kind": "folder", "path": "photos"}, "auto")
+    later = replace(spec, evals=(EvalSet("fire-free", photos),))
+    assert later.hash() == spec.hash() and later.out == spec.out
+    assert missing_evals(later, first) == list(later.evals)
+    added = execute_run(later)
+    assert added["skipped"] is True and added["scored"] == ["fire-free"] and log.stat().st_mtime_ns == stamp
+    free = added["tests"]["fire-free"]
+    assert free["AP"] is None and free["boxes"] == 0 and free["images"] == 4
+    assert free[ALARMS] == 100.0  # one detection at score 0.5 >= 0.25 in each of the 4 photos
+    breakdown = json.loads((spec.out / free["scores"] / "errors.json").read_text())
+    assert breakdown["false_alarms_per_100_negatives"] == free[ALARMS] and breakdown["negatives"] == 4
+    assert ALARMS not in added["tests"]["common"] and added["tests"]["common"] == first["tests"]["common"]
+    again = execute_run(later)
+    assert again["skipped"] is True and "scored" not in again
+    fresh = replace(later, root=tmp_path / "fresh")
+    execute_run(fresh)  # trained and scored on both sets at once: the same results.json bytes
+    assert (fresh.out / RESULTS_FILE).read_bytes() == (later.out / RESULTS_FILE).read_bytes()
+
+
+def test_a_redefined_named_test_set_is_scored_again(tmp_path: Path) -> None:
+    from factories_experiment import fire_free_photos
+
+    spec = _fake_yolo_run(tmp_path)
+    folder = fire_free_photos(tmp_path / "photos", 6)
+    every = DataRef(folder, {"kind": "folder", "path": "photos"}, "auto")
+    done = execute_run(replace(spec, evals=(EvalSet("fire-free", every),)))
+    assert done["tests"]["fire-free"]["images"] == 6
+    held = replace(every, identity={**every.identity, "holdout": 0.5}, holdout=0.5)
+    redefined = replace(spec, evals=(EvalSet("fire-free", held),))
+    assert missing_evals(redefined, done) == list(redefined.evals)
+    again = execute_run(redefined)
+    assert again["scored"] == ["fire-free"] and 0 < again["tests"]["fire-free"]["images"] < 6
+
+
+def test_a_finished_run_without_its_model_refuses_new_test_sets(tmp_path: Path) -> None:
+    spec = _spec(tmp_path)
+    spec.out.mkdir(parents=True)
+    (spec.out / RESULTS_FILE).write_text(json.dumps({"hash": spec.hash(), "tests": {"common": {}}}))
+    extra = replace(spec, evals=(EvalSet("more", spec.val_data),))
+    with pytest.raises(RunError, match="exported model .* is gone"):
+        exported_model(extra)
