@@ -130,8 +130,10 @@ def _identity_digest(cfg: Any, method: str, base: Path, monkeypatch: pytest.Monk
 
 @pytest.mark.parametrize(
     ("config", "pinned"),
-    [("demo.yaml", {"method1": "1533ad5335d6", "method2": "bfaa2ab0301a"}),
-     ("paper.yaml", {"method1": "929127593223", "method2": "c3952e06e701"})],
+    [
+        ("demo.yaml", {"method1": "1533ad5335d6", "method2": "bfaa2ab0301a"}),
+        ("paper.yaml", {"method1": "929127593223", "method2": "c3952e06e701"}),
+    ],
 )  # fmt: skip  (Method 2 digests since stages.STANDING: their procedural rooms' flames stand on surfaces now)
 def test_shipped_configs_keep_the_pool_identities_they_had_before_flames_source(
     config: str, pinned: dict, monkeypatch: pytest.MonkeyPatch
