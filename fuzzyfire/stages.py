@@ -190,8 +190,8 @@ def synth_stage(root: Path, method: str, cfg: Any, base: Path, cutouts: Stage | 
     cfg = replace(cfg, kits=tuple(_absolute(Path(p), base) for p in cfg.kits))
     by_path = _later_keys_dropped(to_dict(cfg), to_dict(type(cfg)()))  # the identity before content hashing
     by_path["flame_look"] = FLAME_LOOK  # pools of earlier flames and compositing are other data
-    if getattr(cfg, "stand", "anywhere") == "surfaces" and (cfg.scenes or cfg.environments):
-        by_path["standing"] = STANDING  # renders' flames on up-facing surfaces: pools made before were other data
+    if getattr(cfg, "stand", "anywhere") == "surfaces" and _renders_rooms(cfg):
+        by_path["standing"] = STANDING  # rooms' flames on up-facing surfaces: pools made before were other data
     if getattr(cfg, "backgrounds", ()):
         cfg = replace(cfg, backgrounds=tuple(_absolute(Path(p), base) for p in cfg.backgrounds))
     files = content_identity(cfg)  # replaces the environments and backgrounds of by_path when they are set
@@ -204,6 +204,14 @@ def synth_stage(root: Path, method: str, cfg: Any, base: Path, cutouts: Stage | 
         legacy={"kind": method, "config": by_path} if files and not flames else None,  # pools made by path before
     )
     return stage, DataRef(stage.folder, {"kind": method, "hash": stage.hash}, "coco")
+
+
+def _renders_rooms(cfg: Any) -> bool:
+    """Whether a pool renders rooms (procedural ``scenes`` or mesh files), whose flames ``stand`` places;
+    panoramas, photos and kit streets have their own ground."""
+    from synth.places import split_places
+
+    return bool(cfg.scenes) or bool(split_places(cfg.environments).meshes)  # environments resolved already
 
 
 def _later_keys_dropped(config: dict[str, Any], default: dict[str, Any]) -> dict[str, Any]:

@@ -234,3 +234,21 @@ def test_kit_streets_enter_a_pool_identity_by_the_kits_content(tmp_path: Path) -
     assert [k["kit"] for k in first] == ["kenney_city_kit_suburban", "kenney_retro_urban"]
     moved = shutil.copytree(kits, tmp_path / "b")
     assert content_identity(replace(streets, kits=(moved,)))["kits"] == first  # by content, not by path
+
+
+def test_standing_enters_only_pools_that_render_rooms(tmp_path: Path) -> None:
+    """A panorama-only pool keeps the identity it had before the standing rule was applied; a room pool does not."""
+    import cv2
+    import numpy as np
+    from factories import write_textured_room
+
+    from fuzzyfire.stages import _renders_rooms
+    from synth.method2 import Method2Config
+
+    pano = tmp_path / "panos" / "place.jpg"
+    pano.parent.mkdir()
+    cv2.imwrite(str(pano), np.random.default_rng(0).integers(0, 255, (64, 128, 3), dtype=np.uint8))
+    write_textured_room(tmp_path / "rooms" / "den.glb")
+    assert not _renders_rooms(Method2Config(scenes=0, environments=(pano.parent,)))
+    assert _renders_rooms(Method2Config(scenes=0, environments=(tmp_path / "rooms",)))
+    assert _renders_rooms(Method2Config(scenes=2, environments=(pano.parent,)))
