@@ -160,7 +160,16 @@ def standin_stage(root: Path, name: str, cfg: Any) -> tuple[Stage, DataRef]:
 
 
 #: Synth config keys added after pools were made; left out of a pool's identity while at their default.
-LATER_KEYS = ("environments", "flame_opacity", "closeup", "closeup_height", "background_holdout", "panorama_share")
+LATER_KEYS = (
+    "environments",
+    "flame_opacity",
+    "closeup",
+    "closeup_height",
+    "background_holdout",
+    "panorama_share",
+    "blend",
+    "distractors",
+)
 
 
 def synth_stage(root: Path, method: str, cfg: Any, base: Path) -> tuple[Stage, DataRef]:
