@@ -6,8 +6,9 @@ Modes (one drawn per flame from :attr:`BlendConfig.modes`):
 - ``screen``, ``add``: the flame is light (the composite's own path: coverage, then emission added / screened);
 - ``alpha``: the sprite flattened to straight-alpha RGBA (:func:`synth.sprites.flatten_rgba`) pasted with a
   feathered edge: alpha ramps from 0 at the support's edge to full over ``edge`` pixels inside it;
-- ``blur``: the same RGBA with a Gaussian-blurred edge: premultiplied colour and alpha blurred by ``edge``
-  (sigma, pixels), so the edge spills softly over the background;
+- ``blur``: the same RGBA with a Gaussian-blurred edge: alpha blurred by ``edge`` (sigma, pixels), the colour kept
+  sharp inside (alpha >= 0.5) and spread outward (normalised blur of the premultiplied colour), so the edge
+  spills softly over the background while the body keeps its detail;
 - ``poisson``: Poisson image editing (``cv2.seamlessClone``, normal clone) of the RGBA laid over the local mean
   background colour, in a window around the sprite: the gradients of the flame, the boundary of the
   background (colours shift; the box is still taken from the final visible mask).
@@ -79,9 +80,10 @@ def paste(
     if mode == "blur":
         if edge <= 0:
             return img * (1.0 - alpha[..., None]) + rgb * alpha[..., None]
-        pre = cv2.GaussianBlur(rgb * alpha[..., None], (0, 0), sigmaX=edge)
         a = cv2.GaussianBlur(alpha, (0, 0), sigmaX=edge)[..., None]
-        return img * (1.0 - a) + pre
+        spread = cv2.GaussianBlur(rgb * alpha[..., None], (0, 0), sigmaX=edge) / np.maximum(a, 1e-6)
+        colour = np.where(alpha[..., None] >= 0.5, rgb, spread)  # sharp inside, the edge colour spread outside
+        return img * (1.0 - a) + colour * a
     if mode == "poisson":
         return poisson(img, rgb, alpha)
     raise ValueError(f"{mode!r} is not a paste mode; choose one of {', '.join(PASTE_MODES)}")

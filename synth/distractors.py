@@ -194,12 +194,10 @@ def _blob(h: int, w: int, rng: np.random.Generator, wobble: float = 0.13) -> NDA
 
 
 def _folds(h: int, w: int, rng: np.random.Generator) -> NDArray[np.float32]:
-    """(h, w) shading of cloth folds: a few soft stripes at a random angle, 0.5..1."""
-    x, y = _grid(h, w)
-    angle, period = rng.uniform(0, np.pi), rng.uniform(0.2, 0.45) * max(h, w)
-    phase = (x * np.cos(angle) + y * np.sin(angle)) / period * 2 * np.pi
-    wave = np.sin(phase + 0.8 * np.sin(0.5 * phase + rng.uniform(0, 6)))
-    return (0.75 + 0.25 * wave).astype(np.float32)
+    """(h, w) shading of soft cloth folds, 0.6..1: random noise smoothed at a quarter of the object's size."""
+    noise = cv2.GaussianBlur(rng.normal(0.0, 1.0, (h, w)).astype(np.float32), (0, 0), sigmaX=max(h, w) / 7)
+    noise /= max(float(np.abs(noise).max()), 1e-6)
+    return (0.8 + 0.2 * noise).astype(np.float32)
 
 
 def _red_orange(rng: np.random.Generator) -> NDArray[np.float32]:
@@ -214,7 +212,7 @@ def draw_cloth(size: float, rng: np.random.Generator) -> Layers:
     h = max(int(round(size)), 8)
     w = max(int(round(h * rng.uniform(0.8, 1.8))), 8)
     alpha = _blob(h, w, rng)
-    return _shaded(alpha, _red_orange(rng), _folds(h, w, rng) * side_light(h, w, rng) ** 0.5)
+    return _shaded(alpha, _red_orange(rng), _folds(h, w, rng) * side_light(h, w, rng) ** 0.7)
 
 
 def draw_clothing(size: float, rng: np.random.Generator) -> Layers:
@@ -243,12 +241,12 @@ def draw_clothing(size: float, rng: np.random.Generator) -> Layers:
 
 def draw_taillights(size: float, rng: np.random.Generator) -> Layers:
     """A car's rear lights: two red lamps ``size`` pixels apart (centre to centre) with a red glow and, most of
-    the time, the dark rear of the car between them with a pale licence plate."""
+    the time, the car's rear around them (:func:`car_rear`)."""
     d = max(size, 8.0)
-    lw, lh = d * rng.uniform(0.1, 0.17), d * rng.uniform(0.05, 0.1)
+    lw, lh = d * rng.uniform(0.1, 0.16), d * rng.uniform(0.05, 0.09)
     pad = 3.0 * lw
-    w, h = int(np.ceil(d + 2 * pad)), int(np.ceil(2 * pad + 4 * lh))
-    cy = pad + lh
+    w, h = int(np.ceil(d + 2 * pad)), int(np.ceil(2 * pad + 6 * lh))
+    cy = pad + 3 * lh
     red = np.array([1.0, rng.uniform(0.05, 0.2), rng.uniform(0.03, 0.12)], np.float32)
     light = np.zeros((h, w, 3), np.float32)
     for cx in (pad, pad + d):
@@ -258,14 +256,32 @@ def draw_taillights(size: float, rng: np.random.Generator) -> Layers:
         light += lamp[..., None] * red + glow[..., None] * red + (0.5 * core)[..., None] * np.float32(1.0)
     rgb, alpha = np.zeros((h, w, 3), np.float32), np.zeros((h, w), np.float32)
     if rng.random() < 0.7:
-        body = polygon(h, w, np.array([[pad - 1.3 * lw, cy - 2.2 * lh], [pad + d + 1.3 * lw, cy - 2.2 * lh],
-                                       [pad + d + 1.3 * lw, cy + 3.5 * lh], [pad - 1.3 * lw, cy + 3.5 * lh]]))  # fmt: skip
-        plate = polygon(h, w, np.array([[w / 2 - 0.14 * d, cy + 0.8 * lh], [w / 2 + 0.14 * d, cy + 0.8 * lh],
-                                        [w / 2 + 0.14 * d, cy + 2.2 * lh], [w / 2 - 0.14 * d, cy + 2.2 * lh]]))  # fmt: skip
-        paint = rng.uniform(0.03, 0.3) * np.asarray(rng.uniform(0.7, 1.0, 3), np.float32)
-        rgb = np.where(plate[..., None] > 0.5, np.float32(0.75), paint[None, None, :]).astype(np.float32)
-        alpha = body
+        rgb, alpha = car_rear(h, w, pad, d, cy, lw, lh, rng)
     return rgb, alpha, np.clip(light, 0.0, 1.0).astype(np.float32)
+
+
+def car_rear(
+    h: int, w: int, pad: float, d: float, cy: float, lw: float, lh: float, rng: np.random.Generator
+) -> tuple[NDArray[np.float32], NDArray[np.float32]]:
+    """(h, w, 3) colour and (h, w) alpha of a car seen from behind around lights at x = ``pad`` and ``pad + d``,
+    row ``cy``: painted body, dark rear window above, dark bumper and a pale plate below, the tyres' shadow."""
+    left, right = pad - 1.6 * lw, pad + d + 1.6 * lw
+    top, bottom = cy - 2.0 * lh, cy + 3.2 * lh
+    inset = 0.12 * (right - left)
+    body = polygon(h, w, np.array([[left + 0.3 * lw, top], [right - 0.3 * lw, top], [right, cy], [right, bottom],
+                                   [left, bottom], [left, cy]]))  # fmt: skip
+    glass = polygon(h, w, np.array([[left + inset + 0.1 * d, top - 2.6 * lh], [right - inset - 0.1 * d, top - 2.6 * lh],
+                                    [right - inset * 0.4, top + 0.5], [left + inset * 0.4, top + 0.5]]))  # fmt: skip
+    plate = polygon(h, w, np.array([[w / 2 - 0.13 * d, cy + 0.9 * lh], [w / 2 + 0.13 * d, cy + 0.9 * lh],
+                                    [w / 2 + 0.13 * d, cy + 2.1 * lh], [w / 2 - 0.13 * d, cy + 2.1 * lh]]))  # fmt: skip
+    _, y = _grid(h, w)
+    paint = rng.uniform(0.05, 0.6) * np.asarray(rng.uniform(0.5, 1.0, 3), np.float32)
+    shade = np.clip(1.05 - 0.5 * (y - top) / max(bottom - top, 1.0), 0.4, 1.1)
+    rgb = paint[None, None, :] * shade[..., None]
+    rgb = np.where((y > cy + 2.4 * lh)[..., None], np.float32(0.06), rgb)  # bumper
+    rgb = np.where((glass > body)[..., None], np.float32(0.08) + 0.1 * paint, rgb)
+    rgb = np.where((plate > 0.5)[..., None], np.float32(0.8), rgb)
+    return np.clip(rgb, 0, 1).astype(np.float32), np.maximum(body, glass).astype(np.float32)
 
 
 def draw_glare(size: float, rng: np.random.Generator) -> Layers:
@@ -287,10 +303,24 @@ def draw_glare(size: float, rng: np.random.Generator) -> Layers:
     return np.zeros((h, w, 3), np.float32), np.zeros((h, w), np.float32), np.clip(light, 0, 1).astype(np.float32)
 
 
+def open_sky(rgb: NDArray[np.uint8]) -> NDArray[np.bool_]:
+    """(H, W) bool: :func:`synth.sites.sky_like` pixels connected to the top row (8-connectivity)."""
+    n, labels = cv2.connectedComponents(sky_like(rgb).astype(np.uint8), connectivity=8)
+    top = np.unique(labels[0])
+    return np.isin(labels, top[top > 0])
+
+
+def blue(rgb: NDArray[np.uint8], where: NDArray[np.bool_]) -> bool:
+    """Whether the pixels ``where`` of ``rgb`` are blue on average (CIE b* below -5)."""
+    lab = cv2.cvtColor(rgb, cv2.COLOR_RGB2LAB)[where].astype(np.float32)
+    return bool(lab.size) and float(lab[:, 2].mean()) - 128.0 < -5.0
+
+
 def draw_sun(background: NDArray[np.uint8], horizon: float, rng: np.random.Generator) -> Layers | None:
     """A low sun on the whole image (H, W): a sunset gradient laid over the sky above the ``horizon`` row (sky =
-    :func:`synth.sites.sky_like`, softened) and a sun disc with bloom just above the horizon; None when the view
-    shows less than 15 % sky above its horizon or the horizon is too close to the top for the disc."""
+    :func:`open_sky`, softened) and a sun disc with bloom just above the horizon; None when under 30 % of the
+    image above the horizon or 40 % of its top row is open sky, or that sky is not blue (indoors: a white ceiling;
+    a sky at sunset already), or the horizon is too close to the top for the disc."""
     h, w = background.shape[:2]
     r = w * rng.uniform(0.012, 0.028)
     cy = horizon - rng.uniform(0.6, 3.5) * r
@@ -298,9 +328,10 @@ def draw_sun(background: NDArray[np.uint8], horizon: float, rng: np.random.Gener
         return None
     x, y = _grid(h, w)
     above = np.clip((horizon - y) / 3.0, 0.0, 1.0)
-    sky = cv2.GaussianBlur(sky_like(background).astype(np.float32), (0, 0), sigmaX=2.0) * above
-    if sky[: int(horizon)].mean() < 0.15:
+    sky = open_sky(background)
+    if sky[: int(horizon)].mean() < 0.3 or sky[0].mean() < 0.4 or not blue(background, sky):
         return None
+    sky = cv2.GaussianBlur(sky.astype(np.float32), (0, 0), sigmaX=max(2.0, 0.02 * w)) * above
     cx = w * rng.uniform(0.1, 0.9)
     up = np.clip((horizon - y) / max(horizon, 1.0), 0.0, 1.0)
     orange, violet = np.array([1.0, 0.5, 0.15], np.float32), np.array([0.72, 0.42, 0.55], np.float32)
@@ -310,7 +341,7 @@ def draw_sun(background: NDArray[np.uint8], horizon: float, rng: np.random.Gener
     colour = warm(rng.uniform(1900.0, 2800.0))
     disc = ellipse(h, w, cx, cy, r, r) * above
     bloom = 0.6 * gaussian(h, w, cx, cy, 2 * r, 2 * r) + 0.3 * gaussian(h, w, cx, cy, 6 * r, 5 * r)
-    light = disc[..., None] * (0.4 * colour + 0.6) + (bloom * above)[..., None] * colour
+    light = disc[..., None] * (0.75 * colour + 0.25) + (bloom * above)[..., None] * colour
     return rgb, alpha, np.clip(light, 0.0, 1.0).astype(np.float32)
 
 
@@ -360,7 +391,8 @@ def anchor(kind: str, depth: NDArray[np.float32], fy: float, rng: np.random.Gene
         by, bx = divmod(int(ground[rng.integers(len(ground))]), w)
         d = float(depth[by, bx])
         if kind == "taillights":
-            return fy * rng.uniform(*TAILLIGHT_SPACING_M) / d, bx, by - fy * rng.uniform(*TAILLIGHT_HEIGHT_M) / d
+            spacing = min(fy * rng.uniform(*TAILLIGHT_SPACING_M) / d, 0.35 * w)
+            return spacing, bx, by - spacing * rng.uniform(*TAILLIGHT_HEIGHT_M) / TAILLIGHT_SPACING_M[1]
         return min(fy * rng.uniform(*GROUND_HEIGHT_M[kind]) / d, 0.5 * h), bx, by
     size = h * rng.uniform(*SIZE_SHARE[kind])
     top = 2 * h / 3 if kind == "lamp" else h
