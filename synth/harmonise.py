@@ -9,7 +9,7 @@ Estimators (on (h, w, 3) uint8 RGB, grey = OpenCV's luma):
   half of the pixels;
 - :func:`edge_blur`: the re-blur estimate of edge sharpness (Zhuo & Sim 2011): at the strongest edges the ratio
   ``r`` of gradient magnitudes before and after a Gaussian blur of sigma ``s0`` gives the edge's own blur
-  ``s0 / sqrt(r^2 - 1)`` (pixels).
+  ``s0 / sqrt(r^2 - 1)`` (pixels), less the estimate of a perfect step (:data:`SOBEL_FLOOR`) in quadrature.
 """
 
 from __future__ import annotations
@@ -22,6 +22,7 @@ from numpy.typing import NDArray
 
 _IMMERKAER = np.array([[1, -2, 1], [-2, 4, -2], [1, -2, 1]], np.float32)
 REBLUR_SIGMA = 1.0  # s0 of the re-blur estimate, pixels
+SOBEL_FLOOR = 0.83  # what the estimate reports for a perfect step (the Sobel's own blur), removed in quadrature
 MAX_BLUR = 4.0  # largest edge blur reported, pixels
 TINT_RANGE = (0.6, 1.5)  # per-channel tint gains are clipped to this
 
@@ -90,7 +91,8 @@ def edge_blur(rgb: NDArray[np.uint8], top: float = 0.05) -> float:
     ratio = float(np.median(sharp[edges] / np.maximum(soft[edges], 1e-3)))
     if ratio <= 1.0 + 1e-3:
         return MAX_BLUR
-    return float(min(REBLUR_SIGMA / np.sqrt(ratio**2 - 1.0), MAX_BLUR))
+    raw = REBLUR_SIGMA / np.sqrt(ratio**2 - 1.0)
+    return float(min(np.sqrt(max(raw**2 - SOBEL_FLOOR**2, 0.0)), MAX_BLUR))
 
 
 def apply_look(layer: NDArray[np.float32], weight: NDArray[np.float32], look: Look) -> NDArray[np.float32]:
