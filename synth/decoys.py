@@ -47,7 +47,7 @@ def make_decoy(
     sx, sy = int(rng.integers(0, w - pw + 1)), int(rng.integers(0, h - ph + 1))
     patch = scene[sy : sy + ph, sx : sx + pw]
     if rng.random() < 0.5:
-        patch = patch[:, ::-1]
+        patch = np.ascontiguousarray(patch[:, ::-1])
     over = np.concatenate([patch, silhouette(mask, pw, ph)[..., None]], axis=-1)
     sprite = Sprite(np.ascontiguousarray(over), np.zeros((ph, pw, 3), np.uint8), np.zeros((ph, pw), bool))
     x, y = int(rng.integers(-pw // 4, w - 3 * pw // 4 + 1)), int(rng.integers(-ph // 4, h - 3 * ph // 4 + 1))

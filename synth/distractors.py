@@ -264,7 +264,7 @@ def car_rear(
     h: int, w: int, pad: float, d: float, cy: float, lw: float, lh: float, rng: np.random.Generator
 ) -> tuple[NDArray[np.float32], NDArray[np.float32]]:
     """(h, w, 3) colour and (h, w) alpha of a car seen from behind around lights at x = ``pad`` and ``pad + d``,
-    row ``cy``: painted body, dark rear window above, dark bumper and a pale plate below, the tyres' shadow."""
+    row ``cy``: painted body, dark rear window above, dark bumper, a pale plate and the two tyres below."""
     left, right = pad - 1.6 * lw, pad + d + 1.6 * lw
     top, bottom = cy - 2.0 * lh, cy + 3.2 * lh
     inset = 0.12 * (right - left)
@@ -281,7 +281,12 @@ def car_rear(
     rgb = np.where((y > cy + 2.4 * lh)[..., None], np.float32(0.06), rgb)  # bumper
     rgb = np.where((glass > body)[..., None], np.float32(0.08) + 0.1 * paint, rgb)
     rgb = np.where((plate > 0.5)[..., None], np.float32(0.8), rgb)
-    return np.clip(rgb, 0, 1).astype(np.float32), np.maximum(body, glass).astype(np.float32)
+    tyres = [polygon(h, w, np.array([[x0, bottom - 0.5 * lh], [x0 + 1.6 * lw, bottom - 0.5 * lh],
+                                     [x0 + 1.6 * lw, bottom + 1.3 * lh], [x0, bottom + 1.3 * lh]]))
+             for x0 in (left + 0.4 * lw, right - 2.0 * lw)]  # fmt: skip
+    tyre = np.maximum(*tyres)
+    rgb = np.where((tyre > body)[..., None], np.float32(0.04), rgb)
+    return np.clip(rgb, 0, 1).astype(np.float32), np.maximum(np.maximum(body, glass), tyre).astype(np.float32)
 
 
 def draw_glare(size: float, rng: np.random.Generator) -> Layers:
