@@ -351,8 +351,8 @@ def _register_method2(sub: argparse._SubParsersAction) -> None:
         "  fuzzyfire synth method2 --n 200 --out out/m2-photos --backgrounds my/negatives\n"
         "  fuzzyfire synth method2 --n 200 --out out/m2-panoramas --environments ../shared/data/panoramas\n"
         "  fuzzyfire synth method2 --n 200 --out out/m2-mixed --environments configs/scenes --scenes 24\n"
-        "  fuzzyfire synth method2 --n 200 --out out/m2-hard --environments ../shared/data/panoramas \\\n"
-        "      --distractors 0.5 --blend screen,add,alpha,blur,poisson --harmonise --match-noise --decoys 0.3\n"
+        "  fuzzyfire synth method2 --n 200 --out out/m2-hard --environments ../shared/data/panoramas "
+        "--distractors 0.5 --blend screen,add,alpha,blur,poisson --harmonise --match-noise --decoys 0.3\n"
         "  fuzzyfire synth audit out/m2 --json",
     )
     _dataset_arguments(p, photos=True)
