@@ -25,6 +25,14 @@ Variants (400 images at 416x416, seed 0, each a cached pool of the experiment pi
   per photo view;
 - ``panoramas``: the 29 panoramas of ../shared/data as places, 2 images per view;
 - ``photos_panoramas``: both in one pool, half the views each.
+- ``blend_alpha``, ``blend_blur``, ``blend_poisson``: ``panoramas`` with every flame pasted in one blend mode of
+  synth/blend.py (feathered alpha, blurred edge, Poisson clone) instead of added as light (screen / add);
+- ``blend_matched``: ``panoramas`` with flames tinted by the local light, blurred and grained like the background;
+- ``blend_all``: ``panoramas`` with the five blend modes drawn per flame, matched looks and decoy pastes in 30 % of
+  the images (no paste cue left to learn);
+- ``distractors``: ``panoramas`` with distractors (lamps, a low sun, cones, red cloth, jackets, tail lights, glare;
+  no box) in half of the images;
+- ``distractors_blend_all``: both.
 
 Lines: ``synth_<variant>_gap`` (Fréchet distance to half the real train split, median of 200 draws),
 ``synth_<variant>_gap_ratio`` (to the real-vs-real floor), ``synth_real_floor``, and with ``--train``
@@ -53,6 +61,13 @@ ANYWHERE = ["synth.method2.stand=anywhere"]
 PHOTOS = [f"synth.method2.backgrounds=[{(SHARED / 'fire-free').as_posix()}]", "synth.method2.background_holdout=0.25"]
 PANORAMAS = [f"synth.method2.environments=[{(SHARED / 'panoramas').as_posix()}]"]
 SITES = ["synth.method2.scenes=0", "synth.method2.environments=[]", "synth.method2.images_per_view=2"]
+BLEND_ALL = [
+    "synth.method2.blend.modes=[screen,add,alpha,blur,poisson]",
+    "synth.method2.blend.harmonise=true",
+    "synth.method2.blend.match_noise=true",
+    "synth.method2.blend.decoys=0.3",
+]
+DISTRACTORS = ["synth.method2.distractors.share=0.5"]
 VARIANTS = {
     "procedural": [*ANYWHERE, *PROCEDURAL, "synth.method2.light=false", *NO_CAMERA],
     "files": [*ANYWHERE, *FILES, "synth.method2.light=false", *NO_CAMERA],
@@ -68,6 +83,13 @@ VARIANTS = {
     "photos": [*SITES, *PHOTOS],
     "panoramas": [*SITES, *PANORAMAS],
     "photos_panoramas": [*SITES, *PHOTOS, *PANORAMAS, "synth.method2.photo_share=0.5"],
+    "blend_alpha": [*SITES, *PANORAMAS, "synth.method2.blend.modes=[alpha]"],
+    "blend_blur": [*SITES, *PANORAMAS, "synth.method2.blend.modes=[blur]"],
+    "blend_poisson": [*SITES, *PANORAMAS, "synth.method2.blend.modes=[poisson]"],
+    "blend_matched": [*SITES, *PANORAMAS, "synth.method2.blend.harmonise=true", "synth.method2.blend.match_noise=true"],
+    "blend_all": [*SITES, *PANORAMAS, *BLEND_ALL],
+    "distractors": [*SITES, *PANORAMAS, *DISTRACTORS],
+    "distractors_blend_all": [*SITES, *PANORAMAS, *DISTRACTORS, *BLEND_ALL],
 }
 #: Variants whose flames are cut from the curated real train split.
 CUTOUT_VARIANTS = ("files_cutouts",)

@@ -151,10 +151,21 @@ def cmd_method2(args: argparse.Namespace) -> int:
         raise ValueError("--photo-share is the share of views on --backgrounds photos, which are not given")
     share = 0.5 if args.photo_share is None else args.photo_share
     photos = {"backgrounds": tuple(args.backgrounds or ()), "photo_share": share}
-    cfg = Method2Config(**_dataset_config(args), **photos)
+    cfg = Method2Config(**_dataset_config(args), **photos, **_blend_config(args))
     result = run_method2(cfg, build_library(cfg.flames), args.out, overwrite=args.overwrite)
     print(f"wrote {args.out}: {args.n} images ({', '.join(result.files.values())})")
     return 0
+
+
+def _blend_config(args: argparse.Namespace) -> dict:
+    """Method 2's ``blend`` and ``distractors`` from --blend, --harmonise, --match-noise, --decoys, --distractors
+    (the defaults: today's blend, none of them)."""
+    from synth.blend import BlendConfig
+    from synth.distractors import DistractorConfig
+
+    modes = tuple(m.strip() for m in args.blend.split(",")) if args.blend else BlendConfig().modes
+    blend = BlendConfig(modes=modes, harmonise=args.harmonise, match_noise=args.match_noise, decoys=args.decoys)
+    return {"blend": blend, "distractors": DistractorConfig(share=args.distractors)}
 
 
 def _ious(rep: dict) -> str:
@@ -367,6 +378,8 @@ def _register_method2(sub: argparse._SubParsersAction) -> None:
         "  fuzzyfire synth method2 --n 200 --out out/m2-panoramas --environments ../shared/data/panoramas\n"
         "  fuzzyfire synth method2 --n 200 --out out/m2-mixed --environments configs/scenes --scenes 24\n"
         "  fuzzyfire synth method2 --n 200 --out out/m2-streets --streets 8 --kits ../shared/data/kits\n"
+        "  fuzzyfire synth method2 --n 200 --out out/m2-hard --environments ../shared/data/panoramas "
+        "--distractors 0.5 --blend screen,add,alpha,blur,poisson --harmonise --match-noise --decoys 0.3\n"
         "  fuzzyfire synth audit out/m2 --json",
     )
     _dataset_arguments(p, photos=True)
@@ -376,7 +389,35 @@ def _register_method2(sub: argparse._SubParsersAction) -> None:
         type=float,
         help="share of views on a --backgrounds photo when 3D scenes are also used (default 0.5)",
     )
+    _blend_arguments(p)
     p.set_defaults(func=cmd_method2)
+
+
+def _blend_arguments(p: argparse.ArgumentParser) -> None:
+    """Method 2's distractors and blends (synth/distractors.py, synth/blend.py)."""
+    p.add_argument(
+        "--distractors",
+        type=float,
+        default=0.0,
+        metavar="SHARE",
+        help="share of images (0..1) carrying 1-2 fire-like things that are not fire and get no box: lamps, a low "
+        "sun, traffic cones, red cloth, orange jackets, car tail lights, glare (default 0)",
+    )
+    p.add_argument(
+        "--blend",
+        metavar="MODES",
+        help="comma-separated blend modes drawn per flame: screen, add (light), alpha (feathered paste), blur "
+        "(blurred edge), poisson (seamless clone) (default screen,add)",
+    )
+    p.add_argument("--harmonise", action="store_true", help="tint each flame towards the local background light")
+    p.add_argument("--match-noise", action="store_true", help="blur and grain each flame like the background around it")
+    p.add_argument(
+        "--decoys",
+        type=float,
+        default=0.0,
+        metavar="SHARE",
+        help="share of images (0..1) with decoy pastes: background patches pasted with a flame's shape and blend, no box",
+    )
 
 
 def _register_audit(sub: argparse._SubParsersAction) -> None:

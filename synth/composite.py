@@ -10,6 +10,10 @@ around its base (light on the floor and walls; never part of the flame's mask or
 opaque there (its smoke alpha >= 0.5 or its own flame mask); a smoke pixel (see ``synth.sprites.SMOKE_ALPHA``)
 likewise, and also where a later sprite has smoke (so smoke masks stay disjoint). Boxes come from these final
 masks.
+
+Placements may also be pasted (``alpha``, ``blur``, ``poisson``: :mod:`synth.blend`) instead of added as light, and
+given a :class:`synth.harmonise.Look` (tint, blur, grain matched to the background); with the defaults
+(``screen`` / ``add``, a neutral look) the composite is the one of pools made before these existed.
 """
 
 from __future__ import annotations
@@ -21,9 +25,11 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
+from synth.blend import ALL_MODES, EMISSIVE_MODES, PASTE_MODES, margin, paste
+from synth.harmonise import Look, apply_look
 from synth.sprites import Sprite
 
-BLEND_MODES: tuple[str, ...] = ("screen", "add")
+BLEND_MODES: tuple[str, ...] = EMISSIVE_MODES  # the modes flames were drawn from before synth.blend
 #: Emission brightness (brightest channel, 0..1) from which a flame covers the background fully (x opacity) ...
 OPAQUE_BRIGHTNESS = 0.6
 #: ... and below which it covers nothing (only adds its light).
@@ -51,10 +57,12 @@ class Placement:
     glow: float = 0.3
     opacity: float = 0.8  # luminous coverage: the background behind the flame dims by opacity x coverage()
     cast: bool = True  # light the surroundings warm (with ``glow`` > 0)
+    edge: float = 0.0  # paste modes: feather width (alpha) or edge blur sigma (blur), pixels
+    look: Look = Look()  # tint, blur and grain matched to the background (neutral: none)
 
     def __post_init__(self) -> None:
-        if self.blend not in BLEND_MODES:
-            raise ValueError(f"unknown blend mode {self.blend!r}; choose one of {', '.join(BLEND_MODES)}")
+        if self.blend not in ALL_MODES:
+            raise ValueError(f"unknown blend mode {self.blend!r}; choose one of {', '.join(ALL_MODES)}")
         if self.width < 1 or self.height < 1:
             raise ValueError("placement size must be at least 1 x 1")
 
@@ -71,6 +79,36 @@ def scaled_layers(
     masks = np.stack([sprite.mask, sprite.smoke_mask()], axis=-1).astype(np.float32)
     masks = cv2.resize(masks, (width, height), interpolation=cv2.INTER_LINEAR).reshape(height, width, 2) >= 0.5
     return over.reshape(height, width, 4), emission.reshape(height, width, 3), masks[..., 0], masks[..., 1]
+
+
+def padded_layers(p: Placement) -> tuple[Placement, tuple]:
+    """The placement grown by the margin its paste mode and look need (blur spill, Poisson boundary, softening)
+    and its :func:`scaled_layers` padded to match (zeros, masks False), its look applied; unchanged (and no
+    look applied) for an emissive placement with a neutral look."""
+    layers = scaled_layers(p.sprite, p.width, p.height)
+    if p.blend in EMISSIVE_MODES and p.look.neutral:
+        return p, layers
+    m = max(margin(p.blend, p.edge), int(np.ceil(3.0 * p.look.soften)))
+    over, emission, mask, smoke_mask = (np.pad(a, [(m, m), (m, m)] + [(0, 0)] * (a.ndim - 2)) for a in layers)
+    if not p.look.neutral:
+        alpha = over[..., 3]
+        over = np.concatenate([apply_look(over[..., :3], alpha, p.look), alpha[..., None]], axis=-1)
+        emission = apply_look(emission, coverage(emission.max(axis=-1)), p.look)
+    grown = replace(p, x=p.x - m, y=p.y - m, width=p.width + 2 * m, height=p.height + 2 * m)
+    return grown, (over, emission, mask, smoke_mask)
+
+
+def flattened(
+    over: NDArray[np.float32], emission: NDArray[np.float32], opacity: float
+) -> tuple[NDArray[np.float32], NDArray[np.float32]]:
+    """(h, w, 3) colour and (h, w) straight alpha of a sprite's layers as one RGBA paste: the emission counts as
+    coverage ``e = opacity x`` its brightest channel, ``a = 1 - (1 - a_smoke)(1 - e)``, colour
+    ``(smoke a_smoke (1 - e) + opacity emission) / a`` (:func:`synth.sprites.flatten_rgba` at opacity 1)."""
+    e = opacity * emission.max(axis=-1, keepdims=True)
+    a_smoke = over[..., 3:4]
+    alpha = 1.0 - (1.0 - a_smoke) * (1.0 - e)
+    rgb = (over[..., :3] * a_smoke * (1.0 - e) + opacity * emission) / np.maximum(alpha, 1e-6)
+    return np.clip(rgb, 0.0, 1.0).astype(np.float32), alpha[..., 0].astype(np.float32)
 
 
 def _clip(p: Placement, w: int, h: int) -> tuple[slice, slice, slice, slice] | None:
@@ -134,20 +172,24 @@ def composite(background: NDArray[np.uint8], placements: Sequence[Placement]) ->
     img = background.astype(np.float32) / 255.0
     flames: list[NDArray[np.bool_]] = []
     smoke: list[NDArray[np.bool_]] = []
-    for p in placements:
-        over, emission, mask, smoke_mask = scaled_layers(p.sprite, p.width, p.height)
+    for placed in placements:
+        p, (over, emission, mask, smoke_mask) = padded_layers(placed)
         full, full_smoke = np.zeros((h, w), bool), np.zeros((h, w), bool)
         c = _clip(p, w, h)
         if c is not None:
             ys, xs, sy, sx = c
-            a = over[sy, sx, 3:4]
-            light = emission[sy, sx]
-            cover = a + (1.0 - a) * p.opacity * coverage(light.max(axis=-1, keepdims=True))
-            img[ys, xs] = img[ys, xs] * (1.0 - cover) + over[sy, sx, :3] * a
-            img[ys, xs] = _add_light(img[ys, xs], light, p.blend)
+            if p.blend in PASTE_MODES:
+                rgb, alpha = flattened(over[sy, sx], emission[sy, sx], p.opacity)
+                img[ys, xs] = paste(img[ys, xs], rgb, alpha, p.blend, p.edge)
+            else:
+                a = over[sy, sx, 3:4]
+                light = emission[sy, sx]
+                cover = a + (1.0 - a) * p.opacity * coverage(light.max(axis=-1, keepdims=True))
+                img[ys, xs] = img[ys, xs] * (1.0 - cover) + over[sy, sx, :3] * a
+                img[ys, xs] = _add_light(img[ys, xs], light, p.blend)
             if p.glow > 0:
                 if p.cast:
-                    _cast(img, emission, mask, p)
+                    _cast(img, emission, mask, placed)
                 _glow(img, emission, p, c)
             full[ys, xs], full_smoke[ys, xs] = mask[sy, sx], smoke_mask[sy, sx]
             opaque = (over[sy, sx, 3] >= 0.5) | mask[sy, sx]

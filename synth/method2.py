@@ -5,12 +5,15 @@ such pixels is erased from the image (composited again without it), so no visibl
 
 Image ``i`` uses view ``i // images_per_view`` (see :mod:`synth.views`) and its own rng
 ``default_rng([seed, 2, i])``, so any image can be (re)made alone: runs resume and are byte-reproducible.
+Distractors (:mod:`synth.distractors`), decoy pastes (:mod:`synth.decoys`) and the flames' paste edges and looks
+(:mod:`synth.blend`) draw from a second rng, ``default_rng([seed, 2, i, 1])``: turning them on keeps the flames,
+views and camera effects of every image, and the default config draws nothing from it.
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Literal
 
@@ -19,8 +22,11 @@ from numpy.typing import NDArray
 
 from curate.core.boxes import mask_to_xywh
 from synth import render
-from synth.composite import BLEND_MODES, Placement, composite
-from synth.effects import CameraConfig, apply_effects, expose, sample_effects
+from synth.blend import BlendConfig, sample_style
+from synth.composite import Placement, composite, scaled_layers
+from synth.decoys import plan_decoys
+from synth.distractors import DistractorConfig, draw_distractors, plan_distractors
+from synth.effects import CameraConfig, Effects, apply_effects, expose, sample_effects
 from synth.generate import generate
 from synth.library import FlameLibraryConfig, pick_sequence
 from synth.schema import check_range, check_streets
@@ -64,6 +70,8 @@ class Method2Config:
     light: bool = True  # flames light their surroundings (a warm cast around each flame)
     camera: CameraConfig = field(default_factory=CameraConfig)  # probabilities of the stronger camera effects
     flames: FlameLibraryConfig = field(default_factory=FlameLibraryConfig)
+    blend: BlendConfig = field(default_factory=BlendConfig)  # how flames are blended (synth.blend); decoy pastes
+    distractors: DistractorConfig = field(default_factory=DistractorConfig)  # fire-like things, no box
 
     def __post_init__(self) -> None:
         if self.n < 1 or self.scenes < 0 or self.images_per_view < 1 or self.width < 16 or self.height < 16:
@@ -128,7 +136,7 @@ def plan_flames(
             d = float(depth[min(by, cfg.height - 1), bx]) or 10.0
             hpx = int(np.clip(fy * rng.uniform(*cfg.flame_height_m) / d, 12, 0.9 * cfg.height))
         wpx, spx = sprite_pixels(sprite, hpx)
-        blend = str(rng.choice(BLEND_MODES))
+        blend = str(rng.choice(cfg.blend.modes))  # (screen, add) by default: the draws of pools made before
         glow, opacity = float(rng.uniform(0.1, 0.5)), float(rng.uniform(*cfg.flame_opacity))
         place = Placement(sprite, bx - wpx // 2, by - spx, wpx, spx, blend, glow, opacity, cfg.light)
         out.append((place, f"{seq.name}/{frame}"))
@@ -198,34 +206,79 @@ def visible_composite(scene: NDArray[np.uint8], planned: Sequence[tuple[Placemen
         shown = [shown[k] for k in keep]
 
 
+def dressed_scene(
+    cfg: Method2Config, background, depth, meta: dict, planned, library, effects: Effects, fy: float, rng
+):
+    """The exposed scene flames are composited on, with this image's distractors (reflective ones before the
+    low-light exposure, light sources after it) and decoy pastes, none overlapping a planned flame; and
+    the metadata they add (``distractors``, ``decoys``: kind or blend and box [x, y, w, h]; only when on)."""
+    avoid = [[p.x, p.y, p.width, p.height] for p, _ in planned]
+    items = plan_distractors(cfg.distractors, background, depth, meta, fy, avoid, rng) if cfg.distractors.share else []
+    scene = draw_distractors(expose(draw_distractors(background, items, False), effects), items, True)
+    added: dict = {"distractors": [d.to_json() for d in items]} if cfg.distractors.share else {}
+    if cfg.blend.decoys:
+        decoys = plan_decoys(cfg.blend, scene, library, [*avoid, *(d.box for d in items)], rng)
+        scene = composite(scene, decoys).image
+        added["decoys"] = [{"blend": d.blend, "box": [d.x, d.y, d.width, d.height]} for d in decoys]
+    return scene, added
+
+
+def styled(cfg: Method2Config, planned, scene, rng) -> list[tuple[Placement, str]]:
+    """``planned`` with each flame's paste edge and look (tint, blur, grain) drawn for ``scene`` (unchanged, and
+    nothing drawn, with the default blend)."""
+    if cfg.blend.default:
+        return list(planned)
+    out = []
+    for p, name in planned:
+        emission = scaled_layers(p.sprite, p.width, p.height)[1]
+        colour = np.round(emission * 255.0).astype(np.uint8)
+        edge, look = sample_style(cfg.blend, p.blend, scene, (p.x, p.y, p.width, p.height), colour, rng)
+        out.append((replace(p, edge=edge, look=look), name))
+    return out
+
+
 def make_image(cfg: Method2Config, i: int, library: Sequence[SpriteSequence], views: ViewCache):
     """Image ``i``: ((H, W, 3) uint8, kept fire masks, record dict (boxes xywh, metadata), kept smoke masks or
     None when smoke is not a class). A flame nobody could see is erased, not left unboxed
-    (:func:`visible_composite`); a kept flame's mask and box are its seen part."""
+    (:func:`visible_composite`); a kept flame's mask and box are its seen part. Distractors and decoys are part of
+    the scene (and of the plate the flames' visibility is measured against); they get no box."""
     background, depth, view_meta = views.background(i // cfg.images_per_view)
     rng = np.random.default_rng([cfg.seed, 2, i])
     avoid = view_meta.get("people", []) if view_meta.get("site") else None
-    planned = plan_flames(cfg, library, depth, view_meta["camera"]["yfov"], rng, avoid)
+    yfov = view_meta["camera"]["yfov"]
+    planned = plan_flames(cfg, library, depth, yfov, rng, avoid)
     effects = sample_effects(rng, cfg.camera)
-    image, result, shown, seen = visible_composite(expose(background, effects), planned, effects, cfg.min_box_px)
+    extra = np.random.default_rng([cfg.seed, 2, i, 1])
+    fy = float(render.intrinsics(yfov, cfg.width, cfg.height)[1, 1])
+    scene, added = dressed_scene(cfg, background, depth, view_meta, planned, library, effects, fy, extra)
+    planned = styled(cfg, planned, scene, extra)
+    image, result, shown, seen = visible_composite(scene, planned, effects, cfg.min_box_px)
     kept, boxes, index = boxes_from_masks([v.part for v in seen], cfg.min_box_px)
-    flames = [
-        {
-            "flame": shown[k][1],
-            "blend": shown[k][0].blend,
-            "glow": round(shown[k][0].glow, 4),
-            "opacity": round(shown[k][0].opacity, 4),
-            "contrast": round(seen[k].contrast, 2),
-            "seen": round(seen[k].seen / max(seen[k].pixels, 1), 4),
-        }
-        for k in index
-    ]
-    meta = {**view_meta, "flames": flames, "erased": len(planned) - len(shown), "effects": effects.to_json()}
+    flames = [flame_record(shown[k][0], shown[k][1], seen[k]) for k in index]
+    meta = {**view_meta, "flames": flames, "erased": len(planned) - len(shown), **added, "effects": effects.to_json()}
     record = {"width": cfg.width, "height": cfg.height, "boxes": boxes, "meta": meta}
     if not cfg.smoke_class:
         return image, kept, record, None
     smoke, record["smoke_boxes"], _ = boxes_from_masks(result.smoke, cfg.min_box_px)
     return image, kept, record, smoke
+
+
+def flame_record(p: Placement, name: str, seen) -> dict:
+    """A kept flame in the manifest: sprite, blend, glow, opacity, contrast, seen share (and, when not the
+    default, its paste edge and look)."""
+    out = {
+        "flame": name,
+        "blend": p.blend,
+        "glow": round(p.glow, 4),
+        "opacity": round(p.opacity, 4),
+        "contrast": round(seen.contrast, 2),
+        "seen": round(seen.seen / max(seen.pixels, 1), 4),
+    }
+    if p.edge:
+        out["edge"] = round(p.edge, 3)
+    if not p.look.neutral:
+        out["look"] = p.look.to_json()
+    return out
 
 
 def run_method2(

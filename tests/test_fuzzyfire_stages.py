@@ -252,3 +252,28 @@ def test_standing_enters_only_pools_that_render_rooms(tmp_path: Path) -> None:
     assert not _renders_rooms(Method2Config(scenes=0, environments=(pano.parent,)))
     assert _renders_rooms(Method2Config(scenes=0, environments=(tmp_path / "rooms",)))
     assert _renders_rooms(Method2Config(scenes=2, environments=(pano.parent,)))
+
+
+def test_blends_and_distractors_stay_out_of_existing_pool_identities() -> None:
+    """configs/shared-data.yaml's Method 2 pool and the default pool keep the identities they had before blend and
+    distractors existed (digests computed by the code before them); turning either on makes another pool."""
+    from dataclasses import replace
+
+    from curate.core.config import load_config, to_dict
+    from fuzzyfire.experiment_config import ExperimentConfig
+    from fuzzyfire.stages import _later_keys_dropped
+    from synth.blend import BlendConfig
+    from synth.distractors import DistractorConfig
+    from synth.method2 import Method2Config
+
+    root = Path(__file__).resolve().parents[1]
+    study = load_config(root / "configs" / "shared-data.yaml", ExperimentConfig).synth.method2
+    default = to_dict(Method2Config())
+
+    def identity(cfg: Method2Config) -> str:
+        return digest(_later_keys_dropped(to_dict(cfg), default))
+
+    assert identity(study) == "9a138ab4d9da" and identity(Method2Config()) == "3dd22ec5abe5"
+    assert identity(replace(study, blend=BlendConfig(), distractors=DistractorConfig())) == "9a138ab4d9da"
+    assert identity(replace(study, distractors=DistractorConfig(share=0.5))) != "9a138ab4d9da"
+    assert identity(replace(study, blend=BlendConfig(modes=("alpha",)))) != "9a138ab4d9da"

@@ -223,3 +223,16 @@ def test_method2_on_kit_streets_from_the_command_line(tmp_path, capsys):
     manifest = json.loads((out / "manifest.json").read_text())
     assert manifest["args"]["scenes"] == 0 and manifest["args"]["streets"] == 1  # kit streets alone by default
     assert {m["kind"] for m in manifest["args"]["per_image"]} == {"street"}
+
+
+def test_method2_distractors_and_blends_from_the_command_line(tmp_path, capsys):
+    out, fl = tmp_path / "hard", tmp_path / "fl"
+    assert main(["synth", "flames", "--out", str(fl), "--n", "1", "--frames", "60", "--keep-every", "30"]) == 0
+    args = ["synth", "method2", "--n", "2", "--out", str(out), "--size", "64x48", "--scenes", "1", "--flames", str(fl)]
+    extra = ["--distractors", "1", "--blend", "alpha,poisson", "--harmonise", "--match-noise", "--decoys", "0.5"]
+    assert main([*args, *extra]) == 0
+    manifest = json.loads((out / "manifest.json").read_text())["args"]
+    assert manifest["blend"]["modes"] == ["alpha", "poisson"] and manifest["distractors"]["share"] == 1.0
+    assert all("distractors" in m and "decoys" in m for m in manifest["per_image"])
+    assert main(["synth", "method2", "--out", str(tmp_path / "x"), "--scenes", "1", "--blend", "glue"]) == 2
+    assert "blend.modes" in capsys.readouterr().err

@@ -103,3 +103,31 @@ def test_a_bright_flame_body_hides_what_is_behind_it_and_a_dim_edge_does_not_dar
     white = np.full((10, 10, 3), 230, np.uint8)
     lit = composite(white, [Placement(edge, 0, 0, 10, 10, "screen", 0.0, 1.0)]).image
     assert lit[5, 5, 0] >= 230 and lit[5, 5].astype(int).mean() >= 200  # reddened, not a dark outline
+
+
+def test_flattened_is_flatten_rgba_at_full_opacity():
+    from synth.composite import flattened, scaled_layers
+    from synth.sprites import flatten_rgba
+
+    sprite = _smoky()
+    over, emission, _, _ = scaled_layers(sprite, 10, 20)
+    rgb, alpha = flattened(over, emission, 1.0)
+    reference = flatten_rgba(sprite).astype(np.float32) / 255.0
+    assert np.abs(alpha - reference[..., 3]).max() <= 1 / 255
+    shown = alpha > 0.05
+    assert np.abs(rgb[shown] - reference[..., :3][shown]).max() <= 2 / 255
+
+
+def test_paste_placements_grow_by_their_margin_and_emissive_ones_do_not():
+    from synth.composite import padded_layers
+    from synth.harmonise import Look
+
+    light = Placement(_flame(), 5, 6, 10, 10)
+    assert padded_layers(light)[0] == light
+    blurred, layers = padded_layers(Placement(_flame(), 5, 6, 10, 10, blend="blur", edge=2.0))
+    assert (blurred.x, blurred.y, blurred.width, blurred.height) == (-1, 0, 22, 22)
+    assert all(a.shape[:2] == (22, 22) for a in layers) and layers[2][6:16, 6:16].all() and not layers[2][:6].any()
+    softened, _ = padded_layers(Placement(_flame(), 5, 6, 10, 10, look=Look(soften=1.0)))
+    assert softened.width == 16
+    out = composite(np.zeros((30, 30, 3), np.uint8), [Placement(_flame(), 5, 6, 10, 10, blend="poisson", glow=0.0)])
+    assert mask_to_xywh(out.flames[0]).tolist() == [5, 6, 10, 10]

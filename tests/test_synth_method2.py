@@ -11,6 +11,8 @@ import pytest
 from synth import flames as F
 from synth import method2 as M
 from synth.audit import audit_dataset
+from synth.blend import ALL_MODES, BlendConfig
+from synth.distractors import DistractorConfig, overlaps
 from synth.staging import staging_dir
 
 CFG = M.Method2Config(n=6, seed=3, width=96, height=72, scenes=2, images_per_view=3, max_flames=3, negatives=0.0)
@@ -63,7 +65,7 @@ def test_same_seed_gives_byte_identical_output_and_resume_matches(written, libra
 
     st = Staging(out)
     with M.render.Renderer(CFG.width, CFG.height) as r:
-        views = M.ViewCache(CFG.seed, CFG.scenes, r)
+        views = M.ViewCache(CFG.seed, CFG.scenes, r, surfaces=CFG.stand == "surfaces")  # as generate() builds it
         for i in range(2):
             st.save(i, *M.make_image(CFG, i, library, views))
     assert staging.is_dir()
@@ -133,3 +135,59 @@ def test_audit_reports_the_visibility_of_the_boxes(written):
     v = audit_dataset(written)["visibility"]
     assert v["boxes"] == audit_dataset(written)["boxes"] and v["erased"] >= 0
     assert 10.0 <= v["min_contrast"] <= v["median_contrast"]  # every box is seen: ΔE >= MIN_DELTA_E
+
+
+HARD = M.Method2Config(
+    n=4, seed=3, width=96, height=72, scenes=1, images_per_view=2, max_flames=3, negatives=0.0,
+    distractors=DistractorConfig(share=1.0, max=3), blend=BlendConfig(modes=ALL_MODES, harmonise=True,
+                                                                      match_noise=True, decoys=1.0),
+)  # fmt: skip
+
+
+@pytest.fixture(scope="module")
+def hard(tmp_path_factory, library):
+    out = tmp_path_factory.mktemp("m2hard") / "a"
+    M.run_method2(HARD, library, out)
+    return out
+
+
+def test_distractors_and_every_blend_keep_exact_boxes_and_get_none(hard):
+    """Audit IoU 1.000 with every blend mode, decoys and distractors; neither has a box or overlaps one."""
+    report = audit_dataset(hard)
+    assert report["boxes"] > 0 and report["min_iou"] == 1.0 and report["mean_iou"] == 1.0
+    per_image = json.loads((hard / "manifest.json").read_text())["args"]["per_image"]
+    coco = json.loads((hard / "annotations.json").read_text())
+    assert sum(len(m["distractors"]) for m in per_image) > 0 and all("decoys" in m for m in per_image)
+    for k, meta in enumerate(per_image):
+        boxes = [a["bbox"] for a in coco["annotations"] if a["image_id"] == coco["images"][k]["id"]]
+        assert len(boxes) == len(meta["flames"])
+        for thing in meta["distractors"] + meta["decoys"]:
+            assert not overlaps(thing["box"], boxes)
+    assert {f["blend"] for m in per_image for f in m["flames"]} <= set(ALL_MODES)
+
+
+def test_distractors_leave_the_flames_as_they_were(written, hard, library, tmp_path):
+    """The extra rng: distractors (no blend changes) keep every flame, box and camera effect of the default run;
+    and a rerun of the hard config is byte-identical."""
+    from dataclasses import replace
+
+    only = tmp_path / "only"
+    M.run_method2(replace(CFG, distractors=DistractorConfig(share=1.0)), library, only)
+    for name in ("annotations.json",):
+        assert (only / name).read_bytes() == (written / name).read_bytes()
+    plain = json.loads((written / "manifest.json").read_text())["args"]["per_image"]
+    dressed = json.loads((only / "manifest.json").read_text())["args"]["per_image"]
+    assert any(m["distractors"] for m in dressed) and not any("distractors" in m for m in plain)
+
+    def drop(flames, key="contrast"):
+        return [{k: v for k, v in f.items() if k != key} for f in flames]
+
+    assert [drop(m["flames"]) for m in plain] == [drop(m["flames"]) for m in dressed]
+    contrast = [
+        (f["contrast"], g["contrast"]) for a, b in zip(plain, dressed) for f, g in zip(a["flames"], b["flames"])
+    ]
+    assert max(abs(a - b) for a, b in contrast) < 1.0  # a lamp's bloom may reach the ring a flame's contrast is read on
+    assert [m["effects"] for m in plain] == [m["effects"] for m in dressed]
+    again = tmp_path / "again"
+    M.run_method2(HARD, library, again)
+    assert _files(again) == _files(hard)

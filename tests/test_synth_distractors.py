@@ -1,0 +1,96 @@
+"""Distractors: every kind draws something that is not a flame, never over the boxes it avoids, the sun only
+in open blue sky above the horizon, the same seed the same pixels."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from synth.distractors import (
+    DRAWERS,
+    KINDS,
+    DistractorConfig,
+    draw_distractors,
+    draw_sun,
+    horizon_row,
+    make_distractor,
+    overlaps,
+    plan_distractors,
+)
+
+
+def _outdoor(h=96, w=128, horizon=40):
+    """Blue sky above row ``horizon``, textured green ground below; depth 5 m on the ground."""
+    rng = np.random.default_rng(0)
+    img = np.empty((h, w, 3), np.uint8)
+    img[:horizon] = (110, 160, 230)
+    img[horizon:] = np.clip(rng.normal((70, 120, 50), 25, (h - horizon, w, 3)), 0, 255).astype(np.uint8)
+    depth = np.zeros((h, w), np.float32)
+    depth[horizon + 2 :] = 5.0
+    return img, depth
+
+
+def test_config_rejects_bad_values():
+    for bad in ({"share": -0.1}, {"max": 0}, {"kinds": ("lamp", "dragon")}, {"kinds": ()}):
+        with pytest.raises(ValueError, match="distractors"):
+            DistractorConfig(**bad)
+
+
+@pytest.mark.parametrize("kind", sorted(DRAWERS))
+def test_every_kind_draws_something_that_is_no_flame_and_repeats_per_seed(kind):
+    img, depth = _outdoor()
+    one = make_distractor(kind, img, depth, 100.0, 40.0, np.random.default_rng(3))
+    two = make_distractor(kind, img, depth, 100.0, 40.0, np.random.default_rng(3))
+    assert one is not None and not one.sprite.mask.any()
+    assert one.sprite.over[..., 3].any() or one.sprite.emission.any()
+    assert one.box == two.box and np.array_equal(one.sprite.over, two.sprite.over)
+    assert np.array_equal(one.sprite.emission, two.sprite.emission)
+
+
+def test_sun_stands_above_the_horizon_only_under_open_blue_sky():
+    img, _ = _outdoor()
+    for seed in range(5):
+        rgb, alpha, light = draw_sun(img, 40.0, np.random.default_rng(seed))
+        brightest = np.unravel_index(np.argmax(light.max(axis=-1)), light.shape[:2])
+        assert brightest[0] < 40 and alpha[42:].max() < 0.05  # the disc above the horizon, no tint on the ground
+    ceiling = img.copy()
+    ceiling[:40] = 235  # a white ceiling, not a sky
+    assert draw_sun(ceiling, 40.0, np.random.default_rng(0)) is None
+    assert draw_sun(img, 5.0, np.random.default_rng(0)) is None  # no room for the disc
+
+
+def test_horizon_from_photo_panorama_and_render_metadata():
+    assert horizon_row({"horizon": 0.25}, 400, 300.0) == 100.0
+    assert horizon_row({"pitch": 0.0}, 400, 300.0) == 200.0
+    assert horizon_row({"pitch": -20.0}, 400, 300.0) < 200.0  # looking down: the horizon moves up
+    level = np.eye(4).tolist()  # looking along -z, level
+    assert horizon_row({"camera": {"pose": level, "yfov": 1.0}}, 400, 300.0) == pytest.approx(200.0)
+    assert horizon_row({"camera": {"yfov": 1.0}}, 400, 300.0) is None
+
+
+def test_plans_never_overlap_what_they_avoid_and_draw_nothing_elsewhere():
+    img, depth = _outdoor()
+    cfg = DistractorConfig(share=1.0, max=3)
+    meta = {"horizon": 40 / 96}
+    found = 0
+    for seed in range(20):
+        rng = np.random.default_rng(seed)
+        avoid = [[int(rng.integers(0, 100)), int(rng.integers(0, 70)), 20, 25] for _ in range(2)]
+        items = plan_distractors(cfg, img, depth, meta, 100.0, avoid, rng)
+        found += len(items)
+        for k, d in enumerate(items):
+            assert not overlaps(d.box, avoid) and not overlaps(d.box, [o.box for o in items[:k]])
+            assert overlaps(d.box, [[0, 0, 128, 96]])
+        drawn = draw_distractors(draw_distractors(img, items, False), items, True)
+        changed = np.any(drawn != img, axis=-1)
+        inside = np.zeros_like(changed)
+        for d in items:
+            x, y, w, h = d.box
+            inside[max(y, 0) : y + h, max(x, 0) : x + w] = True
+        assert not (changed & ~inside).any()
+    assert found >= 20
+    assert plan_distractors(DistractorConfig(), img, depth, meta, 100.0, [], np.random.default_rng(0)) == []
+
+
+def test_kinds_cover_the_brief():
+    assert set(KINDS) == set(DRAWERS) | {"sun"}
