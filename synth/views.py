@@ -124,24 +124,27 @@ class ViewCache:
             depths.append(render.render_view(self.renderer, scene, v.pose, v.yfov, True)[1])
             return depths[-1]
 
-        if not env.zones:
-            cam = camera.find_view(env.camera, rng, depth_of, accept=self._shows_surfaces if self.surfaces else None)
-            kind = None if not self.streets else "render"
-            self._view, self._view_index = View(env, scene, cam, depths[-1], kind=kind), view_index
-            return self._view
+        def shows_ground(v: camera.CameraView, depth: NDArray[np.float32]) -> bool:
+            stand = self._stand_mask(env, v.pose, v.yfov, depth)
+            return stand is None or float(stand.mean()) >= MIN_ZONE_SHARE
 
-        def shows_zones(v: camera.CameraView, depth: NDArray[np.float32]) -> bool:
-            return float(zone_standing_mask(depth, v.pose, v.yfov, env.zones).mean()) >= MIN_ZONE_SHARE
-
-        cam = camera.find_view(env.camera, rng, depth_of, accept=shows_zones)
-        ground = zone_standing_mask(depths[-1], cam.pose, cam.yfov, env.zones)
-        self._view, self._view_index = View(env, scene, cam, depths[-1], ground, "street"), view_index
+        cam = camera.find_view(env.camera, rng, depth_of, accept=shows_ground)
+        if env.zones:
+            ground = self._stand_mask(env, cam.pose, cam.yfov, depths[-1])
+            self._view = View(env, scene, cam, depths[-1], ground, "street")
+        else:
+            self._view = View(env, scene, cam, depths[-1], kind=None if not self.streets else "render")
+        self._view_index = view_index
         return self._view
 
-    @staticmethod
-    def _shows_surfaces(v: camera.CameraView, depth: NDArray[np.float32]) -> bool:
-        """Whether a room view (``surfaces``) shows enough up-facing surface for a flame to stand on."""
-        return float(standing_mask(depth, v.pose, v.yfov).mean()) >= MIN_ZONE_SHARE
+    def _stand_mask(
+        self, env: scenes.Environment, pose: NDArray[np.float64], yfov: float, depth: NDArray[np.float32]
+    ) -> NDArray[np.bool_] | None:
+        """(H, W) bool where a flame may stand in a render of ``env`` seen from ``pose``: a kit street's fire-zone
+        ground, or a room's up-facing surfaces with ``surfaces``; None: anywhere (the method's own rule)."""
+        if env.zones:
+            return zone_standing_mask(depth, pose, yfov, env.zones)
+        return standing_mask(depth, pose, yfov) if self.surfaces else None
 
     def background(self, view_index: int) -> tuple[NDArray[np.uint8], NDArray[np.float32], dict]:
         """The background of view ``view_index``: ((H, W, 3) uint8 RGB, (H, W) float32 depth, metadata with its
@@ -160,11 +163,8 @@ class ViewCache:
             v = self.view(view_index)
             rgb, depth = render.render_view(self.renderer, v.scene, v.camera.pose, v.camera.yfov)
             made = (rgb, depth, v.meta())
-            if v.ground is not None:  # a kit street: flames stand on the up-facing ground of its fire zones
-                stand = zone_standing_mask(depth, v.camera.pose, v.camera.yfov, v.env.zones)
-                made = (rgb, np.where(stand, depth, np.float32(0)), {**made[2], "site": "surfaces", "people": []})
-            elif self.surfaces:  # flames stand on up-facing surfaces only (a site, like a photo's ground)
-                stand = standing_mask(depth, v.camera.pose, v.camera.yfov)
+            stand = self._stand_mask(v.env, v.camera.pose, v.camera.yfov, depth)
+            if stand is not None:  # flames stand only there (a site, like a photo's ground)
                 made = (rgb, np.where(stand, depth, np.float32(0)), {**made[2], "site": "surfaces", "people": []})
         if len(self.weights) > 1 and "kind" not in made[2]:  # with streets a render names its own kind
             made[2]["kind"] = kind
