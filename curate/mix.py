@@ -98,17 +98,16 @@ def draw_order(ds: Dataset, rng: np.random.Generator) -> list[ImageRecord]:
     return [images[i] for i in rng.permutation(len(images))]
 
 
-def source_orders(real: Dataset, synth: Dataset, seed: int) -> tuple[list[ImageRecord], list[ImageRecord]]:
-    """Seeded orders of the real and synthetic pools, from independent child streams of ``seed``."""
+def _source_rngs(seed: int) -> tuple[np.random.Generator, np.random.Generator]:
+    """The generators of the real and the synthetic order for ``seed`` (independent child streams)."""
     real_seq, synth_seq = np.random.SeedSequence(seed).spawn(2)
-    return draw_order(real, np.random.default_rng(real_seq)), draw_order(synth, np.random.default_rng(synth_seq))
+    return np.random.default_rng(real_seq), np.random.default_rng(synth_seq)
 
 
 def real_subset(real: Dataset, mix: Mixture, seed: int) -> Dataset:
     """The real images ``mix`` trains on for ``seed`` (the first ``mix.real`` of the seed's real order, which
     does not depend on the synthetic pool), as a dataset of ``real``'s images, splits and boxes."""
-    real_seq, _ = np.random.SeedSequence(seed).spawn(2)
-    ids = {img.id for img in draw_order(real, np.random.default_rng(real_seq))[: mix.real]}
+    ids = {img.id for img in draw_order(real, _source_rngs(seed)[0])[: mix.real]}
     return real.filter_images(lambda img: img.id in ids)
 
 
@@ -143,11 +142,9 @@ def build_mixture(
     Raises :class:`MixError` when a source has fewer images than asked.
     """
     check_available(real, synth, [mix])
-    real_order, synth_order = source_orders(real, synth, seed)
-    real_ids = {img.id for img in real_order[: mix.real]}
-    synth_ids = {img.id for img in synth_order[: mix.synth]}
+    synth_ids = {img.id for img in draw_order(synth, _source_rngs(seed)[1])[: mix.synth]}
     parts = [
-        _tagged(real.filter_images(lambda img: img.id in real_ids), "real", real.root.name),
+        _tagged(real_subset(real, mix, seed), "real", real.root.name),
         _tagged(synth.filter_images(lambda img: img.id in synth_ids), "synth", synth.root.name),
     ]
     names = list(category_names) or list(dict.fromkeys(real.category_names + synth.category_names))
