@@ -137,7 +137,10 @@ def cmd_method1(args: argparse.Namespace) -> int:
     from synth.library import build_library
     from synth.method1 import Method1Config, run_method1
 
-    cfg = Method1Config(box_mode=args.box_mode, **_dataset_config(args))
+    from synth.distractors import DistractorConfig
+
+    distractors = DistractorConfig(share=args.distractors)
+    cfg = Method1Config(box_mode=args.box_mode, distractors=distractors, **_dataset_config(args))
     result = run_method1(cfg, build_library(cfg.flames), args.out, overwrite=args.overwrite)
     print(f"wrote {args.out}: {args.n} images, {args.box_mode} boxes ({', '.join(result.files.values())})")
     return 0
@@ -357,10 +360,12 @@ def _register_method1(sub: argparse._SubParsersAction) -> None:
         "example:\n  fuzzyfire synth method1 --n 1000 --seed 0 --out out/m1 --size 640x480 --scenes 48\n"
         "  fuzzyfire synth method1 --n 200 --out out/m1-paper --box-mode paper\n"
         "  fuzzyfire synth method1 --n 200 --out out/m1-streets --streets 8 --kits ../shared/data/kits\n"
+        "  fuzzyfire synth method1 --n 200 --out out/m1-hard --environments configs/scenes --distractors 0.5\n"
         "  fuzzyfire synth audit out/m1 --json",
     )
     _dataset_arguments(p)
     p.add_argument("--box-mode", default="visible", choices=("visible", "paper"), help="annotation written")
+    _distractor_argument(p)
     p.set_defaults(func=cmd_method1)
 
 
@@ -393,8 +398,8 @@ def _register_method2(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=cmd_method2)
 
 
-def _blend_arguments(p: argparse.ArgumentParser) -> None:
-    """Method 2's distractors and blends (synth/distractors.py, synth/blend.py)."""
+def _distractor_argument(p: argparse.ArgumentParser) -> None:
+    """--distractors SHARE of Method 1 and 2 (synth/distractors.py)."""
     p.add_argument(
         "--distractors",
         type=float,
@@ -403,6 +408,11 @@ def _blend_arguments(p: argparse.ArgumentParser) -> None:
         help="share of images (0..1) carrying 1-2 fire-like things that are not fire and get no box: lamps, a low "
         "sun, traffic cones, red cloth, orange jackets, car tail lights, glare (default 0)",
     )
+
+
+def _blend_arguments(p: argparse.ArgumentParser) -> None:
+    """Method 2's distractors and blends (synth/distractors.py, synth/blend.py)."""
+    _distractor_argument(p)
     p.add_argument(
         "--blend",
         metavar="MODES",

@@ -28,7 +28,11 @@ from synth.sites import sky_like
 from synth.sprites import Sprite
 
 KINDS: tuple[str, ...] = ("lamp", "sun", "cone", "cloth", "clothing", "taillights", "glare")
-EMISSIVE_KINDS: tuple[str, ...] = ("lamp", "sun", "taillights", "glare")  # light: drawn after low-light exposure
+EMISSIVE_KINDS: tuple[str, ...] = ("lamp", "sun", "taillights", "glare")
+OUTDOOR_KINDS: tuple[str, ...] = (
+    "sun",
+    "taillights",
+)  # never drawn in a rendered room (:func:`kinds_here`)  # light: drawn after low-light exposure
 #: Height range in metres of the kinds that stand on the ground (sized by depth like flames).
 GROUND_HEIGHT_M: dict[str, tuple[float, float]] = {
     "cone": (0.45, 0.9),
@@ -441,6 +445,13 @@ def overlaps(box: Sequence[float], others: Sequence[Sequence[float]]) -> bool:
     return any(x < ox + ow and ox < x + w and y < oy + oh and oy < y + h for ox, oy, ow, oh in others)
 
 
+def kinds_here(kinds: Sequence[str], meta: dict) -> tuple[str, ...]:
+    """``kinds`` that fit a view: in a rendered room (metadata with a camera pose, not a kit street) without the
+    :data:`OUTDOOR_KINDS` (no car rear over a bathroom sink); photos, panoramas and streets keep every kind."""
+    room = "pose" in meta.get("camera", {}) and meta.get("kind") != "street"
+    return tuple(k for k in kinds if not (room and k in OUTDOOR_KINDS))
+
+
 def plan_distractors(
     cfg: DistractorConfig, background: NDArray[np.uint8], depth: NDArray[np.float32], meta: dict, fy: float,
     avoid: Sequence[Sequence[float]], rng: np.random.Generator, tries: int = 8,
@@ -450,12 +461,13 @@ def plan_distractors(
     other, all inside the image at least in part."""
     if rng.random() >= cfg.share:
         return []
+    kinds = kinds_here(cfg.kinds, meta)
     h, w = background.shape[:2]
     horizon = horizon_row(meta, h, fy)
     out: list[Distractor] = []
-    for _ in range(int(rng.integers(1, cfg.max + 1))):
+    for _ in range(int(rng.integers(1, cfg.max + 1)) if kinds else 0):
         for _ in range(tries):
-            d = make_distractor(cfg.kinds[int(rng.integers(len(cfg.kinds)))], background, depth, fy, horizon, rng)
+            d = make_distractor(kinds[int(rng.integers(len(kinds)))], background, depth, fy, horizon, rng)
             if d is None or not overlaps(d.box, [[0, 0, w, h]]):
                 continue
             if not overlaps(d.box, [*avoid, *(o.box for o in out)]):

@@ -14,6 +14,11 @@ Boxes (all in pixels, row 0 at the top):
   ∧ the sprite's flame mask warped by the plane's homography ∧ not behind an opaque part (alpha >= 0.5 or
   flame) of a nearer plane (per-pixel depths from the segmentation passes).
 
+Distractors (:mod:`synth.distractors`, ``distractors.share`` > 0): fire-like things drawn on the render after it
+(reflective ones before the low-light exposure, light sources after it), outside every plane's projected box,
+never boxed; objects that stand do so on the surfaces a flame may stand on, sized by the render's depth. They
+draw from a second rng, ``default_rng([seed, 3, i, 1])``: turning them on keeps every plane, box and effect.
+
 Image ``i`` uses view ``i // images_per_view`` (:mod:`synth.views`) and ``default_rng([seed, 3, i])``, so any
 image can be (re)made alone: runs resume and are byte-reproducible.
 """
@@ -31,6 +36,7 @@ from numpy.typing import NDArray
 
 from curate.core.boxes import clip_xyxy, mask_to_xywh, points_to_xyxy, xyxy_to_xywh
 from synth import render
+from synth.distractors import DistractorConfig, draw_distractors, plan_distractors
 from synth.effects import CameraConfig, Effects, apply_effects, expose, sample_effects
 from synth.generate import generate
 from synth.library import FlameLibraryConfig
@@ -38,6 +44,7 @@ from synth.scenes import translate
 from synth.schema import check_range, check_streets
 from synth.sprites import Sprite, SpriteSequence, flatten_rgba
 from synth.staging import boxes_from_masks
+from synth.standing import standing_mask
 from synth.views import View, ViewCache
 
 BOX_MODES: tuple[str, ...] = ("paper", "visible")
@@ -71,6 +78,7 @@ class Method1Config:
     light: bool = True  # flames light their surroundings (a point light per flame)
     camera: CameraConfig = field(default_factory=CameraConfig)  # probabilities of the stronger camera effects
     flames: FlameLibraryConfig = field(default_factory=FlameLibraryConfig)
+    distractors: DistractorConfig = field(default_factory=DistractorConfig)  # fire-like things, no box
 
     def __post_init__(self) -> None:
         if self.box_mode not in BOX_MODES:
@@ -272,6 +280,26 @@ def annotate(cfg: Method1Config, planes: Sequence[Plane], paper: Sequence, masks
     return [masks[i] for i in seen], {"boxes": boxes, "box_modes": modes, "flames": flames}
 
 
+def dressed_render(
+    cfg: Method1Config, rgb: NDArray[np.uint8], view: View, paper: Sequence, effects: Effects,
+    flames_drawn: NDArray[np.bool_] | None, rng: np.random.Generator,
+) -> tuple[NDArray[np.uint8], dict]:  # fmt: skip
+    """The (H, W, 3) uint8 render ``rgb`` exposed (``flames_drawn`` kept at full), with this image's distractors
+    when ``cfg.distractors.share`` > 0: none overlapping a plane's projected box (``paper``, xywh pixels); those
+    that stand do so where a flame may (``view.ground``, else the up-facing surfaces), sized by the view's depth.
+    Also the metadata they add (``distractors``: kind and box [x, y, w, h]; only when on)."""
+    if not cfg.distractors.share:
+        return expose(rgb, effects, flames_drawn), {}
+    pose, yfov = view.camera.pose, view.camera.yfov
+    ground = view.ground if view.ground is not None else standing_mask(view.depth, pose, yfov)
+    depth = np.where(ground, view.depth, np.float32(0))
+    fy = float(render.intrinsics(yfov, cfg.width, cfg.height)[1, 1])
+    avoid = [[float(v) for v in box] for box in paper]
+    items = plan_distractors(cfg.distractors, rgb, depth, view.meta(), fy, avoid, rng)
+    scene = draw_distractors(expose(draw_distractors(rgb, items, False), effects, flames_drawn), items, True)
+    return scene, {"distractors": [d.to_json() for d in items]}
+
+
 def make_image(cfg: Method1Config, i: int, library: Sequence[SpriteSequence], views: ViewCache):
     """Image ``i``: ((H, W, 3) uint8, kept fire masks, record dict (boxes xywh, both box modes, metadata), kept
     smoke masks or None when smoke is not a class)."""
@@ -288,8 +316,11 @@ def make_image(cfg: Method1Config, i: int, library: Sequence[SpriteSequence], vi
     effects = sample_effects(rng, cfg.camera) if cfg.effects else Effects()
     drawn = [cover & layer[..., 1] for (cover, _), layer in zip(passes, layers)]  # visible opaque flame parts
     flames_drawn = np.logical_or.reduce(drawn) if drawn else None
-    image = apply_effects(expose(rgb, effects, flames_drawn), effects)
-    meta: dict[str, Any] = {**view.meta(), "flames": fields["flames"], "box_mode": cfg.box_mode}
+    scene, added = dressed_render(
+        cfg, rgb, view, paper, effects, flames_drawn, np.random.default_rng([cfg.seed, 3, i, 1])
+    )
+    image = apply_effects(scene, effects)
+    meta: dict[str, Any] = {**view.meta(), "flames": fields["flames"], "box_mode": cfg.box_mode, **added}
     meta["effects"] = effects.to_json()
     record = {"width": cfg.width, "height": cfg.height, "boxes": fields["boxes"], "box_modes": fields["box_modes"]}
     record["meta"] = meta

@@ -9,10 +9,12 @@ import pytest
 from synth.distractors import (
     DRAWERS,
     KINDS,
+    OUTDOOR_KINDS,
     DistractorConfig,
     draw_distractors,
     draw_sun,
     horizon_row,
+    kinds_here,
     make_distractor,
     overlaps,
     plan_distractors,
@@ -90,6 +92,21 @@ def test_plans_never_overlap_what_they_avoid_and_draw_nothing_elsewhere():
         assert not (changed & ~inside).any()
     assert found >= 20
     assert plan_distractors(DistractorConfig(), img, depth, meta, 100.0, [], np.random.default_rng(0)) == []
+
+
+def test_rooms_get_no_outdoor_kinds():
+    room = {"environment": "kitchen", "camera": {"pose": np.eye(4).tolist(), "yfov": 1.0}}
+    assert set(kinds_here(KINDS, room)) == set(KINDS) - set(OUTDOOR_KINDS)
+    assert kinds_here(KINDS, {**room, "kind": "street"}) == KINDS  # a kit street is outdoors
+    assert kinds_here(KINDS, {"pitch": 0.0, "camera": {"yfov": 1.0}}) == KINDS  # a panorama view
+    img, depth = _outdoor()
+    cfg = DistractorConfig(share=1.0, max=3, kinds=("taillights",))
+    assert plan_distractors(cfg, img, depth, room, 100.0, [], np.random.default_rng(0)) == []
+    for seed in range(10):
+        items = plan_distractors(
+            DistractorConfig(share=1.0, max=3), img, depth, room, 100.0, [], np.random.default_rng(seed)
+        )
+        assert not {d.kind for d in items} & set(OUTDOOR_KINDS)
 
 
 def test_kinds_cover_the_brief():
