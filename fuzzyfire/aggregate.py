@@ -5,7 +5,7 @@
 from __future__ import annotations
 
 import json
-from collections.abc import Iterator, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from pathlib import Path
 
 import numpy as np
@@ -115,8 +115,11 @@ def write_report(
     out: Path,
     specs: Sequence[RunSpec] = (),
     results: Sequence[dict | None] = (),
+    own: Mapping[tuple[str, str, int], DataRef] | None = None,
 ) -> Path:
-    """Tables, Figure 5, comparisons, samples and the run list (:func:`eval.report.write_study_report`)."""
+    """Tables, Figure 5, comparisons, samples and the run list (:func:`eval.report.write_study_report`); the
+    synthetic samples and gaps are those of :func:`report_pools` (``own``: the own cut-out pools by (mixture,
+    method, seed), :func:`fuzzyfire.cutout_pools.cutout_pools`)."""
     from eval.report import write_study_report
 
     t2 = [r for r in rows if "table2" in r["tables"]]
@@ -124,14 +127,15 @@ def write_report(
     samples = {label("real (train split)", data.real.standin): data.real.with_split(cfg.real.train_split)}
     if data.rare is not None:
         samples[label(cfg.rare.name, data.rare.standin)] = data.rare
-    samples.update({f"synthetic {m}": ref for m, ref in data.pools.items()})
+    pools = report_pools(cfg, data, own or {})
+    samples.update({f"synthetic {m}": ref for m, ref in pools.items()})
     samples.update(data.tests)
     shown = {k: datasets.get(ref) for k, ref in samples.items()} if cfg.report.samples else {}
     alarms = (ALARMS,) if any(ALARMS in r for r in rows) else ()
     columns = ("mixture", "method", "seed", "test_set", "AP", "AP50", "AP25", *alarms, "run")
     title = cfg.report.title + (" — STAND-IN DATA" if data.standin else "")
     return write_study_report(
-        out, t2, np.random.default_rng(0), method_results=t1, gaps=realism_gaps(cfg, data, datasets, out),
+        out, t2, np.random.default_rng(0), method_results=t1, gaps=realism_gaps(cfg, data, datasets, out, pools),
         comparisons=comparisons(cfg, rows), errors=error_rows(datasets, specs, results), samples=shown,
         run_columns=columns, notice=STANDIN_NOTICE if data.standin else "", title=title,
     )  # fmt: skip
@@ -157,14 +161,37 @@ def error_rows(datasets: Datasets, specs: Sequence[RunSpec], results: Sequence[d
     return rows
 
 
-def realism_gaps(cfg: ExperimentConfig, data: Prepared, datasets: Datasets, out: Path) -> list[dict]:
-    """The embedding gap (:mod:`synth.gap`) of each synthetic pool to the real training split, as rows with
-    ``method``; kept in ``out/tables/gap.json`` and reused while the pools, the real set and the draws are the
-    same. Embeddings come from (and go to) the user's embedding cache."""
-    if cfg.report.gap_draws <= 0 or not data.pools:
+def report_pools(
+    cfg: ExperimentConfig, data: Prepared, own: Mapping[tuple[str, str, int], DataRef]
+) -> dict[str, DataRef]:
+    """The synthetic pools the report shows (samples, realism gap) by name: each shared pool by its method, named
+    ``<method> simulated flames (R0 mixtures)`` when own cut-out pools (``own``, by (mixture, method, seed)) took
+    its place in the mixtures with real images, and then the own pool of each such mixture's first seed
+    (``<method> flames.source=<source> <mixture> seed <seed>``)."""
+    shown: dict[str, DataRef] = {}
+    for method, ref in data.pools.items():
+        shown[f"{method} simulated flames (R0 mixtures)" if any(k[1] == method for k in own) else method] = ref
+    firsts: dict[tuple[str, str], int] = {}
+    for mixture, method, seed in own:
+        firsts[(mixture, method)] = min(seed, firsts.get((mixture, method), seed))
+    for (mixture, method), seed in sorted(firsts.items()):
+        source = getattr(cfg.synth, method).flames.source
+        shown[f"{method} flames.source={source} {mixture} seed {seed}"] = own[(mixture, method, seed)]
+    return shown
+
+
+def realism_gaps(
+    cfg: ExperimentConfig, data: Prepared, datasets: Datasets, out: Path, pools: Mapping[str, DataRef] | None = None
+) -> list[dict]:
+    """The embedding gap (:mod:`synth.gap`) of each synthetic pool (``pools`` by name; default ``data.pools``)
+    to the real training split, as rows with ``method`` (the name); kept in ``out/tables/gap.json`` and reused
+    while the pools, the real set and the draws are the same. Embeddings come from (and go to) the user's
+    embedding cache."""
+    pools = data.pools if pools is None else pools
+    if cfg.report.gap_draws <= 0 or not pools:
         return []
     real_ref = data.real.with_split(cfg.real.train_split)
-    key = digest({"real": real_ref.key(), "pools": {m: r.key() for m, r in data.pools.items()},
+    key = digest({"real": real_ref.key(), "pools": {m: r.key() for m, r in pools.items()},
                   "draws": cfg.report.gap_draws})  # fmt: skip
     path = out / "tables" / "gap.json"
     if path.is_file() and (doc := json.loads(path.read_text(encoding="utf-8"))).get("key") == key:
@@ -177,7 +204,7 @@ def realism_gaps(cfg: ExperimentConfig, data: Prepared, datasets: Datasets, out:
     real_ds = datasets.get(real_ref)
     real = embed_set("real (train split)", [real_ds.image_path(i) for i in real_ds.images], embedder, cache)
     gaps = []
-    for method, ref in sorted(data.pools.items()):
+    for method, ref in sorted(pools.items()):
         ds = datasets.get(ref)
         synthetic = embed_set(f"synthetic {method}", [ds.image_path(i) for i in ds.images], embedder, cache)
         try:

@@ -311,6 +311,6 @@ def run_experiment(cfg: ExperimentConfig, base: Path, out: Path, executor=None) 
     results = run_grid(specs, datasets, executor) if executor is not None else finished_runs(specs)
     rows = result_rows(specs, results, out, datasets)
     write_summary(cfg, specs, results, rows, out, data.standin)
-    report = write_report(cfg, data, datasets, rows, out, specs, results)
+    report = write_report(cfg, data, datasets, rows, out, specs, results, own)
     failed = [s for s, r in zip(specs, results) if r is None]
     return ExperimentResult(report, rows, failed, data.standin)

@@ -77,3 +77,24 @@ def test_a_named_set_without_fire_gives_alarm_rows_and_no_comparison(
     monkeypatch.setattr(stats, "paired_bootstrap", lambda *a: {})
     assert comparisons(toy_config(mixtures=["R12_S0", "R6_S6"]), rows) == []
     assert sorted(set(loaded)) == ["common", "rare"]  # no AP on the set without fire: nothing to compare
+
+
+def test_report_shows_the_pools_the_mixtures_trained_on() -> None:
+    """With own cut-out pools the shared pool is named for the R0 mixtures it still serves, and each mixture's
+    own pool of its first seed is shown beside it; without them the pools keep their method names."""
+    from dataclasses import replace
+
+    from fuzzyfire.aggregate import report_pools
+    from fuzzyfire.stages import Prepared
+
+    cfg = toy_config()
+    cfg = replace(cfg, synth=replace(cfg.synth, method2=replace(cfg.synth.method2, flames=replace(
+        cfg.synth.method2.flames, source="cutouts"))))  # fmt: skip
+    shared, real = DataRef(Path("/pool"), {"kind": "pool"}), DataRef(Path("/real"), {"kind": "real"})
+    data = Prepared(real, None, {"method2": shared})
+    own = {("R6_S6", "method2", s): DataRef(Path(f"/own{s}"), {"seed": s}) for s in (2, 1)}
+    assert report_pools(cfg, data, {}) == {"method2": shared}
+    assert report_pools(cfg, data, own) == {
+        "method2 simulated flames (R0 mixtures)": shared,
+        "method2 flames.source=cutouts R6_S6 seed 1": own[("R6_S6", "method2", 1)],
+    }
