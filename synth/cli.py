@@ -134,10 +134,9 @@ def _dataset_config(args: argparse.Namespace) -> dict:
 
 
 def cmd_method1(args: argparse.Namespace) -> int:
+    from synth.distractors import DistractorConfig
     from synth.library import build_library
     from synth.method1 import Method1Config, run_method1
-
-    from synth.distractors import DistractorConfig
 
     distractors = DistractorConfig(share=args.distractors)
     cfg = Method1Config(box_mode=args.box_mode, distractors=distractors, **_dataset_config(args))
