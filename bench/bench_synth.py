@@ -4,7 +4,9 @@
 - compositing alone at 640x480 (target >= 20 img/s);
 - Method 2: ``--n`` images at 640x480 from 48 environments, rendering included (target: 1,000 in <= 3 min);
 - Method 1: ``--n`` images at 640x480 (target: 1,000 in <= 6 min);
-- RSS over each run (median over 5 % windows of the run's time; the final dataset writing is left out): growth
+- the Method runs make images in ``--workers`` processes (default one per core; the same bytes as one process);
+- RSS over each run, this process and its workers (median over 5 % windows of the run's time; the final dataset
+  writing is left out): growth
   from 10 % to 90 % of the run and from 50 % to 90 % (target: flat). The run keeps each
   environment's pyrender scene once built (48 here; Method 2 builds its last one at ~38 % of a 1,000-image run,
   Method 1 at ~5 %), so growth before that is the scene cache; a leak shows as growth in the second half.
@@ -17,13 +19,14 @@ procedural environments (the issue's file-scene targets: Method 2 <= 3 min, Meth
 each street is built for its block of views and released after it, so RSS should not grow across streets).
 
 Usage: ``python bench/bench_synth.py [--n 1000] [--only flames,composite,method2,method1,streets]
-[--environments P] [--kits DIR] [--streets 8]``.
+[--environments P] [--kits DIR] [--streets 8] [--workers 0]``.
 Figures depend on the machine and on other load: take them on an otherwise idle machine.
 """
 
 from __future__ import annotations
 
 import argparse
+import os
 import tempfile
 import threading
 import time
@@ -39,9 +42,24 @@ from synth.method1 import Method1Config, run_method1
 from synth.method2 import Method2Config, plan_flames, run_method2
 
 
-def rss_mb() -> float:
-    with open("/proc/self/statm", encoding="ascii") as f:
+def _statm_mb(pid: str) -> float:
+    with open(f"/proc/{pid}/statm", encoding="ascii") as f:
         return int(f.read().split()[1]) * 4096 / 1e6
+
+
+def rss_mb() -> float:
+    """RSS of this process and its child processes (the image workers; Linux /proc), MB."""
+    me, total = str(os.getpid()), _statm_mb("self")
+    for entry in os.listdir("/proc"):
+        if not entry.isdigit():
+            continue
+        try:
+            with open(f"/proc/{entry}/stat", encoding="ascii") as f:
+                ppid = f.read().rsplit(")", 1)[1].split()[1]
+            total += _statm_mb(entry) if ppid == me else 0.0
+        except OSError:  # the process ended
+            continue
+    return total
 
 
 class RssSampler:
@@ -114,7 +132,12 @@ def main() -> None:
     kits = Path(__file__).resolve().parents[2] / "shared" / "data" / "kits"
     ap.add_argument("--kits", type=Path, default=kits, help=f"building kits for --only streets (default {kits})")
     ap.add_argument("--streets", type=int, default=8, help="kit streets for --only streets (default 8)")
+    ap.add_argument(
+        "--workers", type=int, default=0, help="image processes of the Method runs (default 0 = one per core)"
+    )
     args = ap.parse_args()
+    workers = args.workers or os.cpu_count() or 1
+    print(f"synth_workers: {workers} processes")
     scenes = {"scenes": 0, "environments": (args.environments,)} if args.environments else {"scenes": 48}
     tag = "_files" if args.environments else ""
     only = set(args.only.split(","))
@@ -127,14 +150,14 @@ def main() -> None:
         bench_composite(library)
     if "method2" in only:
         cfg2 = Method2Config(n=args.n, width=640, height=480, **scenes)
-        bench_run(f"method2{tag}", lambda out: run_method2(cfg2, library, out), args.n)
+        bench_run(f"method2{tag}", lambda out: run_method2(cfg2, library, out, workers=workers), args.n)
     if "method1" in only:
         cfg1 = Method1Config(n=args.n, width=640, height=480, **scenes)
-        bench_run(f"method1{tag}", lambda out: run_method1(cfg1, library, out), args.n)
+        bench_run(f"method1{tag}", lambda out: run_method1(cfg1, library, out, workers=workers), args.n)
     if "streets" in only:
         streets = {"scenes": 0, "streets": args.streets, "kits": (args.kits,)}
         cfg3 = Method2Config(n=args.n, width=640, height=480, **streets)
-        bench_run("method2_streets", lambda out: run_method2(cfg3, library, out), args.n)
+        bench_run("method2_streets", lambda out: run_method2(cfg3, library, out, workers=workers), args.n)
 
 
 if __name__ == "__main__":

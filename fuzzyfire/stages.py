@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import os
 import shutil
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field, replace
@@ -180,7 +181,7 @@ def synth_stage(root: Path, method: str, cfg: Any, base: Path, cutouts: Stage | 
     (:func:`synth.envfile.fingerprint`, :func:`synth.photos.photo_fingerprints`), not by path, so a study
     moved to another folder or machine finds its pools (and runs) again. ``cutouts``: a stage of real flame
     cut-outs (:mod:`fuzzyfire.cutout_pools`) for a ``flames.source`` cutouts | both pool, named
-    ``<method>-cutouts-<hash>``; its hash enters the pool's identity."""
+    ``<method>-cutouts-<hash>``; its hash enters the pool's identity. The pool is made in one process per core."""
     from synth.library import build_library, cutout_library
     from synth.method1 import run_method1
     from synth.method2 import run_method2
@@ -200,7 +201,12 @@ def synth_stage(root: Path, method: str, cfg: Any, base: Path, cutouts: Stage | 
         root,
         f"{method}-cutouts" if cutouts is not None else method,
         {"kind": method, "config": {**by_path, **files, **flames}},
-        lambda out: runner(cfg, build_library(cfg.flames, cutout_library(cutouts.folder) if cutouts else ()), out),
+        lambda out: runner(
+            cfg,
+            build_library(cfg.flames, cutout_library(cutouts.folder) if cutouts else ()),
+            out,
+            workers=os.cpu_count() or 1,  # the same bytes from any number of processes
+        ),  # fmt: skip
         legacy={"kind": method, "config": by_path} if files and not flames else None,  # pools made by path before
     )
     return stage, DataRef(stage.folder, {"kind": method, "hash": stage.hash}, "coco")

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 from pathlib import Path
 
 from curate.core.commands import add_command
@@ -140,7 +141,7 @@ def cmd_method1(args: argparse.Namespace) -> int:
 
     distractors = DistractorConfig(share=args.distractors)
     cfg = Method1Config(box_mode=args.box_mode, distractors=distractors, **_dataset_config(args))
-    result = run_method1(cfg, build_library(cfg.flames), args.out, overwrite=args.overwrite)
+    result = run_method1(cfg, build_library(cfg.flames), args.out, overwrite=args.overwrite, workers=_workers(args))
     print(f"wrote {args.out}: {args.n} images, {args.box_mode} boxes ({', '.join(result.files.values())})")
     return 0
 
@@ -154,9 +155,16 @@ def cmd_method2(args: argparse.Namespace) -> int:
     share = 0.5 if args.photo_share is None else args.photo_share
     photos = {"backgrounds": tuple(args.backgrounds or ()), "photo_share": share}
     cfg = Method2Config(**_dataset_config(args), **photos, **_blend_config(args))
-    result = run_method2(cfg, build_library(cfg.flames), args.out, overwrite=args.overwrite)
+    result = run_method2(cfg, build_library(cfg.flames), args.out, overwrite=args.overwrite, workers=_workers(args))
     print(f"wrote {args.out}: {args.n} images ({', '.join(result.files.values())})")
     return 0
+
+
+def _workers(args: argparse.Namespace) -> int:
+    """--workers, 0 = one per core."""
+    if args.workers < 0:
+        raise ValueError(f"--workers must be >= 0, got {args.workers}")
+    return args.workers or os.cpu_count() or 1
 
 
 def _blend_config(args: argparse.Namespace) -> dict:
@@ -345,6 +353,12 @@ def _dataset_arguments(p: argparse.ArgumentParser, photos: bool = False) -> None
     )
     p.add_argument("--overwrite", action="store_true", help="replace a fuzzyfire dataset already at --out")
     p.add_argument("--smoke", action="store_true", help="also annotate smoke (class 'smoke', alpha >= 0.25)")
+    p.add_argument(
+        "--workers",
+        type=int,
+        default=0,
+        help="image processes (default 0 = one per core; any number writes the same bytes)",
+    )
 
 
 def _register_method1(sub: argparse._SubParsersAction) -> None:

@@ -5,14 +5,18 @@
 from __future__ import annotations
 
 import sys
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import ExitStack, contextmanager
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
+
+import cv2
 
 from curate.core.progress import progress
 from curate.core.writer import WriteResult, check_output_target
 from synth import render
-from synth.envfile import find_environment_files
+from synth.envfile import EnvironmentFile, find_environment_files
 from synth.kits import credits, find_kits, licence_files, load_kit
 from synth.panorama import PanoramaBackgrounds
 from synth.photos import PhotoBackgrounds, keep_in_pool
@@ -24,6 +28,120 @@ from synth.views import ViewCache
 
 MakeImage = Callable[[Any, int, Sequence[SpriteSequence], ViewCache], tuple]
 
+#: Views per block of a run without mesh files or kit streets (a process makes whole blocks).
+BLOCK_VIEWS = 8
+#: Images to make per extra process at least (starting one costs ~2 s): fewer run in this process.
+MIN_IMAGES_PER_WORKER = 16
+
+
+@dataclass(frozen=True)
+class Job:
+    """What a process needs to make images of a run (picklable): the method, its config and image maker, the
+    flame library, the output folder (its staging folder receives the images) and the checked places."""
+
+    method: str
+    cfg: Any
+    make_image: MakeImage
+    library: tuple[SpriteSequence, ...]
+    out: Path
+    platform: str | None
+    files: tuple[EnvironmentFile, ...]
+    kit_folders: tuple[Path, ...]
+    photo_files: tuple[Path, ...]
+    panoramas: tuple[Path, ...]
+
+
+@contextmanager
+def opened_views(job: Job) -> Iterator[tuple[ViewCache, list[dict[str, str]]]]:
+    """The run's :class:`ViewCache` on a fresh renderer (closed on exit) and the ``problems`` dicts of its
+    photo and panorama backgrounds (unreadable files: reason)."""
+    cfg = job.cfg
+    with render.Renderer(cfg.width, cfg.height, job.platform) as renderer:
+        photos = PhotoBackgrounds(list(job.photo_files), cfg.width, cfg.height, cfg.seed) if job.photo_files else None
+        panoramas = PanoramaBackgrounds(list(job.panoramas), cfg.width, cfg.height, cfg.seed) if job.panoramas else None
+        share, count = getattr(cfg, "photo_share", 0.0), -(-cfg.n // cfg.images_per_view)  # views of the run
+        views = ViewCache(
+            cfg.seed,
+            cfg.scenes,
+            renderer,
+            job.files,
+            photos,
+            share,
+            count,
+            panoramas,
+            getattr(cfg, "panorama_share", 0.5),
+            surfaces=getattr(cfg, "stand", "anywhere") == "surfaces",  # Method 2's rule; Method 1 has its own
+            kits=[load_kit(folder) for folder in job.kit_folders],
+            streets_count=getattr(cfg, "streets", 0),
+        )
+        yield views, [source.problems for source in (photos, panoramas) if source is not None]
+
+
+def _make_images(job: Job, todo: Sequence[int]) -> dict[str, str]:
+    """Make and stage images ``todo`` in this process (a progress bar); the backgrounds skipped, with reasons."""
+    staging = Staging(job.out)
+    with opened_views(job) as (views, problems):
+        for i in progress(todo, total=len(todo), desc=f"{job.method} images"):
+            staging.save(i, *job.make_image(job.cfg, i, job.library, views))
+        return {k: v for found in problems for k, v in found.items()}
+
+
+def blocks(job: Job, todo: Sequence[int]) -> list[list[int]]:
+    """``todo`` (ascending image indices) cut into blocks a process makes alone: the images of one mesh file's or
+    kit street's views (each environment is loaded by one process), else of :data:`BLOCK_VIEWS` views."""
+    cfg = job.cfg
+    per_view = cfg.images_per_view
+    streets = getattr(cfg, "streets", 0)
+    if job.files or streets:
+        total, views = len(job.files) + streets + cfg.scenes, -(-cfg.n // per_view)
+        key = [min((i // per_view) * total // views, total - 1) for i in todo]  # ViewCache.environment_index
+    else:
+        key = [i // per_view // BLOCK_VIEWS for i in todo]
+    out: dict[int, list[int]] = {}
+    for k, i in zip(key, todo):
+        out.setdefault(k, []).append(i)
+    return list(out.values())
+
+
+_WORKER: dict[str, Any] = {}  # a worker process's job, its views and their problems (set by _start_worker)
+
+
+def _start_worker(job: Job) -> None:
+    import atexit
+
+    cv2.setNumThreads(1)  # one image pipeline per core
+    stack = ExitStack()
+    views, problems = stack.enter_context(opened_views(job))
+    atexit.register(stack.close)
+    _WORKER.update(job=job, views=views, problems=problems, staging=Staging(job.out))
+
+
+def _work(block: Sequence[int]) -> tuple[int, dict[str, str]]:
+    job, views = _WORKER["job"], _WORKER["views"]
+    for i in block:
+        _WORKER["staging"].save(i, *job.make_image(job.cfg, i, job.library, views))
+    return len(block), {k: v for found in _WORKER["problems"] for k, v in found.items()}
+
+
+def _in_workers(job: Job, todo: Sequence[int], workers: int) -> dict[str, str]:
+    """Make and stage images ``todo`` in ``workers`` spawned processes, block by block (:func:`blocks`); the
+    backgrounds skipped, with reasons. A failure in a process is raised here."""
+    import multiprocessing
+
+    chunks = blocks(job, todo)
+    problems: dict[str, str] = {}
+    context = multiprocessing.get_context("spawn")  # no forked GL or torch state
+    with context.Pool(min(workers, len(chunks)), _start_worker, (job,)) as pool:
+
+        def images_done() -> Iterator[int]:  # one item per finished image, for the progress bar
+            for done, found in pool.imap_unordered(_work, chunks):
+                problems.update(found)
+                yield from range(done)
+
+        for _ in progress(images_done(), total=len(todo), desc=f"{job.method} images"):
+            pass
+    return problems
+
 
 def generate(
     method: str,
@@ -33,6 +151,7 @@ def generate(
     out: Path,
     overwrite: bool = False,
     platform: str | None = None,
+    workers: int = 1,
 ) -> WriteResult:
     """Generate (or resume) ``cfg.n`` images with ``make_image(cfg, i, library, views)`` and write ``out``.
 
@@ -43,7 +162,9 @@ def generate(
     background photos are checked before anything is rendered (:class:`~curate.core.writer.OutputError`,
     FileNotFoundError, ValueError). A run that fails or is interrupted
     keeps the images it finished in the staging folder and says so (the same command resumes from them); one
-    that finished none leaves nothing behind.
+    that finished none leaves nothing behind. ``workers`` > 1: images are made in up to that many processes (at
+    least :data:`MIN_IMAGES_PER_WORKER` images each), each on whole blocks of views (:func:`blocks`); every image
+    depends only on (seed, index), so the dataset is byte-identical to one process's.
     """
     if not library or not all(seq.sprites for seq in library):
         raise ValueError("the flame library is empty")
@@ -58,33 +179,14 @@ def generate(
     if kit_folders:
         args["kit_credits"] = credits(kit_folders)
     staging = Staging(out, args)
+    job = Job(method, cfg, make_image, tuple(library), out, platform, tuple(files), tuple(kit_folders),
+              tuple(photo_files), tuple(places.panoramas))  # fmt: skip
     try:
-        with render.Renderer(cfg.width, cfg.height, platform) as renderer:
-            photos = PhotoBackgrounds(photo_files, cfg.width, cfg.height, cfg.seed) if photo_files else None
-            panoramas = (
-                PanoramaBackgrounds(places.panoramas, cfg.width, cfg.height, cfg.seed) if places.panoramas else None
-            )
-            share, count = getattr(cfg, "photo_share", 0.0), -(-cfg.n // cfg.images_per_view)  # views of the run
-            views = ViewCache(
-                cfg.seed,
-                cfg.scenes,
-                renderer,
-                files,
-                photos,
-                share,
-                count,
-                panoramas,
-                getattr(cfg, "panorama_share", 0.5),
-                surfaces=getattr(cfg, "stand", "anywhere") == "surfaces",  # Method 2's rule; Method 1 has its own
-                kits=[load_kit(folder) for folder in kit_folders],
-                streets_count=getattr(cfg, "streets", 0),
-            )
-            todo = [i for i in range(cfg.n) if not staging.done(i)]
-            for i in progress(todo, total=len(todo), desc=f"{method} images"):
-                staging.save(i, *make_image(cfg, i, library, views))
-        for source in (photos, panoramas):
-            for path, reason in (source.problems if source else {}).items():
-                print(f"{path}: skipped background ({reason})", file=sys.stderr)
+        todo = [i for i in range(cfg.n) if not staging.done(i)]
+        workers = min(workers, len(todo) // MIN_IMAGES_PER_WORKER)
+        problems = _in_workers(job, todo, workers) if workers > 1 else _make_images(job, todo)
+        for path, reason in problems.items():
+            print(f"{path}: skipped background ({reason})", file=sys.stderr)
         sources = [path for folder in kit_folders for path in licence_files(folder)]
         return finish(staging, out, cfg.n, f"synth:{method}", f"synth {method}", args, cfg.smoke_class, overwrite,
                       sources)  # fmt: skip

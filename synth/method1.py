@@ -336,6 +336,8 @@ def run_method1(
     out: Path,
     overwrite: bool = False,
     platform: str | None = None,
+    workers: int = 1,
 ):
-    """Generate (or resume) ``cfg.n`` images and write the dataset to ``out``; returns the WriteResult."""
-    return generate("method1", cfg, make_image, library, out, overwrite, platform)
+    """Generate (or resume) ``cfg.n`` images and write the dataset to ``out`` (in ``workers`` processes: the
+    same bytes); returns the WriteResult."""
+    return generate("method1", cfg, make_image, library, out, overwrite, platform, workers)

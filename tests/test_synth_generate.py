@@ -1,15 +1,20 @@
 """The shared generation loop: every image staged once, an interrupted run resumes where it stopped, the
-dataset is written with the method's source tag, an empty flame library is refused."""
+dataset is written with the method's source tag, an empty flame library is refused; several processes write the
+same bytes as one, each environment's views stay in one block, and a failure in a process is raised and keeps
+what was staged."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
+from pathlib import Path
 
+import cv2
 import numpy as np
 import pytest
 
 from curate.core.formats.registry import read_dataset
-from synth.generate import generate
+from synth import flames as F
+from synth.generate import BLOCK_VIEWS, Job, blocks, generate
 from synth.sprites import Sprite, SpriteSequence
 from synth.staging import staging_dir
 
@@ -35,7 +40,7 @@ def _make_image(cfg, i, library, views):
     """A flat image with one 8x6 box at (i, i): the loop only has to stage it."""
     mask = np.zeros((cfg.height, cfg.width), bool)
     mask[i : i + 6, i : i + 8] = True
-    image = np.full((cfg.height, cfg.width, 3), 40 * i, np.uint8)
+    image = np.full((cfg.height, cfg.width, 3), 40 * i % 256, np.uint8)
     record = {"width": cfg.width, "height": cfg.height, "boxes": [[i, i, 8, 6]], "meta": {"i": i}}
     return image, [mask], record, None
 
@@ -67,3 +72,71 @@ def test_empty_library_is_refused(tmp_path):
         generate("method9", TinyConfig(), _make_image, [], tmp_path / "out")
     with pytest.raises(ValueError, match="flame library is empty"):
         generate("method9", TinyConfig(), _make_image, [SpriteSequence("s", (), {})], tmp_path / "out")
+
+
+def _files(folder: Path) -> dict[str, bytes]:
+    skip = {"manifest.json", "data.yaml"}  # these two name the output folder by absolute path
+    return {p.relative_to(folder).as_posix(): p.read_bytes() for p in sorted(folder.rglob("*")) if p.is_file()
+            and p.name not in skip}  # fmt: skip
+
+
+@pytest.fixture(scope="module")
+def flames() -> list[SpriteSequence]:
+    p = F.FlameParams(rows=40, cols=28, frames=40, keep_every=20, warmup=30)
+    return [F.generate_sequence(f"f{k}", p, np.random.default_rng(k)) for k in range(2)]
+
+
+def _panoramas(root: Path) -> Path:
+    """Two 256x128 panoramas: sky above the middle row, textured ground below."""
+    rng = np.random.default_rng(0)
+    for k in range(2):
+        img = np.empty((128, 256, 3), np.uint8)
+        img[:64] = (230, 150, 60)  # BGR sky
+        img[64:] = rng.integers(60, 200, (64, 256, 3), dtype=np.uint8)
+        root.mkdir(parents=True, exist_ok=True)
+        assert cv2.imwrite(str(root / f"p{k}.png"), img)
+    return root
+
+
+def test_two_processes_write_the_bytes_of_one(tmp_path, flames):
+    """Method 2 on procedural rooms and panoramas, Method 1 on procedural rooms: workers=2 == workers=1."""
+    from synth.method1 import Method1Config, run_method1
+    from synth.method2 import Method2Config, run_method2
+
+    m2 = Method2Config(n=40, seed=3, width=96, height=72, scenes=2, environments=(_panoramas(tmp_path / "pano"),),
+                       images_per_view=2, negatives=0.0, min_box_px=2)  # fmt: skip
+    m1 = Method1Config(n=6, seed=5, width=96, height=72, scenes=2, negatives=0.0, min_box_px=2)
+    for run, cfg in ((run_method2, m2), (run_method1, m1)):
+        one, two = tmp_path / f"{cfg.n}-one", tmp_path / f"{cfg.n}-two"
+        run(cfg, flames, one)
+        run(cfg, flames, two, workers=2)
+        assert _files(one) == _files(two) and len(_files(one)) > cfg.n
+
+
+def test_blocks_keep_an_environment_in_one_process_and_cover_every_image():
+    cfg = TinyConfig(n=40, scenes=0, images_per_view=2)
+    job = Job("method9", replace(cfg, scenes=0), _make_image, (), Path("x"), None, ("a", "b", "c"), (), (), ())
+    todo = [i for i in range(40) if i % 7]  # some images staged already
+    got = blocks(job, todo)  # type: ignore[arg-type]
+    assert sorted(i for b in got for i in b) == todo and len(got) == 3
+    views = [sorted({i // 2 * 3 // 20 for i in b}) for b in got]  # the environment of each block's views
+    assert views == [[0], [1], [2]]
+    free = blocks(replace(job, files=()), list(range(40)))
+    assert [len(b) for b in free] == [2 * BLOCK_VIEWS, 2 * BLOCK_VIEWS, 40 - 4 * BLOCK_VIEWS]
+
+
+def _fails_at_5(cfg, i, library, views):
+    if i == 5:
+        raise RuntimeError("image 5 cannot be made")
+    return _make_image(cfg, i, library, views)
+
+
+def test_a_failure_in_a_process_is_raised_and_keeps_the_staged_images(tmp_path):
+    out = tmp_path / "out"
+    cfg = TinyConfig(n=3 * BLOCK_VIEWS, width=48, height=32)
+    with pytest.raises(RuntimeError, match="image 5 cannot be made"):
+        generate("method9", cfg, _fails_at_5, _library(), out, workers=2)
+    staged = staging_dir(out)
+    assert staged.is_dir() and not (staged / "records" / "000005.json").exists()
+    generate("method9", cfg, _make_image, _library(), out, workers=2)
+    assert len(read_dataset(out).dataset.images) == cfg.n and not staged.exists()
