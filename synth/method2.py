@@ -210,9 +210,10 @@ def dressed_scene(
     cfg: Method2Config, background, depth, meta: dict, planned, library, effects: Effects, fy: float, rng
 ):
     """The exposed scene flames are composited on, with this image's distractors (reflective ones before the
-    low-light exposure, light sources after it) and decoy pastes, none overlapping a planned flame; and
+    low-light exposure, light sources after it) and decoy pastes, none overlapping a planned flame or a photo
+    site's ``people`` (boxes [x, y, w, h] in ``meta``); and
     the metadata they add (``distractors``, ``decoys``: kind or blend and box [x, y, w, h]; only when on)."""
-    avoid = [[p.x, p.y, p.width, p.height] for p, _ in planned]
+    avoid = [*([p.x, p.y, p.width, p.height] for p, _ in planned), *meta.get("people", [])]  # a photo's people too
     items = plan_distractors(cfg.distractors, background, depth, meta, fy, avoid, rng) if cfg.distractors.share else []
     scene = draw_distractors(expose(draw_distractors(background, items, False), effects), items, True)
     added: dict = {"distractors": [d.to_json() for d in items]} if cfg.distractors.share else {}

@@ -191,3 +191,24 @@ def test_distractors_leave_the_flames_as_they_were(written, hard, library, tmp_p
     again = tmp_path / "again"
     M.run_method2(HARD, library, again)
     assert _files(again) == _files(hard)
+
+
+def test_distractors_never_cover_a_photo_sites_people():
+    """A site's people boxes are avoided like flames: nothing fire-like is drawn on a person."""
+    from dataclasses import replace
+
+    from synth.effects import Effects
+
+    cfg = replace(CFG, width=128, height=96, distractors=DistractorConfig(share=1.0, max=3))
+    rng = np.random.default_rng(0)
+    background = rng.integers(60, 200, (96, 128, 3), dtype=np.uint8)
+    depth = np.zeros((96, 128), np.float32)
+    depth[40:] = np.linspace(20.0, 3.0, 56, dtype=np.float32)[:, None]  # ground below the horizon
+    person = [30, 20, 40, 76]
+    drawn = 0
+    for seed in range(20):
+        meta = {"horizon": 40 / 96, "site": True, "people": [person], "camera": {"yfov": 1.0}}
+        _, added = M.dressed_scene(cfg, background, depth, meta, [], [], Effects(), 100.0, np.random.default_rng(seed))
+        drawn += len(added["distractors"])
+        assert all(not overlaps(d["box"], [person]) for d in added["distractors"])
+    assert drawn >= 10
