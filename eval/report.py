@@ -185,6 +185,21 @@ def comparisons_html(rows: Sequence[Mapping[str, Any]]) -> str:
     return f"<table>{head}{''.join(body)}</table>"
 
 
+COMPARISON_COLUMNS = ("test_set", "mixture", "baseline", "metric", "delta", "low", "high", "p_value")
+
+
+def comparisons_csv(rows: Sequence[Mapping[str, Any]]) -> str:
+    """The paired comparisons (:func:`comparisons_html` rows) as CSV: deltas and their 95 % interval in AP
+    points, the bootstrap p-value."""
+    lines = [",".join(COMPARISON_COLUMNS)]
+    for r in rows:
+        d = r["delta"]
+        scaled = [f"{100 * d[k]:.2f}" for k in ("value", "low", "high")]
+        lines.append(",".join([str(r["test_set"]), str(r["mixture"]), str(r["baseline"]), str(r["metric"]), *scaled,
+                               f"{d['p_value']:.4f}"]))  # fmt: skip
+    return "\n".join(lines) + "\n"
+
+
 def write_study_report(
     out: Path,
     results: Sequence[Mapping[str, Any]],
@@ -205,7 +220,8 @@ def write_study_report(
 
     ``results``: one mapping per (run, test set) as :func:`eval.tables.table2` takes (also the run list);
     ``method_results``: Table 1 rows (with ``method``); ``gaps``: see :func:`gaps_html` (also written as
-    ``out/tables/gap.json``); ``comparisons``: see :func:`comparisons_html`; ``errors``: see :func:`errors_html`;
+    ``out/tables/gap.json``); ``comparisons``: see :func:`comparisons_html` (also written as
+    ``out/tables/comparisons.csv``, :func:`comparisons_csv`); ``errors``: see :func:`errors_html`;
     ``samples``: datasets to show a few images of, by label; ``notice``: shown at the top of the page."""
     from eval.plots import plot_figure5
     from eval.tables import table1, table2
@@ -226,6 +242,8 @@ def write_study_report(
         sections.append(("Figure 5", "".join(figure_html(f, out, f.stem) for f in figures)))
     if comparisons:
         sections.append(("Paired comparisons (image-level bootstrap)", comparisons_html(comparisons)))
+        (out / "tables").mkdir(parents=True, exist_ok=True)
+        (out / "tables" / "comparisons.csv").write_text(comparisons_csv(comparisons), encoding="utf-8")
     if errors:
         sections.append(("Where AP50 goes (error breakdown)", errors_html(errors)))
     for label, ds in (samples or {}).items():

@@ -85,6 +85,11 @@ def test_write_study_report_writes_tables_figures_and_page(tmp_path):
     for name in ("table1.md", "table1.csv", "table1.tex", "table2.md", "table2.csv", "table2.tex"):
         assert (out / "tables" / name).stat().st_size > 0
     assert "**50.5 ± 0.7**" in (out / "tables" / "table2.md").read_text()
+    csv = (out / "tables" / "comparisons.csv").read_text().splitlines()
+    assert csv == [
+        "test_set,mixture,baseline,metric,delta,low,high,p_value",
+        "rare,R500_S500,R1000_S0,AP,5.00,1.00,9.00,0.0200",
+    ]
     assert {p.name for p in (out / "figures").iterdir()} == {"figure5_AP.png", "figure5_AP50.png"}
     text = page.read_text()
     assert "STAND-IN DATA" in text and 'src="figures/figure5_AP.png"' in text and "<td>+5.0</td>" in text
