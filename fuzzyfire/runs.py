@@ -42,6 +42,15 @@ class RunError(RuntimeError):
     """A run that could not finish (its folder and the cause in the message)."""
 
 
+def train_identity(train: TrainConfig) -> dict[str, Any]:
+    """``train`` as a run's identity holds it: ``select`` left out while it is ``best`` (runs trained before the
+    key existed keep their hash)."""
+    out = to_dict(train)
+    if out.get("select") == "best":
+        del out["select"]
+    return out
+
+
 @dataclass(frozen=True)
 class EvalSet:
     name: str  # label in the tables, e.g. "common (stand-in)"
@@ -97,7 +106,7 @@ class RunSpec:
             "val_data": self.val_data.key(),
             "tests": {t.name: t.data.key() for t in self.tests},
             "classes": list(self.classes),
-            "train": to_dict(self.train),
+            "train": train_identity(self.train),
             "score": to_dict(self.score),
         }
 
@@ -224,7 +233,8 @@ def exported_model(spec: RunSpec) -> Path:
     path = spec.out / "train" / RESULTS_FILE
     name = json.loads(path.read_text(encoding="utf-8")).get("onnx") if path.is_file() else None
     if not name or not (spec.out / "train" / name).is_file():
-        raise RunError(f"{spec.out}: its exported model (train/best.onnx) is gone: nothing to score new test sets on")
+        raise RunError(f"{spec.out}: its exported model (train/{spec.train.select}.onnx) is gone: nothing to score new "
+                       "test sets on")  # fmt: skip
     return spec.out / "train" / name
 
 
@@ -262,8 +272,8 @@ def execute_run(spec: RunSpec, data: RunData | None = None) -> dict[str, Any]:
     else:
         trained = train_run(spec, data.val)
         if not trained.get("onnx"):
-            raise RunError(f"{spec.out}: training produced no best.onnx (no epoch finished)")
-        model, best = spec.out / "train" / trained["onnx"], trained["best"]
+            raise RunError(f"{spec.out}: training produced no {spec.train.select}.onnx (no epoch finished)")
+        model, best = spec.out / "train" / trained["onnx"], trained.get("selected", trained["best"])
     trained_at = time.perf_counter()
     tests = score_run(spec, model, data.tests)
     _write_json(spec.out / "timing.json", {"train_s": trained_at - start, "score_s": time.perf_counter() - trained_at})

@@ -45,6 +45,14 @@ def test_identity_ignores_the_output_folder_and_uses_the_run_seed(tmp_path: Path
     assert replace(a, method=None).label == "R2_S2"
 
 
+def test_select_enters_the_identity_only_when_not_best(tmp_path: Path) -> None:
+    """Runs trained before ``train.select`` existed keep their hash; select=last is another run."""
+    a = _spec(tmp_path)
+    assert "select" not in a.identity()["train"] and a.identity()["train"]["epochs"] == 1
+    last = replace(a, train=replace(a.train, select="last"))
+    assert last.identity()["train"]["select"] == "last" and last.hash() != a.hash()
+
+
 def test_finished_runs_are_skipped_only_with_the_same_spec(tmp_path: Path) -> None:
     spec = _spec(tmp_path)
     assert finished(spec) is None

@@ -119,6 +119,27 @@ def test_a_run_begun_with_epochs_counted_from_0_resumes_counted_from_1(
     assert results["best"] == json.loads((reference_run / "results.json").read_text())["best"]
 
 
+def test_select_last_exports_the_last_epochs_weights_without_training_again(
+    data, reference_run: Path, tmp_path: Path
+) -> None:
+    """A finished run resumed with select=last trains nothing and exports last.onnx, whose AP on the validation
+    images is the last epoch's (best.onnx stays the best epoch's)."""
+    from eval.onnx_model import OnnxDetector
+    from eval.score import score
+
+    out = tmp_path / "copy"
+    shutil.copytree(reference_run, out)
+    results = loop.fit(replace(CFG, select="last"), *data, out)
+    last = _metrics(reference_run)[-1]
+    assert _metrics(out) == _metrics(reference_run)  # nothing trained again
+    assert results["onnx"] == "last.onnx" and results["selected"]["epoch"] == last["epoch"] == CFG.epochs
+    scored = score(OnnxDetector(out / "last.onnx"), data[1]).metrics.summary
+    assert scored["AP"] == pytest.approx(last["AP"], abs=2e-3) and scored["AP50"] == pytest.approx(
+        last["AP50"], abs=2e-3
+    )
+    assert json.loads((reference_run / "results.json").read_text())["onnx"] == "best.onnx"
+
+
 def test_resume_refuses_another_config(data, reference_run: Path, tmp_path: Path) -> None:
     shutil.copytree(reference_run, tmp_path / "copy")
     other = TrainConfig(epochs=2, imgsz=64, batch=8, seed=6)

@@ -69,7 +69,9 @@ def build_config(args: argparse.Namespace):
     from train.device import resolve_device
 
     cfg = TrainConfig()
-    given = {k: getattr(args, k) for k in ("epochs", "imgsz", "batch", "seed", "threads", "device", "workers")}
+    given = {
+        k: getattr(args, k) for k in ("epochs", "imgsz", "batch", "seed", "threads", "device", "workers", "select")
+    }
     cfg = replace(cfg, **{k: v for k, v in given.items() if v is not None})
     if args.views is not None:
         cfg = replace(cfg, feature_views=args.views)
@@ -101,10 +103,10 @@ def cmd_train(args: argparse.Namespace) -> int:
     except ResumeError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
-    best = results["best"]
+    chosen = results["selected"]
     print(
-        f"best epoch {best['epoch']}: AP {best['AP']:.4f}  AP50 {best['AP50']:.4f}  "
-        f"fitness {best['fitness']:.4f}  -> {Path(args.out) / 'best.onnx'}"
+        f"{cfg.select} epoch {chosen['epoch']}: AP {chosen['AP']:.4f}  AP50 {chosen['AP50']:.4f}  "
+        f"fitness {chosen['fitness']:.4f}  -> {Path(args.out) / str(results['onnx'])}"
     )
     return 0
 
@@ -155,6 +157,12 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--device", help="auto | cpu | cuda | cuda:N (default auto: the first GPU, else the CPU)")
     p.add_argument("--workers", type=int, help="data-loading processes (default: none on the CPU, 8 on a GPU)")
     p.add_argument("--threads", type=int, help="torch threads (default: torch's choice)")
+    p.add_argument(
+        "--select",
+        choices=("best", "last"),
+        help="weights exported: best (validation fitness, YOLOv5's rule; the default) or last (the last epoch's "
+        "EMA: steadier when the validation set has only a few dozen images)",
+    )
     p.add_argument("--train-split", help="split of --train to use (default: train when present, else all)")
     p.add_argument("--val-split", help="split of --val to use (default: valid/val when present, else all)")
     formats = ("auto", *FORMATS)

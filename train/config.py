@@ -99,6 +99,9 @@ class TrainConfig:
     val_conf: float = 0.001  # validation: score threshold before NMS
     val_iou: float = 0.6  # validation: NMS IoU threshold
     max_det: int = 300  # validation: detections kept per image
+    # exported weights: the EMA of the epoch with the best validation fitness (YOLOv5's best.pt), or of the last
+    # epoch (steadier when the validation set is small: best-of-N on a few dozen images picks noise)
+    select: Literal["best", "last"] = "best"
     threads: int = 0  # torch threads; 0 = leave torch's default (all cores)
     device: str = "auto"  # auto | cpu | cuda | cuda:N; auto = the first CUDA GPU when there is one, else the CPU
     workers: Optional[int] = None  # data-loading processes; null = none on the CPU (a thread), 8 on a GPU

@@ -172,6 +172,12 @@ def _checkpoint(t: Trainer, epoch: int, best: dict[str, Any]) -> dict[str, Any]:
     }
 
 
+def _trained_by(config: dict[str, Any]) -> dict[str, Any]:
+    """A config without what only chooses the exported weights (``select``): a finished run resumed with another
+    ``select`` exports those weights without training again."""
+    return {k: v for k, v in config.items() if k != "select"}
+
+
 def _resume(t: Trainer, out: Path) -> tuple[int, dict[str, Any]]:
     """Load ``out/last.pt`` when present: returns (0-based index of the first epoch to run, best-so-far record
     with its epoch counted from 1)."""
@@ -179,7 +185,7 @@ def _resume(t: Trainer, out: Path) -> tuple[int, dict[str, Any]]:
     if not last.is_file():
         return 0, {"fitness": -1.0, "epoch": 0}
     state = torch.load(last, map_location=t.device, weights_only=False)
-    if state["config"] != asdict(t.cfg) or state["class_names"] != t.class_names:
+    if _trained_by(state["config"]) != _trained_by(asdict(t.cfg)) or state["class_names"] != t.class_names:
         raise ResumeError(f"{last}: the run there used another config or classes; choose another --out")
     start = unfreeze_epoch(t.cfg)
     if start is not None and int(state["epoch"]) >= start:  # saved after unfreezing: same groups and split
@@ -295,18 +301,27 @@ def _epoch_line(record: dict[str, Any], epochs: int) -> str:
     )
 
 
+def _record_of(metrics: dict[str, Any]) -> dict[str, Any]:
+    return {k: metrics[k] for k in ("epoch", "fitness", "AP", "AP50") if k in metrics}
+
+
 def _finish(t: Trainer, out: Path, best: dict[str, Any]) -> dict[str, Any]:
-    """Export ``best.onnx`` from the best EMA weights and write ``results.json``."""
-    if (out / "best.pt").is_file():
-        model, names, imgsz = load_detector(out / "best.pt")
-        export_onnx(model, out / "best.onnx", imgsz, names)
-    plot_curves(read_metrics(out / "metrics.jsonl"), out / "curves.png", title=out.name)
+    """Export the selected EMA weights (``cfg.select``: ``best.onnx`` from the best epoch's, or ``last.onnx`` from
+    the last epoch's) and write ``results.json`` (``best`` and ``selected``: epoch, fitness, AP, AP50)."""
+    chosen = out / f"{t.cfg.select}.pt"  # best.pt or last.pt (EMA weights in both)
+    onnx = out / f"{t.cfg.select}.onnx"
+    if chosen.is_file():
+        model, names, imgsz = load_detector(chosen)
+        export_onnx(model, onnx, imgsz, names)
+    metrics = read_metrics(out / "metrics.jsonl")
+    plot_curves(metrics, out / "curves.png", title=out.name)
     results = {
         "best": best,
+        "selected": best if t.cfg.select == "best" else _record_of(metrics[-1] if metrics else {}),
         "config": asdict(t.cfg),
         "class_names": t.class_names,
         "anchors": t.anchors,
-        "onnx": "best.onnx" if (out / "best.onnx").is_file() else None,
+        "onnx": onnx.name if onnx.is_file() else None,
         "device": str(t.device),
         "versions": versions(),
         "lock": lock_status(),
