@@ -16,7 +16,7 @@ import json
 import os
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, NamedTuple
 
@@ -166,11 +166,32 @@ def run_data(spec: RunSpec, load: Callable[[DataRef], Dataset] | None = None) ->
 
 
 def train_run(spec: RunSpec, val: Dataset) -> dict[str, Any]:
-    """Train (or resume) into ``spec.out/train``, selecting the best epoch on ``val``; returns train's results
-    (best epoch and its metrics)."""
+    """Train (or resume) into ``spec.out/train``, selecting the epoch by ``spec.train.select`` (validation on
+    ``val``); returns train's results (best and selected epoch and their metrics). A run that differs from a
+    trained one only in ``select`` starts from its training (:func:`adopt_training`): nothing is trained again."""
     from train.loop import fit
 
+    adopt_training(spec)
     return fit(spec.train, load_data(spec.train_data, spec.classes), val, spec.out / "train")
+
+
+def adopt_training(spec: RunSpec) -> Path | None:
+    """Copy the training of ``spec``'s twin with the other ``train.select`` (its ``train/`` without the exported
+    model and results) into ``spec.out/train`` when that twin finished training and ``spec`` has not begun;
+    returns the folder copied from. The twin's weights are the same (``select`` only chooses what is exported),
+    so resuming there trains nothing."""
+    import shutil
+
+    here = spec.out / "train"
+    if (here / "last.pt").is_file():
+        return None
+    for other in ("best", "last"):
+        twin = replace(spec, train=replace(spec.train, select=other)).out / "train"
+        if other != spec.train.select and (twin / "results.json").is_file() and (twin / "last.pt").is_file():
+            shutil.copytree(twin, here, ignore=shutil.ignore_patterns("*.onnx", "results.json"), dirs_exist_ok=True)
+            print(f"train  {spec.label} seed {spec.seed}: the training of {twin.parent} (select: {other}) reused")
+            return twin
+    return None
 
 
 def score_run(

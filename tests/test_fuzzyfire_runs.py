@@ -53,6 +53,24 @@ def test_select_enters_the_identity_only_when_not_best(tmp_path: Path) -> None:
     assert last.identity()["train"]["select"] == "last" and last.hash() != a.hash()
 
 
+def test_a_run_that_differs_only_in_select_starts_from_its_twins_training(tmp_path: Path) -> None:
+    from fuzzyfire.runs import adopt_training
+
+    best = _spec(tmp_path)
+    last = replace(best, train=replace(best.train, select="last"))
+    assert adopt_training(last) is None  # no twin trained yet
+    twin = best.out / "train"
+    twin.mkdir(parents=True)
+    for name in ("last.pt", "best.pt", "metrics.jsonl", "best.onnx", "results.json"):
+        (twin / name).write_text(name)
+    assert adopt_training(last) == twin
+    assert sorted(p.name for p in (last.out / "train").iterdir()) == ["best.pt", "last.pt", "metrics.jsonl"]
+    (twin / "last.pt").write_text("trained further")
+    assert adopt_training(last) is None and (last.out / "train" / "last.pt").read_text() == "last.pt"  # begun
+    other = replace(last, train=replace(last.train, seed=1))
+    assert adopt_training(other) is None  # another seed is another training
+
+
 def test_finished_runs_are_skipped_only_with_the_same_spec(tmp_path: Path) -> None:
     spec = _spec(tmp_path)
     assert finished(spec) is None
