@@ -17,11 +17,14 @@ import shutil
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from curate.core.config import to_dict
 from fuzzyfire import __version__
 from fuzzyfire.datasets import DataRef
+
+if TYPE_CHECKING:
+    from synth.places import Places
 
 STAGE_FILE = "stage.json"
 STANDIN_LABEL = " (stand-in)"
@@ -191,11 +194,12 @@ def synth_stage(root: Path, method: str, cfg: Any, base: Path, cutouts: Stage | 
     cfg = replace(cfg, kits=tuple(_absolute(Path(p), base) for p in cfg.kits))
     by_path = _later_keys_dropped(to_dict(cfg), to_dict(type(cfg)()))  # the identity before content hashing
     by_path["flame_look"] = FLAME_LOOK  # pools of earlier flames and compositing are other data
-    if getattr(cfg, "stand", "anywhere") == "surfaces" and _renders_rooms(cfg):
-        by_path["standing"] = STANDING  # rooms' flames on up-facing surfaces: pools made before were other data
     if getattr(cfg, "backgrounds", ()):
         cfg = replace(cfg, backgrounds=tuple(_absolute(Path(p), base) for p in cfg.backgrounds))
-    files = content_identity(cfg)  # replaces the environments and backgrounds of by_path when they are set
+    places = _places(cfg, None)  # one scan of the places for both uses below
+    if getattr(cfg, "stand", "anywhere") == "surfaces" and _renders_rooms(cfg, places):
+        by_path["standing"] = STANDING  # rooms' flames on up-facing surfaces: pools made before were other data
+    files = content_identity(cfg, places)  # replaces the environments and backgrounds of by_path when set
     flames = {"cutouts": cutouts.hash} if cutouts is not None else {}
     stage = cached_stage(
         root,
@@ -212,12 +216,17 @@ def synth_stage(root: Path, method: str, cfg: Any, base: Path, cutouts: Stage | 
     return stage, DataRef(stage.folder, {"kind": method, "hash": stage.hash}, "coco")
 
 
-def _renders_rooms(cfg: Any) -> bool:
-    """Whether a pool renders rooms (procedural ``scenes`` or mesh files), whose flames ``stand`` places;
-    panoramas, photos and kit streets have their own ground."""
+def _renders_rooms(cfg: Any, places: Places | None = None) -> bool:
+    """Whether a pool renders rooms (procedural ``scenes`` or mesh files; ``places``: ``cfg``'s places split
+    already, else split here), whose flames ``stand`` places; panoramas, photos and kit streets have their own
+    ground."""
+    return bool(cfg.scenes) or bool(_places(cfg, places).meshes)
+
+
+def _places(cfg: Any, places: Places | None) -> Places:
     from synth.places import split_places
 
-    return bool(cfg.scenes) or bool(split_places(cfg.environments).meshes)  # environments resolved already
+    return places if places is not None else split_places(cfg.environments, getattr(cfg, "backgrounds", ()))
 
 
 def _later_keys_dropped(config: dict[str, Any], default: dict[str, Any]) -> dict[str, Any]:
@@ -244,17 +253,16 @@ STANDING = 1
 PHOTO_SITES = 1
 
 
-def content_identity(cfg: Any) -> dict[str, Any]:
-    """The environment files, building kits and background photos of ``cfg`` by content (only the keys that are
-    set)."""
+def content_identity(cfg: Any, places: Places | None = None) -> dict[str, Any]:
+    """The environment files, panoramas, building kits and background photos of ``cfg`` by content (only the keys
+    that are set; ``places``: ``cfg``'s environments and backgrounds split already, else split here)."""
     from synth.envfile import find_environment_files, fingerprint
     from synth.kits import find_kits, kit_fingerprint
     from synth.panorama import panorama_fingerprints
     from synth.photos import photo_fingerprints
-    from synth.places import split_places
 
     out: dict[str, Any] = {}
-    places = split_places(cfg.environments, getattr(cfg, "backgrounds", ()))
+    places = _places(cfg, places)
     if places.meshes:
         out["environments"] = [fingerprint(spec) for spec in find_environment_files(places.meshes)]
     if places.panoramas:

@@ -112,8 +112,8 @@ def test_pools_are_identified_by_the_content_of_their_environments_and_photos(tm
     assert [p["name"] for p in identity["backgrounds"]] == sorted(p["name"] for p in identity["backgrounds"])
     from fuzzyfire.stages import content_identity
 
-    changed = content_identity(replace(cfg, environments=(tmp_path / "b" / "scenes",),
-                                        backgrounds=(tmp_path / "b" / "photos",)))  # fmt: skip
+    there = replace(cfg, environments=(tmp_path / "b" / "scenes",), backgrounds=(tmp_path / "b" / "photos",))
+    changed = content_identity(there)
     assert (
         changed["environments"][0]["scale"] == 0.5 and len(changed["backgrounds"]) == len(identity["backgrounds"]) + 1
     )
