@@ -33,6 +33,8 @@ Variants (400 images at 416x416, seed 0, each a cached pool of the experiment pi
 - ``distractors``: ``panoramas`` with distractors (lamps, a low sun, cones, red cloth, jackets, tail lights, glare;
   no box) in half of the images;
 - ``distractors_blend_all``: both.
+- ``streets``: 16 procedural kit streets from ../shared/data/kits (flames on the ground of their fire zones);
+- ``mix``: panoramas (half the views), the 12 interiors (flames on up-facing surfaces) and the 16 kit streets.
 
 Lines: ``synth_<variant>_gap`` (Fréchet distance to half the real train split, median of 200 draws),
 ``synth_<variant>_gap_ratio`` (to the real-vs-real floor), ``synth_real_floor``, and with ``--train``
@@ -68,6 +70,8 @@ BLEND_ALL = [
     "synth.method2.blend.decoys=0.3",
 ]
 DISTRACTORS = ["synth.method2.distractors.share=0.5"]
+STREETS = ["synth.method2.streets=16", f"synth.method2.kits=[{(SHARED / 'kits').as_posix()}]"]
+ROOMS = (ROOT / "configs" / "scenes").as_posix()
 VARIANTS = {
     "procedural": [*ANYWHERE, *PROCEDURAL, "synth.method2.light=false", *NO_CAMERA],
     "files": [*ANYWHERE, *FILES, "synth.method2.light=false", *NO_CAMERA],
@@ -90,6 +94,8 @@ VARIANTS = {
     "blend_all": [*SITES, *PANORAMAS, *BLEND_ALL],
     "distractors": [*SITES, *PANORAMAS, *DISTRACTORS],
     "distractors_blend_all": [*SITES, *PANORAMAS, *DISTRACTORS, *BLEND_ALL],
+    "streets": [*SITES, *STREETS],
+    "mix": [*SITES, f"synth.method2.environments=[{(SHARED / 'panoramas').as_posix()},{ROOMS}]", *STREETS],
 }
 #: Variants whose flames are cut from the curated real train split.
 CUTOUT_VARIANTS = ("files_cutouts",)
