@@ -28,11 +28,8 @@ from synth.sites import sky_like
 from synth.sprites import Sprite
 
 KINDS: tuple[str, ...] = ("lamp", "sun", "cone", "cloth", "clothing", "taillights", "glare")
-EMISSIVE_KINDS: tuple[str, ...] = ("lamp", "sun", "taillights", "glare")
-OUTDOOR_KINDS: tuple[str, ...] = (
-    "sun",
-    "taillights",
-)  # never drawn in a rendered room (:func:`kinds_here`)  # light: drawn after low-light exposure
+EMISSIVE_KINDS: tuple[str, ...] = ("lamp", "sun", "taillights", "glare")  # light: drawn after low-light exposure
+OUTDOOR_KINDS: tuple[str, ...] = ("sun", "taillights")  # never drawn in a rendered room (:func:`kinds_here`)
 #: Height range in metres of the kinds that stand on the ground (sized by depth like flames).
 GROUND_HEIGHT_M: dict[str, tuple[float, float]] = {
     "cone": (0.45, 0.9),

@@ -24,7 +24,7 @@ from synth.places import split_places
 from synth.schema import to_json
 from synth.sprites import SpriteSequence
 from synth.staging import Staging, finish
-from synth.views import ViewCache
+from synth.views import ViewCache, environment_index
 
 MakeImage = Callable[[Any, int, Sequence[SpriteSequence], ViewCache], tuple]
 
@@ -93,8 +93,8 @@ def blocks(job: Job, todo: Sequence[int]) -> list[list[int]]:
     per_view = cfg.images_per_view
     streets = getattr(cfg, "streets", 0)
     if job.files or streets:
-        total, views = len(job.files) + streets + cfg.scenes, -(-cfg.n // per_view)
-        key = [min((i // per_view) * total // views, total - 1) for i in todo]  # ViewCache.environment_index
+        views = -(-cfg.n // per_view)
+        key = [environment_index(i // per_view, len(job.files), streets, cfg.scenes, views) for i in todo]
     else:
         key = [i // per_view // BLOCK_VIEWS for i in todo]
     out: dict[int, list[int]] = {}

@@ -49,6 +49,16 @@ class View:
         return out if self.kind is None else {**out, "kind": self.kind}
 
 
+def environment_index(view_index: int, files: int, streets: int, scenes: int, views: int) -> int:
+    """The environment view ``view_index`` of a run with ``views`` views looks at (module docstring): with mesh
+    ``files`` or kit ``streets``, equal consecutive blocks over files, streets and procedural ``scenes``; else
+    ``view_index`` modulo the scenes."""
+    total = files + streets + scenes
+    if not files and not streets:
+        return view_index % total
+    return min(view_index * total // views, total - 1)
+
+
 class ViewCache:
     """Builds each environment's pyrender scene once and remembers the last view (and background) made."""
 
@@ -89,10 +99,7 @@ class ViewCache:
 
     def environment_index(self, view_index: int) -> int:
         """The environment view ``view_index`` looks at (module docstring)."""
-        total = len(self.files) + self.streets + self.scenes
-        if not self.files and not self.streets:
-            return view_index % total
-        return min(view_index * total // self.views, total - 1)
+        return environment_index(view_index, len(self.files), self.streets, self.scenes, self.views)
 
     def environment(self, env_index: int) -> tuple[scenes.Environment, Any]:
         """Environment ``env_index`` and its pyrender scene; a file scene or a street replaces the previous one

@@ -248,7 +248,7 @@ def fit(cfg: TrainConfig, train_ds: Dataset, val_ds: Dataset, out: Path | str) -
         record.update(evaluate(t.ema.ema, val_inputs, val_ds, *args))
         record["val_seconds"] = time.perf_counter() - start
         if record["fitness"] > best["fitness"]:
-            best = {k: record[k] for k in ("epoch", "fitness", "AP", "AP50")}
+            best = _record_of(record)
             _save(out / "best.pt", _best_weights(t))
         _log_epoch(out, record)
         _save(out / "last.pt", _checkpoint(t, epoch, best))
@@ -302,6 +302,7 @@ def _epoch_line(record: dict[str, Any], epochs: int) -> str:
 
 
 def _record_of(metrics: dict[str, Any]) -> dict[str, Any]:
+    """An epoch's metrics as ``results.json`` names its best and selected epochs: epoch, fitness, AP, AP50."""
     return {k: metrics[k] for k in ("epoch", "fitness", "AP", "AP50") if k in metrics}
 
 
