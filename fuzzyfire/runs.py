@@ -25,6 +25,7 @@ from eval.errors import ALARMS
 from fuzzyfire.datasets import DataRef, load_data
 from fuzzyfire.engine import CommandJob, command_train
 from fuzzyfire.stages import digest
+from train.config import trained_by
 
 if TYPE_CHECKING:
     from curate.core.cocoeval import CocoMetrics
@@ -43,12 +44,10 @@ class RunError(RuntimeError):
 
 
 def train_identity(train: TrainConfig) -> dict[str, Any]:
-    """``train`` as a run's identity holds it: ``select`` left out while it is ``best`` (runs trained before the
-    key existed keep their hash)."""
-    out = to_dict(train)
-    if out.get("select") == "best":
-        del out["select"]
-    return out
+    """``train`` as a run's identity holds it: keys added later left out while they hold the value runs trained
+    before them used (``select: best``, ``real_finetune: 0``; :func:`train.config.trained_by`), so those runs
+    keep their hash."""
+    return trained_by(to_dict(train))
 
 
 @dataclass(frozen=True)

@@ -53,6 +53,14 @@ def test_select_enters_the_identity_only_when_not_best(tmp_path: Path) -> None:
     assert last.identity()["train"]["select"] == "last" and last.hash() != a.hash()
 
 
+def test_real_finetune_enters_the_identity_only_when_set(tmp_path: Path) -> None:
+    """Runs trained before ``train.real_finetune`` existed keep their hash; a fine-tuned run is another run."""
+    a = _spec(tmp_path)
+    assert "real_finetune" not in a.identity()["train"]
+    tuned = replace(a, train=replace(a.train, real_finetune=1))
+    assert tuned.identity()["train"]["real_finetune"] == 1 and tuned.hash() != a.hash()
+
+
 def test_a_run_that_differs_only_in_select_starts_from_its_twins_training(tmp_path: Path) -> None:
     from fuzzyfire.runs import adopt_training
 

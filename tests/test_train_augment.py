@@ -109,3 +109,21 @@ def test_hsv_jitter_changes_colour_not_shape() -> None:
     out = hsv_jitter(image, (0.015, 0.7, 0.4), np.random.default_rng(0))
     assert out.shape == image.shape and not np.array_equal(out, image)
     assert np.array_equal(hsv_jitter(image, (0, 0, 0), np.random.default_rng(0)), image)
+
+
+def test_mosaic_partners_come_from_the_given_indices_and_a_full_range_changes_nothing() -> None:
+    pool = [resize_longest(_painted(k), 64) for k in range(6)]
+    cfg = AugmentConfig(mosaic=1.0)
+    for seed in range(5):
+        loaded: list[int] = []
+
+        def load(i: int, loaded: list[int] = loaded) -> Sample:
+            loaded.append(i)
+            return pool[i]
+
+        out = augment(load, 0, np.array([0, 4, 5]), 64, cfg, np.random.default_rng(seed))
+        assert loaded[0] == 0 and set(loaded[1:]) <= {0, 4, 5} and len(loaded) == 4
+        every = augment(lambda i: pool[i], 0, np.arange(6), 64, cfg, np.random.default_rng(seed))
+        counted = augment(lambda i: pool[i], 0, 6, 64, cfg, np.random.default_rng(seed))
+        assert np.array_equal(every.image, counted.image) and np.array_equal(every.boxes, counted.boxes)
+        assert out.image.shape == (64, 64, 3)

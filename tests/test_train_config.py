@@ -46,3 +46,10 @@ def test_round_trip_and_strictness() -> None:
         build_config({"optim": {"lr": 0.1}}, TrainConfig)
     with pytest.raises(ConfigError, match="model.backbone"):
         build_config({"model": {"backbone": "resnet"}}, TrainConfig)
+
+
+def test_real_finetune_is_at_most_the_epochs() -> None:
+    assert TrainConfig(epochs=5, real_finetune=5).real_finetune == 5
+    for bad in (-1, 6):
+        with pytest.raises(ValueError, match="real_finetune"):
+            TrainConfig(epochs=5, real_finetune=bad)

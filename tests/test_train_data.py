@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -12,7 +13,7 @@ from factories_train import painted_dataset
 from curate.core.dataset import DatasetBuilder
 from train.augment import Sample
 from train.config import AugmentConfig
-from train.data import TrainBatches, cache_images, collate, letterboxed_images
+from train.data import TrainBatches, cache_images, collate, letterboxed_images, real_indices
 
 
 @pytest.fixture(scope="module")
@@ -86,3 +87,36 @@ def test_worker_processes_give_the_same_batches(dataset) -> None:
     assert len(threads) == len(processes) == 3
     for (xa, ta), (xb, tb) in zip(threads, processes):
         assert torch.equal(xa, xb) and torch.equal(ta, tb)
+
+
+def _tagged(cache: list, synthetic: set[int]) -> list:
+    """``cache`` with the images at ``synthetic`` tagged as a fuzzyfire mixture tags its synthetic images."""
+    return [
+        replace(c, record=replace(c.record, source="synth:method2" if i in synthetic else "real:x"))
+        for i, c in enumerate(cache)
+    ]
+
+
+def test_real_from_trains_the_last_epochs_on_real_images_only(dataset) -> None:
+    cache = _tagged(cache_images(dataset, 64), {1, 4, 5, 8})
+    assert real_indices(cache).tolist() == [0, 2, 3, 6, 7, 9]
+    plain = TrainBatches(cache, 64, 4, AugmentConfig(), seed=3)
+    tuned = TrainBatches(cache, 64, 4, AugmentConfig(), seed=3, real_from=2)
+    for epoch in (0, 1):  # before real_from: every image once, in the same order as without it
+        assert tuned.count(epoch) == len(tuned) == 3
+        assert [c.tolist() for c in tuned.chunks(epoch)] == [c.tolist() for c in plain.chunks(epoch)]
+    for epoch in (2, 5):
+        chunks = tuned.chunks(epoch)
+        assert tuned.count(epoch) == len(chunks) == 2 and len(tuned) == 3
+        assert sorted(np.concatenate(chunks).tolist()) == [0, 2, 3, 6, 7, 9]
+        assert [b[0].shape[0] for b in tuned.epoch(epoch)] == [4, 2]
+    assert tuned.chunks(2, start=1)[0].tolist() == tuned.chunks(2)[1].tolist()
+
+
+def test_real_from_leaves_synthetic_images_views_unchanged(dataset) -> None:
+    """Only a real image's mosaic partners are restricted: a synthetic image's view is as it was."""
+    cache = _tagged(cache_images(dataset, 64), {1, 4})
+    plain = TrainBatches(cache, 64, 4, AugmentConfig(mosaic=1.0), seed=3)
+    tuned = TrainBatches(cache, 64, 4, AugmentConfig(mosaic=1.0), seed=3, real_from=1)
+    for draw in range(3):
+        assert np.array_equal(plain.sample(draw, 1).image, tuned.sample(draw, 1).image)

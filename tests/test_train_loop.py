@@ -208,3 +208,41 @@ def test_unfreezing_late_trains_later_stages_and_resumes_across_the_switch(data,
     _interrupted_then_resumed(cfg, data, tmp_path / "run", monkeypatch, crash_at=3)
     resumed = _weights(tmp_path / "run")
     assert all(torch.equal(weights[k], resumed[k]) for k in weights)
+
+
+def _sourced(ds, synthetic_every: int):
+    """``ds`` with every ``synthetic_every``-th image tagged synthetic, the others real (as a mixture tags them)."""
+    images = tuple(
+        replace(img, source="synth:method2" if k % synthetic_every == 0 else "real:painted")
+        for k, img in enumerate(ds.images)
+    )
+    return replace(ds, images=images)
+
+
+def test_real_from_is_the_first_real_only_epoch_when_there_are_both_kinds(data, capsys) -> None:
+    from train.data import cache_images
+
+    train, _ = data
+    mixed, real_only = cache_images(_sourced(train, 2), 64), cache_images(train, 64)
+    assert loop.real_from(replace(CFG, epochs=10, real_finetune=3), mixed) == 7
+    assert loop.real_from(replace(CFG, epochs=10, real_finetune=0), mixed) is None
+    assert loop.real_from(replace(CFG, epochs=10, real_finetune=3), real_only) is None
+    assert "no synthetic images" in capsys.readouterr().out
+    synthetic_only = cache_images(_sourced(train, 1), 64)
+    assert loop.real_from(replace(CFG, epochs=10, real_finetune=3), synthetic_only) is None
+    assert "no real images" in capsys.readouterr().out
+
+
+def test_real_finetune_trains_and_a_run_saved_before_the_key_existed_resumes(data, reference_run, tmp_path) -> None:
+    train, val = data
+    tuned = loop.fit(replace(CFG, real_finetune=1), _sourced(train, 2), val, tmp_path / "tuned")
+    assert tuned["config"]["real_finetune"] == 1 and len(_metrics(tmp_path / "tuned")) == CFG.epochs
+    plain = _weights(reference_run)
+    assert any(not torch.equal(v, plain[k]) for k, v in _weights(tmp_path / "tuned").items() if v.is_floating_point())
+    old = tmp_path / "old"
+    shutil.copytree(reference_run, old)
+    state = torch.load(old / "last.pt", map_location="cpu", weights_only=False)
+    del state["config"]["real_finetune"]
+    torch.save(state, old / "last.pt")
+    loop.fit(CFG, *data, old)  # finished: nothing to train, no ResumeError
+    assert _metrics(old) == _metrics(reference_run)

@@ -142,19 +142,21 @@ def hflip(sample: Sample) -> Sample:
 def augment(
     load: Callable[[int], Sample],
     index: int,
-    count: int,
+    partners: int | NDArray[np.int64],
     size: int,
     cfg: AugmentConfig,
     rng: np.random.Generator,
 ) -> Sample:
-    """The training view of sample ``index`` (of ``count``), ``size`` x ``size``.
+    """The training view of sample ``index``, ``size`` x ``size``.
 
     ``load(i)`` returns sample ``i`` resized to longest side ``size``. With probability ``cfg.mosaic`` the
-    sample and three random others form a mosaic; the result (or the letterboxed sample) goes through a
+    sample and three random others form a mosaic, drawn from ``range(partners)`` or from the given sample
+    indices (the same draws either way when those are ``0 .. n-1``); the result (or the letterboxed sample) goes through a
     random affine, then HSV jitter and a horizontal flip with probability ``cfg.fliplr``.
     """
     if rng.random() < cfg.mosaic:
-        others = rng.integers(0, count, size=3)
+        pool = np.arange(partners) if isinstance(partners, int) else partners
+        others = pool[rng.integers(0, len(pool), size=3)]
         base = mosaic_canvas([load(index), *(load(int(i)) for i in others)], size, rng)
     else:
         base = letterbox(load(index), size)

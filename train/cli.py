@@ -70,7 +70,8 @@ def build_config(args: argparse.Namespace):
 
     cfg = TrainConfig()
     given = {
-        k: getattr(args, k) for k in ("epochs", "imgsz", "batch", "seed", "threads", "device", "workers", "select")
+        k: getattr(args, k)
+        for k in ("epochs", "imgsz", "batch", "seed", "threads", "device", "workers", "select", "real_finetune")
     }
     cfg = replace(cfg, **{k: v for k, v in given.items() if v is not None})
     if args.views is not None:
@@ -162,6 +163,13 @@ def register(sub: argparse._SubParsersAction) -> None:
         choices=("best", "last"),
         help="weights exported: best (validation fitness, YOLOv5's rule; the default) or last (the last epoch's "
         "EMA: steadier when the validation set has only a few dozen images)",
+    )
+    p.add_argument(
+        "--real-finetune",
+        type=int,
+        metavar="N",
+        help="the last N epochs train only on the real images of a fuzzyfire mixture (sources not synth:); a "
+        "real image's mosaic partners are real in every epoch (default 0: never)",
     )
     p.add_argument("--train-split", help="split of --train to use (default: train when present, else all)")
     p.add_argument("--val-split", help="split of --val to use (default: valid/val when present, else all)")

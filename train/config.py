@@ -16,7 +16,7 @@ lr0: 0.01, momentum: 0.937, warmup_epochs: 3, nominal_batch: 64}``, ``augment: {
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Literal, Optional
+from typing import Any, Literal, Optional
 
 #: Depth and width multiples of the YOLOv5 family (published values).
 MODEL_SIZES: dict[str, tuple[float, float]] = {"n": (0.33, 0.25), "s": (0.33, 0.50), "m": (0.67, 0.75)}
@@ -102,6 +102,9 @@ class TrainConfig:
     # exported weights: the EMA of the epoch with the best validation fitness (YOLOv5's best.pt), or of the last
     # epoch (steadier when the validation set is small: best-of-N on a few dozen images picks noise)
     select: Literal["best", "last"] = "best"
+    # the last N epochs train only on the real images (a mixture's images whose source is not ``synth:``), and a
+    # real image's mosaic partners are real in every epoch: synthetic data as a warm start, real data last; 0 = never
+    real_finetune: int = 0
     threads: int = 0  # torch threads; 0 = leave torch's default (all cores)
     device: str = "auto"  # auto | cpu | cuda | cuda:N; auto = the first CUDA GPU when there is one, else the CPU
     workers: Optional[int] = None  # data-loading processes; null = none on the CPU (a thread), 8 on a GPU
@@ -114,3 +117,17 @@ class TrainConfig:
     loss: LossConfig = field(default_factory=LossConfig)
     augment: AugmentConfig = field(default_factory=AugmentConfig)
     unfreeze: UnfreezeConfig = field(default_factory=UnfreezeConfig)
+
+    def __post_init__(self) -> None:
+        if not 0 <= self.real_finetune <= self.epochs:
+            raise ValueError(f"real_finetune must be in 0..epochs ({self.epochs}), got {self.real_finetune}")
+
+
+#: Keys added after runs were trained, with the value those runs trained with: a run's identity and a resumed
+#: run's config check leave a key out while it holds that value, so older runs keep their hash and resume.
+LATER_TRAIN_KEYS: dict[str, object] = {"select": "best", "real_finetune": 0}
+
+
+def trained_by(config: dict[str, Any]) -> dict[str, Any]:
+    """A train config (as a dict) without the :data:`LATER_TRAIN_KEYS` at their old values."""
+    return {k: v for k, v in config.items() if not (k in LATER_TRAIN_KEYS and v == LATER_TRAIN_KEYS[k])}

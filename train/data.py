@@ -118,20 +118,50 @@ def epoch_order(count: int, seed: int, epoch: int) -> NDArray[np.int64]:
     return np.random.default_rng([seed, epoch]).permutation(count)
 
 
+SYNTHETIC_SOURCE = "synth:"  # how a fuzzyfire mixture tags its synthetic images' source (curate.mix)
+
+
+def real_indices(cache: list[CachedImage]) -> NDArray[np.int64]:
+    """Indices of the cached images that are not synthetic (source not starting with :data:`SYNTHETIC_SOURCE`)."""
+    return np.asarray([i for i, c in enumerate(cache) if not c.record.source.startswith(SYNTHETIC_SOURCE)], np.int64)
+
+
 class TrainBatches:
     """Augmented batches of a cached training set; the last partial batch is kept.
 
+    ``real_from``: from this epoch on, batches hold only the real images (:func:`real_indices`), and a real
+    image's mosaic partners are real in every epoch (None: every image in every epoch, mosaics of any four).
     ``workers`` > 0 prepares batches in that many worker processes (to keep a GPU fed); 0 prepares the next
     batch in a thread while the caller trains on the current one. Both give the same batches."""
 
     def __init__(
-        self, cache: list[CachedImage], size: int, batch: int, cfg: AugmentConfig, seed: int, workers: int = 0
+        self,
+        cache: list[CachedImage],
+        size: int,
+        batch: int,
+        cfg: AugmentConfig,
+        seed: int,
+        workers: int = 0,
+        real_from: int | None = None,
     ) -> None:
         self.cache, self.size, self.batch, self.cfg, self.seed = cache, size, batch, cfg, seed
-        self.workers = workers
+        self.workers, self.real_from = workers, real_from
+        self.real = real_indices(cache) if real_from is not None else np.arange(len(cache))
+        self._is_real = np.zeros(len(cache), bool)
+        self._is_real[self.real] = True
 
     def __len__(self) -> int:
+        """Batches in an epoch of every image."""
         return -(-len(self.cache) // self.batch)
+
+    def count(self, epoch: int) -> int:
+        """Batches in ``epoch`` (fewer from ``real_from`` on)."""
+        return -(-len(self._images(epoch)) // self.batch)
+
+    def _images(self, epoch: int) -> NDArray[np.int64]:
+        if self.real_from is not None and epoch >= self.real_from:
+            return self.real
+        return np.arange(len(self.cache))
 
     def sample(self, draw: int, index: int) -> Sample:
         """The augmented view of image ``index`` in ``draw`` (size x size)."""
@@ -139,7 +169,8 @@ class TrainBatches:
         def load(i: int) -> Sample:
             return self.cache[i].sample
 
-        return augment(load, index, len(self.cache), self.size, self.cfg, sample_rng(self.seed, draw, index))
+        partners = self.real if self._is_real[index] and self.real_from is not None else len(self.cache)
+        return augment(load, index, partners, self.size, self.cfg, sample_rng(self.seed, draw, index))
 
     def make_batch(self, draw: int, indices: NDArray[np.int64]) -> tuple[torch.Tensor, torch.Tensor]:
         """Collated views of ``indices`` in ``draw``: (B, 3, S, S) float32 in [0, 1] and (T, 6) targets."""
@@ -147,7 +178,8 @@ class TrainBatches:
 
     def chunks(self, epoch: int, start: int = 0) -> list[NDArray[np.int64]]:
         """Image indices of each batch of ``epoch`` from batch number ``start``."""
-        order = epoch_order(len(self.cache), self.seed, epoch)
+        images = self._images(epoch)
+        order = images[epoch_order(len(images), self.seed, epoch)]
         return [order[i : i + self.batch] for i in range(start * self.batch, len(order), self.batch)]
 
     def epoch(self, epoch: int, start: int = 0) -> Iterator[tuple[torch.Tensor, torch.Tensor]]:

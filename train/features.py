@@ -116,6 +116,10 @@ class FeatureBatches:
     def __len__(self) -> int:
         return len(self.samples)
 
+    def count(self, epoch: int) -> int:
+        """Batches in ``epoch`` (:meth:`train.data.TrainBatches.count`)."""
+        return self.samples.count(epoch)
+
     def draw(self, epoch: int) -> int:
         """The augmentation draw an epoch trains on: its view when views are cached, else the epoch."""
         return epoch % self.views if self.views else epoch

@@ -24,8 +24,8 @@ from curate.core.lock import lock_status
 from curate.core.manifest import git_commit, versions
 from curate.core.progress import progress
 from train.anchors import check_anchors, label_sizes
-from train.config import DEFAULT_ANCHORS, ModelConfig, TrainConfig
-from train.data import TrainBatches, cache_images, letterboxed_images
+from train.config import DEFAULT_ANCHORS, ModelConfig, TrainConfig, trained_by
+from train.data import CachedImage, TrainBatches, cache_images, letterboxed_images, real_indices
 from train.device import resolve_device, uses_amp
 from train.ema import ModelEMA
 from train.export import export_onnx
@@ -68,14 +68,14 @@ class Trainer:
 def train_one_epoch(t: Trainer, epoch: int) -> dict[str, float]:
     """One pass over the training batches; returns mean losses, learning rate and images/second."""
     t.model.train()
-    nb = len(t.batches)
+    nb = t.batches.count(epoch)
     sums = {"box": 0.0, "obj": 0.0, "cls": 0.0}
     seen, pending, start = 0, 0, time.perf_counter()
     t.optimizer.zero_grad(set_to_none=True)
     batches = progress(t.batches.epoch(epoch), total=nb, desc=f"epoch {epoch + 1}", unit="batch", min_items=10)
     amp = uses_amp(t.device)
     for i, (feats, targets) in enumerate(batches):
-        iteration = epoch * nb + i
+        iteration = epoch * len(t.batches) + i  # the schedule counts full epochs (real_finetune ones are shorter)
         t.schedule.apply(t.optimizer, iteration, epoch)
         with torch.autocast(t.device.type, enabled=amp):
             raw = t.model.forward_frozen(channels_last(feats))
@@ -127,7 +127,7 @@ def build_trainer(cfg: TrainConfig, train_ds: Dataset) -> Trainer:
     model = build_model(len(names), model_cfg, cfg.imgsz).to(device, memory_format=torch.channels_last)
     check_unfreeze(cfg, model)
     workers = cfg.workers if cfg.workers is not None else (GPU_WORKERS if device.type == "cuda" else 0)
-    samples = TrainBatches(cache, cfg.imgsz, cfg.batch, cfg.augment, cfg.seed, workers)
+    samples = TrainBatches(cache, cfg.imgsz, cfg.batch, cfg.augment, cfg.seed, workers, real_from(cfg, cache))
     runner = FrozenRunner(model, cfg.imgsz, device, cfg.threads)
     batches = FeatureBatches(samples, runner, cfg.feature_views, cfg.feature_cache_gb)
     schedule = Schedule(cfg.optim, cfg.epochs, len(batches), cfg.batch)
@@ -140,6 +140,19 @@ def build_trainer(cfg: TrainConfig, train_ds: Dataset) -> Trainer:
     return Trainer(
         cfg, model, ema, optimizer, loss_fn, schedule, batches, names, _nested(anchors), device, runner, scaler
     )
+
+
+def real_from(cfg: TrainConfig, cache: list[CachedImage]) -> int | None:
+    """The first epoch of ``cfg.real_finetune``'s real-only epochs, or None when there are none: the setting is 0,
+    or the training set has no real or no synthetic images (said on stdout)."""
+    if cfg.real_finetune <= 0:
+        return None
+    real = len(real_indices(cache))
+    if real == 0 or real == len(cache):
+        kind = "no real" if real == 0 else "no synthetic"
+        print(f"real_finetune {cfg.real_finetune}: the training set has {kind} images; every epoch trains on all")
+        return None
+    return cfg.epochs - cfg.real_finetune
 
 
 def _nested(anchors: Any) -> tuple:
@@ -173,9 +186,10 @@ def _checkpoint(t: Trainer, epoch: int, best: dict[str, Any]) -> dict[str, Any]:
 
 
 def _trained_by(config: dict[str, Any]) -> dict[str, Any]:
-    """A config without what only chooses the exported weights (``select``): a finished run resumed with another
-    ``select`` exports those weights without training again."""
-    return {k: v for k, v in config.items() if k != "select"}
+    """A config without what only chooses the exported weights (``select``: a finished run resumed with another
+    ``select`` exports those weights without training again) and without later keys at their old values
+    (:func:`train.config.trained_by`: a run saved before them resumes)."""
+    return {k: v for k, v in trained_by(config).items() if k != "select"}
 
 
 def _resume(t: Trainer, out: Path) -> tuple[int, dict[str, Any]]:
