@@ -36,6 +36,7 @@ from fuzzyfire.experiment_config import METHODS, EvalSetConfig, ExperimentConfig
 from fuzzyfire.leakage import check_leakage, pool_photos
 from fuzzyfire.runs import EvalSet, RunSpec, RunTask, execute_task, finished, missing_evals, run_data
 from fuzzyfire.stages import Prepared, curate_stage, digest, folder_ref, label, standin_stage, synth_stage
+from train.config import TrainConfig
 
 
 def _say(message: str) -> None:
@@ -207,7 +208,7 @@ def plan_runs(
             val,
             tests,
             cfg.classes,
-            replace(train, seed=seed),
+            _train_for(replace(train, seed=seed), e.mixture),
             score,
             out,
             engine,
@@ -217,6 +218,13 @@ def plan_runs(
         for seed in cfg.grid.seeds
         for e in grid
     ]
+
+
+def _train_for(train: TrainConfig, mixture: str) -> TrainConfig:
+    """``train`` for one mixture: ``real_finetune`` only where the mixture has real *and* synthetic images (else it
+    changes nothing, and a real-only or synthetic-only run stays the run it was: same identity, not trained again)."""
+    mix = parse_mixture(mixture)
+    return train if mix.real and mix.synth else replace(train, real_finetune=0)
 
 
 def test_sets(cfg: ExperimentConfig, data: Prepared) -> tuple[tuple[EvalSet, ...], tuple[EvalSet, ...]]:

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 from collections import Counter
+from dataclasses import replace
 from pathlib import Path
 
 import pytest
@@ -275,3 +276,23 @@ def test_named_test_sets_leave_every_run_identity_as_it_was(tmp_path: Path) -> N
     assert all([t.name for t in s.evals] == ["fire-free"] for s in after)
     assert set(before[0].identity()) == {"mixture", "method", "seed", "train_data", "val_data", "tests", "classes",
                                          "train", "score"}  # fmt: skip
+
+
+def test_real_finetune_reaches_only_the_runs_with_real_and_synthetic_images(tmp_path: Path) -> None:
+    """Real-only and synthetic-only runs keep their identity (the setting changes nothing for them)."""
+    from fuzzyfire.datasets import DataRef
+    from fuzzyfire.experiment import plan_runs
+    from fuzzyfire.stages import Prepared
+
+    plain = toy_config()
+    tuned = replace(plain, train=replace(plain.train, real_finetune=1))
+    ref = DataRef(tmp_path, {"kind": "standin", "hash": "x"}, "coco", standin=True)
+    mixtures = {(e.mixture, e.method, 0): ref for e in grid_entries(plain)}
+    prepared = Prepared(ref, ref, {"method1": ref, "method2": ref})
+    before = plan_runs(plain, grid_entries(plain), prepared, mixtures, tmp_path)
+    after = plan_runs(tuned, grid_entries(tuned), prepared, mixtures, tmp_path)
+    mixed = {s.mixture for s in before if "R0_" not in s.mixture and not s.mixture.endswith("_S0")}
+    assert mixed and {s.mixture for s in before} - mixed  # the toy grid has both kinds of run
+    for a, b in zip(before, after):
+        assert (a.hash() == b.hash()) == (a.mixture not in mixed)
+        assert b.train.real_finetune == (1 if a.mixture in mixed else 0)
