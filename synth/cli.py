@@ -25,7 +25,7 @@ def cmd_flames(args: argparse.Namespace) -> int:
     from synth.preview import write_preview
     from synth.sprites import save_sequence
 
-    seqs = procedural_library(args.n, args.seed, args.frames, args.keep_every, args.rare, args.generator)
+    seqs = procedural_library(args.n, args.seed, args.frames, args.keep_every, args.rare, args.generator, args.texture)
     for seq in progress(seqs, total=len(seqs), desc="flames"):
         save_sequence(args.out / seq.name, seq)
     preview = write_preview(seqs, args.out / "preview.png")
@@ -81,6 +81,10 @@ def cmd_scenes(args: argparse.Namespace) -> int:
 
 DEFAULT_SCENES = 48  # procedural rooms when the user brings no backgrounds of their own
 DEFAULT_LIBRARY = 12  # procedural flame sequences when --flames is absent
+TEXTURE_HELP = (
+    "procedural flames' inner streaks, 0..1: the body's temperature dips by up to this in rising streaks (orange "
+    "tongues inside the yellow) and its edge is softened (default 0: a flat clipped body)"
+)
 
 
 def _scenes(args: argparse.Namespace) -> int:
@@ -117,9 +121,12 @@ def _dataset_config(args: argparse.Namespace) -> dict:
 
     if args.library is not None and args.flames:
         raise ValueError("--library makes procedural flames, which --flames replaces: give one of them")
+    if args.texture and args.flames:
+        raise ValueError("--texture shapes procedural flames, which --flames replaces: give one of them")
     w, h = args.size
     library = DEFAULT_LIBRARY if args.library is None else args.library
-    flames = FlameLibraryConfig(sequences=library, seed=args.seed, folders=tuple(args.flames or ()))
+    folders = tuple(args.flames or ())
+    flames = FlameLibraryConfig(sequences=library, seed=args.seed, folders=folders, texture=args.texture)
     return {
         "n": args.n,
         "seed": args.seed,
@@ -265,6 +272,7 @@ def _register_flames(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--frames", type=int, default=1024, help="simulation steps per sequence")
     p.add_argument("--keep-every", type=int, default=12, help="keep one frame every K steps")
     p.add_argument("--rare", type=float, default=0.05, help="fraction of chemical-colour (rare) flames")
+    p.add_argument("--texture", type=float, default=0.0, help=TEXTURE_HELP)
     p.set_defaults(func=cmd_flames)
 
 
@@ -351,6 +359,7 @@ def _dataset_arguments(p: argparse.ArgumentParser, photos: bool = False) -> None
         type=int,
         help=f"procedural flame sequences to make instead of --flames (default {DEFAULT_LIBRARY})",
     )
+    p.add_argument("--texture", type=float, default=0.0, help=TEXTURE_HELP)
     p.add_argument("--overwrite", action="store_true", help="replace a fuzzyfire dataset already at --out")
     p.add_argument("--smoke", action="store_true", help="also annotate smoke (class 'smoke', alpha >= 0.25)")
     p.add_argument(

@@ -82,6 +82,7 @@ class FlameParams:
     body: float = 0.25  # height of the burning body (fuel held at full temperature), fraction of the rows
     detail: float = 1.0  # edge turbulence: the rendered flame is warped by noise of this amplitude, grid cells
     aspect: float = 0.0  # width / height of the flame box the sequence is stretched to (0: as simulated)
+    texture: float = 0.0  # inner streaks: the temperature dips by up to this fraction in rising streaks (0: none)
     frames: int = 1024
     keep_every: int = 12
     warmup: int = 100  # steps before the first kept frame (the first plume's mushroom cap leaves the grid)
@@ -96,6 +97,8 @@ class FlameParams:
             raise ValueError("frames, keep_every must be >= 1 and the grid at least 16 x 16")
         if not 0.0 < self.body <= 0.8 or self.detail < 0 or self.aspect < 0:
             raise ValueError("body must be in (0, 0.8], detail and aspect >= 0")
+        if not 0.0 <= self.texture < 1.0:
+            raise ValueError(f"texture must be in [0, 1), got {self.texture}")
 
 
 def sample_aspect(rng: np.random.Generator) -> float:
@@ -288,6 +291,21 @@ def edge_warp(p: FlameParams, rng: np.random.Generator, tall: int = 4) -> tuple[
     return fields[0], fields[1]
 
 
+def streaks(p: FlameParams, rng: np.random.Generator, tall: int = 4) -> F32:
+    """A (tall x rows x scale, cols x scale) field in [0, 1] of thin vertical streaks (noise cells 1.5 x 8 and
+    0.75 x 3 grid cells) that :func:`render_fields` scrolls upwards with the warp: where it is high the flame's
+    temperature dips by up to ``p.texture``, so its body shows orange tongues and licks inside the yellow, as
+    real flames do, instead of one flat clipped colour."""
+    shape = (p.rows * p.scale * tall, p.cols * p.scale)
+    field = np.zeros(shape, np.float32)
+    for (across, up), weight in (((1.5, 8.0), 0.65), ((0.75, 3.0), 0.35)):
+        small = rng.standard_normal(
+            (max(int(shape[0] / (up * p.scale)), 2), max(int(shape[1] / (across * p.scale)), 2))
+        )
+        field += weight * cv2.resize(small.astype(np.float32), (shape[1], shape[0]), interpolation=cv2.INTER_CUBIC)
+    return np.clip(0.5 + 0.5 * field / max(float(field.std()), 1e-6), 0.0, 1.0).astype(np.float32)
+
+
 def render_fields(
     temperature: F32,
     soot: F32,
@@ -296,16 +314,21 @@ def render_fields(
     mask_level: float = 0.2,
     warp: tuple[F32, F32] | None = None,
     tint: tuple[F32, F32] | None = None,
+    texture: F32 | None = None,
 ) -> Sprite:
     """Fields (rows, cols) -> an uncropped sprite of (rows * scale, cols * scale) pixels. ``warp``: (dx, dy)
     displacements in output pixels of that size, applied to the temperature; ``tint``: (chemical palette,
-    (rows, cols) weight) mixed into ``palette``. The flame mask is where the emitted colour's brightest channel
-    exceeds ``mask_level`` (visible fire)."""
+    (rows, cols) weight) mixed into ``palette``; ``texture``: a :func:`streaks` window of that size (the
+    temperature times ``1 - p.texture * texture``, and its edge softened by a blur of ``p.texture * scale``
+    pixels: a gradient through orange and red, not a crisp orange rim). The flame mask is where the emitted
+    colour's brightest channel exceeds ``mask_level`` (visible fire)."""
     size = (p.cols * p.scale, p.rows * p.scale)
     t = np.clip(cv2.resize(temperature, size, interpolation=cv2.INTER_CUBIC), 0.0, 1.0)
     if warp is not None:
         gy, gx = np.mgrid[0 : size[1], 0 : size[0]].astype(np.float32)
         t = cv2.remap(t, gx + warp[0], gy + warp[1], cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT, borderValue=0)
+    if texture is not None and p.texture > 0:
+        t = cv2.GaussianBlur(t * (1.0 - p.texture * texture), (0, 0), sigmaX=p.texture * p.scale)
     idx = np.round(t * (len(palette) - 1)).astype(np.intp)
     emission = palette[idx]
     if tint is not None:
@@ -320,11 +343,11 @@ def render_fields(
     return Sprite(over, np.round(emission * 255).astype(np.uint8), mask)
 
 
-def _frame_warp(warp: tuple[F32, F32], rows: int, step: int) -> tuple[F32, F32]:
+def _frame_warp(warp: tuple[F32, ...], rows: int, step: int) -> tuple[F32, ...]:
     """The ``rows``-high window of the tall ``warp`` fields at ``step`` (scrolling upwards, wrapping)."""
     span = len(warp[0]) - rows
     off = span - (3 * step) % span
-    return warp[0][off : off + rows], warp[1][off : off + rows]
+    return tuple(f[off : off + rows] for f in warp)
 
 
 def simulate_fluid(p: FlameParams, rng: np.random.Generator) -> list[Sprite]:
@@ -339,13 +362,16 @@ def simulate_fluid(p: FlameParams, rng: np.random.Generator) -> list[Sprite]:
     src = source_mask(p, rng)
     base = base_attenuation(p, p.rows - 3, rng)
     warp = edge_warp(p, rng)
+    inner = streaks(p, np.random.default_rng(rng.integers(2**63))) if p.texture > 0 else None
     frames = []
     for step in range(p.warmup + p.frames):
         fluid_step(state, p, src, (gx, gy), rng)
         kept = step - p.warmup
         if kept >= 0 and kept % p.keep_every == 0:
-            w = _frame_warp(warp, p.rows * p.scale, kept)
-            frames.append(render_fields(state.temperature * base, state.soot, p, body, warp=w, tint=tint))
+            dx, dy = _frame_warp(warp, p.rows * p.scale, kept)
+            tex = None if inner is None else _frame_warp((inner,), p.rows * p.scale, kept)[0]
+            fields = (state.temperature * base, state.soot, p, body)
+            frames.append(render_fields(*fields, warp=(dx, dy), tint=tint, texture=tex))
     return frames
 
 
@@ -358,6 +384,7 @@ def simulate_noise(p: FlameParams, rng: np.random.Generator) -> list[Sprite]:
     palette = flame_palette(p.palette, exposure=p.exposure, peak=p.peak)
     base = base_attenuation(p, rows, rng)
     warp = edge_warp(p, rng) if p.detail > 0 else None
+    inner = streaks(p, np.random.default_rng(rng.integers(2**63))) if p.texture > 0 else None
     frames = []
     for step in range(0, p.frames, p.keep_every):
         off = (step * 2) % (rows * 3)
@@ -368,7 +395,9 @@ def simulate_noise(p: FlameParams, rng: np.random.Generator) -> list[Sprite]:
         heat = np.clip(1.0 - d + 0.35 * n * (0.3 + y), 0, 1) * np.clip(1.2 - y * (1 + 0.3 * n), 0, 1)
         soot = np.clip(0.8 - d * 0.6, 0, 1) * np.clip(y - 0.5, 0, None) * (1 + 0.5 * n)
         w = None if warp is None else _frame_warp(warp, rows * p.scale, step)
-        frames.append(render_fields((heat * base).astype(np.float32), soot.astype(np.float32), p, palette, warp=w))
+        tex = None if inner is None else _frame_warp((inner,), rows * p.scale, step)[0]
+        fields = ((heat * base).astype(np.float32), soot.astype(np.float32), p, palette)
+        frames.append(render_fields(*fields, warp=w, tint=None, texture=tex))
     return frames
 
 

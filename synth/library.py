@@ -34,6 +34,7 @@ class FlameLibraryConfig:
     folders: tuple[Path, ...] = ()  # sequence folders to load instead of simulating
     source: Literal["simulated", "cutouts", "both"] = "simulated"  # simulated (or folders) | real cut-outs | both
     cutout_share: float = 0.5  # source both: share of flames drawn from the cut-outs, 0..1
+    texture: float = 0.0  # simulated flames' inner streaks and soft edge (synth.flames.streaks), 0..1; 0 = flat body
 
     def __post_init__(self) -> None:
         if self.generator not in GENERATORS:
@@ -42,6 +43,8 @@ class FlameLibraryConfig:
             raise ValueError(f"invalid flame library config: {self}")
         if self.source not in FLAME_SOURCES:
             raise ValueError(f"unknown flames.source {self.source!r}; choose one of {', '.join(FLAME_SOURCES)}")
+        if not 0.0 <= self.texture < 1.0:
+            raise ValueError(f"flames.texture must be in [0, 1), got {self.texture}")
         if not 0.0 <= self.cutout_share <= 1.0:
             raise ValueError(f"flames.cutout_share must be in 0..1, got {self.cutout_share}")
         if self.source != "both" and self.cutout_share != FlameLibraryConfig.cutout_share:
@@ -51,14 +54,16 @@ class FlameLibraryConfig:
 
 
 def procedural_library(
-    n: int, seed: int, frames: int, keep_every: int, rare: float, generator: str = "fluid"
+    n: int, seed: int, frames: int, keep_every: int, rare: float, generator: str = "fluid", texture: float = 0.0
 ) -> list[SpriteSequence]:
     """``n`` procedural flame sequences named ``<generator>-<seed>-<k>``; sequence k is drawn from
-    ``default_rng([seed, k])`` (a chemical palette with probability ``rare``)."""
+    ``default_rng([seed, k])`` (a chemical palette with probability ``rare``; inner streaks of depth
+    ``texture``, :func:`synth.flames.streaks`)."""
     seqs = []
     for k in range(n):
         rng = np.random.default_rng([seed, k])
-        params = sample_params(rng, generator, rare=bool(rng.random() < rare), frames=frames, keep_every=keep_every)
+        fixed = {"frames": frames, "keep_every": keep_every, "texture": texture}
+        params = sample_params(rng, generator, rare=bool(rng.random() < rare), **fixed)
         seqs.append(generate_sequence(f"{generator}-{seed}-{k:03d}", params, rng))
     return seqs
 
@@ -79,7 +84,8 @@ def build_library(cfg: FlameLibraryConfig, cutouts: Sequence[SpriteSequence] = (
     if cfg.folders:
         simulated = load_library(list(cfg.folders))
     else:
-        simulated = procedural_library(cfg.sequences, cfg.seed, cfg.frames, cfg.keep_every, cfg.rare, cfg.generator)
+        args = (cfg.sequences, cfg.seed, cfg.frames, cfg.keep_every, cfg.rare, cfg.generator, cfg.texture)
+        simulated = procedural_library(*args)
     return list(cutouts) + simulated
 
 

@@ -277,3 +277,6 @@ def test_blends_and_distractors_stay_out_of_existing_pool_identities() -> None:
     assert identity(replace(study, blend=BlendConfig(), distractors=DistractorConfig())) == "9a138ab4d9da"
     assert identity(replace(study, distractors=DistractorConfig(share=0.5))) != "9a138ab4d9da"
     assert identity(replace(study, blend=BlendConfig(modes=("alpha",)))) != "9a138ab4d9da"
+    textured = replace(study, flames=replace(study.flames, texture=0.5))
+    assert identity(replace(study, flames=replace(study.flames, texture=0.0))) == "9a138ab4d9da"
+    assert identity(textured) != "9a138ab4d9da"

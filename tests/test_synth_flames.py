@@ -1,3 +1,4 @@
+import cv2
 import numpy as np
 import pytest
 
@@ -124,3 +125,35 @@ def test_rare_flames_are_tinted_plausibly():
     blueness = lambda cut: float((e[cut][:, :, 2] - e[cut][:, :, 0])[sp.mask[cut]].mean())  # noqa: E731
     assert blueness(base) > blueness(top) + 60 and blueness(top) < -60  # blue base, a yellow-orange flame above
     assert F.tint_weight(F.FlameParams(**SMALL), 45) is None
+
+
+def test_texture_streaks_the_body_and_texture_0_changes_nothing():
+    """Inner streaks: the flame's own colours vary more inside its mask (orange tongues in the yellow); at 0 the
+    sprites are those of a config without the key, byte for byte."""
+    for generator in ("fluid", "noise"):
+        flat = F.generate_sequence("a", F.FlameParams(generator=generator, **SMALL), np.random.default_rng(3))
+        zero = F.generate_sequence(
+            "a", F.FlameParams(generator=generator, texture=0.0, **SMALL), np.random.default_rng(3)
+        )
+        assert all(np.array_equal(a.emission, b.emission) for a, b in zip(flat.sprites, zero.sprites))
+    gains = []
+    for k in range(3):  # the interior (mask eroded 3 px): more spread, more orange
+        inner = {}
+        for texture in (0.0, 0.5):
+            rng = np.random.default_rng([7, k])
+            sprites = F.generate_sequence(
+                "c", F.sample_params(rng, frames=60, keep_every=30, texture=texture), rng
+            ).sprites
+            green = np.concatenate(
+                [s.emission[cv2.erode(s.mask.astype(np.uint8), np.ones((7, 7), np.uint8)) > 0][:, 1] for s in sprites]
+            ).astype(float)
+            inner[texture] = (green.std(), (green < 200).mean())
+        assert inner[0.5][0] > 1.1 * inner[0.0][0] and inner[0.5][1] > inner[0.0][1]
+        gains.append(inner[0.5][1] - inner[0.0][1])
+    assert np.mean(gains) > 0.2
+    field = F.streaks(F.FlameParams(texture=0.5, **SMALL), np.random.default_rng(0))
+    assert field.shape == (48 * 2 * 4, 32 * 2) and 0.0 <= field.min() and field.max() <= 1.0
+    rows_var, cols_var = np.diff(field, axis=0).std(), np.diff(field, axis=1).std()
+    assert cols_var > 2 * rows_var  # vertical streaks: they change faster across than up
+    with pytest.raises(ValueError, match="texture"):
+        F.FlameParams(texture=1.0)
