@@ -175,14 +175,18 @@ def _workers(args: argparse.Namespace) -> int:
 
 
 def _blend_config(args: argparse.Namespace) -> dict:
-    """Method 2's ``blend`` and ``distractors`` from --blend, --harmonise, --match-noise, --decoys, --distractors
-    (the defaults: today's blend, none of them)."""
+    """Method 2's ``blend``, ``distractors`` and ``never_darken`` from --blend, --harmonise, --match-noise,
+    --decoys, --distractors, --never-darken (the defaults: today's blend, none of them)."""
     from synth.blend import BlendConfig
     from synth.distractors import DistractorConfig
 
     modes = tuple(m.strip() for m in args.blend.split(",")) if args.blend else BlendConfig().modes
     blend = BlendConfig(modes=modes, harmonise=args.harmonise, match_noise=args.match_noise, decoys=args.decoys)
-    return {"blend": blend, "distractors": DistractorConfig(share=args.distractors)}
+    return {
+        "blend": blend,
+        "distractors": DistractorConfig(share=args.distractors),
+        "never_darken": args.never_darken,
+    }
 
 
 def _ious(rep: dict) -> str:
@@ -442,6 +446,11 @@ def _blend_arguments(p: argparse.ArgumentParser) -> None:
         "(blurred edge), poisson (seamless clone) (default screen,add)",
     )
     p.add_argument("--harmonise", action="store_true", help="tint each flame towards the local background light")
+    p.add_argument(
+        "--never-darken",
+        action="store_true",
+        help="a flame's dim edge reddens a bright background instead of outlining it darker (light blends)",
+    )
     p.add_argument("--match-noise", action="store_true", help="blur and grain each flame like the background around it")
     p.add_argument(
         "--decoys",

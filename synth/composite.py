@@ -3,8 +3,10 @@
 Per sprite, in order: the ``over`` layer (smoke) is alpha-blended and the background behind the flame dimmed by
 its luminous coverage (``opacity`` x :func:`coverage` of the emission brightness: none below
 :data:`CLEAR_BRIGHTNESS`, full from :data:`OPAQUE_BRIGHTNESS` up, so a flame's bright body hides what is behind it, as a camera exposed for the
-fire sees it, while its dim edge lets the background through), then the emission is added (``add``) or
-screened (``screen``), plus a soft glow
+fire sees it, while its dim edge lets the background through; over a bright background a half-covering dim edge
+still darkens it into an outline, unless ``never_darken`` caps the coverage where covering and lighting keeps the luma
+behind the flame: :func:`_keeping_cover`, up to clipping), then the emission
+is added (``add``) or screened (``screen``), plus a soft glow
 (blurred emission) and a warm cast: the surroundings lit in the flame's mean colour with a Gaussian falloff
 around its base (light on the floor and walls; never part of the flame's mask or box). A flame pixel stays visible unless a later sprite is
 opaque there (its smoke alpha >= 0.5 or its own flame mask); a smoke pixel (see ``synth.sprites.SMOKE_ALPHA``)
@@ -59,6 +61,7 @@ class Placement:
     cast: bool = True  # light the surroundings warm (with ``glow`` > 0)
     edge: float = 0.0  # paste modes: feather width (alpha) or edge blur sigma (blur), pixels
     look: Look = Look()  # tint, blur and grain matched to the background (neutral: none)
+    never_darken: bool = False  # light modes: the flame's coverage is capped so it never darkens the luma behind it
 
     def __post_init__(self) -> None:
         if self.blend not in ALL_MODES:
@@ -116,6 +119,20 @@ def _clip(p: Placement, w: int, h: int) -> tuple[slice, slice, slice, slice] | N
     if x0 >= x1 or y0 >= y1:
         return None
     return slice(y0, y1), slice(x0, x1), slice(y0 - p.y, y1 - p.y), slice(x0 - p.x, x1 - p.x)
+
+
+def _luma(rgb: NDArray[np.float32]) -> NDArray[np.float32]:
+    """(..., 3) -> (..., 1) Rec. 709 luma of display values."""
+    return rgb @ np.asarray([[0.2126], [0.7152], [0.0722]], np.float32)
+
+
+def _keeping_cover(behind: NDArray[np.float32], light: NDArray[np.float32], blend: str) -> NDArray[np.float32]:
+    """The largest coverage whose covered background plus ``light`` (added or screened by ``blend``) keeps the
+    luma ``behind`` it (both (..., 1) in 0..1): ``L / B`` with ``add``, ``L (1 - B) / (B (1 - L))`` with ``screen``."""
+    b = np.maximum(behind, 1e-3)
+    if blend == "add":
+        return light / b
+    return light * (1.0 - b) / np.maximum(b * (1.0 - light), 1e-6)
 
 
 def _add_light(img: NDArray[np.float32], light: NDArray[np.float32], blend: str) -> NDArray[np.float32]:
@@ -184,7 +201,10 @@ def composite(background: NDArray[np.uint8], placements: Sequence[Placement]) ->
             else:
                 a = over[sy, sx, 3:4]
                 light = emission[sy, sx]
-                cover = a + (1.0 - a) * p.opacity * coverage(light.max(axis=-1, keepdims=True))
+                flame = (1.0 - a) * p.opacity * coverage(light.max(axis=-1, keepdims=True))
+                if p.never_darken:
+                    flame = np.minimum(flame, _keeping_cover(_luma(img[ys, xs]), _luma(light), p.blend))
+                cover = a + flame
                 img[ys, xs] = img[ys, xs] * (1.0 - cover) + over[sy, sx, :3] * a
                 img[ys, xs] = _add_light(img[ys, xs], light, p.blend)
             if p.glow > 0:

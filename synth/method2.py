@@ -68,6 +68,7 @@ class Method2Config:
     min_box_px: int = 4  # visible flames smaller than this (either side) are dropped
     smoke_class: bool = False
     light: bool = True  # flames light their surroundings (a warm cast around each flame)
+    never_darken: bool = False  # a flame's dim edge reddens a bright background, never outlines it darker (composite)
     camera: CameraConfig = field(default_factory=CameraConfig)  # probabilities of the stronger camera effects
     flames: FlameLibraryConfig = field(default_factory=FlameLibraryConfig)
     blend: BlendConfig = field(default_factory=BlendConfig)  # how flames are blended (synth.blend); decoy pastes
@@ -139,6 +140,7 @@ def plan_flames(
         blend = str(rng.choice(cfg.blend.modes))  # (screen, add) by default: the draws of pools made before
         glow, opacity = float(rng.uniform(0.1, 0.5)), float(rng.uniform(*cfg.flame_opacity))
         place = Placement(sprite, bx - wpx // 2, by - spx, wpx, spx, blend, glow, opacity, cfg.light)
+        place = replace(place, never_darken=cfg.never_darken)
         out.append((place, f"{seq.name}/{frame}"))
     return out
 

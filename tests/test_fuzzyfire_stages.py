@@ -280,3 +280,5 @@ def test_blends_and_distractors_stay_out_of_existing_pool_identities() -> None:
     textured = replace(study, flames=replace(study.flames, texture=0.5))
     assert identity(replace(study, flames=replace(study.flames, texture=0.0))) == "9a138ab4d9da"
     assert identity(textured) != "9a138ab4d9da"
+    assert identity(replace(study, never_darken=False)) == "9a138ab4d9da"
+    assert identity(replace(study, never_darken=True)) != "9a138ab4d9da"

@@ -131,3 +131,24 @@ def test_paste_placements_grow_by_their_margin_and_emissive_ones_do_not():
     assert softened.width == 16
     out = composite(np.zeros((30, 30, 3), np.uint8), [Placement(_flame(), 5, 6, 10, 10, blend="poisson", glow=0.0)])
     assert mask_to_xywh(out.flames[0]).tolist() == [5, 6, 10, 10]
+
+
+@pytest.mark.parametrize("blend", ["add", "screen"])
+def test_never_darken_keeps_the_luma_behind_a_mid_bright_edge(blend: str) -> None:
+    """An orange edge of brightness ~0.45 half-covers a pale wall and outlines it darker; capped, it reddens it."""
+    from synth.composite import _luma
+
+    edge = _flame(value=0)
+    edge.emission[:] = (115, 55, 10)  # orange, brightest channel 0.45: coverage ~0.75
+    pale = np.full((10, 10, 3), 235, np.uint8)
+    luma = lambda img: float(_luma(img.astype(np.float32) / 255.0).mean())  # noqa: E731
+    outlined = composite(pale, [Placement(edge, 0, 0, 10, 10, blend, 0.0, 1.0)]).image
+    kept = composite(pale, [Placement(edge, 0, 0, 10, 10, blend, 0.0, 1.0, never_darken=True)]).image
+    assert luma(outlined) < luma(pale) - 0.2  # the outline: darker than the wall
+    assert luma(kept) >= luma(pale) - 0.03  # (a channel clipped at 255 loses a little)
+    assert kept[5, 5, 0] > kept[5, 5, 2]  # reddened
+    core = _flame(value=0)
+    core.emission[:] = (255, 240, 150)
+    for never_darken in (False, True):  # a bright core still hides the wall behind it
+        out = composite(pale, [Placement(core, 0, 0, 10, 10, blend, 0.0, 1.0, never_darken=never_darken)]).image
+        assert np.abs(out.astype(int) - (255, 240, 150)).max() <= 1
