@@ -35,6 +35,9 @@ Variants (400 images at 416x416, seed 0, each a cached pool of the experiment pi
 - ``distractors_blend_all``: both.
 - ``streets``: 16 procedural kit streets from ../shared/data/kits (flames on the ground of their fire zones);
 - ``mix``: panoramas (half the views), the 12 interiors (flames on up-facing surfaces) and the 16 kit streets.
+- ``texture``: ``panoramas`` with the simulated flames' inner streaks (``flames.texture: 0.5``);
+- ``never_darken``: ``panoramas`` with flame edges that never darken what is behind them;
+- ``look``: both (``texture`` + ``never_darken``).
 
 Lines: ``synth_<variant>_gap`` (Fréchet distance to half the real train split, median of 200 draws),
 ``synth_<variant>_gap_ratio`` (to the real-vs-real floor), ``synth_real_floor``, and with ``--train``
@@ -96,6 +99,9 @@ VARIANTS = {
     "distractors_blend_all": [*SITES, *PANORAMAS, *DISTRACTORS, *BLEND_ALL],
     "streets": [*SITES, *STREETS],
     "mix": [*SITES, f"synth.method2.environments=[{(SHARED / 'panoramas').as_posix()},{ROOMS}]", *STREETS],
+    "texture": [*SITES, *PANORAMAS, "synth.method2.flames.texture=0.5"],
+    "never_darken": [*SITES, *PANORAMAS, "synth.method2.never_darken=true"],
+    "look": [*SITES, *PANORAMAS, "synth.method2.flames.texture=0.5", "synth.method2.never_darken=true"],
 }
 #: Variants whose flames are cut from the curated real train split.
 CUTOUT_VARIANTS = ("files_cutouts",)
