@@ -182,6 +182,10 @@ class ExperimentConfig:
             self.engine.check()
         except EngineError as exc:
             raise ExperimentConfigError(str(exc)) from None
+        if self.engine.name == "command" and self.train.real_finetune:
+            raise ExperimentConfigError(
+                "train.real_finetune is fuzzyfire's trainer's; engine command trains with its own recipe (set it to 0)"
+            )
 
     def test_names(self) -> dict[str, str]:
         """The label of every named test set (``tests:``), by key."""

@@ -77,6 +77,9 @@ def test_engine_config_is_checked_when_loaded() -> None:
         _config(train="").check()
     with pytest.raises(EngineError, match="choose fuzzyfire or command"):
         EngineConfig(name="other").check()  # type: ignore[arg-type]
+    tuned = _config()
+    with pytest.raises(ExperimentConfigError, match="real_finetune is fuzzyfire's trainer's"):
+        replace(tuned, train=replace(tuned.train, real_finetune=1)).check()
 
 
 @pytest.mark.slow
