@@ -120,7 +120,7 @@ class TrainConfig:
 
     def __post_init__(self) -> None:
         if not 0 <= self.real_finetune <= self.epochs:
-            raise ValueError(f"real_finetune must be in 0..epochs ({self.epochs}), got {self.real_finetune}")
+            raise ValueError(f"train.real_finetune must be in 0..epochs ({self.epochs}), got {self.real_finetune}")
 
 
 #: Keys added after runs were trained, with the value those runs trained with: a run's identity and a resumed
