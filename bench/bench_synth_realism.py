@@ -37,7 +37,8 @@ Variants (400 images at 416x416, seed 0, each a cached pool of the experiment pi
 - ``mix``: panoramas (half the views), the 12 interiors (flames on up-facing surfaces) and the 16 kit streets.
 - ``texture``: ``panoramas`` with the simulated flames' inner streaks (``flames.texture: 0.5``);
 - ``never_darken``: ``panoramas`` with flame edges that never darken what is behind them;
-- ``look``: both (``texture`` + ``never_darken``).
+- ``look``: both (``texture`` + ``never_darken``: configs/shared-data.yaml's default; every other variant has the
+  earlier flat look it was measured with).
 
 Lines: ``synth_<variant>_gap`` (Fréchet distance to half the real train split, median of 200 draws),
 ``synth_<variant>_gap_ratio`` (to the real-vs-real floor), ``synth_real_floor``, and with ``--train``
@@ -75,6 +76,9 @@ BLEND_ALL = [
 DISTRACTORS = ["synth.method2.distractors.share=0.5"]
 STREETS = ["synth.method2.streets=16", f"synth.method2.kits=[{(SHARED / 'kits').as_posix()}]"]
 ROOMS = (ROOT / "configs" / "scenes").as_posix()
+#: Every variant starts from the flames' earlier look (the one the variants were measured with); ``texture``,
+#: ``never_darken`` and ``look`` (the study's default since) turn it on.
+FLAT = ["synth.method2.never_darken=false", "synth.method2.flames.texture=0"]
 VARIANTS = {
     "procedural": [*ANYWHERE, *PROCEDURAL, "synth.method2.light=false", *NO_CAMERA],
     "files": [*ANYWHERE, *FILES, "synth.method2.light=false", *NO_CAMERA],
@@ -113,7 +117,7 @@ def _config(overrides: list[str], seeds: list[int]):
 
     grid = ["grid.mixtures=[R0_S400]", "grid.table1=[]", "grid.synthetic=method2", "synth.method1=null"]
     seeds_ = f"grid.seeds=[{','.join(map(str, seeds))}]"
-    return load_config(CONFIG, ExperimentConfig, [*grid, seeds_, "report.samples=false", *overrides])
+    return load_config(CONFIG, ExperimentConfig, [*grid, seeds_, "report.samples=false", *FLAT, *overrides])
 
 
 def _cutout_library(seeds: list[int], out: Path) -> Path:

@@ -273,7 +273,10 @@ def test_blends_and_distractors_stay_out_of_existing_pool_identities() -> None:
     def identity(cfg: Method2Config) -> str:
         return digest(_later_keys_dropped(to_dict(cfg), default))
 
-    assert identity(study) == "9a138ab4d9da" and identity(Method2Config()) == "3dd22ec5abe5"
+    assert identity(Method2Config()) == "3dd22ec5abe5"
+    assert study.never_darken and study.flames.texture == 0.5  # the study's look since issue 23's last session
+    study = replace(study, never_darken=False, flames=replace(study.flames, texture=0.0))  # the earlier look
+    assert identity(study) == "9a138ab4d9da"
     assert identity(replace(study, blend=BlendConfig(), distractors=DistractorConfig())) == "9a138ab4d9da"
     assert identity(replace(study, distractors=DistractorConfig(share=0.5))) != "9a138ab4d9da"
     assert identity(replace(study, blend=BlendConfig(modes=("alpha",)))) != "9a138ab4d9da"
