@@ -139,8 +139,9 @@ def plan_flames(
         wpx, spx = sprite_pixels(sprite, hpx)
         blend = str(rng.choice(cfg.blend.modes))  # (screen, add) by default: the draws of pools made before
         glow, opacity = float(rng.uniform(0.1, 0.5)), float(rng.uniform(*cfg.flame_opacity))
-        place = Placement(sprite, bx - wpx // 2, by - spx, wpx, spx, blend, glow, opacity, cfg.light)
-        place = replace(place, never_darken=cfg.never_darken)
+        place = Placement(
+            sprite, bx - wpx // 2, by - spx, wpx, spx, blend, glow, opacity, cfg.light, never_darken=cfg.never_darken
+        )
         out.append((place, f"{seq.name}/{frame}"))
     return out
 

@@ -121,9 +121,14 @@ def epoch_order(count: int, seed: int, epoch: int) -> NDArray[np.int64]:
 SYNTHETIC_SOURCE = "synth:"  # how a fuzzyfire mixture tags its synthetic images' source (curate.mix)
 
 
+def is_real(image: CachedImage) -> bool:
+    """Whether a cached image is not synthetic (its source does not start with :data:`SYNTHETIC_SOURCE`)."""
+    return not image.record.source.startswith(SYNTHETIC_SOURCE)
+
+
 def real_indices(cache: list[CachedImage]) -> NDArray[np.int64]:
-    """Indices of the cached images that are not synthetic (source not starting with :data:`SYNTHETIC_SOURCE`)."""
-    return np.asarray([i for i, c in enumerate(cache) if not c.record.source.startswith(SYNTHETIC_SOURCE)], np.int64)
+    """Indices of the cached images that are real (:func:`is_real`)."""
+    return np.asarray([i for i, c in enumerate(cache) if is_real(c)], np.int64)
 
 
 class TrainBatches:
@@ -146,9 +151,7 @@ class TrainBatches:
     ) -> None:
         self.cache, self.size, self.batch, self.cfg, self.seed = cache, size, batch, cfg, seed
         self.workers, self.real_from = workers, real_from
-        self.real = real_indices(cache) if real_from is not None else np.arange(len(cache))
-        self._is_real = np.zeros(len(cache), bool)
-        self._is_real[self.real] = True
+        self.real = real_indices(cache) if real_from is not None else None  # None: no real-only epochs
 
     def __len__(self) -> int:
         """Batches in an epoch of every image."""
@@ -159,7 +162,7 @@ class TrainBatches:
         return -(-len(self._images(epoch)) // self.batch)
 
     def _images(self, epoch: int) -> NDArray[np.int64]:
-        if self.real_from is not None and epoch >= self.real_from:
+        if self.real is not None and epoch >= self.real_from:
             return self.real
         return np.arange(len(self.cache))
 
@@ -169,7 +172,7 @@ class TrainBatches:
         def load(i: int) -> Sample:
             return self.cache[i].sample
 
-        partners = self.real if self._is_real[index] and self.real_from is not None else len(self.cache)
+        partners = self.real if self.real is not None and is_real(self.cache[index]) else len(self.cache)
         return augment(load, index, partners, self.size, self.cfg, sample_rng(self.seed, draw, index))
 
     def make_batch(self, draw: int, indices: NDArray[np.int64]) -> tuple[torch.Tensor, torch.Tensor]:
