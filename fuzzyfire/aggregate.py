@@ -167,7 +167,7 @@ def report_pools(
     """The synthetic pools the report shows (samples, realism gap) by name: each shared pool by its method, named
     ``<method> simulated flames (R0 mixtures)`` when own cut-out pools (``own``, by (mixture, method, seed)) took
     its place in the mixtures with real images, and then the own pool of each such mixture's first seed
-    (``<method> flames.source=<source> <mixture> seed <seed>``)."""
+    (``<method> flames.source=<source>[ own_frames=<share>] <mixture> seed <seed>``)."""
     shown: dict[str, DataRef] = {}
     for method, ref in data.pools.items():
         shown[f"{method} simulated flames (R0 mixtures)" if any(k[1] == method for k in own) else method] = ref
@@ -175,8 +175,9 @@ def report_pools(
     for mixture, method, seed in own:
         firsts[(mixture, method)] = min(seed, firsts.get((mixture, method), seed))
     for (mixture, method), seed in sorted(firsts.items()):
-        source = getattr(cfg.synth, method).flames.source
-        shown[f"{method} flames.source={source} {mixture} seed {seed}"] = own[(mixture, method, seed)]
+        pool = getattr(cfg.synth, method)
+        frames = f" own_frames={pool.own_frames:g}" if getattr(pool, "own_frames", 0) else ""
+        shown[f"{method} flames.source={pool.flames.source}{frames} {mixture} seed {seed}"] = own[(mixture, method, seed)]
     return shown
 
 

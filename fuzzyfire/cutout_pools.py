@@ -9,6 +9,12 @@ by the subset's content (:func:`curate.core.fingerprint.fingerprint`: image byte
 rule's parameters and the pool's config, so mixtures and seeds that draw the same subset share them, and a
 change of the mask rule makes new cut-outs and pools. Validation and test images never reach a pool.
 
+With ``synth.method2.own_frames`` > 0 an own pool also composites on the mixture's own real training images
+(:mod:`synth.frames`: each keeps its own fire boxes, flames stand beside them): the subset is written as a
+stage ``frames-<hash>`` (COCO, images linked) and becomes the pool's ``frames``, at that share of the views
+(the photo kind's weight, :func:`synth.places.kind_weights`; the config's places take the rest). The flames
+are simulated unless ``flames.source`` says otherwise.
+
 R0_S<n> mixtures have no real images of their own: they keep the experiment's simulated pool (their runs are the
 runs of the config without ``flames.source``) and the experiment prints a note saying so. Cutting their flames
 from the whole train split instead would make a synthetic-only run train on real pixels; refusing would make
@@ -43,10 +49,25 @@ PoolKey = tuple[str, str, int]
 
 
 def simulated(cfg: Method2Config) -> Method2Config:
-    """``cfg`` with simulated flames: the experiment's shared pool (the same identity as a config without
-    ``flames.source``), which R0 mixtures and the report's samples and gap use."""
+    """``cfg`` with simulated flames on its own places only: the experiment's shared pool (the same identity as a
+    config without ``flames.source`` and ``own_frames``), which R0 mixtures and the report's samples and gap use."""
     flames = replace(cfg.flames, source="simulated", cutout_share=type(cfg.flames)().cutout_share)
-    return replace(cfg, flames=flames)
+    return replace(cfg, flames=flames, own_frames=0.0)
+
+
+def is_own(cfg: Method2Config | None) -> bool:
+    """Whether mixtures with real images get pools of their own (own cut-out flames or own frames)."""
+    return cfg is not None and (cfg.flames.source != "simulated" or cfg.own_frames > 0)
+
+
+def frames_stage(root: Path, subset: Dataset) -> Stage:
+    """``subset`` (images and fire boxes) written as a COCO dataset whose images link to the originals: the
+    labelled frames of an own pool (:mod:`synth.frames`), a cached stage identified by the subset's content."""
+    from curate.core.fingerprint import fingerprint
+    from curate.core.writer import write_dataset
+
+    identity = {"kind": "frames", "real": fingerprint(subset).to_dict()}
+    return cached_stage(root, "frames", identity, lambda out: write_dataset(subset, out, ("coco",), "symlink"))
 
 
 def mask_identity() -> dict[str, Any]:
@@ -88,9 +109,13 @@ def cutout_stage(root: Path, subset: Dataset) -> Stage:
     return stage
 
 
-def own_pool(root: Path, cfg: Method2Config, subset: Dataset, base: Path) -> tuple[Stage, Stage, DataRef]:
-    """(cut-out stage, pool stage, pool reference) of the Method 2 pool whose flames are ``subset``'s."""
-    cut = cutout_stage(root, subset)
+def own_pool(root: Path, cfg: Method2Config, subset: Dataset, base: Path) -> tuple[Stage | None, Stage, DataRef]:
+    """(cut-out stage or None, pool stage, pool reference) of the Method 2 pool of the real ``subset``: its flames
+    (``flames.source`` cutouts | both) and/or its images as frames (``own_frames``)."""
+    cut = cutout_stage(root, subset) if cfg.flames.source != "simulated" else None
+    if cfg.own_frames > 0:
+        frames = frames_stage(root, subset).folder
+        cfg = replace(cfg, frames=(frames,), photo_share=cfg.own_frames, panorama_share=1.0 - cfg.own_frames)
     stage, ref = synth_stage(root, "method2", cfg, base, cutouts=cut)
     return cut, stage, ref
 
@@ -103,18 +128,19 @@ def cutout_pools(
     cfg: ExperimentConfig, mixtures: Sequence[str], real_train: DataRef, datasets: Datasets, base: Path, out: Path
 ) -> dict[PoolKey, DataRef]:
     """The own Method 2 pool of each (mixture, ``method2``, seed) of the Method 2 ``mixtures`` with real images, when
-    ``synth.method2.flames.source`` is cutouts or both (else none: every mixture keeps the shared pool);
+    ``synth.method2.flames.source`` is cutouts or both or ``own_frames`` > 0 (else none: every mixture keeps the
+    shared pool);
     ``real_train``: the real training split, the only images cut. Prints one line per pool and a note naming
     the R0 mixtures, which keep simulated flames (module docstring)."""
     m2 = cfg.synth.method2
-    if m2 is None or m2.flames.source == "simulated":
+    if m2 is None or not is_own(m2):
         return {}
     if FIRE not in cfg.classes:
-        raise ValueError(f"flames.source {m2.flames.source}: cuts '{FIRE}' boxes, but classes are {list(cfg.classes)}")
+        raise ValueError(f"own Method 2 pools take '{FIRE}' boxes, but classes are {list(cfg.classes)}")
     entries = list(dict.fromkeys(mixtures))
     kept = [name for name in entries if parse_mixture(name).real == 0]
     if kept:
-        _say(f"data   method2 flames: {', '.join(kept)} have no real images to cut flames from: simulated flames")
+        _say(f"data   method2: {', '.join(kept)} have no real images of their own: the shared simulated pool")
     real = datasets.get(real_train)
     pools: dict[PoolKey, DataRef] = {}
     for seed in cfg.grid.seeds:
@@ -122,6 +148,7 @@ def cutout_pools(
             subset = real_subset(real, parse_mixture(name), seed)
             cut, stage, ref = own_pool(out / "data", m2, subset, base)
             cached = "  (cached)" if stage.cached else ""
-            _say(f"data   method2 {name} seed {seed}: flames of {cut.folder.name}, pool {stage.folder}{cached}")
+            what = f"flames of {cut.folder.name}, " if cut is not None else ""
+            _say(f"data   method2 {name} seed {seed}: {what}pool {stage.folder}{cached}")
             pools[(name, "method2", seed)] = ref.with_split(None)
     return pools

@@ -171,7 +171,7 @@ def standin_stage(root: Path, name: str, cfg: Any) -> tuple[Stage, DataRef]:
 #: Synth config keys added after pools were made; left out of a pool's identity while at their default.
 LATER_KEYS = (
     "environments", "flame_opacity", "closeup", "closeup_height", "background_holdout", "panorama_share", "streets",
-    "kits", "blend", "distractors", "never_darken",
+    "kits", "blend", "distractors", "never_darken", "frames", "own_frames",
 )  # fmt: skip
 
 #: Keys of a pool's ``flames`` added after pools were made; left out of its identity while at their default.
@@ -196,6 +196,8 @@ def synth_stage(root: Path, method: str, cfg: Any, base: Path, cutouts: Stage | 
     by_path["flame_look"] = FLAME_LOOK  # pools of earlier flames and compositing are other data
     if getattr(cfg, "backgrounds", ()):
         cfg = replace(cfg, backgrounds=tuple(_absolute(Path(p), base) for p in cfg.backgrounds))
+    if getattr(cfg, "frames", ()):
+        cfg = replace(cfg, frames=tuple(_absolute(Path(p), base) for p in cfg.frames))
     places = _places(cfg, None)  # one scan of the places for both uses below
     if getattr(cfg, "stand", "anywhere") == "surfaces" and _renders_rooms(cfg, places):
         by_path["standing"] = STANDING  # rooms' flames on up-facing surfaces: pools made before were other data
@@ -203,7 +205,7 @@ def synth_stage(root: Path, method: str, cfg: Any, base: Path, cutouts: Stage | 
     flames = {"cutouts": cutouts.hash} if cutouts is not None else {}
     stage = cached_stage(
         root,
-        f"{method}-cutouts" if cutouts is not None else method,
+        f"{method}-cutouts" if cutouts is not None else f"{method}-frames" if getattr(cfg, "frames", ()) else method,
         {"kind": method, "config": {**by_path, **files, **flames}},
         lambda out: runner(
             cfg,
@@ -272,6 +274,10 @@ def content_identity(cfg: Any, places: Places | None = None) -> dict[str, Any]:
     if getattr(cfg, "backgrounds", ()):
         out["backgrounds"] = photo_fingerprints(cfg.backgrounds, cfg.background_holdout)
         out["photo_sites"] = PHOTO_SITES  # photos became sites: pools made before that are other data
+    if getattr(cfg, "frames", ()):
+        from synth.frames import frame_fingerprints
+
+        out["frames"] = frame_fingerprints(cfg.frames)
     return out
 
 

@@ -77,10 +77,22 @@ def visibility_summary(folder: Path) -> dict[str, Any] | None:
     }
 
 
+def _frame_boxes(folder: Path, images: int) -> list[int]:
+    """Per image (in ``annotations.json`` order), how many of its last fire boxes are a labelled frame's own
+    (``frame_boxes`` in the manifest's per-image records, :mod:`synth.frames`): labels without a flame mask,
+    not audited."""
+    path = folder / "manifest.json"
+    per_image = json.loads(path.read_text(encoding="utf-8")).get("args", {}).get("per_image") if path.is_file() else None
+    if not per_image or len(per_image) != images:
+        return [0] * images
+    return [len(meta.get("frame_boxes", [])) for meta in per_image]
+
+
 def audit_dataset(folder: Path) -> dict[str, Any]:
     """``{"images", "boxes", "mean_iou", "min_iou"}`` of the written fire boxes vs their mask boxes, plus
     ``"modes": {mode: {...}}`` when alternative box sets were kept, ``"smoke": {...}`` for smoke boxes and
-    ``"visibility": {...}`` (:func:`visibility_summary`) when the images recorded it."""
+    ``"visibility": {...}`` (:func:`visibility_summary`) when the images recorded it, and ``"frame_boxes"``: how
+    many boxes were a labelled frame's own (not audited) when there were any."""
     coco = json.loads((folder / "annotations.json").read_text(encoding="utf-8"))
     fire = _boxes_by_image(coco, "fire")
     if fire is None:
@@ -91,15 +103,19 @@ def audit_dataset(folder: Path) -> dict[str, Any]:
     ious: list[float] = []
     smoke_ious: list[float] = []
     mode_ious: dict[str, list[float]] = {}
-    for img in coco["images"]:
+    frames = _frame_boxes(folder, len(coco["images"]))
+    for k, img in enumerate(coco["images"]):
         mask_path = folder / "masks" / Path(img["file_name"]).relative_to("images").with_suffix(".png")
         truths = _truths(mask_path)
-        ious += _ious(fire[img["id"]], truths)
+        boxes = fire[img["id"]]
+        ious += _ious(boxes[: len(boxes) - frames[k]], truths)
         for mode, boxes in modes.get(img["file_name"], {}).items():
             mode_ious.setdefault(mode, []).extend(_ious(boxes, truths))
         if smoke is not None:
             smoke_ious += _ious(smoke[img["id"]], _truths(mask_path.with_suffix(".smoke.png")))
     result = _summary(ious, len(coco["images"]))
+    if any(frames):
+        result["frame_boxes"] = sum(frames)
     if mode_ious:
         result["modes"] = {m: _summary(v, len(coco["images"])) for m, v in sorted(mode_ious.items())}
     if smoke is not None:

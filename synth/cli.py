@@ -91,7 +91,8 @@ def _scenes(args: argparse.Namespace) -> int:
     """``--scenes``, else none when the user brings environments, photos or kit streets (theirs alone), else 48."""
     if args.scenes is not None:
         return args.scenes
-    return 0 if args.environments or getattr(args, "backgrounds", None) or args.streets else DEFAULT_SCENES
+    yours = args.environments or getattr(args, "backgrounds", None) or getattr(args, "frames", None)
+    return 0 if yours or args.streets else DEFAULT_SCENES
 
 
 def _dataset_config(args: argparse.Namespace) -> dict:
@@ -157,10 +158,10 @@ def cmd_method2(args: argparse.Namespace) -> int:
     from synth.library import build_library
     from synth.method2 import Method2Config, run_method2
 
-    if args.photo_share is not None and not args.backgrounds:
-        raise ValueError("--photo-share is the share of views on --backgrounds photos, which are not given")
+    if args.photo_share is not None and not (args.backgrounds or args.frames):
+        raise ValueError("--photo-share is the share of views on --backgrounds/--frames, which are not given")
     share = 0.5 if args.photo_share is None else args.photo_share
-    photos = {"backgrounds": tuple(args.backgrounds or ()), "photo_share": share}
+    photos = {"backgrounds": tuple(args.backgrounds or ()), "frames": tuple(args.frames or ()), "photo_share": share}
     cfg = Method2Config(**_dataset_config(args), **photos, **_blend_config(args))
     result = run_method2(cfg, build_library(cfg.flames), args.out, overwrite=args.overwrite, workers=_workers(args))
     print(f"wrote {args.out}: {args.n} images ({', '.join(result.files.values())})")
@@ -406,6 +407,7 @@ def _register_method2(sub: argparse._SubParsersAction) -> None:
         "example:\n  fuzzyfire synth method2 --n 1000 --seed 0 --out out/m2 --size 640x480 --scenes 48\n"
         "  fuzzyfire synth method2 --n 200 --out out/m2-rooms --environments configs/scenes\n"
         "  fuzzyfire synth method2 --n 200 --out out/m2-photos --backgrounds my/negatives\n"
+        "  fuzzyfire synth method2 --n 200 --out out/m2-frames --frames my/cctv-labelled  # keeps their boxes\n"
         "  fuzzyfire synth method2 --n 200 --out out/m2-panoramas --environments ../shared/data/panoramas\n"
         "  fuzzyfire synth method2 --n 200 --out out/m2-mixed --environments configs/scenes --scenes 24\n"
         "  fuzzyfire synth method2 --n 200 --out out/m2-streets --streets 8 --kits ../shared/data/kits\n"
@@ -416,9 +418,17 @@ def _register_method2(sub: argparse._SubParsersAction) -> None:
     _dataset_arguments(p, photos=True)
     p.add_argument("--backgrounds", type=Path, nargs="+", metavar="PATH", help="fire-free photos (files or folders)")
     p.add_argument(
+        "--frames",
+        type=Path,
+        nargs="+",
+        metavar="DATASET",
+        help="labelled datasets (any format, e.g. your cameras' frames with their fire boxes): composited on like "
+        "photos; each keeps its own fire boxes as labels and no flame is placed over them",
+    )
+    p.add_argument(
         "--photo-share",
         type=float,
-        help="share of views on a --backgrounds photo when 3D scenes are also used (default 0.5)",
+        help="share of views on a --backgrounds photo or --frames image when 3D scenes are also used (default 0.5)",
     )
     _blend_arguments(p)
     p.set_defaults(func=cmd_method2)

@@ -7,7 +7,7 @@ from __future__ import annotations
 import sys
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import ExitStack, contextmanager
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -17,6 +17,7 @@ from curate.core.progress import progress
 from curate.core.writer import WriteResult, check_output_target
 from synth import render
 from synth.envfile import EnvironmentFile, find_environment_files
+from synth.frames import load_frames
 from synth.kits import credits, find_kits, licence_files, load_kit
 from synth.panorama import PanoramaBackgrounds
 from synth.photos import PhotoBackgrounds, keep_in_pool
@@ -49,6 +50,7 @@ class Job:
     kit_folders: tuple[Path, ...]
     photo_files: tuple[Path, ...]
     panoramas: tuple[Path, ...]
+    frames: dict[Path, tuple] = field(default_factory=dict)  # labelled frames' fire boxes (synth.frames), by photo
 
 
 @contextmanager
@@ -57,7 +59,11 @@ def opened_views(job: Job) -> Iterator[tuple[ViewCache, list[dict[str, str]]]]:
     photo and panorama backgrounds (unreadable files: reason)."""
     cfg = job.cfg
     with render.Renderer(cfg.width, cfg.height, job.platform) as renderer:
-        photos = PhotoBackgrounds(list(job.photo_files), cfg.width, cfg.height, cfg.seed) if job.photo_files else None
+        photos = (
+            PhotoBackgrounds(list(job.photo_files), cfg.width, cfg.height, cfg.seed, job.frames)
+            if job.photo_files
+            else None
+        )
         panoramas = PanoramaBackgrounds(list(job.panoramas), cfg.width, cfg.height, cfg.seed) if job.panoramas else None
         share, count = getattr(cfg, "photo_share", 0.0), -(-cfg.n // cfg.images_per_view)  # views of the run
         views = ViewCache(
@@ -175,12 +181,15 @@ def generate(
     files = find_environment_files(places.meshes) if places.meshes else []
     kit_folders = find_kits(cfg.kits) if getattr(cfg, "streets", 0) else []  # Method 1 and 2 configs have them
     photo_files = keep_in_pool(places.photos, getattr(cfg, "background_holdout", 0.0))
+    frames = load_frames(getattr(cfg, "frames", ()))  # labelled frames: photos that keep their fire boxes
+    known = set(photo_files)
+    photo_files += [p for p in frames if p not in known]
     args = {**to_json(cfg), "flame_sequences": [s.name for s in library]}
     if kit_folders:
         args["kit_credits"] = credits(kit_folders)
     staging = Staging(out, args)
     job = Job(method, cfg, make_image, tuple(library), out, platform, tuple(files), tuple(kit_folders),
-              tuple(photo_files), tuple(places.panoramas))  # fmt: skip
+              tuple(photo_files), tuple(places.panoramas), frames)  # fmt: skip
     try:
         todo = [i for i in range(cfg.n) if not staging.done(i)]
         workers = min(workers, len(todo) // MIN_IMAGES_PER_WORKER)

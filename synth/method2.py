@@ -53,7 +53,10 @@ class Method2Config:
     streets: int = 0  # procedural streets laid out from building kits (synth.streets), after the files; 0 = none
     kits: tuple[Path, ...] = ()  # kit folders (synth.kits), or folders of them, for the streets
     backgrounds: tuple[Path, ...] = ()  # fire-free photos (files / folders) composited on instead of renders
-    photo_share: float = 0.5  # fraction of views on a photo when there are also 3D environments
+    frames: tuple[Path, ...] = ()  # labelled datasets whose images are photos keeping their fire boxes (synth.frames)
+    own_frames: float = 0.0  # experiment: share of an own pool's views on its mixture's real training images
+    # (fuzzyfire.cutout_pools; they become the pool's frames); 0 = none
+    photo_share: float = 0.5  # fraction of views on a photo (or frame) when there are also 3D environments
     background_holdout: float = 0.0  # share of the photos (chosen by content hash) never composited on: test data
     panorama_share: float = 0.5  # weight of panorama views (environments that are 2:1 images) beside photos and renders
     stand: Literal["surfaces", "anywhere"] = "surfaces"  # renders: flames stand on up-facing surfaces (floors, tables:
@@ -77,10 +80,12 @@ class Method2Config:
     def __post_init__(self) -> None:
         if self.n < 1 or self.scenes < 0 or self.images_per_view < 1 or self.width < 16 or self.height < 16:
             raise ValueError(f"invalid Method 2 config: {self}")
-        if self.scenes == 0 and not self.environments and not self.backgrounds and not self.streets:
+        if self.scenes == 0 and not (self.environments or self.backgrounds or self.frames or self.streets):
             raise ValueError(
-                "scenes is 0 and no environments, streets or backgrounds are given: nothing to composite on"
+                "scenes is 0 and no environments, streets, backgrounds or frames are given: nothing to composite on"
             )
+        if not 0.0 <= self.own_frames <= 1.0:
+            raise ValueError(f"own_frames must be in 0..1, got {self.own_frames}")
         check_streets(self.streets, self.kits)
         if not 0.0 <= self.background_holdout < 1.0:
             raise ValueError(f"background_holdout must be in 0..1 (exclusive), got {self.background_holdout}")
@@ -190,6 +195,12 @@ def site_spot(
     return None
 
 
+def kept_clear(meta: dict) -> list:
+    """Boxes [x, y, w, h] of a view where no flame or distractor may go: a photo site's people and a labelled
+    frame's own fires (:mod:`synth.frames`)."""
+    return [*meta.get("people", []), *meta.get("frame_boxes", [])]
+
+
 def visible_composite(scene: NDArray[np.uint8], planned: Sequence[tuple[Placement, str]], effects, min_box_px: int):
     """Composite ``planned`` on the exposed ``scene`` and take it through the camera (``effects``), erasing every
     flame that cannot be seen (:mod:`synth.visibility`: contrast against the plate, the scene through the same
@@ -216,7 +227,7 @@ def dressed_scene(
     low-light exposure, light sources after it) and decoy pastes, none overlapping a planned flame or a photo
     site's ``people`` (boxes [x, y, w, h] in ``meta``); and
     the metadata they add (``distractors``, ``decoys``: kind or blend and box [x, y, w, h]; only when on)."""
-    avoid = [*([p.x, p.y, p.width, p.height] for p, _ in planned), *meta.get("people", [])]  # a photo's people too
+    avoid = [*([p.x, p.y, p.width, p.height] for p, _ in planned), *kept_clear(meta)]  # a photo's people too
     items = plan_distractors(cfg.distractors, background, depth, meta, fy, avoid, rng) if cfg.distractors.share else []
     scene = draw_distractors(expose(draw_distractors(background, items, False), effects), items, True)
     added: dict = {"distractors": [d.to_json() for d in items]} if cfg.distractors.share else {}
@@ -248,7 +259,7 @@ def make_image(cfg: Method2Config, i: int, library: Sequence[SpriteSequence], vi
     the scene (and of the plate the flames' visibility is measured against); they get no box."""
     background, depth, view_meta = views.background(i // cfg.images_per_view)
     rng = np.random.default_rng([cfg.seed, 2, i])
-    avoid = view_meta.get("people", []) if view_meta.get("site") else None
+    avoid = kept_clear(view_meta) if view_meta.get("site") else None
     yfov = view_meta["camera"]["yfov"]
     planned = plan_flames(cfg, library, depth, yfov, rng, avoid)
     effects = sample_effects(rng, cfg.camera)
@@ -260,6 +271,7 @@ def make_image(cfg: Method2Config, i: int, library: Sequence[SpriteSequence], vi
     kept, boxes, index = boxes_from_masks([v.part for v in seen], cfg.min_box_px)
     flames = [flame_record(shown[k][0], shown[k][1], seen[k]) for k in index]
     meta = {**view_meta, "flames": flames, "erased": len(planned) - len(shown), **added, "effects": effects.to_json()}
+    boxes += view_meta.get("frame_boxes", [])  # a labelled frame's own fires, after the flames (no mask: audit)
     record = {"width": cfg.width, "height": cfg.height, "boxes": boxes, "meta": meta}
     if not cfg.smoke_class:
         return image, kept, record, None

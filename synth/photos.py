@@ -9,7 +9,7 @@ Photos are used in an order drawn by the seed, every photo once before any repea
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
 
 import cv2
@@ -18,6 +18,7 @@ from numpy.typing import NDArray
 
 from curate.core.imageio import ImageError, read_image
 from curate.scan import list_image_files
+from synth.frames import Box, crop_boxes
 from synth.sites import Site, estimate_site, read_site_sidecar, sidecar_files
 
 
@@ -84,12 +85,22 @@ def crop_to(image: NDArray[np.uint8], width: int, height: int, rng: np.random.Ge
 
 class PhotoBackgrounds:
     """Background ``v`` is photo ``perm[v % n]`` (module docstring) cropped by ``default_rng([seed, 5, v])``;
-    unreadable photos are skipped (the next one in the order is used) and named in :attr:`problems`."""
+    unreadable photos are skipped (the next one in the order is used) and named in :attr:`problems`. ``labels``:
+    the fire boxes [x, y, w, h] px of the photos that are labelled frames (:mod:`synth.frames`), carried into
+    each view's ``frame_boxes``."""
 
-    def __init__(self, photos: Sequence[Path], width: int, height: int, seed: int) -> None:
+    def __init__(
+        self,
+        photos: Sequence[Path],
+        width: int,
+        height: int,
+        seed: int,
+        labels: Mapping[Path, Sequence[Box]] | None = None,
+    ) -> None:
         if not photos:
             raise ValueError("no background photos")
         self.photos, self.width, self.height, self.seed = list(photos), width, height, seed
+        self.labels = dict(labels or {})
         self.order = np.random.default_rng([seed, 8]).permutation(len(self.photos))
         self.problems: dict[str, str] = {}
 
@@ -133,4 +144,6 @@ class PhotoBackgrounds:
             "site": site.source,
             "people": people,
         }
+        if path in self.labels:  # a labelled frame: its own fires are labels, and no flame stands on them
+            meta["frame_boxes"] = crop_boxes(self.labels[path], [x, y, cw, ch], self.width, self.height)
         return rgb, depth, meta

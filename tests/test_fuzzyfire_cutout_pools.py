@@ -98,7 +98,7 @@ def test_r0_mixtures_keep_the_shared_simulated_pool_and_say_so(built) -> None:
     _, data, _, refs, printed = built
     for seed in SEEDS:
         assert refs[("R0_S6", "method2", seed)].identity["synth"] == data.pools["method2"].with_split(None).key()
-    assert "R0_S6 have no real images to cut flames from: simulated flames" in printed
+    assert "R0_S6 have no real images of their own: the shared simulated pool" in printed
 
 
 def test_configs_without_the_key_keep_their_pools_and_mixtures(built) -> None:
@@ -178,5 +178,5 @@ def test_a_subset_without_cutouts_or_a_grid_without_fire_is_refused_in_one_line(
     d["classes"], d["synth"]["method1"] = ["smoke"], None
     d["synth"]["method2"]["flames"] = {**d["synth"]["method2"]["flames"], "source": "cutouts"}
     cfg = build_config(d, ExperimentConfig)
-    with pytest.raises(ValueError, match=r"flames.source cutouts: cuts 'fire' boxes, but classes are \['smoke'\]"):
+    with pytest.raises(ValueError, match=r"own Method 2 pools take 'fire' boxes, but classes are \['smoke'\]"):
         cutout_pools(cfg, ["R6_S6"], None, Datasets(cfg.classes), tmp_path, tmp_path)

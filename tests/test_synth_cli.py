@@ -134,7 +134,7 @@ def test_what_can_be_checked_fails_in_one_line_before_rendering(tmp_path, capsys
         ([], "a fuzzyfire dataset is already there; pass --overwrite to replace it"),
         (["--overwrite", "--environments", str(tmp_path / "nowhere")], "nowhere: no such environment file or folder"),
         (["--overwrite", "--backgrounds", str(tmp_path / "nophotos")], "nophotos: no such file or folder"),
-        (["--overwrite", "--photo-share", "0.3"], "--photo-share is the share of views on --backgrounds photos"),
+        (["--overwrite", "--photo-share", "0.3"], "--photo-share is the share of views on --backgrounds/--frames"),
         (["--overwrite", "--library", "3"], "--library makes procedural flames, which --flames replaces"),
         (["--overwrite", "--streets", "2"], "--streets needs --kits DIR"),
         (["--overwrite", "--kits", str(tmp_path)], "--kits are the building kits of --streets N"),
