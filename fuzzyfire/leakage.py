@@ -23,15 +23,19 @@ def pool_photos(synth: object, methods: Sequence[str], base: Path) -> dict[str, 
     """The background photos of the pools ``methods`` of ``synth`` (an experiment's
     :class:`fuzzyfire.experiment_config.SynthConfig`), each as its pool takes them
     (:func:`synth.photos.pool_photos`: without the held-out share and without panoramas); ``backgrounds``
-    resolve against ``base``. Pools without photos are left out."""
+    resolve against ``base``; the images of labelled ``frames`` (:mod:`synth.frames`) count too. Pools without
+    photos are left out."""
+    from synth.frames import load_frames
     from synth.photos import pool_photos as photos_of
 
     out = {}
     for method in methods:
         cfg = getattr(synth, method)
         folders = [p if Path(p).is_absolute() else base / p for p in getattr(cfg, "backgrounds", ())]
-        if folders:
-            out[method] = photos_of(folders, cfg.background_holdout)
+        frames = [p if Path(p).is_absolute() else base / p for p in getattr(cfg, "frames", ())]
+        photos = [*(photos_of(folders, cfg.background_holdout) if folders else []), *load_frames(frames)]
+        if photos:
+            out[method] = photos
     return out
 
 

@@ -9,6 +9,7 @@ import numpy as np
 from PIL import Image
 
 from curate.core.dataset import Dataset, DatasetBuilder
+from curate.core.writer import write_dataset
 
 
 def write_image(path: Path, width: int, height: int, seed: int = 0, fmt: str | None = None) -> Path:
@@ -154,3 +155,18 @@ def write_tiny_kits(root: Path) -> Path:
     for kit in ("kenney_retro_urban", "kenney_city_kit_suburban"):
         (root / kit / "LICENSE.txt").write_text("License: (Creative Commons Zero, CC0)\n")
     return root
+
+
+def write_frames(root: Path, n: int = 3, width: int = 128, height: int = 96) -> Path:
+    """A COCO dataset of ``n`` random ``width`` x ``height`` frames, frame k with k + 1 fire boxes and one smoke
+    box; returns its folder."""
+    src = root / "src"
+    builder = DatasetBuilder(src, ["fire", "smoke"])
+    for k in range(n):
+        write_image(src / f"f{k}.png", width, height, seed=k)
+        image = builder.add_image(f"f{k}.png", width, height, source="real:cams")
+        for j in range(k + 1):
+            builder.add_box(image, "fire", (4 + 30 * j, 50, 20, 30))
+        builder.add_box(image, "smoke", (2, 2, 30, 20))
+    write_dataset(builder.build(), root / "frames", ("coco",), "copy")
+    return root / "frames"

@@ -1,6 +1,6 @@
-"""Own Method 2 pools per (mixture's real training subset, seed): flames only from that subset (no leakage), one
-pool per subset content, R0 mixtures on the shared simulated pool, byte-identical rebuilds, and the identities of
-configs without ``flames.source`` unchanged."""
+"""Own Method 2 pools per (mixture's real training subset, seed): flames (and own frames) only from that subset
+(no leakage), one pool per subset content, R0 mixtures on the shared simulated pool, byte-identical rebuilds, and
+the identities of configs without ``flames.source`` or ``own_frames`` unchanged."""
 
 from __future__ import annotations
 
@@ -27,14 +27,16 @@ CONFIGS = Path(__file__).resolve().parents[1] / "configs"
 SEEDS = [0, 1]
 
 
-def _config(source: str | None, **grid: Any) -> ExperimentConfig:
+def _config(source: str | None, own_frames: float = 0.0, **grid: Any) -> ExperimentConfig:
     """The toy config with 160x120 real images (flames large enough to cut), no Method 1, Method 2 flames from
-    ``source`` (None: the key left out)."""
+    ``source`` (None: the key left out), ``own_frames`` when > 0."""
     d = toy_dict(**{"mixtures": ["R6_S6", "R6_S3", "R0_S6"], "table1": [], "seeds": SEEDS, **grid})
     d["real"]["standin"].update(width=160, height=120, flame_height=[0.3, 0.6], negatives=0.0)
     d["synth"]["method1"] = None
     if source is not None:
         d["synth"]["method2"]["flames"] = {**d["synth"]["method2"]["flames"], "source": source}
+    if own_frames:
+        d["synth"]["method2"]["own_frames"] = own_frames
     d["report"] = {"bootstrap": 0, "samples": False, "gap_draws": 0}
     return build_config(d, ExperimentConfig)
 
@@ -180,3 +182,26 @@ def test_a_subset_without_cutouts_or_a_grid_without_fire_is_refused_in_one_line(
     cfg = build_config(d, ExperimentConfig)
     with pytest.raises(ValueError, match=r"own Method 2 pools take 'fire' boxes, but classes are \['smoke'\]"):
         cutout_pools(cfg, ["R6_S6"], None, Datasets(cfg.classes), tmp_path, tmp_path)
+
+
+def test_own_frames_composite_on_the_mixtures_own_training_images_only(tmp_path: Path) -> None:
+    """``own_frames``: each (subset, seed) pool composites simulated flames on that subset's images, which keep
+    their fire boxes; R0 mixtures keep the shared pool, which is the pool of the config without the key."""
+    cfg = _config(None, own_frames=1.0)
+    data, own, refs, printed = _prepare(cfg, tmp_path)
+    assert sorted(own) == sorted((m, "method2", s) for s in SEEDS for m in ("R6_S6", "R6_S3"))
+    assert simulated(cfg.synth.method2) == _config(None).synth.method2
+    real = read_coco(data.real.path).dataset
+    boxes = real.annotations_by_image()
+    real_boxes = {real.image_path(i).resolve().as_posix(): len(boxes[i.id]) for i in real.images}
+    for (name, method, seed), pool in own.items():
+        assert pool.path.name.startswith("method2-frames-") and "flames of" not in printed
+        record = json.loads((refs[(name, method, seed)].path / "mixture.json").read_text())
+        trained = {e["from"] for e in record["images"] if e["source"].startswith("real:")}
+        per_image = json.loads((pool.path / "manifest.json").read_text())["args"]["per_image"]
+        shown = {Path(m["photo"]).resolve().as_posix() for m in per_image}
+        assert shown <= trained  # only the mixture's own training images, never validation or test ones
+        assert all(len(m["frame_boxes"]) <= real_boxes[Path(m["photo"]).resolve().as_posix()] for m in per_image)
+        assert sum(len(m["frame_boxes"]) for m in per_image) > 0
+    for seed in SEEDS:
+        assert refs[("R0_S6", "method2", seed)].identity["synth"] == data.pools["method2"].with_split(None).key()

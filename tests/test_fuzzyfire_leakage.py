@@ -67,3 +67,16 @@ def test_the_experiment_refuses_leakage_before_building_a_pool(tmp_path: Path, c
     err = capsys.readouterr().err
     assert err.startswith("error: leakage: 5 images of test set 'fire-free' are background photos of the method2")
     assert err.count("\n") == 1 and not list((tmp_path / "out" / "data").glob("method2-*"))
+
+
+def test_labelled_frames_are_pool_photos_too(tmp_path: Path) -> None:
+    from factories import write_frames
+
+    from curate.core.load import load_split
+
+    frames = write_frames(tmp_path)
+    synth = SynthConfig(method2=Method2Config(scenes=0, frames=(Path("frames"),)))
+    pool = pool_photos(synth, ("method2",), tmp_path)["method2"]
+    assert len(pool) == 3
+    with pytest.raises(LeakageError, match="leakage: 3 images of test set 'cams' are background photos"):
+        check_leakage({"method2": pool}, {"cams": load_split(frames)})

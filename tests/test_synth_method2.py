@@ -212,3 +212,32 @@ def test_distractors_never_cover_a_photo_sites_people():
         drawn += len(added["distractors"])
         assert all(not overlaps(d["box"], [person]) for d in added["distractors"])
     assert drawn >= 10
+
+
+def test_labelled_frames_keep_their_fire_boxes_and_flames_stand_beside_them(tmp_path, library):
+    """On labelled frames (synth.frames) each image's last boxes are its frame's own fires, cropped with it
+    (unaudited, counted); every flame box is exact and overlaps none of them; the same seed, the same bytes."""
+    from dataclasses import replace
+
+    from curate.core.formats.coco import read_coco
+    from factories import write_frames
+    from synth.distractors import overlaps
+
+    frames = write_frames(tmp_path)
+    cfg = replace(CFG, n=8, scenes=0, frames=(frames,), width=128, height=96, images_per_view=1, max_flames=2)
+    M.run_method2(cfg, library, tmp_path / "a")
+    ds = read_coco(tmp_path / "a").dataset
+    per_image = json.loads((tmp_path / "a" / "manifest.json").read_text())["args"]["per_image"]
+    by_image = ds.annotations_by_image()
+    flames = 0
+    for img, meta in zip(ds.images, per_image):
+        boxes = [list(a.bbox) for a in by_image[img.id]]
+        own = meta["frame_boxes"]
+        assert own and boxes[len(boxes) - len(own) :] == own and meta["photo"].startswith(frames.as_posix())
+        flames += len(boxes) - len(own)
+        assert not any(overlaps(b, own) for b in boxes[: len(boxes) - len(own)])
+    report = audit_dataset(tmp_path / "a")
+    assert flames >= 4 and report["boxes"] == flames and report["mean_iou"] == 1.0
+    assert report["frame_boxes"] == sum(len(m["frame_boxes"]) for m in per_image)
+    M.run_method2(cfg, library, tmp_path / "b")
+    assert _files(tmp_path / "a") == _files(tmp_path / "b")

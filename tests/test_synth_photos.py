@@ -116,3 +116,17 @@ def test_a_held_out_share_of_photos_is_chosen_by_content(tmp_path: Path) -> None
     (tmp_path / "p").mkdir()
     cv2.imwrite(str(tmp_path / "p" / "h.jpg"), pano)
     assert pool_photos([tmp_path / "p"], 0.25) == [] and photo_fingerprints([tmp_path / "p"]) == []
+
+
+def test_a_labelled_photo_carries_its_boxes_through_the_crop(tmp_path: Path) -> None:
+    from synth.frames import crop_boxes
+
+    a, b = write_image(tmp_path / "a.jpg", 160, 120, seed=1), write_image(tmp_path / "b.jpg", 160, 120, seed=2)
+    boxes = [(40.0, 60.0, 30.0, 40.0)]
+    photos = PhotoBackgrounds([a, b], 64, 48, seed=0, labels={a: boxes})
+    for view in range(4):
+        _, _, meta = photos.background(view)
+        if meta["photo"].endswith("a.jpg"):
+            assert meta["frame_boxes"] == crop_boxes(boxes, meta["crop"], 64, 48)
+        else:
+            assert "frame_boxes" not in meta  # an unlabelled photo's metadata is as before
