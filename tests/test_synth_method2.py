@@ -219,8 +219,9 @@ def test_labelled_frames_keep_their_fire_boxes_and_flames_stand_beside_them(tmp_
     (unaudited, counted); every flame box is exact and overlaps none of them; the same seed, the same bytes."""
     from dataclasses import replace
 
-    from curate.core.formats.coco import read_coco
     from factories import write_frames
+
+    from curate.core.formats.coco import read_coco
     from synth.distractors import overlaps
 
     frames = write_frames(tmp_path)
