@@ -177,7 +177,8 @@ def report_pools(
     for (mixture, method), seed in sorted(firsts.items()):
         pool = getattr(cfg.synth, method)
         frames = f" own_frames={pool.own_frames:g}" if getattr(pool, "own_frames", 0) else ""
-        shown[f"{method} flames.source={pool.flames.source}{frames} {mixture} seed {seed}"] = own[(mixture, method, seed)]
+        name = f"{method} flames.source={pool.flames.source}{frames} {mixture} seed {seed}"
+        shown[name] = own[(mixture, method, seed)]
     return shown
 
 

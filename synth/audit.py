@@ -82,7 +82,8 @@ def _frame_boxes(folder: Path, images: int) -> list[int]:
     (``frame_boxes`` in the manifest's per-image records, :mod:`synth.frames`): labels without a flame mask,
     not audited."""
     path = folder / "manifest.json"
-    per_image = json.loads(path.read_text(encoding="utf-8")).get("args", {}).get("per_image") if path.is_file() else None
+    manifest = json.loads(path.read_text(encoding="utf-8")) if path.is_file() else {}
+    per_image = manifest.get("args", {}).get("per_image")
     if not per_image or len(per_image) != images:
         return [0] * images
     return [len(meta.get("frame_boxes", [])) for meta in per_image]

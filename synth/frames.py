@@ -64,4 +64,3 @@ def crop_boxes(boxes: Sequence[Box], crop: Sequence[int], width: int, height: in
         if min(kept[2], kept[3]) >= MIN_SIDE_PX:
             out.append([round(v, 2) for v in kept])
     return out
-
