@@ -1,0 +1,124 @@
+"""Does a synthetic pool help? R200_S200 (200 real + 200 synthetic images) against R200_S0 (the same 200 real
+images alone) on the shared data, per Method 2 variant: the study of configs/shared-data.yaml on those two
+mixtures, the study's detector, ``--seeds`` (default 0, 1, 2), Δ with the paired image-level bootstrap over
+images (1,000 resamples, seeds averaged) - the measure of issue 22/23's targets. R200_S0 runs are shared by
+every variant (trained once); each variant's pools and runs are cached under ``--out`` (pointing it at a study's
+folder reuses that study's runs).
+
+Variants (on shared-data.yaml: panoramas, the flames' new look, 2 images per view):
+
+- ``flat``: the flames' earlier flat look (no streaks, edges may darken a wall);
+- ``look``: the default (``flames.texture: 0.5``, ``never_darken``);
+- ``finetune``: ``look`` with ``train.real_finetune: 10`` (the last 10 epochs on the real images only);
+- ``cutouts``: each mixture's own real flames cut out and pasted (``flames.source: cutouts``);
+- ``own_frames``: simulated flames composited on each mixture's own real training images, which keep their
+  boxes (``own_frames: 1``);
+- ``own_frames_half``: half the views on own frames, half on the panoramas;
+- ``own_frames_cutouts``: own cut-out flames on own frames (copy-paste augmentation made by the study);
+- ``own_frames_none``: own frames with no flame added (``negatives: 1``): what the frames give by themselves
+  (a second, cropped and camera-treated copy of each real image) - the control of ``own_frames``.
+
+Lines: ``synth_use_<variant>_<test>_<metric>_delta: +d AP points (95% CI lo..hi, p)`` for AP50 and AP on every
+test set with fire, ``synth_use_<variant>_R200_S200_<test>_AP50: mean % (seeds: ...), std`` and, on a
+negatives-only set, ``..._alarms_per_100``. Skips cleanly without ../shared/data.
+
+.venv/bin/python bench/bench_synth_usefulness.py [--out out/bench-synth-usefulness] [--seeds 0,1,2] [--only look,own_frames]  (the default pair)
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import csv
+import sys
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+CONFIG = ROOT / "configs" / "shared-data.yaml"
+SHARED = ROOT.parent / "shared" / "data"
+STUDY = [
+    "grid.table1=[]",
+    "synth.method1=null",
+    "grid.mixtures=[R200_S0,R200_S200]",
+    "report.baseline=R200_S0",
+    "report.gap_draws=0",
+    "report.samples=false",
+]
+VARIANTS = {
+    "flat": ["synth.method2.never_darken=false", "synth.method2.flames.texture=0"],
+    "look": [],
+    "finetune": ["train.real_finetune=10"],
+    "cutouts": ["synth.method2.flames.source=cutouts"],
+    "own_frames": ["synth.method2.own_frames=1.0"],
+    "own_frames_half": ["synth.method2.own_frames=0.5"],
+    "own_frames_cutouts": ["synth.method2.own_frames=1.0", "synth.method2.flames.source=cutouts"],
+    "own_frames_none": ["synth.method2.own_frames=1.0", "synth.method2.negatives=1.0"],
+}
+MIXTURE, BASELINE = "R200_S200", "R200_S0"
+
+
+def _config(overrides: list[str], seeds: list[int]):
+    from curate.core.config import load_config
+    from fuzzyfire.experiment_config import ExperimentConfig
+
+    seeds_ = f"grid.seeds=[{','.join(map(str, seeds))}]"
+    return load_config(CONFIG, ExperimentConfig, [*STUDY, seeds_, *overrides])
+
+
+def _print_deltas(name: str, table: Path) -> None:
+    """The R200_S200 - R200_S0 lines of a study's ``tables/comparisons.csv``."""
+    with table.open(encoding="utf-8") as f:
+        for row in csv.DictReader(f):
+            if row["mixture"] == MIXTURE and row["baseline"] == BASELINE and row["metric"] in ("AP50", "AP"):
+                print(f"synth_use_{name}_{row['test_set']}_{row['metric']}_delta: {float(row['delta']):+.1f} AP points "
+                      f"(95% CI {float(row['low']):+.1f}..{float(row['high']):+.1f}, p {row['p_value']})")  # fmt: skip
+
+
+def _print_means(name: str, rows: list[dict]) -> None:
+    """Mean and std over seeds of R200_S200's AP50 per test set with fire, and of its alarms per 100 images on a
+    negatives-only set."""
+    for test in sorted({r["test_set"] for r in rows}):
+        mine = [r for r in rows if r["test_set"] == test and r["mixture"] == MIXTURE]
+        if any(r["AP50"] is not None for r in mine):
+            key, unit, values = "AP50", " %", [100 * r["AP50"] for r in mine]
+        else:
+            key, unit, values = "alarms_per_100", "", [r["alarms_per_100"] for r in mine]
+        arr = np.array(values, dtype=float)
+        std = arr.std(ddof=1) if len(arr) > 1 else 0.0
+        print(f"synth_use_{name}_{MIXTURE}_{test}_{key}: {arr.mean():.1f}{unit} (seeds: "
+              f"{', '.join(f'{v:.1f}' for v in arr)}), std {std:.1f}")  # fmt: skip
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--out", type=Path, default=ROOT / "out" / "bench-synth-usefulness")
+    parser.add_argument("--seeds", default="0,1,2")
+    parser.add_argument(
+        "--only", default="look,own_frames", help=f"comma-separated variants of {', '.join(VARIANTS)} (~20 min each)"
+    )
+    args = parser.parse_args()
+    if not (SHARED / "fire-cctv-416").is_dir() or not (SHARED / "panoramas").is_dir():
+        print(f"synth_usefulness_skipped: {SHARED} not found", file=sys.stderr)
+        return 0
+    from fuzzyfire.executors import LocalExecutor
+    from fuzzyfire.experiment import run_experiment
+
+    seeds = [int(s) for s in args.seeds.split(",")]
+    for name in args.only.split(","):
+        if name not in VARIANTS:
+            parser.error(f"unknown variant {name!r} (variants: {', '.join(VARIANTS)})")
+        cfg = _config(VARIANTS[name], seeds)
+        with contextlib.redirect_stdout(sys.stderr):
+            result = run_experiment(cfg, CONFIG.parent, args.out, LocalExecutor())
+        if result.failed:
+            print(f"synth_use_{name}_failed: {len(result.failed)} runs", file=sys.stderr)
+            return 1
+        _print_deltas(name, args.out / "tables" / "comparisons.csv")
+        _print_means(name, result.rows)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
