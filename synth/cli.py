@@ -25,7 +25,8 @@ def cmd_flames(args: argparse.Namespace) -> int:
     from synth.preview import write_preview
     from synth.sprites import save_sequence
 
-    seqs = procedural_library(args.n, args.seed, args.frames, args.keep_every, args.rare, args.generator, args.texture)
+    texture = _texture(args)
+    seqs = procedural_library(args.n, args.seed, args.frames, args.keep_every, args.rare, args.generator, texture)
     for seq in progress(seqs, total=len(seqs), desc="flames"):
         save_sequence(args.out / seq.name, seq)
     preview = write_preview(seqs, args.out / "preview.png")
@@ -81,10 +82,20 @@ def cmd_scenes(args: argparse.Namespace) -> int:
 
 DEFAULT_SCENES = 48  # procedural rooms when the user brings no backgrounds of their own
 DEFAULT_LIBRARY = 12  # procedural flame sequences when --flames is absent
+#: The procedural flames' inner streaks when --texture is not given (configs/shared-data.yaml's look).
+TEXTURE = 0.5
 TEXTURE_HELP = (
     "procedural flames' inner streaks, 0..1: the body's temperature dips by up to this in rising streaks (orange "
-    "tongues inside the yellow) and its edge is softened (default 0: a flat clipped body)"
+    f"tongues inside the yellow) and its edge is softened (default {TEXTURE:g}, the study's look; 0: the earlier flat "
+    "clipped body)"
 )
+
+
+def _texture(args: argparse.Namespace) -> float:
+    """--texture, or :data:`TEXTURE` for procedural flames when it is not given (0 with --flames: real sprites)."""
+    if args.texture is not None:
+        return args.texture
+    return 0.0 if getattr(args, "flames", None) else TEXTURE
 
 
 def _scenes(args: argparse.Namespace) -> int:
@@ -127,7 +138,7 @@ def _dataset_config(args: argparse.Namespace) -> dict:
     w, h = args.size
     library = DEFAULT_LIBRARY if args.library is None else args.library
     folders = tuple(args.flames or ())
-    flames = FlameLibraryConfig(sequences=library, seed=args.seed, folders=folders, texture=args.texture)
+    flames = FlameLibraryConfig(sequences=library, seed=args.seed, folders=folders, texture=_texture(args))
     return {
         "n": args.n,
         "seed": args.seed,
@@ -177,7 +188,7 @@ def _workers(args: argparse.Namespace) -> int:
 
 def _blend_config(args: argparse.Namespace) -> dict:
     """Method 2's ``blend``, ``distractors`` and ``never_darken`` from --blend, --harmonise, --match-noise,
-    --decoys, --distractors, --never-darken (the defaults: today's blend, none of them)."""
+    --decoys, --distractors, --never-darken (the defaults: today's blend, none of them but never_darken)."""
     from synth.blend import BlendConfig
     from synth.distractors import DistractorConfig
 
@@ -277,7 +288,7 @@ def _register_flames(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--frames", type=int, default=1024, help="simulation steps per sequence")
     p.add_argument("--keep-every", type=int, default=12, help="keep one frame every K steps")
     p.add_argument("--rare", type=float, default=0.05, help="fraction of chemical-colour (rare) flames")
-    p.add_argument("--texture", type=float, default=0.0, help=TEXTURE_HELP)
+    p.add_argument("--texture", type=float, help=TEXTURE_HELP)
     p.set_defaults(func=cmd_flames)
 
 
@@ -364,7 +375,7 @@ def _dataset_arguments(p: argparse.ArgumentParser, photos: bool = False) -> None
         type=int,
         help=f"procedural flame sequences to make instead of --flames (default {DEFAULT_LIBRARY})",
     )
-    p.add_argument("--texture", type=float, default=0.0, help=TEXTURE_HELP)
+    p.add_argument("--texture", type=float, help=TEXTURE_HELP)
     p.add_argument("--overwrite", action="store_true", help="replace a fuzzyfire dataset already at --out")
     p.add_argument("--smoke", action="store_true", help="also annotate smoke (class 'smoke', alpha >= 0.25)")
     p.add_argument(
@@ -458,8 +469,10 @@ def _blend_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--harmonise", action="store_true", help="tint each flame towards the local background light")
     p.add_argument(
         "--never-darken",
-        action="store_true",
-        help="a flame's dim edge reddens a bright background instead of outlining it darker (light blends)",
+        action=argparse.BooleanOptionalAction,
+        default=True,
+        help="a flame's dim edge reddens a bright background instead of outlining it darker (light blends; default "
+        "on, the study's look: --no-never-darken for the earlier compositing)",
     )
     p.add_argument("--match-noise", action="store_true", help="blur and grain each flame like the background around it")
     p.add_argument(

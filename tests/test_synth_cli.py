@@ -114,9 +114,9 @@ def test_method2_on_photographs(tmp_path, capsys):
     assert json.loads(capsys.readouterr().out)["mean_iou"] == 1.0
 
 
-def _flames(tmp_path: Path) -> Path:
+def _flames(tmp_path: Path, *extra: str) -> Path:
     flames = ["synth", "flames", "--out", str(tmp_path / "fl"), "--n", "1", "--frames", "60", "--keep-every", "30"]
-    assert main(flames) == 0
+    assert main([*flames, *extra]) == 0
     return tmp_path / "fl"
 
 
@@ -194,8 +194,10 @@ def test_method2_on_a_fixed_camera_puts_every_flame_on_its_floor(tmp_path, capsy
         "horizon: 0.3\ncamera_height: 3\nground: [[0.5, 0.3], [1, 0.3], [1, 1], [0.5, 1]]\n"
     )
     out = tmp_path / "m2"
-    args = ["synth", "method2", "--n", "16", "--out", str(out), "--size", "96x72", "--flames", str(_flames(tmp_path))]
-    assert main([*args, "--backgrounds", str(tmp_path / "cam")]) == 0
+    flat = _flames(tmp_path, "--texture", "0")  # the flat look, where a flame's seen box is its whole flame (a
+    # softened edge and never_darken can leave a dim foot unseen: the box's bottom is then above the foot)
+    args = ["synth", "method2", "--n", "16", "--out", str(out), "--size", "96x72", "--flames", str(flat)]
+    assert main([*args, "--backgrounds", str(tmp_path / "cam"), "--no-never-darken"]) == 0
     manifest = json.loads((out / "manifest.json").read_text())
     coco = json.loads((out / "annotations.json").read_text())
     metas = {img["id"]: meta for img, meta in zip(coco["images"], manifest["args"]["per_image"])}
