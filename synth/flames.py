@@ -362,17 +362,25 @@ def simulate_fluid(p: FlameParams, rng: np.random.Generator) -> list[Sprite]:
     src = source_mask(p, rng)
     base = base_attenuation(p, p.rows - 3, rng)
     warp = edge_warp(p, rng)
-    inner = streaks(p, np.random.default_rng(rng.integers(2**63))) if p.texture > 0 else None
+    texture_at = streaks_at(p, rng)
     frames = []
     for step in range(p.warmup + p.frames):
         fluid_step(state, p, src, (gx, gy), rng)
         kept = step - p.warmup
         if kept >= 0 and kept % p.keep_every == 0:
             dx, dy = _frame_warp(warp, p.rows * p.scale, kept)
-            tex = None if inner is None else _frame_warp((inner,), p.rows * p.scale, kept)[0]
             fields = (state.temperature * base, state.soot, p, body)
-            frames.append(render_fields(*fields, warp=(dx, dy), tint=tint, texture=tex))
+            frames.append(render_fields(*fields, warp=(dx, dy), tint=tint, texture=texture_at(kept)))
     return frames
+
+
+def streaks_at(p: FlameParams, rng: np.random.Generator) -> Callable[[int], F32 | None]:
+    """The flame's :func:`streaks` as a function of the kept step: the (rows, cols) field scrolled up with the
+    flame at that step, or None without ``p.texture`` (then nothing is drawn from ``rng``; else one seed)."""
+    if p.texture <= 0:
+        return lambda step: None
+    inner = streaks(p, np.random.default_rng(rng.integers(2**63)))
+    return lambda step: _frame_warp((inner,), p.rows * p.scale, step)[0]
 
 
 def simulate_noise(p: FlameParams, rng: np.random.Generator) -> list[Sprite]:
@@ -384,7 +392,7 @@ def simulate_noise(p: FlameParams, rng: np.random.Generator) -> list[Sprite]:
     palette = flame_palette(p.palette, exposure=p.exposure, peak=p.peak)
     base = base_attenuation(p, rows, rng)
     warp = edge_warp(p, rng) if p.detail > 0 else None
-    inner = streaks(p, np.random.default_rng(rng.integers(2**63))) if p.texture > 0 else None
+    texture_at = streaks_at(p, rng)
     frames = []
     for step in range(0, p.frames, p.keep_every):
         off = (step * 2) % (rows * 3)
@@ -395,9 +403,8 @@ def simulate_noise(p: FlameParams, rng: np.random.Generator) -> list[Sprite]:
         heat = np.clip(1.0 - d + 0.35 * n * (0.3 + y), 0, 1) * np.clip(1.2 - y * (1 + 0.3 * n), 0, 1)
         soot = np.clip(0.8 - d * 0.6, 0, 1) * np.clip(y - 0.5, 0, None) * (1 + 0.5 * n)
         w = None if warp is None else _frame_warp(warp, rows * p.scale, step)
-        tex = None if inner is None else _frame_warp((inner,), rows * p.scale, step)[0]
         fields = ((heat * base).astype(np.float32), soot.astype(np.float32), p, palette)
-        frames.append(render_fields(*fields, warp=w, tint=None, texture=tex))
+        frames.append(render_fields(*fields, warp=w, tint=None, texture=texture_at(step)))
     return frames
 
 
