@@ -51,7 +51,10 @@ PoolKey = tuple[str, str, int]
 def simulated(cfg: Method2Config) -> Method2Config:
     """``cfg`` with simulated flames on its own places only: the experiment's shared pool (the same identity as a
     config without ``flames.source`` and ``own_frames``), which R0 mixtures and the report's samples and gap use."""
-    flames = replace(cfg.flames, source="simulated", cutout_share=type(cfg.flames)().cutout_share)
+    default = type(cfg.flames)()
+    flames = replace(
+        cfg.flames, source="simulated", cutout_share=default.cutout_share, cutout_max_fill=default.cutout_max_fill
+    )
     return replace(cfg, flames=flames, own_frames=0.0)
 
 
@@ -82,9 +85,10 @@ def mask_identity() -> dict[str, Any]:
     }
 
 
-def cutout_stage(root: Path, subset: Dataset) -> Stage:
+def cutout_stage(root: Path, subset: Dataset, max_fill: float = 1.0) -> Stage:
     """The cut-outs of ``subset``'s fire boxes (``fuzzyfire synth cutouts`` layout, ``cutouts.json`` naming each
-    one's image) as a cached stage; ValueError when no box gives one."""
+    one's image), none whose mask fills more than ``max_fill`` of its box (``flames.cutout_max_fill``), as a
+    cached stage; ValueError when no box gives one."""
     import json
 
     from curate.core.fingerprint import fingerprint
@@ -97,10 +101,13 @@ def cutout_stage(root: Path, subset: Dataset) -> Stage:
         "min_side": MIN_SIDE,
         "min_cover": MIN_COVER,
         "mask": mask_identity(),
+        **({"max_fill": max_fill} if max_fill < 1.0 else {}),  # stages cut before the key keep their identity
     }
-    stage = cached_stage(
-        root, "cutouts", identity, lambda out: write_cutouts(cutouts(subset, FIRE, MIN_SIDE, MIN_COVER), out)
-    )
+
+    def cut(out: Path) -> int:
+        return write_cutouts(cutouts(subset, FIRE, MIN_SIDE, MIN_COVER, max_fill=max_fill), out)
+
+    stage = cached_stage(root, "cutouts", identity, cut)
     if not json.loads((stage.folder / "cutouts.json").read_text(encoding="utf-8")):
         raise ValueError(
             f"flames.source: the {len(subset.images)} real images of a mixture give no cut-out (fire boxes of at "
@@ -112,7 +119,7 @@ def cutout_stage(root: Path, subset: Dataset) -> Stage:
 def own_pool(root: Path, cfg: Method2Config, subset: Dataset, base: Path) -> tuple[Stage | None, Stage, DataRef]:
     """(cut-out stage or None, pool stage, pool reference) of the Method 2 pool of the real ``subset``: its flames
     (``flames.source`` cutouts | both) and/or its images as frames (``own_frames``)."""
-    cut = cutout_stage(root, subset) if cfg.flames.source != "simulated" else None
+    cut = cutout_stage(root, subset, cfg.flames.cutout_max_fill) if cfg.flames.source != "simulated" else None
     if cfg.own_frames > 0:
         frames = frames_stage(root, subset).folder
         cfg = replace(cfg, frames=(frames,), photo_share=cfg.own_frames, panorama_share=1.0 - cfg.own_frames)

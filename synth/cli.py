@@ -45,7 +45,9 @@ def cmd_cutouts(args: argparse.Namespace) -> int:
     try:
         ds = pick_split(result.dataset, args.split, args.src)
         problems: list = []
-        items = cutouts(ds, args.class_name, args.min_side, args.min_cover, problems, args.mask)
+        if not 0.0 < args.max_fill <= 1.0:
+            raise ValueError(f"--max-fill must be in (0, 1], got {args.max_fill}")
+        items = cutouts(ds, args.class_name, args.min_side, args.min_cover, problems, args.mask, args.max_fill)
         n = write_cutouts(items, args.out)
     except (SplitError, ValueError, FileExistsError) as exc:
         print(f"error: {exc}", file=sys.stderr)
@@ -316,6 +318,13 @@ def _register_cutouts(sub: argparse._SubParsersAction) -> None:
         "--min-cover", type=float, default=0.08, help="skip boxes less fire-coloured than this share (default 0.08)"
     )
     p.add_argument("--mask", default="grabcut", choices=("colour", "grabcut"), help="flame mask rule (default grabcut)")
+    p.add_argument(
+        "--max-fill",
+        type=float,
+        default=1.0,
+        help="skip cut-outs whose flame mask fills more than this share of the box: fire-lit rectangles, not "
+        "flame shapes (default 1: keep all; 0.85 drops ~14 %% of fire-cctv-416's)",
+    )
     add_reader_args(p, source=False)
     p.set_defaults(func=cmd_cutouts)
 

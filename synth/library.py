@@ -34,6 +34,7 @@ class FlameLibraryConfig:
     folders: tuple[Path, ...] = ()  # sequence folders to load instead of simulating
     source: Literal["simulated", "cutouts", "both"] = "simulated"  # simulated (or folders) | real cut-outs | both
     cutout_share: float = 0.5  # source both: share of flames drawn from the cut-outs, 0..1
+    cutout_max_fill: float = 1.0  # experiment's cut-outs: none whose mask fills more of its box (synth.cutouts.cut)
     texture: float = 0.0  # simulated flames' inner streaks and soft edge (synth.flames.streaks), 0..1; 0 = flat body
 
     def __post_init__(self) -> None:
@@ -45,6 +46,8 @@ class FlameLibraryConfig:
             raise ValueError(f"unknown flames.source {self.source!r}; choose one of {', '.join(FLAME_SOURCES)}")
         if not 0.0 <= self.texture < 1.0:
             raise ValueError(f"flames.texture must be in [0, 1), got {self.texture}")
+        if not 0.0 < self.cutout_max_fill <= 1.0:
+            raise ValueError(f"flames.cutout_max_fill must be in (0, 1], got {self.cutout_max_fill}")
         if not 0.0 <= self.cutout_share <= 1.0:
             raise ValueError(f"flames.cutout_share must be in 0..1, got {self.cutout_share}")
         if self.source != "both" and self.cutout_share != FlameLibraryConfig.cutout_share:

@@ -205,3 +205,17 @@ def test_own_frames_composite_on_the_mixtures_own_training_images_only(tmp_path:
         assert sum(len(m["frame_boxes"]) for m in per_image) > 0
     for seed in SEEDS:
         assert refs[("R0_S6", "method2", seed)].identity["synth"] == data.pools["method2"].with_split(None).key()
+
+
+def test_max_fill_cuts_a_stage_of_its_own_and_keeps_the_default_ones(built, tmp_path: Path) -> None:
+    """``flames.cutout_max_fill`` < 1: another cut-out stage (fewer or as many cut-outs); at 1 the stage is the one
+    cut before the key existed."""
+    from curate.core.load import load_split
+
+    out, data, *_ = built
+    train = load_split(data.real.path, "coco", "train", ["fire"])
+    full, strict = cutout_stage(out / "data", train), cutout_stage(out / "data", train, max_fill=0.3)
+    assert full.hash != strict.hash
+    assert cutout_stage(out / "data", train, max_fill=1.0).hash == full.hash
+    count = [len(json.loads((s.folder / "cutouts.json").read_text())) for s in (full, strict)]
+    assert 0 < count[1] < count[0]
