@@ -15,6 +15,8 @@ Variants (on shared-data.yaml: panoramas, the flames' new look, 2 images per vie
   boxes (``own_frames: 1``);
 - ``own_frames_half``: half the views on own frames, half on the panoramas;
 - ``own_frames_cutouts``: own cut-out flames on own frames (copy-paste augmentation made by the study);
+- ``own_frames_cutouts_clean``: ``own_frames_cutouts`` without the cut-outs whose mask fills more than 85 % of
+  their box (fire-lit rectangles: ``flames.cutout_max_fill: 0.85``);
 - ``own_frames_none``: own frames with no flame added (``negatives: 1``): what the frames give by themselves
   (a second, cropped and camera-treated copy of each real image) - the control of ``own_frames``.
 
@@ -55,6 +57,11 @@ VARIANTS = {
     "own_frames_half": ["synth.method2.own_frames=0.5"],
     "own_frames_cutouts": ["synth.method2.own_frames=1.0", "synth.method2.flames.source=cutouts"],
     "own_frames_none": ["synth.method2.own_frames=1.0", "synth.method2.negatives=1.0"],
+    "own_frames_cutouts_clean": [
+        "synth.method2.own_frames=1.0",
+        "synth.method2.flames.source=cutouts",
+        "synth.method2.flames.cutout_max_fill=0.85",
+    ],
 }
 MIXTURE, BASELINE = "R200_S200", "R200_S0"
 
