@@ -108,8 +108,8 @@ def audit_dataset(folder: Path) -> dict[str, Any]:
     for k, img in enumerate(coco["images"]):
         mask_path = folder / "masks" / Path(img["file_name"]).relative_to("images").with_suffix(".png")
         truths = _truths(mask_path)
-        boxes = fire[img["id"]]
-        ious += _ious(boxes[: len(boxes) - frames[k]], truths)
+        flames = fire[img["id"]][: len(fire[img["id"]]) - frames[k]]  # a frame's own boxes come last, unmasked
+        ious += _ious(flames, truths)
         for mode, boxes in modes.get(img["file_name"], {}).items():
             mode_ious.setdefault(mode, []).extend(_ious(boxes, truths))
         if smoke is not None:

@@ -17,7 +17,7 @@ from curate.core.progress import progress
 from curate.core.writer import WriteResult, check_output_target
 from synth import render
 from synth.envfile import EnvironmentFile, find_environment_files
-from synth.frames import load_frames
+from synth.frames import Box, load_frames
 from synth.kits import credits, find_kits, licence_files, load_kit
 from synth.panorama import PanoramaBackgrounds
 from synth.photos import PhotoBackgrounds, keep_in_pool
@@ -50,7 +50,7 @@ class Job:
     kit_folders: tuple[Path, ...]
     photo_files: tuple[Path, ...]
     panoramas: tuple[Path, ...]
-    frames: dict[Path, tuple] = field(default_factory=dict)  # labelled frames' fire boxes (synth.frames), by photo
+    frames: dict[Path, tuple[Box, ...]] = field(default_factory=dict)  # labelled frames' fire boxes, by photo
 
 
 @contextmanager

@@ -116,7 +116,7 @@ def plan_flames(
     """Random flames standing at random pixels, sized by the scene depth there (world height in metres of the flame
     itself, its mask: the sprite, smoke included, is scaled to match); on a
     site (``avoid`` given: a photo or panorama, :mod:`synth.sites`) only at pixels whose depth is > 0 (the ground)
-    and never over the ``avoid`` boxes [x, y, w, h] (people); or,
+    and never over the ``avoid`` boxes [x, y, w, h] (:func:`kept_clear`); or,
     for a ``cfg.closeup`` share of the fire images, one flame filling ``cfg.closeup_height`` of the frame with
     its base near the bottom edge (a fire seen from close by; the part outside the frame is cut off)."""
     if rng.random() < cfg.negatives:
@@ -224,10 +224,11 @@ def dressed_scene(
     cfg: Method2Config, background, depth, meta: dict, planned, library, effects: Effects, fy: float, rng
 ):
     """The exposed scene flames are composited on, with this image's distractors (reflective ones before the
-    low-light exposure, light sources after it) and decoy pastes, none overlapping a planned flame or a photo
-    site's ``people`` (boxes [x, y, w, h] in ``meta``); and
+    low-light exposure, light sources after it) and decoy pastes, none overlapping a planned flame or what
+    :func:`kept_clear` keeps clear (a photo site's people, a labelled frame's fires; boxes [x, y, w, h] in
+    ``meta``); and
     the metadata they add (``distractors``, ``decoys``: kind or blend and box [x, y, w, h]; only when on)."""
-    avoid = [*([p.x, p.y, p.width, p.height] for p, _ in planned), *kept_clear(meta)]  # a photo's people too
+    avoid = [*([p.x, p.y, p.width, p.height] for p, _ in planned), *kept_clear(meta)]
     items = plan_distractors(cfg.distractors, background, depth, meta, fy, avoid, rng) if cfg.distractors.share else []
     scene = draw_distractors(expose(draw_distractors(background, items, False), effects), items, True)
     added: dict = {"distractors": [d.to_json() for d in items]} if cfg.distractors.share else {}
