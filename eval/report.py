@@ -206,6 +206,7 @@ def write_study_report(
     rng: np.random.Generator,
     *,
     method_results: Sequence[Mapping[str, Any]] = (),
+    controls: Sequence[Mapping[str, Any]] = (),
     gaps: Sequence[Mapping[str, Any]] = (),
     comparisons: Sequence[Mapping[str, Any]] = (),
     errors: Sequence[Mapping[str, Any]] = (),
@@ -219,12 +220,14 @@ def write_study_report(
     thumbnails and ``out/report.html``; returns the page's path.
 
     ``results``: one mapping per (run, test set) as :func:`eval.tables.table2` takes (also the run list);
-    ``method_results``: Table 1 rows (with ``method``); ``gaps``: see :func:`gaps_html` (also written as
+    ``method_results``: Table 1 rows (with ``method``); ``controls``: rows of the control runs (Table 2 mixtures
+    whose synthetic images were replaced by flame-free copies of their own real images), a table of their own
+    (``out/tables/controls.{md,csv,tex}``, rows labelled ``<mixture> copies``) and listed with the runs; ``gaps``: see :func:`gaps_html` (also written as
     ``out/tables/gap.json``); ``comparisons``: see :func:`comparisons_html` (also written as
     ``out/tables/comparisons.csv``, :func:`comparisons_csv`); ``errors``: see :func:`errors_html`;
     ``samples``: datasets to show a few images of, by label; ``notice``: shown at the top of the page."""
     from eval.plots import plot_figure5
-    from eval.tables import table1, table2
+    from eval.tables import control_table, table1, table2
 
     sections: list[tuple[str, str]] = []
     if method_results:
@@ -240,6 +243,11 @@ def write_study_report(
         figures = [plot_figure5(results, out / "figures" / f"figure5_{m}.png", m) for m in shown]
         sections.append(("Table 2 — training mixtures", table_html(t2)))
         sections.append(("Figure 5", "".join(figure_html(f, out, f.stem) for f in figures)))
+    if controls:
+        tc = control_table(controls, metrics=table_metrics(controls))
+        write_table_files(tc, out / "tables", "controls")
+        sections.append(("Controls — the synthetic images replaced by flame-free copies of the real ones",
+                         table_html(tc)))  # fmt: skip
     if comparisons:
         sections.append(("Paired comparisons (image-level bootstrap)", comparisons_html(comparisons)))
         (out / "tables").mkdir(parents=True, exist_ok=True)
@@ -248,8 +256,8 @@ def write_study_report(
         sections.append(("Where AP50 goes (error breakdown)", errors_html(errors)))
     for label, ds in (samples or {}).items():
         sections.append((f"Samples: {label}", samples_html(ds, out / "samples" / _slug(label), out, rng)))
-    if results:
-        sections.append(("Runs", runs_html(results, run_columns)))
+    if results or controls:
+        sections.append(("Runs", runs_html([*results, *controls], run_columns)))
     page = out / "report.html"
     out.mkdir(parents=True, exist_ok=True)
     page.write_text(render_page(title, sections, notice), encoding="utf-8")

@@ -116,6 +116,23 @@ def table2(
     )
 
 
+def control_table(
+    results: Sequence[Mapping[str, Any]], test_sets: Sequence[str] = (), metrics: Sequence[str] = ("AP", "AP50")
+) -> Table:
+    """The control runs: one row per mixture (labelled ``<mixture> copies``) whose synthetic images were replaced
+    by flame-free copies of its own real images, by synthetic share; columns as :func:`table2`."""
+    mixtures = sorted({parse_mixture(r["mixture"]) for r in results}, key=lambda m: (m.synth, m.real))
+    names = tuple(m.name for m in mixtures)
+    cells = _collect(results, lambda r: r["mixture"], tuple(dict.fromkeys((*metrics, ALARMS))))
+    return Table(
+        "Controls: AP by training mixture, its synthetic images replaced by flame-free copies of its real images",
+        (("real + copies of the real", names),),
+        _columns(results, test_sets, metrics),
+        cells,
+        {n: f"{n} copies" for n in names},
+    )
+
+
 def table1(
     results: Sequence[Mapping[str, Any]], test_sets: Sequence[str] = (), metrics: Sequence[str] = ("AP", "AP50")
 ) -> Table:

@@ -13,6 +13,7 @@ import numpy as np
 from curate.core.config import to_dict
 from curate.mix import parse_mixture
 from eval.errors import ALARMS
+from fuzzyfire.controls import CONTROL, CONTROL_TABLE, control_label
 from fuzzyfire.datasets import DataRef, Datasets
 from fuzzyfire.experiment_config import ExperimentConfig
 from fuzzyfire.runs import EvalSet, RunSpec
@@ -80,29 +81,37 @@ def _predictions(folder: Path) -> list[dict]:
 
 
 def comparisons(cfg: ExperimentConfig, rows: Sequence[dict]) -> list[dict]:
-    """Paired image-level bootstrap of every Table-2 mixture against the baseline, per test set with boxes and
-    metric (seeds averaged per resample); sets without boxes have no AP to compare."""
+    """Paired image-level bootstrap of every Table-2 mixture against the baseline, then of every mixture that has a
+    control run (``grid.control``) against that control (``baseline`` named by
+    :func:`fuzzyfire.controls.control_label`), per test set with boxes and metric (seeds averaged per resample);
+    sets without boxes have no AP to compare."""
     from eval.stats import MatchTable, paired_bootstrap
 
-    t2 = [r for r in rows if "table2" in r["tables"] and ALARMS not in r]
-    names = list(dict.fromkeys(r["mixture"] for r in t2))
+    if not cfg.report.bootstrap:
+        return []
+    scored = [r for r in rows if ALARMS not in r]
+    names = list(dict.fromkeys(r["mixture"] for r in scored if "table2" in r["tables"]))
     real_only = [n for n in names if parse_mixture(n).synth == 0]
     baseline = cfg.report.baseline or (max(real_only, key=lambda n: parse_mixture(n).real) if real_only else None)
-    if not cfg.report.bootstrap or baseline not in names:
+    # (baseline's table, its mixture, its label, the compared mixture): Table 2 runs against the baseline, then
+    # each mixture against its control run
+    pairs = [("table2", baseline, baseline, n) for n in names if n != baseline] if baseline in names else []
+    controlled = dict.fromkeys(r["mixture"] for r in scored if CONTROL_TABLE in r["tables"])
+    pairs += [(CONTROL_TABLE, n, control_label(n), n) for n in names if n in controlled]
+    if not pairs:
         return []
     out = []
-    rng = np.random.default_rng(0)
-    for test in dict.fromkeys(r["test_set"] for r in t2):
-        tables = {
-            n: [MatchTable.load(Path(r["matches"])) for r in t2 if r["mixture"] == n and r["test_set"] == test]
-            for n in names
-        }
-        for name in names:
-            if name == baseline or not tables[name] or not tables[baseline]:
-                continue
-            deltas = paired_bootstrap(tables[baseline], tables[name], rng, cfg.report.bootstrap)
-            for metric, d in deltas.items():
-                out.append({"test_set": test, "mixture": name, "baseline": baseline, "metric": metric,
+    rngs = {"table2": np.random.default_rng(0), CONTROL_TABLE: np.random.default_rng(1)}  # controls leave the rest
+    for test in dict.fromkeys(r["test_set"] for r in scored if "table2" in r["tables"]):
+        runs: dict[tuple[str, str], list[MatchTable]] = {}
+        for r in (r for r in scored if r["test_set"] == test):
+            matches = MatchTable.load(Path(r["matches"]))
+            for table in r["tables"]:
+                runs.setdefault((table, r["mixture"]), []).append(matches)
+        for table, base, base_label, name in pairs:
+            a, b = runs.get((table, base), []), runs.get(("table2", name), [])
+            for metric, d in (paired_bootstrap(a, b, rngs[table], cfg.report.bootstrap) if a and b else {}).items():
+                out.append({"test_set": test, "mixture": name, "baseline": base_label, "metric": metric,
                             "delta": d.to_dict()})  # fmt: skip
     return out
 
@@ -124,6 +133,7 @@ def write_report(
 
     t2 = [r for r in rows if "table2" in r["tables"]]
     t1 = [r for r in rows if "table1" in r["tables"]]
+    controls = [r for r in rows if CONTROL_TABLE in r["tables"]]
     samples = {label("real (train split)", data.real.standin): data.real.with_split(cfg.real.train_split)}
     if data.rare is not None:
         samples[label(cfg.rare.name, data.rare.standin)] = data.rare
@@ -135,7 +145,8 @@ def write_report(
     columns = ("mixture", "method", "seed", "test_set", "AP", "AP50", "AP25", *alarms, "run")
     title = cfg.report.title + (" — STAND-IN DATA" if data.standin else "")
     return write_study_report(
-        out, t2, np.random.default_rng(0), method_results=t1, gaps=realism_gaps(cfg, data, datasets, out, pools),
+        out, t2, np.random.default_rng(0), method_results=t1, controls=controls,
+        gaps=realism_gaps(cfg, data, datasets, out, pools),
         comparisons=comparisons(cfg, rows), errors=error_rows(datasets, specs, results), samples=shown,
         run_columns=columns, notice=STANDIN_NOTICE if data.standin else "", title=title,
     )  # fmt: skip
@@ -167,7 +178,8 @@ def report_pools(
     """The synthetic pools the report shows (samples, realism gap) by name: each shared pool by its method, named
     ``<method> simulated flames (R0 mixtures)`` when own cut-out pools (``own``, by (mixture, method, seed)) took
     its place in the mixtures with real images, and then the own pool of each such mixture's first seed
-    (``<method> flames.source=<source>[ own_frames=<share>] <mixture> seed <seed>``)."""
+    (``<method> flames.source=<source>[ own_frames=<share>] <mixture> seed <seed>``; a control's
+    ``<mixture> copies (control) seed <seed>``)."""
     shown: dict[str, DataRef] = {}
     for method, ref in data.pools.items():
         shown[f"{method} simulated flames (R0 mixtures)" if any(k[1] == method for k in own) else method] = ref
@@ -175,6 +187,9 @@ def report_pools(
     for mixture, method, seed in own:
         firsts[(mixture, method)] = min(seed, firsts.get((mixture, method), seed))
     for (mixture, method), seed in sorted(firsts.items()):
+        if method == CONTROL:
+            shown[f"{control_label(mixture)} (control) seed {seed}"] = own[(mixture, method, seed)]
+            continue
         pool = getattr(cfg.synth, method)
         frames = f" own_frames={pool.own_frames:g}" if getattr(pool, "own_frames", 0) else ""
         name = f"{method} flames.source={pool.flames.source}{frames} {mixture} seed {seed}"

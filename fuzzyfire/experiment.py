@@ -29,6 +29,7 @@ from curate.core.lock import lock_status, lock_summary
 from curate.mix import mixture_dir, parse_mixture, write_mixture
 from eval.errors import ALARMS
 from fuzzyfire.aggregate import STANDIN_NOTICE, result_rows, write_report, write_summary
+from fuzzyfire.controls import CONTROL, CONTROL_TABLE, control_pools, has_control
 from fuzzyfire.cutout_pools import cutout_pools, simulated
 from fuzzyfire.datasets import DataRef, Datasets
 from fuzzyfire.executors import Outcome
@@ -100,12 +101,16 @@ class GridEntry:
 
 
 def grid_entries(cfg: ExperimentConfig) -> list[GridEntry]:
-    """The distinct runs of one seed, Table 2 first, then Table 1 (a run in both tables is one run). This is the
-    one place that decides which runs exist and which tables they fill."""
+    """The distinct runs of one seed, Table 2 first, then the controls (``grid.control``: method
+    :data:`fuzzyfire.controls.CONTROL`), then Table 1 (a run in two tables is one run). This is the one place
+    that decides which runs exist and which tables they fill."""
     tables: dict[tuple[str, str | None], list[str]] = {}
     for name in cfg.grid.mixtures:
         method = None if parse_mixture(name).synth == 0 else cfg.grid.synthetic
         tables.setdefault((name, method), []).append("table2")
+    for name in cfg.grid.mixtures if cfg.grid.control else ():
+        if has_control(name):
+            tables.setdefault((name, CONTROL), []).append(CONTROL_TABLE)
     for name in cfg.grid.table1:
         if parse_mixture(name).real:
             raise ValueError(f"grid.table1: {name} has real images; Table 1 compares synthetic-only training")
@@ -132,18 +137,20 @@ def write_mixtures(
     own: Mapping[tuple[str, str, int], DataRef] | None = None,
 ) -> dict[tuple[str, str | None, int], DataRef]:
     """Write every (mixture, method, seed) training set of ``grid``; returns their references. ``own``: the
-    pool of a (mixture, method, seed) that has its own (:func:`fuzzyfire.cutout_pools.cutout_pools`) instead of
-    the method's shared one."""
+    pool of a (mixture, method, seed) that has its own (:func:`fuzzyfire.cutout_pools.cutout_pools`,
+    :func:`fuzzyfire.controls.control_pools`) instead of the method's shared one."""
     real_train = data.real.with_split(cfg.real.train_split)
     real_pool = datasets.get(real_train)
     val_ref = data.real.with_split(cfg.real.val_split)
     val = functools.cache(lambda: _yolo_validation(datasets, val_ref, cfg.classes))  # only if a mixture is written
     refs = {}
     for method in dict.fromkeys(e.method for e in grid):
-        shared = data.pools[method].with_split(None) if method else None
+        shared = data.pools[method].with_split(None) if method in data.pools else None
         for seed in cfg.grid.seeds:
             for name in (e.mixture for e in grid if e.method == method):
                 synth = (own or {}).get((name, method, seed), shared) if method else None
+                if method and synth is None:
+                    raise KeyError(f"no {method} pool for {name} seed {seed}")  # a control without its pool
                 pool = datasets.get(synth) if synth else _empty(real_pool.root, cfg.classes)
                 key = {"real": real_train.key(), "synth": synth.key() if synth else None, "classes": list(cfg.classes)}
                 root = out / "mixtures" / f"{method or 'real'}-{digest(key)}"
@@ -314,7 +321,10 @@ def run_experiment(cfg: ExperimentConfig, base: Path, out: Path, executor=None) 
     if data.standin:
         _say(STANDIN_NOTICE)
     drawn = [e.mixture for e in grid if e.method == "method2"]
-    own = cutout_pools(cfg, drawn, data.real.with_split(cfg.real.train_split), datasets, base, out)
+    real_train = data.real.with_split(cfg.real.train_split)
+    own = cutout_pools(cfg, drawn, real_train, datasets, base, out)
+    controlled = [e.mixture for e in grid if e.method == CONTROL]
+    own = {**own, **control_pools(cfg, controlled, real_train, datasets, base, out)}
     specs = plan_runs(cfg, grid, data, write_mixtures(cfg, grid, data, datasets, out, own), out)
     results = run_grid(specs, datasets, executor) if executor is not None else finished_runs(specs)
     rows = result_rows(specs, results, out, datasets)

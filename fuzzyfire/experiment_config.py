@@ -117,7 +117,9 @@ class SynthConfig:
 @dataclass(frozen=True)
 class GridConfig:
     """The runs: every mixture x seed. ``mixtures`` make Table 2 (their synthetic images from ``synthetic``);
-    ``table1`` mixtures (synthetic only) are trained with every method for Table 1."""
+    ``table1`` mixtures (synthetic only) are trained with every method for Table 1. ``control``: each Table 2
+    mixture with real and synthetic images is also trained with its synthetic images replaced by flame-free
+    copies of its own real images (:mod:`fuzzyfire.controls`), and compared with that run."""
 
     mixtures: tuple[str, ...] = (
         "R250_S0", "R500_S0", "R750_S0", "R1000_S0",
@@ -127,6 +129,7 @@ class GridConfig:
     synthetic: Literal["method1", "method2"] = "method2"
     table1: tuple[str, ...] = ("R0_S1000",)
     seeds: tuple[int, ...] = (0, 1, 2, 3, 4)
+    control: bool = False
 
 
 @dataclass(frozen=True)
@@ -174,6 +177,10 @@ class ExperimentConfig:
             )
         if not self.grid.seeds:
             raise ExperimentConfigError("grid.seeds is empty")
+        if self.grid.control and self.synth.method2 is None:
+            raise ExperimentConfigError(
+                "grid.control makes its copies of the real images with Method 2, but synth.method2 is null"
+            )
         if not self.grid.mixtures and not self.grid.table1:
             raise ExperimentConfigError("grid.mixtures and grid.table1 are both empty: nothing to train")
         if not self.classes:
