@@ -261,6 +261,6 @@ def write_summary(cfg: ExperimentConfig, specs, results, rows, out: Path, standi
 
 
 def table_text(out: Path) -> str:
-    """Table 2 (and Table 1) in Markdown, as written into ``out/tables``."""
-    parts = [(out / "tables" / f"{t}.md") for t in ("table1", "table2")]
+    """Table 2 (and Table 1, and the controls) in Markdown, as written into ``out/tables``."""
+    parts = [(out / "tables" / f"{t}.md") for t in ("table1", "table2", "controls")]
     return "\n".join(p.read_text(encoding="utf-8") for p in parts if p.is_file())

@@ -19,7 +19,7 @@ from curate.core.config import build_config
 from curate.core.dataset import DatasetBuilder
 from curate.core.formats.coco import read_coco
 from eval.stats import MatchTable
-from fuzzyfire.aggregate import comparisons
+from fuzzyfire.aggregate import comparisons, table_text
 from fuzzyfire.controls import CONTROL, CONTROL_TABLE, control_config, control_label, control_pools, has_control
 from fuzzyfire.datasets import Datasets
 from fuzzyfire.experiment import grid_entries, needed_methods, prepare_data, write_mixtures
@@ -186,6 +186,7 @@ def test_a_study_with_controls_trains_reports_and_compares_them(tmp_path: Path) 
     assert set(before) < {p.parent.name for p in (out / "runs").glob("*/*/results.json")}
     assert [r for r in done.rows if "table2" in r["tables"]] == plain.rows
     assert "| R6_S6 copies |" in (out / "tables" / "controls.md").read_text()
+    assert "| R6_S6 copies |" in table_text(out)  # what `fuzzyfire experiment` prints at the end
     compared = (out / "tables" / "comparisons.csv").read_text().splitlines()
     assert any(line.startswith("common (stand-in),R6_S6,R6_S6 copies,AP50,") for line in compared)
     assert "Controls — the synthetic images replaced by flame-free copies" in (out / "report.html").read_text()
