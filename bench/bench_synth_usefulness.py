@@ -21,7 +21,9 @@ Variants (on shared-data.yaml: panoramas, the flames' new look, 2 images per vie
   (a second, cropped and camera-treated copy of each real image) - the control of ``own_frames``.
 
 Lines: ``synth_use_<variant>_<test>_<metric>_delta: +d AP points (95% CI lo..hi, p)`` for AP50 and AP on every
-test set with fire, ``synth_use_<variant>_R200_S200_<test>_AP50: mean % (seeds: ...), std`` and, on a
+test set with fire, ``synth_use_<variant>_vs_copies_<test>_<metric>_delta`` the same against the variant's control
+(R200_S200 on flame-free copies of its real images: ``grid.control``, on in shared-data.yaml; trained once per
+look, shared by the variants that differ only in their flames' source or frames), ``synth_use_<variant>_R200_S200_<test>_AP50: mean % (seeds: ...), std`` and, on a
 negatives-only set, ``..._alarms_per_100``. Skips cleanly without ../shared/data.
 
 .venv/bin/python bench/bench_synth_usefulness.py [--out out/bench-synth-usefulness] [--seeds 0,1,2] [--only look,own_frames]  (the default pair)
@@ -36,6 +38,8 @@ import sys
 from pathlib import Path
 
 import numpy as np
+
+from fuzzyfire.controls import control_label
 
 ROOT = Path(__file__).resolve().parents[1]
 CONFIG = ROOT / "configs" / "shared-data.yaml"
@@ -75,19 +79,21 @@ def _config(overrides: list[str], seeds: list[int]):
 
 
 def _print_deltas(name: str, table: Path) -> None:
-    """The R200_S200 - R200_S0 lines of a study's ``tables/comparisons.csv``."""
+    """The R200_S200 - R200_S0 lines of a study's ``tables/comparisons.csv``, then the R200_S200 - its control
+    lines (``vs_copies``: the same mixture on flame-free copies of its real images, ``grid.control``)."""
     with table.open(encoding="utf-8") as f:
-        for row in csv.DictReader(f):
-            if row["mixture"] == MIXTURE and row["baseline"] == BASELINE and row["metric"] in ("AP50", "AP"):
-                print(f"synth_use_{name}_{row['test_set']}_{row['metric']}_delta: {float(row['delta']):+.1f} AP points "
-                      f"(95% CI {float(row['low']):+.1f}..{float(row['high']):+.1f}, p {row['p_value']})")  # fmt: skip
+        rows = [r for r in csv.DictReader(f) if r["mixture"] == MIXTURE and r["metric"] in ("AP50", "AP")]
+    for baseline, what in ((BASELINE, ""), (control_label(MIXTURE), "vs_copies_")):
+        for row in (r for r in rows if r["baseline"] == baseline):
+            print(f"synth_use_{name}_{what}{row['test_set']}_{row['metric']}_delta: {float(row['delta']):+.1f} AP "
+                  f"points (95% CI {float(row['low']):+.1f}..{float(row['high']):+.1f}, p {row['p_value']})")  # fmt: skip
 
 
 def _print_means(name: str, rows: list[dict]) -> None:
     """Mean and std over seeds of R200_S200's AP50 per test set with fire, and of its alarms per 100 images on a
     negatives-only set."""
     for test in sorted({r["test_set"] for r in rows}):
-        mine = [r for r in rows if r["test_set"] == test and r["mixture"] == MIXTURE]
+        mine = [r for r in rows if r["test_set"] == test and r["mixture"] == MIXTURE and "table2" in r["tables"]]
         if any(r["AP50"] is not None for r in mine):
             key, unit, values = "AP50", " %", [100 * r["AP50"] for r in mine]
         else:
