@@ -70,6 +70,8 @@ def test_the_control_pool_has_no_flame_and_keeps_the_rest_of_the_method2_config(
     assert (control.negatives, control.own_frames, control.backgrounds, control.frames) == (1.0, 1.0, (), ())
     assert control.flames.source == "simulated" and control.distractors == m2.distractors
     assert replace(control, negatives=m2.negatives, own_frames=0.0) == m2  # nothing else differs
+    own = replace(m2, own_frames=0.5, flames=replace(m2.flames, source="both", cutout_share=0.3, cutout_max_fill=0.8))
+    assert control_config(own) == control  # the variants of a study share their control
 
 
 @pytest.fixture(scope="module")
