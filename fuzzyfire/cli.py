@@ -21,14 +21,17 @@ COMMAND_MODULES: tuple[str, ...] = ("curate.cli", "synth.cli", "train.cli", "eva
 _DESCRIPTION = """Run the study of a YAML config: curate the real data (optional), generate the Method 1 and
 Method 2 pools, draw the R(m)_S(n) mixtures, train every mixture x seed, score each run on the common, the
 rare and the named test sets (tests:; a set without labels gets its false alarms per 100 images), and write
-tables (Markdown, CSV, LaTeX), Figure 5 and report.html. Stages are cached by a hash of their config and every
-run writes results.json last: run the same command again to resume (a test set added later is scored on the
-finished runs without training them again; --report-only lists what is not scored yet).
+tables (Markdown, CSV, LaTeX), Figure 5 and report.html. With grid.control each real + synthetic mixture is
+also trained on flame-free copies of its own real images instead of its synthetic ones and compared with them.
+Stages are cached by a hash of their config and every run writes results.json last: run the same command again
+to resume (a test set added later is scored on the finished runs without training them again; --report-only
+lists what is not scored yet).
 
 example:
   fuzzyfire experiment configs/demo.yaml --out out/demo
   fuzzyfire experiment configs/shared-data.yaml --out out/shared --set grid.seeds=[0,1,2]
   fuzzyfire experiment configs/shared-data.yaml --out out/shared --report-only   # tables so far
+  fuzzyfire experiment configs/demo.yaml --out out/demo --set grid.control=true   # + the control runs
   fuzzyfire experiment configs/shared-data.yaml --out out/shared --set tests.mine.path=/data/my-photos
   fuzzyfire experiment configs/paper.yaml --out /shared/study --executor ray --address ray://head:10001 \\
       --set real.path=/data/fiiw --set rare.path=/data/rare
