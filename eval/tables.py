@@ -61,11 +61,14 @@ def heading(column: tuple[str, str]) -> str:
 
 def marks(table: Table, scale: float = 100.0, digits: int = 1) -> dict[Key, str]:
     """``"best"`` / ``"second"`` per column by mean as displayed (``mean * scale`` rounded to ``digits``, so
-    cells that read the same share a mark; the lowest alarm rates are best); unmarked cells are not listed."""
+    cells that read the same share a mark; the lowest alarm rates are best); unmarked cells are not listed. A
+    column with fewer than two rows has no mark (nothing to compare)."""
     out: dict[Key, str] = {}
     for col in table.columns:
         f = shown_scale(col[1], scale)
         values = {row: round(c.mean * f, digits) for row in table.rows if (c := table.cell(row, col)) is not None}
+        if len(values) < 2:
+            continue
         ranked = sorted(set(values.values()), reverse=col[1] != ALARMS)
         for row, v in values.items():
             if v == ranked[0]:

@@ -103,3 +103,8 @@ def test_table1_has_the_alarm_column_too():
     ]
     t = table1(res)
     assert t.columns[-1] == ("fire-free", ALARMS) and t.cell("Method 1 (3D) R0_S1000", t.columns[-1]).mean == 80.0
+
+
+def test_a_column_with_one_row_has_no_mark():
+    one = [r for r in results() if r["mixture"] == "R500_S500"]
+    assert marks(table2(one)) == {} and "| R500_S500 | 55.0 ± 1.4 |" in to_markdown(table2(one))
