@@ -229,6 +229,7 @@ def write_study_report(
     from eval.plots import plot_figure5
     from eval.tables import control_table, table1, table2
 
+    drop_stale_tables(out / "tables", method_results, results, controls, comparisons)
     sections: list[tuple[str, str]] = []
     if method_results:
         t1 = table1(method_results, metrics=table_metrics(method_results))
@@ -251,7 +252,7 @@ def write_study_report(
     if comparisons:
         sections.append(("Paired comparisons (image-level bootstrap)", comparisons_html(comparisons)))
         (out / "tables").mkdir(parents=True, exist_ok=True)
-        (out / "tables" / "comparisons.csv").write_text(comparisons_csv(comparisons), encoding="utf-8")
+        (out / "tables" / COMPARISONS_FILE).write_text(comparisons_csv(comparisons), encoding="utf-8")
     if errors:
         sections.append(("Where AP50 goes (error breakdown)", errors_html(errors)))
     for label, ds in (samples or {}).items():
@@ -262,6 +263,23 @@ def write_study_report(
     out.mkdir(parents=True, exist_ok=True)
     page.write_text(render_page(title, sections, notice), encoding="utf-8")
     return page
+
+
+#: The files of ``out/tables`` a study report writes (and removes when this report has none of them).
+TABLE_STEMS: tuple[str, ...] = ("table1", "table2", "controls")
+TABLE_SUFFIXES: tuple[str, ...] = (".md", ".csv", ".tex")
+COMPARISONS_FILE = "comparisons.csv"
+
+
+def drop_stale_tables(folder: Path, *parts: Sequence[Any]) -> None:
+    """Remove the table files of ``folder`` that this report will not write again: ``table1``, ``table2`` and
+    ``controls`` (``parts`` 0-2: their rows) and ``comparisons.csv`` (``parts`` 3), so a study re-reported with
+    fewer runs or another config never shows an earlier report's table beside its own. Other files are kept."""
+    stems = [stem for stem, rows in zip(TABLE_STEMS, parts[:3]) if not rows]
+    stale = [folder / f"{stem}{suffix}" for stem in stems for suffix in TABLE_SUFFIXES]
+    stale += [folder / COMPARISONS_FILE] if not parts[3] else []
+    for path in stale:
+        path.unlink(missing_ok=True)
 
 
 def table_metrics(results: Sequence[Mapping[str, Any]]) -> tuple[str, ...]:

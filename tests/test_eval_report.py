@@ -95,6 +95,11 @@ def test_write_study_report_writes_tables_figures_and_page(tmp_path):
     assert "STAND-IN DATA" in text and 'src="figures/figure5_AP.png"' in text and "<td>+5.0</td>" in text
     assert "Realism gap" in text and "<td>0.853 [0.836, 0.875]</td>" in text and "<td>5.27 [4.80, 5.79]</td>" in text
     assert text.count('src="samples/common__stand_in/') == 6 and text.count("<td>R0_S1000</td>") >= 4
+    (out / "tables" / "notes.txt").write_text("mine\n")
+    again = [r for r in results if r["mixture"] == "R1000_S0"]
+    write_study_report(out, again, np.random.default_rng(0), comparisons=[], samples={})
+    left = sorted(p.name for p in (out / "tables").iterdir())  # no Table 1 or comparison of the earlier report
+    assert left == ["notes.txt", "table2.csv", "table2.md", "table2.tex"]
 
 
 def test_errors_table_means_over_seeds() -> None:
