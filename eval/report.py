@@ -5,7 +5,7 @@ the run list, and the page that ties them together (one self-contained folder; i
 from __future__ import annotations
 
 import html
-from collections.abc import Mapping, Sequence
+from collections.abc import Collection, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -216,20 +216,21 @@ def write_study_report(
     title: str = "fuzzyfire study",
 ) -> Path:
     """Write ``out/tables/table{1,2}.{md,csv,tex}`` (AP, AP50 and, when every run has it, AP25),
-    ``out/figures/figure5_{AP,AP50}.png``, sample
-    thumbnails and ``out/report.html``; returns the page's path.
+    ``out/figures/figure5_{AP,AP50}.png``, sample thumbnails and ``out/report.html``, and remove the table files of
+    an earlier report that this one does not write (:func:`drop_stale_tables`); returns the page's path.
 
     ``results``: one mapping per (run, test set) as :func:`eval.tables.table2` takes (also the run list);
     ``method_results``: Table 1 rows (with ``method``); ``controls``: rows of the control runs (Table 2 mixtures
     whose synthetic images were replaced by flame-free copies of their own real images), a table of their own
-    (``out/tables/controls.{md,csv,tex}``, rows labelled ``<mixture> copies``) and listed with the runs; ``gaps``: see :func:`gaps_html` (also written as
-    ``out/tables/gap.json``); ``comparisons``: see :func:`comparisons_html` (also written as
+    (``out/tables/controls.{md,csv,tex}``, rows labelled ``<mixture> copies``) and listed with the runs;
+    ``gaps``: see :func:`gaps_html` (also written as ``out/tables/gap.json``); ``comparisons``: see :func:`comparisons_html` (also written as
     ``out/tables/comparisons.csv``, :func:`comparisons_csv`); ``errors``: see :func:`errors_html`;
     ``samples``: datasets to show a few images of, by label; ``notice``: shown at the top of the page."""
     from eval.plots import plot_figure5
     from eval.tables import control_table, table1, table2
 
-    drop_stale_tables(out / "tables", method_results, results, controls, comparisons)
+    parts = {"table1": method_results, "table2": results, "controls": controls}
+    drop_stale_tables(out / "tables", [stem for stem, rows in parts.items() if rows], bool(comparisons))
     sections: list[tuple[str, str]] = []
     if method_results:
         t1 = table1(method_results, metrics=table_metrics(method_results))
@@ -271,14 +272,12 @@ TABLE_SUFFIXES: tuple[str, ...] = (".md", ".csv", ".tex")
 COMPARISONS_FILE = "comparisons.csv"
 
 
-def drop_stale_tables(folder: Path, *parts: Sequence[Any]) -> None:
-    """Remove the table files of ``folder`` that this report will not write again: ``table1``, ``table2`` and
-    ``controls`` (``parts`` 0-2: their rows) and ``comparisons.csv`` (``parts`` 3), so a study re-reported with
-    fewer runs or another config never shows an earlier report's table beside its own. Other files are kept."""
-    stems = [stem for stem, rows in zip(TABLE_STEMS, parts[:3]) if not rows]
-    stale = [folder / f"{stem}{suffix}" for stem in stems for suffix in TABLE_SUFFIXES]
-    stale += [folder / COMPARISONS_FILE] if not parts[3] else []
-    for path in stale:
+def drop_stale_tables(folder: Path, written: Collection[str], comparisons: bool) -> None:
+    """Remove the table files of ``folder`` that this report will not write again: those of the
+    :data:`TABLE_STEMS` not in ``written``, and ``comparisons.csv`` unless ``comparisons``, so a study re-reported
+    with fewer runs or another config never shows an earlier report's table beside its own. Other files stay."""
+    stale = [folder / f"{stem}{suffix}" for stem in TABLE_STEMS if stem not in written for suffix in TABLE_SUFFIXES]
+    for path in stale + ([] if comparisons else [folder / COMPARISONS_FILE]):
         path.unlink(missing_ok=True)
 
 
