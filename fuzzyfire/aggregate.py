@@ -89,7 +89,8 @@ def comparisons(cfg: ExperimentConfig, rows: Sequence[dict]) -> list[dict]:
 
     if not cfg.report.bootstrap:
         return []
-    scored = [r for r in rows if ALARMS not in r]
+    compared = ("table2", CONTROL_TABLE)  # Table 1's runs are not compared: their matches are not read
+    scored = [r for r in rows if ALARMS not in r and any(t in r["tables"] for t in compared)]
     names = list(dict.fromkeys(r["mixture"] for r in scored if "table2" in r["tables"]))
     real_only = [n for n in names if parse_mixture(n).synth == 0]
     baseline = cfg.report.baseline or (max(real_only, key=lambda n: parse_mixture(n).real) if real_only else None)
