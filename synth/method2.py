@@ -80,9 +80,11 @@ class Method2Config:
     def __post_init__(self) -> None:
         if self.n < 1 or self.scenes < 0 or self.images_per_view < 1 or self.width < 16 or self.height < 16:
             raise ValueError(f"invalid Method 2 config: {self}")
-        if self.scenes == 0 and not (self.environments or self.backgrounds or self.frames or self.streets):
+        places = self.environments or self.backgrounds or self.frames or self.streets or self.own_frames > 0
+        if self.scenes == 0 and not places:  # own_frames: the experiment adds the mixture's images as frames
             raise ValueError(
-                "scenes is 0 and no environments, streets, backgrounds or frames are given: nothing to composite on"
+                "scenes is 0 and no environments, streets, backgrounds, frames or own_frames are given: nothing to "
+                "composite on"
             )
         if not 0.0 <= self.own_frames <= 1.0:
             raise ValueError(f"own_frames must be in 0..1, got {self.own_frames}")

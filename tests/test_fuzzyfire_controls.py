@@ -74,6 +74,13 @@ def test_the_control_pool_has_no_flame_and_keeps_the_rest_of_the_method2_config(
     assert control_config(own) == control  # the variants of a study share their control
 
 
+def test_a_pool_on_photos_only_has_a_control() -> None:
+    m2 = _config().synth.method2
+    photos = replace(m2, environments=(), scenes=0, backgrounds=(Path("photos"),))
+    control = control_config(photos)  # no environment, photo or frame left: its own frames are its places
+    assert (control.environments, control.backgrounds, control.scenes, control.own_frames) == ((), (), 0, 1.0)
+
+
 @pytest.fixture(scope="module")
 def built(tmp_path_factory: pytest.TempPathFactory) -> tuple[Any, dict, dict, str]:
     """(data, control pools, mixture refs, printed) of the toy config with controls, nothing trained."""

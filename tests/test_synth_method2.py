@@ -108,6 +108,12 @@ def test_closeups_frame_one_large_flame_at_the_bottom(library) -> None:
         M.Method2Config(closeup=1.5)
 
 
+def test_a_config_with_no_place_is_refused_unless_the_experiment_adds_its_own_frames() -> None:
+    with pytest.raises(ValueError, match="nothing to composite on"):
+        M.Method2Config(scenes=0)
+    assert M.Method2Config(scenes=0, own_frames=1.0).own_frames == 1.0
+
+
 def _plain_flame(colour: tuple[int, int, int]) -> F.Sprite:
     emission = np.zeros((12, 8, 3), np.uint8)
     emission[:] = colour
