@@ -46,10 +46,19 @@ def control_label(mixture: str) -> str:
     return f"{mixture} {CONTROL}"
 
 
+#: The Method 2 keys a control keeps from its pool's config: what acts on an image that gets no flame (its size,
+#: count and seed, the crops and camera, blend decoys, distractors) and the flame library (built, never drawn).
+KEPT: tuple[str, ...] = ("n", "seed", "width", "height", "images_per_view", "smoke_class", "camera", "blend",
+                         "distractors")  # fmt: skip
+
+
 def control_config(cfg: Method2Config) -> Method2Config:
-    """The Method 2 config of a control pool: ``cfg`` without flames (every image a negative) on the mixture's own
-    frames only (its photos and frames dropped; the experiment adds the frames), everything else as ``cfg``."""
-    return replace(simulated(cfg), own_frames=1.0, negatives=1.0, backgrounds=(), frames=())
+    """The Method 2 config of a control pool: no flame (every image a negative) on the mixture's own frames only
+    (the experiment adds them as frames), with :data:`KEPT` and the simulated flame library of ``cfg``; the places
+    (environments, streets, photos, frames) and the flames' placement and look are the defaults, so the variants
+    of a study that differ only in those share one control (and its runs)."""
+    kept = {key: getattr(cfg, key) for key in KEPT}
+    return type(cfg)(**kept, flames=simulated(cfg).flames, scenes=0, own_frames=1.0, negatives=1.0)
 
 
 def control_pools(

@@ -20,7 +20,7 @@ from curate.core.dataset import DatasetBuilder
 from curate.core.formats.coco import read_coco
 from eval.stats import MatchTable
 from fuzzyfire.aggregate import comparisons, table_text
-from fuzzyfire.controls import CONTROL, CONTROL_TABLE, control_config, control_label, control_pools, has_control
+from fuzzyfire.controls import CONTROL, CONTROL_TABLE, KEPT, control_config, control_label, control_pools, has_control
 from fuzzyfire.datasets import Datasets
 from fuzzyfire.experiment import grid_entries, needed_methods, prepare_data, write_mixtures
 from fuzzyfire.experiment_config import ExperimentConfig, ExperimentConfigError
@@ -69,9 +69,13 @@ def test_the_control_pool_has_no_flame_and_keeps_the_rest_of_the_method2_config(
     control = control_config(m2)
     assert (control.negatives, control.own_frames, control.backgrounds, control.frames) == (1.0, 1.0, (), ())
     assert control.flames.source == "simulated" and control.distractors == m2.distractors
-    assert replace(control, negatives=m2.negatives, own_frames=0.0) == m2  # nothing else differs
+    assert all(getattr(control, key) == getattr(m2, key) for key in KEPT) and control.flames == m2.flames
     own = replace(m2, own_frames=0.5, flames=replace(m2.flames, source="both", cutout_share=0.3, cutout_max_fill=0.8))
     assert control_config(own) == control  # the variants of a study share their control
+    places = replace(m2, environments=(Path("panoramas"),), backgrounds=(Path("photos"),), background_holdout=0.25)
+    looks = replace(m2, never_darken=True, max_flames=1, closeup=0.5, flame_opacity=(0.5, 0.6), light=False)
+    assert control_config(places) == control_config(looks) == control  # places and flame looks: one control
+    assert control_config(replace(m2, camera=replace(m2.camera, defocus=0.9))) != control  # what acts on copies counts
 
 
 def test_a_pool_on_photos_only_has_a_control() -> None:
