@@ -16,7 +16,6 @@ Only Table 2 mixtures with real and synthetic images have a control; R0 mixtures
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
