@@ -16,6 +16,7 @@ Only Table 2 mixtures with real and synthetic images have a control; R0 mixtures
 from __future__ import annotations
 
 from collections.abc import Sequence
+from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -46,7 +47,8 @@ def control_label(mixture: str) -> str:
 
 
 #: The Method 2 keys a control keeps from its pool's config: what acts on an image that gets no flame (its size,
-#: count and seed, the crops and camera, blend decoys, distractors) and the flame library (built, never drawn).
+#: count and seed, the crops and camera, blend decoys, distractors); and it keeps the flame library, whose masks
+#: shape the blend decoys, but not the library's smoke (``rising_smoke``), which nothing draws.
 KEPT: tuple[str, ...] = ("n", "seed", "width", "height", "images_per_view", "smoke_class", "camera", "blend",
                          "distractors")  # fmt: skip
 
@@ -57,7 +59,8 @@ def control_config(cfg: Method2Config) -> Method2Config:
     (environments, streets, photos, frames) and the flames' placement and look are the defaults, so the variants
     of a study that differ only in those share one control (and its runs)."""
     kept = {key: getattr(cfg, key) for key in KEPT}
-    return type(cfg)(**kept, flames=simulated(cfg).flames, scenes=0, own_frames=1.0, negatives=1.0)
+    flames = replace(simulated(cfg).flames, rising_smoke=type(cfg.flames).rising_smoke)  # no decoy draws smoke
+    return type(cfg)(**kept, flames=flames, scenes=0, own_frames=1.0, negatives=1.0)
 
 
 def control_pools(

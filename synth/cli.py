@@ -26,7 +26,9 @@ def cmd_flames(args: argparse.Namespace) -> int:
     from synth.sprites import save_sequence
 
     texture = _texture(args)
-    seqs = procedural_library(args.n, args.seed, args.frames, args.keep_every, args.rare, args.generator, texture)
+    seqs = procedural_library(
+        args.n, args.seed, args.frames, args.keep_every, args.rare, args.generator, texture, args.rising_smoke
+    )
     for seq in progress(seqs, total=len(seqs), desc="flames"):
         save_sequence(args.out / seq.name, seq)
     preview = write_preview(seqs, args.out / "preview.png")
@@ -93,6 +95,12 @@ TEXTURE_HELP = (
 )
 
 
+RISING_HELP = (
+    "procedural flames' smoke only from the flame's middle up, rising from its tips (default: wherever the "
+    "simulated soot drifts, also low beside the base, where it can read as a dark stain on the ground)"
+)
+
+
 def _texture(args: argparse.Namespace) -> float:
     """--texture, or :data:`TEXTURE` for procedural flames when it is not given (0 with --flames: real sprites)."""
     if args.texture is not None:
@@ -137,10 +145,14 @@ def _dataset_config(args: argparse.Namespace) -> dict:
         raise ValueError("--library makes procedural flames, which --flames replaces: give one of them")
     if args.texture and args.flames:
         raise ValueError("--texture shapes procedural flames, which --flames replaces: give one of them")
+    if args.rising_smoke and args.flames:
+        raise ValueError("--rising-smoke shapes procedural flames, which --flames replaces: give one of them")
     w, h = args.size
     library = DEFAULT_LIBRARY if args.library is None else args.library
     folders = tuple(args.flames or ())
-    flames = FlameLibraryConfig(sequences=library, seed=args.seed, folders=folders, texture=_texture(args))
+    flames = FlameLibraryConfig(
+        sequences=library, seed=args.seed, folders=folders, texture=_texture(args), rising_smoke=args.rising_smoke
+    )
     return {
         "n": args.n,
         "seed": args.seed,
@@ -291,6 +303,7 @@ def _register_flames(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--keep-every", type=int, default=12, help="keep one frame every K steps")
     p.add_argument("--rare", type=float, default=0.05, help="fraction of chemical-colour (rare) flames")
     p.add_argument("--texture", type=float, help=TEXTURE_HELP)
+    p.add_argument("--rising-smoke", action="store_true", help=RISING_HELP)
     p.set_defaults(func=cmd_flames)
 
 
@@ -385,6 +398,7 @@ def _dataset_arguments(p: argparse.ArgumentParser, photos: bool = False) -> None
         help=f"procedural flame sequences to make instead of --flames (default {DEFAULT_LIBRARY})",
     )
     p.add_argument("--texture", type=float, help=TEXTURE_HELP)
+    p.add_argument("--rising-smoke", action="store_true", help=RISING_HELP)
     p.add_argument("--overwrite", action="store_true", help="replace a fuzzyfire dataset already at --out")
     p.add_argument("--smoke", action="store_true", help="also annotate smoke (class 'smoke', alpha >= 0.25)")
     p.add_argument(

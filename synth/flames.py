@@ -83,6 +83,8 @@ class FlameParams:
     detail: float = 1.0  # edge turbulence: the rendered flame is warped by noise of this amplitude, grid cells
     aspect: float = 0.0  # width / height of the flame box the sequence is stretched to (0: as simulated)
     texture: float = 0.0  # inner streaks: the temperature dips by up to this fraction in rising streaks (0: none)
+    rising_smoke: bool = False  # smoke only from the flame's middle up (False: wherever the soot drifts, also low
+    # beside the base, where it reads as a dark stain or shadow on the ground)
     frames: int = 1024
     keep_every: int = 12
     warmup: int = 100  # steps before the first kept frame (the first plume's mushroom cap leaves the grid)
@@ -337,10 +339,24 @@ def render_fields(
     mask = emission.max(axis=-1) > mask_level
     dens = np.clip(cv2.resize(soot, size, interpolation=cv2.INTER_LINEAR), 0.0, None)
     alpha = (1.0 - np.exp(-p.smoke * dens)) * (1.0 - emission.max(axis=-1)) * _border_window(t.shape)
+    if p.rising_smoke:
+        alpha = alpha * rising(mask)[:, None]
     over = np.empty(t.shape + (4,), np.uint8)
     over[..., :3] = np.uint8(round(p.smoke_grey * 255))
     over[..., 3] = np.round(np.clip(alpha, 0, 1) * 255).astype(np.uint8)
     return Sprite(over, np.round(emission * 255).astype(np.uint8), mask)
+
+
+def rising(mask: NDArray[np.bool_]) -> F32:
+    """(rows,) weight in [0, 1] of a sprite's smoke by row: 1 from the top of its flame ``mask`` (rows, cols) up, 0
+    from the flame's middle row down (a smoothstep between), so smoke rises from the flame and never lies beside
+    or below its base; all 1 for an empty mask."""
+    rows = np.nonzero(mask.any(axis=1))[0]
+    if not len(rows):
+        return np.ones(len(mask), np.float32)
+    top, middle = float(rows[0]), 0.5 * float(rows[0] + rows[-1])
+    r = np.clip((middle - np.arange(len(mask), dtype=np.float32)) / max(middle - top, 1.0), 0.0, 1.0)
+    return (r * r * (3.0 - 2.0 * r)).astype(np.float32)
 
 
 def _frame_warp(warp: tuple[F32, ...], rows: int, step: int) -> tuple[F32, ...]:

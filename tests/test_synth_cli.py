@@ -120,6 +120,11 @@ def _flames(tmp_path: Path, *extra: str) -> Path:
     return tmp_path / "fl"
 
 
+def test_flames_with_rising_smoke_are_written_with_the_key(tmp_path):
+    params = json.loads((_flames(tmp_path, "--rising-smoke") / "fluid-0-000" / "sequence.json").read_text())["params"]
+    assert params["rising_smoke"] is True
+
+
 def test_what_can_be_checked_fails_in_one_line_before_rendering(tmp_path, capsys):
     import pytest
 
@@ -136,6 +141,7 @@ def test_what_can_be_checked_fails_in_one_line_before_rendering(tmp_path, capsys
         (["--overwrite", "--backgrounds", str(tmp_path / "nophotos")], "nophotos: no such file or folder"),
         (["--overwrite", "--photo-share", "0.3"], "--photo-share is the share of views on --backgrounds/--frames"),
         (["--overwrite", "--library", "3"], "--library makes procedural flames, which --flames replaces"),
+        (["--overwrite", "--rising-smoke"], "--rising-smoke shapes procedural flames, which --flames replaces"),
         (["--overwrite", "--streets", "2"], "--streets needs --kits DIR"),
         (["--overwrite", "--kits", str(tmp_path)], "--kits are the building kits of --streets N"),
         (["--overwrite", "--streets", "2", "--kits", str(tmp_path / "nokits")], "nokits: no such kit folder"),

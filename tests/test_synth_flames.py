@@ -157,3 +157,28 @@ def test_texture_streaks_the_body_and_texture_0_changes_nothing():
     assert cols_var > 2 * rows_var  # vertical streaks: they change faster across than up
     with pytest.raises(ValueError, match="texture"):
         F.FlameParams(texture=1.0)
+
+
+def test_rising_smoke_keeps_the_flame_and_lifts_its_smoke_above_the_flames_middle():
+    """With rising_smoke a sprite's flame (emission, mask) is the same, byte for byte; its smoke alpha is 0 from the
+    flame's middle row down and unchanged from the flame's top up."""
+    for k in range(3):
+        seqs = {}
+        for rise in (False, True):
+            rng = np.random.default_rng([11, k])
+            p = F.sample_params(rng, frames=120, keep_every=40, rising_smoke=rise, smoke=2.0)
+            seqs[rise] = F.render_fields(*_fields(p), p, F.palettes(p)[0])
+        low, high = seqs[False], seqs[True]
+        assert np.array_equal(low.emission, high.emission) and np.array_equal(low.mask, high.mask)
+        rows = np.nonzero(high.mask.any(axis=1))[0]
+        middle = (rows[0] + rows[-1]) // 2
+        assert high.over[middle:, :, 3].max() == 0 and low.over[middle:, :, 3].max() > 0
+        assert np.array_equal(high.over[: rows[0] + 1, :, 3], low.over[: rows[0] + 1, :, 3])
+    assert np.array_equal(F.rising(np.zeros((5, 3), bool)), np.ones(5, np.float32))  # no flame: smoke as it is
+
+
+def _fields(p: F.FlameParams) -> tuple[np.ndarray, np.ndarray]:
+    """(temperature, soot) fields of ``p``'s grid: a hot tongue in the lower middle, soot everywhere."""
+    y, x = np.mgrid[0 : p.rows, 0 : p.cols].astype(np.float32)
+    hot = np.clip(1.0 - np.hypot((x - p.cols / 2) / (0.15 * p.cols), (y - 0.7 * p.rows) / (0.2 * p.rows)), 0, 1)
+    return hot.astype(np.float32), np.full((p.rows, p.cols), 0.8, np.float32)

@@ -45,6 +45,12 @@ def test_procedural_library_is_seeded_and_folders_load(tmp_path):
     save_sequence(tmp_path / "lib" / "one", a[0])
     loaded = L.build_library(L.FlameLibraryConfig(folders=(tmp_path / "lib",)))
     assert [s.name for s in loaded] == ["fluid-7-000"] and len(loaded[0].sprites) == len(a[0].sprites)
+    risen = L.build_library(
+        L.FlameLibraryConfig(sequences=2, seed=7, frames=40, keep_every=20, rare=0.0, rising_smoke=True)
+    )
+    assert [s.meta["params"]["rising_smoke"] for s in risen] == [True, True]  # the key reaches the flames
+    pairs = [(x, y) for s, t in zip(a, risen) for x, y in zip(s.sprites, t.sprites)]  # the same flames (their
+    assert all(abs(int(x.mask.sum()) - int(y.mask.sum())) <= 0.03 * x.mask.sum() for x, y in pairs)  # crops differ)
 
 
 def _tagged(name: str, generator: str) -> L.SpriteSequence:
