@@ -185,8 +185,11 @@ def cmd_method2(args: argparse.Namespace) -> int:
 
     if args.photo_share is not None and not (args.backgrounds or args.frames):
         raise ValueError("--photo-share is the share of views on --backgrounds/--frames, which are not given")
+    if args.photo_negatives is not None and not args.backgrounds:
+        raise ValueError("--photo-negatives is the share of --backgrounds photos left without flames, none are given")
     share = 0.5 if args.photo_share is None else args.photo_share
     photos = {"backgrounds": tuple(args.backgrounds or ()), "frames": tuple(args.frames or ()), "photo_share": share}
+    photos["photo_negatives"] = args.photo_negatives
     cfg = Method2Config(**_dataset_config(args), **photos, **_blend_config(args))
     result = run_method2(cfg, build_library(cfg.flames), args.out, overwrite=args.overwrite, workers=_workers(args))
     print(f"wrote {args.out}: {args.n} images ({', '.join(result.files.values())})")
@@ -441,6 +444,8 @@ def _register_method2(sub: argparse._SubParsersAction) -> None:
         "example:\n  fuzzyfire synth method2 --n 1000 --seed 0 --out out/m2 --size 640x480 --scenes 48\n"
         "  fuzzyfire synth method2 --n 200 --out out/m2-rooms --environments configs/scenes\n"
         "  fuzzyfire synth method2 --n 200 --out out/m2-photos --backgrounds my/negatives\n"
+        "  fuzzyfire synth method2 --n 200 --out out/m2-negatives --environments ../shared/data/panoramas "
+        "--backgrounds my/negatives --photo-share 0.3 --photo-negatives 1  # 30 % your photos as they are\n"
         "  fuzzyfire synth method2 --n 200 --out out/m2-frames --frames my/cctv-labelled  # keeps their boxes\n"
         "  fuzzyfire synth method2 --n 200 --out out/m2-panoramas --environments ../shared/data/panoramas\n"
         "  fuzzyfire synth method2 --n 200 --out out/m2-mixed --environments configs/scenes --scenes 24\n"
@@ -463,6 +468,13 @@ def _register_method2(sub: argparse._SubParsersAction) -> None:
         "--photo-share",
         type=float,
         help="share of views on a --backgrounds photo or --frames image when 3D scenes are also used (default 0.5)",
+    )
+    p.add_argument(
+        "--photo-negatives",
+        type=float,
+        metavar="SHARE",
+        help="share (0..1) of the images on a --backgrounds photo left without flames: your fire-free photos as "
+        "hard negatives, as they are (default: as every image, 10 %%)",
     )
     _blend_arguments(p)
     p.set_defaults(func=cmd_method2)

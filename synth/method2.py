@@ -64,6 +64,8 @@ class Method2Config:
     images_per_view: int = 8  # images composited on each rendered view
     max_flames: int = 3  # flames per image: uniform in 1..max_flames
     negatives: float = 0.1  # fraction of images without flames
+    photo_negatives: float | None = None  # fraction of the images on a fire-free photo (``backgrounds``) without
+    # flames: hard negatives of the user's own kind; None = ``negatives`` (frames and other places keep that)
     flame_height_m: tuple[float, float] = (0.3, 2.5)  # flame height in the scene, metres
     flame_opacity: tuple[float, float] = (0.85, 1.0)  # luminous coverage of a flame's body (1 = hides what is behind)
     closeup: float = 0.0  # fraction of fire images framed as a close-up: one flame of closeup_height x the image
@@ -99,6 +101,8 @@ class Method2Config:
             raise ValueError(f"photo_share must be in 0..1, got {self.photo_share}")
         if self.max_flames < 1 or not 0.0 <= self.negatives <= 1.0 or self.min_box_px < 1:
             raise ValueError(f"invalid Method 2 config: {self}")
+        if self.photo_negatives is not None and not 0.0 <= self.photo_negatives <= 1.0:
+            raise ValueError(f"photo_negatives must be in 0..1 or null, got {self.photo_negatives}")
         check_range("flame_height_m", self.flame_height_m, 0.01)
         check_range("closeup_height", self.closeup_height, 0.05)
         if not 0.0 <= self.closeup <= 1.0:
@@ -114,14 +118,16 @@ def plan_flames(
     yfov: float,
     rng: np.random.Generator,
     avoid: Sequence[Sequence[int]] | None = None,
+    negatives: float | None = None,
 ) -> list[tuple[Placement, str]]:
     """Random flames standing at random pixels, sized by the scene depth there (world height in metres of the flame
     itself, its mask: the sprite, smoke included, is scaled to match); on a
     site (``avoid`` given: a photo or panorama, :mod:`synth.sites`) only at pixels whose depth is > 0 (the ground)
     and never over the ``avoid`` boxes [x, y, w, h] (:func:`kept_clear`); or,
     for a ``cfg.closeup`` share of the fire images, one flame filling ``cfg.closeup_height`` of the frame with
-    its base near the bottom edge (a fire seen from close by; the part outside the frame is cut off)."""
-    if rng.random() < cfg.negatives:
+    its base near the bottom edge (a fire seen from close by; the part outside the frame is cut off). None (no
+    flame) with probability ``negatives`` (default ``cfg.negatives``: :func:`negative_share`)."""
+    if rng.random() < (cfg.negatives if negatives is None else negatives):
         return []
     closeup = cfg.closeup > 0 and rng.random() < cfg.closeup
     fy = render.intrinsics(yfov, cfg.width, cfg.height)[1, 1]
@@ -255,6 +261,13 @@ def styled(cfg: Method2Config, planned, scene, rng) -> list[tuple[Placement, str
     return out
 
 
+def negative_share(cfg: Method2Config, view_meta: dict) -> float:
+    """The probability that an image on the view of ``view_meta`` gets no flame: ``cfg.photo_negatives`` on a
+    fire-free photo (a ``backgrounds`` photo, not a labelled frame) when set, else ``cfg.negatives``."""
+    photo = "photo" in view_meta and "frame_boxes" not in view_meta
+    return cfg.photo_negatives if photo and cfg.photo_negatives is not None else cfg.negatives
+
+
 def make_image(cfg: Method2Config, i: int, library: Sequence[SpriteSequence], views: ViewCache):
     """Image ``i``: ((H, W, 3) uint8, kept fire masks, record dict (boxes xywh, metadata), kept smoke masks or
     None when smoke is not a class). A flame nobody could see is erased, not left unboxed
@@ -264,7 +277,7 @@ def make_image(cfg: Method2Config, i: int, library: Sequence[SpriteSequence], vi
     rng = np.random.default_rng([cfg.seed, 2, i])
     avoid = kept_clear(view_meta) if view_meta.get("site") else None
     yfov = view_meta["camera"]["yfov"]
-    planned = plan_flames(cfg, library, depth, yfov, rng, avoid)
+    planned = plan_flames(cfg, library, depth, yfov, rng, avoid, negative_share(cfg, view_meta))
     effects = sample_effects(rng, cfg.camera)
     extra = np.random.default_rng([cfg.seed, 2, i, 1])
     fy = float(render.intrinsics(yfov, cfg.width, cfg.height)[1, 1])

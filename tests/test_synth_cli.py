@@ -142,6 +142,7 @@ def test_what_can_be_checked_fails_in_one_line_before_rendering(tmp_path, capsys
         (["--overwrite", "--photo-share", "0.3"], "--photo-share is the share of views on --backgrounds/--frames"),
         (["--overwrite", "--library", "3"], "--library makes procedural flames, which --flames replaces"),
         (["--overwrite", "--rising-smoke"], "--rising-smoke shapes procedural flames, which --flames replaces"),
+        (["--overwrite", "--photo-negatives", "1"], "--photo-negatives is the share of --backgrounds photos left"),
         (["--overwrite", "--streets", "2"], "--streets needs --kits DIR"),
         (["--overwrite", "--kits", str(tmp_path)], "--kits are the building kits of --streets N"),
         (["--overwrite", "--streets", "2", "--kits", str(tmp_path / "nokits")], "nokits: no such kit folder"),

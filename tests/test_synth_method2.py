@@ -248,3 +248,29 @@ def test_labelled_frames_keep_their_fire_boxes_and_flames_stand_beside_them(tmp_
     assert report["frame_boxes"] == sum(len(m["frame_boxes"]) for m in per_image)
     M.run_method2(cfg, library, tmp_path / "b")
     assert _files(tmp_path / "a") == _files(tmp_path / "b")
+
+
+def test_photo_negatives_leave_every_fire_free_photo_without_flames_and_the_rest_as_before(tmp_path, library):
+    """``photo_negatives`` 1: every image on a backgrounds photo has no flame and no box; the renders keep flames
+    (``negatives`` 0); unset, the same pool has flames on photos too; a labelled frame keeps ``negatives``."""
+    from dataclasses import replace
+
+    from factories import write_image
+
+    for k in range(3):
+        write_image(tmp_path / "photos" / f"p{k}.jpg", 200, 150, seed=k)
+    cfg = replace(CFG, n=16, images_per_view=1, backgrounds=(tmp_path / "photos",), photo_share=0.5)
+    kinds = {}
+    for share in (None, 1.0):
+        out = tmp_path / f"neg{share}"
+        M.run_method2(replace(cfg, photo_negatives=share), library, out)
+        per_image = json.loads((out / "manifest.json").read_text())["args"]["per_image"]
+        kinds[share] = [("photo" in m, bool(m["flames"])) for m in per_image]
+    assert [photo for photo, _ in kinds[None]] == [photo for photo, _ in kinds[1.0]]  # the same views
+    assert {flames for photo, flames in kinds[1.0] if photo} == {False}
+    assert any(flames for photo, flames in kinds[None] if photo) and all(f for p, f in kinds[1.0] if not p)
+    frame = {"photo": "f.jpg", "frame_boxes": []}
+    assert M.negative_share(replace(CFG, photo_negatives=1.0), frame) == CFG.negatives == 0.0
+    assert M.negative_share(replace(CFG, photo_negatives=0.7), {"photo": "p.jpg"}) == 0.7
+    with pytest.raises(ValueError, match="photo_negatives"):
+        M.Method2Config(photo_negatives=1.5)
