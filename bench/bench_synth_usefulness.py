@@ -18,7 +18,16 @@ Variants (on shared-data.yaml: panoramas, the flames' new look, 2 images per vie
 - ``own_frames_cutouts_clean``: ``own_frames_cutouts`` without the cut-outs whose mask fills more than 85 % of
   their box (fire-lit rectangles: ``flames.cutout_max_fill: 0.85``);
 - ``own_frames_none``: own frames with no flame added (``negatives: 1``): what the frames give by themselves
-  (a second, cropped and camera-treated copy of each real image) - the control of ``own_frames``.
+  (a second, cropped and camera-treated copy of each real image) - the control of ``own_frames``;
+- ``own_frames_cutouts_1``: ``own_frames_cutouts`` with one image per view (``images_per_view: 1``: every image on
+  another crop of another real frame, not two on each);
+- ``rising_smoke``: ``look`` with the simulated flames' smoke only from their middle up (``flames.rising_smoke``);
+- ``photo_negatives``: the fire-free photos of ``fire-free/`` (less the 25 % held out as the false-alarm test set)
+  as they are, with no flame, for every synthetic image (``backgrounds``, ``negatives: 1``): hard negatives alone;
+- ``look_photo_negatives``: ``look`` with a quarter of the views on those photos, left without flames
+  (``photo_negatives: 1``: hard negatives beside the simulated flames);
+- ``own_frames_cutouts_photo_negatives``: ``own_frames_cutouts`` with those photos beside the own frames as hard
+  negatives (about half the views: the photos and frames are drawn in one order).
 
 Lines: ``synth_use_<variant>_<test>_<metric>_delta: +d AP points (95% CI lo..hi, p)`` for AP50 and AP on every
 test set with fire, ``synth_use_<variant>_vs_copies_<test>_<metric>_delta`` the same against the variant's control
@@ -52,6 +61,8 @@ STUDY = [
     "report.gap_draws=0",
     "report.samples=false",
 ]
+#: The fire-free photos as a pool's backgrounds, the quarter that is the false-alarm test set held out.
+PHOTOS = ["synth.method2.backgrounds=[../../shared/data/fire-free]", "synth.method2.background_holdout=0.25"]
 VARIANTS = {
     "flat": ["synth.method2.never_darken=false", "synth.method2.flames.texture=0"],
     "look": [],
@@ -61,6 +72,29 @@ VARIANTS = {
     "own_frames_half": ["synth.method2.own_frames=0.5"],
     "own_frames_cutouts": ["synth.method2.own_frames=1.0", "synth.method2.flames.source=cutouts"],
     "own_frames_none": ["synth.method2.own_frames=1.0", "synth.method2.negatives=1.0"],
+    "own_frames_cutouts_1": [
+        "synth.method2.own_frames=1.0",
+        "synth.method2.flames.source=cutouts",
+        "synth.method2.images_per_view=1",
+    ],
+    "rising_smoke": ["synth.method2.flames.rising_smoke=true"],
+    "photo_negatives": [
+        "synth.method2.environments=[]",
+        *PHOTOS,
+        "synth.method2.negatives=1.0",
+    ],
+    "look_photo_negatives": [
+        *PHOTOS,
+        "synth.method2.photo_share=0.25",
+        "synth.method2.panorama_share=0.75",
+        "synth.method2.photo_negatives=1.0",
+    ],
+    "own_frames_cutouts_photo_negatives": [
+        *PHOTOS,
+        "synth.method2.photo_negatives=1.0",
+        "synth.method2.own_frames=1.0",
+        "synth.method2.flames.source=cutouts",
+    ],
     "own_frames_cutouts_clean": [
         "synth.method2.own_frames=1.0",
         "synth.method2.flames.source=cutouts",
