@@ -215,6 +215,7 @@ def _blend_config(args: argparse.Namespace) -> dict:
         "blend": blend,
         "distractors": DistractorConfig(share=args.distractors),
         "never_darken": args.never_darken,
+        "opaque_body": args.opaque_body,
     }
 
 
@@ -508,6 +509,12 @@ def _blend_arguments(p: argparse.ArgumentParser) -> None:
         default=True,
         help="a flame's dim edge reddens a bright background instead of outlining it darker (light blends; default "
         "on, the study's look: --no-never-darken for the earlier compositing)",
+    )
+    p.add_argument(
+        "--opaque-body",
+        action="store_true",
+        help="with --never-darken: a flame's bright body still hides a bright background (no pale film over a "
+        "sunlit wall); only its dim edge never darkens",
     )
     p.add_argument("--match-noise", action="store_true", help="blur and grain each flame like the background around it")
     p.add_argument(

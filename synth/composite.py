@@ -5,7 +5,8 @@ its luminous coverage (``opacity`` x :func:`coverage` of the emission brightness
 :data:`CLEAR_BRIGHTNESS`, full from :data:`OPAQUE_BRIGHTNESS` up, so a flame's bright body hides what is behind it, as a camera exposed for the
 fire sees it, while its dim edge lets the background through; over a bright background a half-covering dim edge
 still darkens it into an outline, unless ``never_darken`` caps the coverage where covering and lighting keeps the luma
-behind the flame: :func:`_keeping_cover`, up to clipping), then the emission
+behind the flame: :func:`_keeping_cover`, up to clipping; with ``opaque_body`` only at the dim edge, the bright
+body covering as without it: :func:`body_weight`), then the emission
 is added (``add``) or screened (``screen``), plus a soft glow
 (blurred emission) and a warm cast: the surroundings lit in the flame's mean colour with a Gaussian falloff
 around its base (light on the floor and walls; never part of the flame's mask or box). A flame pixel stays visible unless a later sprite is
@@ -46,6 +47,19 @@ def coverage(brightness: NDArray[np.float32]) -> NDArray[np.float32]:
     return (r * r * (3.0 - 2.0 * r)).astype(np.float32)
 
 
+#: Emission luma (0..1) over which an ``opaque_body`` flame goes from its dim edge (the ``never_darken`` cap) to its
+#: body (covering what is behind it as far as ``opacity`` and :func:`coverage` say).
+BODY_LUMA = (0.45, 0.75)
+
+
+def body_weight(luma: NDArray[np.float32]) -> NDArray[np.float32]:
+    """Weight in [0, 1] of a flame pixel's body by its emission ``luma`` (any shape): a smoothstep over
+    :data:`BODY_LUMA`. A luminous, sooty flame hides a bright wall behind it (the wall does not shine through its
+    body as through a pale film); only its dim edge adds light without covering."""
+    r = np.clip((luma - BODY_LUMA[0]) / (BODY_LUMA[1] - BODY_LUMA[0]), 0.0, 1.0)
+    return (r * r * (3.0 - 2.0 * r)).astype(np.float32)
+
+
 @dataclass(frozen=True)
 class Placement:
     """A sprite scaled to ``width`` x ``height`` pixels with its top-left at (x, y) (may lie outside)."""
@@ -62,6 +76,7 @@ class Placement:
     edge: float = 0.0  # paste modes: feather width (alpha) or edge blur sigma (blur), pixels
     look: Look = Look()  # tint, blur and grain matched to the background (neutral: none)
     never_darken: bool = False  # light modes: the flame's coverage is capped so it never darkens the luma behind it
+    opaque_body: bool = False  # with never_darken: the cap holds for the dim edge only; the bright body covers
 
     def __post_init__(self) -> None:
         if self.blend not in ALL_MODES:
@@ -203,7 +218,10 @@ def composite(background: NDArray[np.uint8], placements: Sequence[Placement]) ->
                 light = emission[sy, sx]
                 flame = (1.0 - a) * p.opacity * coverage(light.max(axis=-1, keepdims=True))
                 if p.never_darken:
-                    flame = np.minimum(flame, _keeping_cover(_luma(img[ys, xs]), _luma(light), p.blend))
+                    cap = _keeping_cover(_luma(img[ys, xs]), _luma(light), p.blend)
+                    if p.opaque_body:
+                        cap = cap + np.clip(1.0 - cap, 0.0, 1.0) * body_weight(_luma(light))
+                    flame = np.minimum(flame, cap)
                 cover = a + flame
                 img[ys, xs] = img[ys, xs] * (1.0 - cover) + over[sy, sx, :3] * a
                 img[ys, xs] = _add_light(img[ys, xs], light, p.blend)

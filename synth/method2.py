@@ -74,6 +74,8 @@ class Method2Config:
     smoke_class: bool = False
     light: bool = True  # flames light their surroundings (a warm cast around each flame)
     never_darken: bool = False  # a flame's dim edge reddens a bright background, never outlines it darker (composite)
+    opaque_body: bool = False  # with never_darken: the flame's bright body still hides a bright background (no pale
+    # translucent film over a sunlit wall or road); only the dim edge keeps never_darken's cap (composite)
     camera: CameraConfig = field(default_factory=CameraConfig)  # probabilities of the stronger camera effects
     flames: FlameLibraryConfig = field(default_factory=FlameLibraryConfig)
     blend: BlendConfig = field(default_factory=BlendConfig)  # how flames are blended (synth.blend); decoy pastes
@@ -153,8 +155,9 @@ def plan_flames(
         blend = str(rng.choice(cfg.blend.modes))  # (screen, add) by default: the draws of pools made before
         glow, opacity = float(rng.uniform(0.1, 0.5)), float(rng.uniform(*cfg.flame_opacity))
         place = Placement(
-            sprite, bx - wpx // 2, by - spx, wpx, spx, blend, glow, opacity, cfg.light, never_darken=cfg.never_darken
-        )
+            sprite, bx - wpx // 2, by - spx, wpx, spx, blend, glow, opacity, cfg.light,
+            never_darken=cfg.never_darken, opaque_body=cfg.opaque_body,
+        )  # fmt: skip
         out.append((place, f"{seq.name}/{frame}"))
     return out
 

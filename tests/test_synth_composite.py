@@ -152,3 +152,24 @@ def test_never_darken_keeps_the_luma_behind_a_mid_bright_edge(blend: str) -> Non
     for never_darken in (False, True):  # a bright core still hides the wall behind it
         out = composite(pale, [Placement(core, 0, 0, 10, 10, blend, 0.0, 1.0, never_darken=never_darken)]).image
         assert np.abs(out.astype(int) - (255, 240, 150)).max() <= 1
+
+
+@pytest.mark.parametrize("blend", ["add", "screen"])
+def test_an_opaque_body_hides_a_bright_wall_and_its_dim_edge_still_never_darkens(blend: str) -> None:
+    """A saturated orange-yellow body (luma ~0.76, darker than a 235 wall) is a pale film under never_darken alone
+    and its own colour with opaque_body; the dim orange edge never darkens the wall either way."""
+    from synth.composite import _luma, body_weight
+
+    body = _flame(value=0)
+    body.emission[:] = (255, 190, 60)
+    pale = np.full((10, 10, 3), 235, np.uint8)
+    film = composite(pale, [Placement(body, 0, 0, 10, 10, blend, 0.0, 1.0, never_darken=True)]).image
+    solid = composite(pale, [Placement(body, 0, 0, 10, 10, blend, 0.0, 1.0, never_darken=True, opaque_body=True)]).image
+    assert np.abs(solid.astype(int) - (255, 190, 60)).max() <= 1  # the flame's own colour
+    assert int(film[5, 5, 2]) > int(solid[5, 5, 2]) + 30  # the wall's blue shines through the film
+    edge = _flame(value=0)
+    edge.emission[:] = (115, 55, 10)
+    luma = lambda img: float(_luma(img.astype(np.float32) / 255.0).mean())  # noqa: E731
+    kept = composite(pale, [Placement(edge, 0, 0, 10, 10, blend, 0.0, 1.0, never_darken=True, opaque_body=True)])
+    assert luma(kept.image) >= luma(pale) - 0.03
+    assert body_weight(np.float32([0.0, 0.45, 0.6, 0.75, 1.0])).tolist() == pytest.approx([0, 0, 0.5, 1, 1])

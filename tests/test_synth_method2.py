@@ -274,3 +274,12 @@ def test_photo_negatives_leave_every_fire_free_photo_without_flames_and_the_rest
     assert M.negative_share(replace(CFG, photo_negatives=0.7), {"photo": "p.jpg"}) == 0.7
     with pytest.raises(ValueError, match="photo_negatives"):
         M.Method2Config(photo_negatives=1.5)
+
+
+def test_the_flames_of_a_pool_carry_its_compositing_rule(library):
+    from dataclasses import replace
+
+    depth = np.full((CFG.height, CFG.width), 4.0, np.float32)
+    cfg = replace(CFG, never_darken=True, opaque_body=True)
+    placed = [p for i in range(5) for p, _ in M.plan_flames(cfg, library, depth, 1.0, np.random.default_rng(i))]
+    assert placed and all(p.never_darken and p.opaque_body for p in placed)
