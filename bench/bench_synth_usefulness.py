@@ -32,8 +32,8 @@ Variants (on shared-data.yaml: panoramas, the flames' new look, 2 images per vie
 
 Lines: ``synth_use_<variant>_<test>_<metric>_delta: +d AP points (95% CI lo..hi, p)`` for AP50 and AP on every
 test set with fire, ``synth_use_<variant>_vs_copies_<test>_<metric>_delta`` the same against the variant's control
-(R200_S200 on flame-free copies of its real images: ``grid.control``, on in shared-data.yaml; trained once per
-look, shared by the variants that differ only in their flames' source or frames), ``synth_use_<variant>_R200_S200_<test>_AP50: mean % (seeds: ...), std`` and, on a
+(R200_S200 on flame-free copies of its real images: ``grid.control``, on in shared-data.yaml; trained once,
+shared by the variants that differ only in their places, flames or frames: fuzzyfire/controls.py KEPT), ``synth_use_<variant>_R200_S200_<test>_AP50: mean % (seeds: ...), std`` and, on a
 negatives-only set, ``..._alarms_per_100``. Skips cleanly without ../shared/data.
 
 .venv/bin/python bench/bench_synth_usefulness.py [--out out/bench-synth-usefulness] [--seeds 0,1,2] [--only look,own_frames]  (the default pair)
