@@ -446,7 +446,7 @@ def _register_method2(sub: argparse._SubParsersAction) -> None:
         "  fuzzyfire synth method2 --n 200 --out out/m2-rooms --environments configs/scenes\n"
         "  fuzzyfire synth method2 --n 200 --out out/m2-photos --backgrounds my/negatives\n"
         "  fuzzyfire synth method2 --n 200 --out out/m2-negatives --environments ../shared/data/panoramas "
-        "--backgrounds my/negatives --photo-share 0.3 --photo-negatives 1  # 30 % your photos as they are\n"
+        "--backgrounds my/negatives --photo-share 0.3 --photo-negatives 1  # your photos as they are, no flame\n"
         "  fuzzyfire synth method2 --n 200 --out out/m2-frames --frames my/cctv-labelled  # keeps their boxes\n"
         "  fuzzyfire synth method2 --n 200 --out out/m2-panoramas --environments ../shared/data/panoramas\n"
         "  fuzzyfire synth method2 --n 200 --out out/m2-mixed --environments configs/scenes --scenes 24\n"

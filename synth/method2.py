@@ -127,8 +127,8 @@ def plan_flames(
     site (``avoid`` given: a photo or panorama, :mod:`synth.sites`) only at pixels whose depth is > 0 (the ground)
     and never over the ``avoid`` boxes [x, y, w, h] (:func:`kept_clear`); or,
     for a ``cfg.closeup`` share of the fire images, one flame filling ``cfg.closeup_height`` of the frame with
-    its base near the bottom edge (a fire seen from close by; the part outside the frame is cut off). None (no
-    flame) with probability ``negatives`` (default ``cfg.negatives``: :func:`negative_share`)."""
+    its base near the bottom edge (a fire seen from close by; the part outside the frame is cut off). No flame
+    (an empty list) with probability ``negatives`` (default ``cfg.negatives``; per view: :func:`negative_share`)."""
     if rng.random() < (cfg.negatives if negatives is None else negatives):
         return []
     closeup = cfg.closeup > 0 and rng.random() < cfg.closeup
