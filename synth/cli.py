@@ -188,8 +188,12 @@ def cmd_method2(args: argparse.Namespace) -> int:
     if args.photo_negatives is not None and not args.backgrounds:
         raise ValueError("--photo-negatives is the share of --backgrounds photos left without flames, none are given")
     share = 0.5 if args.photo_share is None else args.photo_share
-    photos = {"backgrounds": tuple(args.backgrounds or ()), "frames": tuple(args.frames or ()), "photo_share": share}
-    photos["photo_negatives"] = args.photo_negatives
+    photos = {
+        "backgrounds": tuple(args.backgrounds or ()),
+        "frames": tuple(args.frames or ()),
+        "photo_share": share,
+        "photo_negatives": args.photo_negatives,
+    }
     cfg = Method2Config(**_dataset_config(args), **photos, **_blend_config(args))
     result = run_method2(cfg, build_library(cfg.flames), args.out, overwrite=args.overwrite, workers=_workers(args))
     print(f"wrote {args.out}: {args.n} images ({', '.join(result.files.values())})")

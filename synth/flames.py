@@ -249,6 +249,11 @@ def fluid_step(s: FluidState, p: FlameParams, src: F32, grid: tuple[F32, F32], r
     s.temperature = cooled.astype(np.float32)
 
 
+def _smooth(r: NDArray[np.floating]) -> NDArray[np.floating]:
+    """The smoothstep of ``r`` in [0, 1] (any shape and float type, kept)."""
+    return r * r * (3.0 - 2.0 * r)
+
+
 def _border_window(shape: tuple[int, int], fraction: float = 0.25) -> F32:
     """(h, w) factor fading smoke to 0 towards the left, right and top borders over ``fraction`` of the side (the
     bottom over 0.4 of that), in a smoothstep: no hard or straight edge where the plume leaves the domain or
@@ -257,8 +262,7 @@ def _border_window(shape: tuple[int, int], fraction: float = 0.25) -> F32:
     ramp_x = np.clip(np.minimum(np.arange(w), np.arange(w)[::-1]) / max(fraction * w, 1.0), 0, 1)
     ramp_y = np.clip(np.arange(h) / max(fraction * h, 1.0), 0, 1)
     ramp_y = np.minimum(ramp_y, np.clip(np.arange(h)[::-1] / max(0.4 * fraction * h, 1.0), 0, 1))
-    smooth = lambda r: r * r * (3 - 2 * r)  # noqa: E731
-    return (smooth(ramp_y)[:, None] * smooth(ramp_x)[None, :]).astype(np.float32)
+    return (_smooth(ramp_y)[:, None] * _smooth(ramp_x)[None, :]).astype(np.float32)
 
 
 def _oval_window(shape: tuple[int, int]) -> F32:
@@ -267,8 +271,7 @@ def _oval_window(shape: tuple[int, int]) -> F32:
     h, w = shape
     y = (np.arange(h, dtype=np.float32) + 0.5) / h * 2.0 - 1.0
     x = (np.arange(w, dtype=np.float32) + 0.5) / w * 2.0 - 1.0
-    r = np.clip((1.0 - np.hypot(y[:, None], x[None, :])) / 0.5, 0.0, 1.0)
-    return (r * r * (3.0 - 2.0 * r)).astype(np.float32)
+    return _smooth(np.clip((1.0 - np.hypot(y[:, None], x[None, :])) / 0.5, 0.0, 1.0)).astype(np.float32)
 
 
 def tint_weight(p: FlameParams, bottom: int) -> F32 | None:
@@ -371,8 +374,7 @@ def rising(mask: NDArray[np.bool_]) -> F32:
     first = np.where(mask.any(axis=0), mask.argmax(axis=0), bottom).astype(np.float32)  # each column's flame top
     line = 0.5 * (np.minimum(first, 0.5 * (top + bottom)) + 0.5 * (top + bottom))  # between its top and the middle
     up = (line[None, :] - np.arange(mask.shape[0], dtype=np.float32)[:, None]) / (0.25 * height)
-    r = np.clip(up, 0.0, 1.0)
-    weight = r * r * (3.0 - 2.0 * r)
+    weight = _smooth(np.clip(up, 0.0, 1.0))
     thinning = np.clip(np.arange(mask.shape[0], dtype=np.float32) / max(top, 1.0), 0.0, 1.0) ** 0.7  # 0 at row 0
     weight = (weight * thinning[:, None]).astype(np.float32)
     return cv2.GaussianBlur(weight, (0, 0), sigmaX=0.1 * height).astype(np.float32)

@@ -97,7 +97,7 @@ def build_library(cfg: FlameLibraryConfig, cutouts: Sequence[SpriteSequence] = (
         simulated = load_library(list(cfg.folders))
     else:
         args = (cfg.sequences, cfg.seed, cfg.frames, cfg.keep_every, cfg.rare, cfg.generator, cfg.texture)
-        simulated = procedural_library(*args, rising_smoke=cfg.rising_smoke)
+        simulated = procedural_library(*args, cfg.rising_smoke)
     return list(cutouts) + simulated
 
 
