@@ -28,7 +28,9 @@ Variants (on shared-data.yaml: panoramas, the flames' new look, 2 images per vie
 - ``look_photo_negatives``: ``look`` with a quarter of the views on those photos, left without flames
   (``photo_negatives: 1``: hard negatives beside the simulated flames);
 - ``own_frames_cutouts_photo_negatives``: ``own_frames_cutouts`` with those photos beside the own frames as hard
-  negatives (about half the views: the photos and frames are drawn in one order).
+  negatives (about half the views: the photos and frames are drawn in one order);
+- ``own_frames_cutouts_half_photo_negatives``: the same with own cut-outs pasted on half of those photos and the
+  other half left as they are (``photo_negatives: 0.5``: about a quarter of the views hard negatives).
 
 Lines: ``synth_use_<variant>_<test>_<metric>_delta: +d AP points (95% CI lo..hi, p)`` for AP50 and AP on every
 test set with fire, ``synth_use_<variant>_vs_copies_<test>_<metric>_delta`` the same against the variant's control
@@ -94,6 +96,12 @@ VARIANTS = {
     "own_frames_cutouts_photo_negatives": [
         *PHOTOS,
         "synth.method2.photo_negatives=1.0",
+        "synth.method2.own_frames=1.0",
+        "synth.method2.flames.source=cutouts",
+    ],
+    "own_frames_cutouts_half_photo_negatives": [
+        *PHOTOS,
+        "synth.method2.photo_negatives=0.5",
         "synth.method2.own_frames=1.0",
         "synth.method2.flames.source=cutouts",
     ],
