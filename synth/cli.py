@@ -309,7 +309,10 @@ def _register_flames(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--generator", default="fluid", choices=("fluid", "noise"), help="flame simulation")
     p.add_argument("--frames", type=int, default=1024, help="simulation steps per sequence")
     p.add_argument("--keep-every", type=int, default=12, help="keep one frame every K steps")
-    p.add_argument("--rare", type=float, default=0.05, help="fraction of chemical-colour (rare) flames")
+    rare = (
+        "probability that a sequence is a chemical-colour (rare) flame (drawn per sequence: the count varies by seed)"
+    )
+    p.add_argument("--rare", type=float, default=0.05, help=rare)
     p.add_argument("--texture", type=float, help=TEXTURE_HELP)
     p.add_argument("--rising-smoke", action="store_true", help=RISING_HELP)
     p.set_defaults(func=cmd_flames)

@@ -29,7 +29,7 @@ class FlameLibraryConfig:
     generator: Literal["fluid", "noise"] = "fluid"
     frames: int = 240  # simulation steps per sequence
     keep_every: int = 12  # keep one frame every K steps
-    rare: float = 0.05  # fraction of chemical-colour (rare) flames
+    rare: float = 0.05  # probability that a sequence is a chemical-colour (rare) flame, drawn per sequence
     seed: int = 0
     folders: tuple[Path, ...] = ()  # sequence folders to load instead of simulating
     source: Literal["simulated", "cutouts", "both"] = "simulated"  # simulated (or folders) | real cut-outs | both
