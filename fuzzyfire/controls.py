@@ -48,7 +48,8 @@ def control_label(mixture: str) -> str:
 
 #: The Method 2 keys a control keeps from its pool's config: what acts on an image that gets no flame (its size,
 #: count and seed, the crops and camera, blend decoys, distractors); and it keeps the flame library, whose masks
-#: shape the blend decoys, but not the library's smoke (``rising_smoke``), which nothing draws.
+#: shape the blend decoys, but not the library's smoke (``rising_smoke``), which nothing draws, nor its colours
+#: (``exposed``) unless decoys take the masks those colours light up.
 KEPT: tuple[str, ...] = ("n", "seed", "width", "height", "images_per_view", "smoke_class", "camera", "blend",
                          "distractors")  # fmt: skip
 
@@ -59,7 +60,10 @@ def control_config(cfg: Method2Config) -> Method2Config:
     (environments, streets, photos, frames) and the flames' placement and look are the defaults, so the variants
     of a study that differ only in those share one control (and its runs)."""
     kept = {key: getattr(cfg, key) for key in KEPT}
-    flames = replace(simulated(cfg).flames, rising_smoke=type(cfg.flames).rising_smoke)  # no decoy draws smoke
+    defaults = type(cfg.flames)
+    flames = replace(simulated(cfg).flames, rising_smoke=defaults.rising_smoke)  # no decoy draws smoke
+    if not cfg.blend.decoys:  # nothing of a flame shows in a control without decoys
+        flames = replace(flames, exposed=defaults.exposed)
     return type(cfg)(**kept, flames=flames, scenes=0, own_frames=1.0, negatives=1.0)
 
 

@@ -27,7 +27,15 @@ def cmd_flames(args: argparse.Namespace) -> int:
 
     texture = _texture(args)
     seqs = procedural_library(
-        args.n, args.seed, args.frames, args.keep_every, args.rare, args.generator, texture, args.rising_smoke
+        args.n,
+        args.seed,
+        args.frames,
+        args.keep_every,
+        args.rare,
+        args.generator,
+        texture,
+        args.rising_smoke,
+        args.exposed,
     )
     for seq in progress(seqs, total=len(seqs), desc="flames"):
         save_sequence(args.out / seq.name, seq)
@@ -99,6 +107,10 @@ RISING_HELP = (
     "procedural flames' smoke only from the flame's middle up, rising from its tips (default: wherever the "
     "simulated soot drifts, also low beside the base, where it can read as a dark stain on the ground)"
 )
+EXPOSED_HELP = (
+    "procedural flames coloured as a camera records a fire: a 900-1600 K black body past the sensor's range, red "
+    "edges, orange, yellow and a white core (default: the display palette, a 3000 K body with yellow cores)"
+)
 
 
 def _texture(args: argparse.Namespace) -> float:
@@ -147,11 +159,18 @@ def _dataset_config(args: argparse.Namespace) -> dict:
         raise ValueError("--texture shapes procedural flames, which --flames replaces: give one of them")
     if args.rising_smoke and args.flames:
         raise ValueError("--rising-smoke shapes procedural flames, which --flames replaces: give one of them")
+    if args.exposed and args.flames:
+        raise ValueError("--exposed colours procedural flames, which --flames replaces: give one of them")
     w, h = args.size
     library = DEFAULT_LIBRARY if args.library is None else args.library
     folders = tuple(args.flames or ())
     flames = FlameLibraryConfig(
-        sequences=library, seed=args.seed, folders=folders, texture=_texture(args), rising_smoke=args.rising_smoke
+        sequences=library,
+        seed=args.seed,
+        folders=folders,
+        texture=_texture(args),
+        rising_smoke=args.rising_smoke,
+        exposed=args.exposed,
     )
     return {
         "n": args.n,
@@ -315,6 +334,7 @@ def _register_flames(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--rare", type=float, default=0.05, help=rare)
     p.add_argument("--texture", type=float, help=TEXTURE_HELP)
     p.add_argument("--rising-smoke", action="store_true", help=RISING_HELP)
+    p.add_argument("--exposed", action="store_true", help=EXPOSED_HELP)
     p.set_defaults(func=cmd_flames)
 
 
@@ -410,6 +430,7 @@ def _dataset_arguments(p: argparse.ArgumentParser, photos: bool = False) -> None
     )
     p.add_argument("--texture", type=float, help=TEXTURE_HELP)
     p.add_argument("--rising-smoke", action="store_true", help=RISING_HELP)
+    p.add_argument("--exposed", action="store_true", help=EXPOSED_HELP)
     p.add_argument("--overwrite", action="store_true", help="replace a fuzzyfire dataset already at --out")
     p.add_argument("--smoke", action="store_true", help="also annotate smoke (class 'smoke', alpha >= 0.25)")
     p.add_argument(

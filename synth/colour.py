@@ -114,3 +114,31 @@ def flame_palette(
         body = chromaticity((1 - white) * hue[None, :] + white * np.ones(3) * 0.9 + 0.05 * body)
     rgb = body * _intensity(t, exposure)[:, None] * peak
     return srgb_encode(rgb).astype(np.float32)
+
+
+#: The camera-exposed palette (:func:`exposed_palette`): a sooty fire's black body at 900-1600 K (hotter is not
+#: what wood, fuel or a house burns at: a 3000 K body's colour is the pale yellow of a lamp), each channel rolling
+#: off as the sensor saturates (``1 - exp(-ROLL_OFF x)``), and past saturation the core blooming to white: the
+#: white mix goes smoothly from 0 to 1 as the brightest channel's exposed value goes from 2 to 6.
+EXPOSED_T_MAX = 1600.0
+ROLL_OFF = 1.3
+BLOOM = (2.0, 6.0)
+
+
+def exposed_palette(
+    gain: float, exposure: float = 9.0, n: int = 256, t_min: float = 900.0, t_max: float = EXPOSED_T_MAX
+) -> NDArray[np.float32]:
+    """(n, 3) float32 sRGB-encoded colours for normalised temperature ``i / (n - 1)`` of a black-body flame as a
+    camera records it: the linear colour ``blackbody_rgb(T) * (1 - exp(-exposure t^4)) * gain`` (``gain`` > 0: the
+    camera's exposure, in units of the display palette's full scale) through a per-channel roll-off and a bloom to
+    white (:data:`ROLL_OFF`, :data:`BLOOM`). Dim gas is red, brighter orange, then yellow as green saturates, and a
+    core bright enough is white, as fires are in photographs (the real train flames: a fifth of their pixels
+    near-white, the colourful ones at hue 30 degrees; the display palette's flames: 1 % and 42 degrees, README)."""
+    if gain <= 0:
+        raise ValueError(f"gain must be > 0, got {gain}")
+    t = np.linspace(0.0, 1.0, n)
+    x = blackbody_rgb(t_min + t * (t_max - t_min)) * _intensity(t, exposure)[:, None] * gain
+    rolled = 1.0 - np.exp(-ROLL_OFF * x)
+    white = np.clip((x.max(axis=-1, keepdims=True) - BLOOM[0]) / (BLOOM[1] - BLOOM[0]), 0.0, 1.0)
+    white = white * white * (3.0 - 2.0 * white)
+    return srgb_encode((1.0 - white) * rolled + white).astype(np.float32)

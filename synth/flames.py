@@ -20,7 +20,9 @@ flat to pale yellow: see the README); the rendered field is warped by sub-grid n
 crisp, turbulent edges; frames are kept only after ``warmup`` steps (the first plume's mushroom cap has left);
 a sequence is stretched sideways to a sampled box aspect ratio (``aspect``, the real boxes' distribution).
 Chemical palettes tint a black-body flame (:data:`TINTS`): methane is blue at the base, metal salts colour
-the lower flame and leave yellow soot tips.
+the lower flame and leave yellow soot tips. An *exposed* flame (``gain`` > 0, :func:`exposed_gain`) is coloured as
+a camera records a fire instead: a cooler black body pushed past the sensor's range, red at the edge, orange, then
+yellow and a white core (:func:`synth.colour.exposed_palette`).
 """
 
 from __future__ import annotations
@@ -32,7 +34,7 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from synth.colour import flame_palette
+from synth.colour import exposed_palette, flame_palette
 from synth.sprites import Sprite, SpriteSequence, crop_to_content
 
 SHAPES: tuple[str, ...] = ("point", "line", "ring", "pool", "jet")
@@ -54,6 +56,10 @@ ASPECT_MEDIAN, ASPECT_SIGMA = 0.57, 0.6
 ASPECT_RANGE = (0.2, 2.0)
 MAX_STRETCH = 1.6  # a sequence is stretched sideways by at most this factor (or 1 / it) towards ``aspect``
 DRAG = 0.97  # sideways velocity kept per step: wind and swirls do not pile up into a flame blown flat
+#: Camera gain range of an exposed flame (:func:`exposed_gain`): with :data:`synth.colour.EXPOSED_T_MAX` the
+#: composited flames' pixels match the real train flames' near-white share, saturation and hue (README, "Exposed
+#: flames"); 4-16 gives a quarter near-white, 3-10 a fifth.
+EXPOSED_GAIN = (3.0, 10.0)
 
 
 @dataclass(frozen=True)
@@ -78,6 +84,9 @@ class FlameParams:
     palette: str = "blackbody"
     exposure: float = 9.0  # brightness curve of the palette (higher: brighter, more saturated flames)
     peak: float = 1.0  # linear brightness at the core; > 1 clips to yellow-white like an over-exposed camera
+    gain: float = (
+        0.0  # > 0: the camera-exposed palette at this gain (synth.colour.exposed_palette), not the display one
+    )
     base_fade: float = 3.0  # the flame's base fades out over an irregular line up to this many cells high
     body: float = 0.25  # height of the burning body (fuel held at full temperature), fraction of the rows
     detail: float = 1.0  # edge turbulence: the rendered flame is warped by noise of this amplitude, grid cells
@@ -101,6 +110,8 @@ class FlameParams:
             raise ValueError("body must be in (0, 0.8], detail and aspect >= 0")
         if not 0.0 <= self.texture < 1.0:
             raise ValueError(f"texture must be in [0, 1), got {self.texture}")
+        if self.gain < 0:
+            raise ValueError(f"gain must be >= 0 (0: the display palette), got {self.gain}")
 
 
 def sample_aspect(rng: np.random.Generator) -> float:
@@ -108,10 +119,21 @@ def sample_aspect(rng: np.random.Generator) -> float:
     return float(np.clip(ASPECT_MEDIAN * np.exp(rng.normal(0.0, ASPECT_SIGMA)), *ASPECT_RANGE))
 
 
-def sample_params(rng: np.random.Generator, generator: str = "fluid", rare: bool = False, **fixed) -> FlameParams:
+def exposed_gain(peak: float) -> float:
+    """The camera gain of an exposed flame (:data:`EXPOSED_GAIN`, log-uniform) from its sampled ``peak`` (uniform
+    in 1.3..2.0): no draw of its own, so an exposed library has the same shapes, smoke and motion as the display
+    one of the same seed."""
+    lo, hi = EXPOSED_GAIN
+    return float(lo * (hi / lo) ** np.clip((peak - 1.3) / 0.7, 0.0, 1.0))
+
+
+def sample_params(
+    rng: np.random.Generator, generator: str = "fluid", rare: bool = False, exposed: bool = False, **fixed
+) -> FlameParams:
     """Random flame parameters: shape, box aspect ratio (:func:`sample_aspect`), size of the burning body, wind,
-    turbulence, smoke, exposure; ``rare`` picks a chemical palette of :data:`RARE_PALETTES`. Keyword arguments in
-    ``fixed`` override the sampled values."""
+    turbulence, smoke, exposure; ``rare`` picks a chemical palette of :data:`RARE_PALETTES`; ``exposed``: a
+    black-body flame gets the camera-exposed palette at :func:`exposed_gain` of its peak (the same draws either
+    way). Keyword arguments in ``fixed`` override the sampled values."""
     shape = str(rng.choice(SHAPES, p=np.asarray(SHAPE_WEIGHTS) / sum(SHAPE_WEIGHTS)))
     names = list(RARE_PALETTES)
     weights = np.asarray([RARE_PALETTES[k] for k in names]) / sum(RARE_PALETTES.values())
@@ -137,6 +159,8 @@ def sample_params(rng: np.random.Generator, generator: str = "fluid", rare: bool
         detail=float(rng.uniform(1.5, 2.5)),
         aspect=aspect,
     )
+    if exposed and palette == "blackbody":
+        p = replace(p, gain=exposed_gain(p.peak))
     return replace(p, **fixed)
 
 
@@ -285,9 +309,13 @@ def tint_weight(p: FlameParams, bottom: int) -> F32 | None:
 
 
 def palettes(p: FlameParams) -> tuple[F32, F32 | None]:
-    """(black-body palette, chemical palette or None) of ``p``; the chemical one is exposed at most 1.2 x so its
-    hue survives (a blue base is blue, not clipped white)."""
-    body = flame_palette("blackbody", exposure=p.exposure, peak=p.peak)
+    """(black-body palette, chemical palette or None) of ``p``: the black body the display palette, or with
+    ``p.gain`` > 0 the camera-exposed one (:func:`synth.colour.exposed_palette`); the chemical one is exposed at most
+    1.2 x so its hue survives (a blue base is blue, not clipped white)."""
+    if p.gain > 0:
+        body = exposed_palette(p.gain, exposure=p.exposure)
+    else:
+        body = flame_palette("blackbody", exposure=p.exposure, peak=p.peak)
     if p.palette == "blackbody":
         return body, None
     return body, flame_palette(p.palette, exposure=p.exposure, peak=min(p.peak, 1.2))
@@ -426,7 +454,7 @@ def simulate_noise(p: FlameParams, rng: np.random.Generator) -> list[Sprite]:
     tall = sum(_noise(rng, (rows * 4, cols), c) * (c / 16) for c in (16, 8, 4))
     y = np.linspace(1.0, 0.0, rows, dtype=np.float32)[:, None]  # 0 at the bottom row, 1 at the top
     x = (np.arange(cols, dtype=np.float32) - cols / 2 + 0.5)[None, :] / cols
-    palette = flame_palette(p.palette, exposure=p.exposure, peak=p.peak)
+    palette = palettes(p)[0] if p.gain > 0 else flame_palette(p.palette, exposure=p.exposure, peak=p.peak)
     base = base_attenuation(p, rows, rng)
     warp = edge_warp(p, rng) if p.detail > 0 else None
     texture_at = streaks_at(p, rng)

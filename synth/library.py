@@ -37,6 +37,7 @@ class FlameLibraryConfig:
     cutout_max_fill: float = 1.0  # experiment's cut-outs: none whose mask fills more of its box (synth.cutouts.cut)
     texture: float = 0.0  # simulated flames' inner streaks and soft edge (synth.flames.streaks), 0..1; 0 = flat body
     rising_smoke: bool = False  # simulated flames' smoke only from the flame's middle up (synth.flames.rising)
+    exposed: bool = False  # simulated flames coloured as a camera records fire: white cores, red edges (synth.colour)
 
     def __post_init__(self) -> None:
         if self.generator not in GENERATORS:
@@ -66,16 +67,18 @@ def procedural_library(
     generator: str = "fluid",
     texture: float = 0.0,
     rising_smoke: bool = False,
+    exposed: bool = False,
 ) -> list[SpriteSequence]:
     """``n`` procedural flame sequences named ``<generator>-<seed>-<k>``; sequence k is drawn from
     ``default_rng([seed, k])`` (a chemical palette with probability ``rare``; inner streaks of depth
     ``texture``, :func:`synth.flames.streaks`; ``rising_smoke``: smoke only from the flame's middle up,
-    :func:`synth.flames.rising`)."""
+    :func:`synth.flames.rising`; ``exposed``: the camera-exposed palette, :func:`synth.flames.exposed_gain`, with
+    the same shapes and motion as without it)."""
     seqs = []
     for k in range(n):
         rng = np.random.default_rng([seed, k])
         fixed = {"frames": frames, "keep_every": keep_every, "texture": texture, "rising_smoke": rising_smoke}
-        params = sample_params(rng, generator, rare=bool(rng.random() < rare), **fixed)
+        params = sample_params(rng, generator, rare=bool(rng.random() < rare), exposed=exposed, **fixed)
         seqs.append(generate_sequence(f"{generator}-{seed}-{k:03d}", params, rng))
     return seqs
 
@@ -97,7 +100,7 @@ def build_library(cfg: FlameLibraryConfig, cutouts: Sequence[SpriteSequence] = (
         simulated = load_library(list(cfg.folders))
     else:
         args = (cfg.sequences, cfg.seed, cfg.frames, cfg.keep_every, cfg.rare, cfg.generator, cfg.texture)
-        simulated = procedural_library(*args, cfg.rising_smoke)
+        simulated = procedural_library(*args, cfg.rising_smoke, cfg.exposed)
     return list(cutouts) + simulated
 
 

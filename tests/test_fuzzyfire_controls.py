@@ -79,6 +79,15 @@ def test_the_control_pool_has_no_flame_and_keeps_the_rest_of_the_method2_config(
     assert control_config(replace(m2, camera=replace(m2.camera, defocus=0.9))) != control  # what acts on copies counts
 
 
+def test_exposed_flames_share_the_control_unless_decoys_take_their_masks() -> None:
+    m2 = _config().synth.method2
+    exposed = replace(m2, flames=replace(m2.flames, exposed=True))
+    assert control_config(exposed) == control_config(m2)  # no flame, no decoy: the colours show nowhere
+    decoys = replace(m2, blend=replace(m2.blend, decoys=0.3))
+    with_decoys = replace(decoys, flames=replace(decoys.flames, exposed=True))
+    assert control_config(with_decoys) != control_config(decoys) and control_config(with_decoys).flames.exposed
+
+
 def test_a_pool_on_photos_only_has_a_control() -> None:
     m2 = _config().synth.method2
     photos = replace(m2, environments=(), scenes=0, backgrounds=(Path("photos"),))

@@ -125,6 +125,11 @@ def test_flames_with_rising_smoke_are_written_with_the_key(tmp_path):
     assert params["rising_smoke"] is True
 
 
+def test_exposed_flames_are_written_with_their_gain(tmp_path):
+    params = json.loads((_flames(tmp_path, "--exposed", "--rare", "0") / "fluid-0-000" / "sequence.json").read_text())
+    assert params["params"]["gain"] > 0
+
+
 def test_what_can_be_checked_fails_in_one_line_before_rendering(tmp_path, capsys):
     import pytest
 
@@ -142,6 +147,7 @@ def test_what_can_be_checked_fails_in_one_line_before_rendering(tmp_path, capsys
         (["--overwrite", "--photo-share", "0.3"], "--photo-share is the share of views on --backgrounds/--frames"),
         (["--overwrite", "--library", "3"], "--library makes procedural flames, which --flames replaces"),
         (["--overwrite", "--rising-smoke"], "--rising-smoke shapes procedural flames, which --flames replaces"),
+        (["--overwrite", "--exposed"], "--exposed colours procedural flames, which --flames replaces"),
         (["--overwrite", "--photo-negatives", "1"], "--photo-negatives is the share of --backgrounds photos left"),
         (["--overwrite", "--streets", "2"], "--streets needs --kits DIR"),
         (["--overwrite", "--kits", str(tmp_path)], "--kits are the building kits of --streets N"),

@@ -68,3 +68,21 @@ def test_sampled_exposures_saturate_the_core_and_keep_a_red_orange_edge(exposure
     assert np.all(edge[:, 1] < 0.7 * edge[:, 0])
     yellow = np.argmax(pal[:, 1] >= 0.6)  # orange-yellow from here on: the upper third or more of the temperatures
     assert yellow < 0.67 * len(pal)
+
+
+def test_the_exposed_palette_goes_red_orange_yellow_white_as_a_camera_records_fire():
+    """Brightness never falls with temperature; the dimmest visible colour is red, the core white at a high gain
+    and warm (not white) at a low one; a higher gain is brighter everywhere."""
+    low, high = C.exposed_palette(3.0), C.exposed_palette(10.0)
+    for pal in (low, high):
+        assert pal.shape == (256, 3) and pal.dtype == np.float32 and 0.0 <= pal.min() and pal.max() <= 1.0
+        luma = pal @ np.array([0.2126, 0.7152, 0.0722], np.float32)
+        assert np.all(np.diff(luma) >= -1e-6)
+        assert np.array_equal(pal[0], np.zeros(3, np.float32))
+        edge = pal[int(np.argmax(pal.max(axis=1) > 0.2))]
+        assert edge[1] < 0.5 * edge[0] and edge[2] < 0.1  # red, not orange or yellow
+    assert high[-1].min() > 0.95 and low[-1].min() < 0.6  # white core only when pushed past the sensor's range
+    assert np.all(high.sum(axis=1) >= low.sum(axis=1) - 1e-6)
+    assert C.flame_palette("blackbody", exposure=9.0, peak=2.0)[-1].min() < 0.6  # the display palette: yellow core
+    with pytest.raises(ValueError, match="gain"):
+        C.exposed_palette(0.0)

@@ -1,3 +1,5 @@
+from dataclasses import replace
+
 import cv2
 import numpy as np
 import pytest
@@ -185,3 +187,25 @@ def _fields(p: F.FlameParams) -> tuple[np.ndarray, np.ndarray]:
     y, x = np.mgrid[0 : p.rows, 0 : p.cols].astype(np.float32)
     hot = np.clip(1.0 - np.hypot((x - p.cols / 2) / (0.15 * p.cols), (y - 0.7 * p.rows) / (0.2 * p.rows)), 0, 1)
     return hot.astype(np.float32), np.full((p.rows, p.cols), 0.8, np.float32)
+
+
+def test_exposed_flames_differ_from_the_display_ones_only_in_colour_white_cored_and_red_edged():
+    """With ``exposed`` a black-body flame's parameters are the same draws but a gain in EXPOSED_GAIN (a chemical
+    one has none); rendered from the same fields its mask covers the display one's, a share of it near-white (the
+    display flame has none) and its colourful pixels more orange (a lower green over red)."""
+    chemical = F.sample_params(np.random.default_rng(0), rare=True, exposed=True)
+    assert chemical.palette != "blackbody" and chemical.gain == 0.0
+    for k in range(3):
+        plain = F.sample_params(np.random.default_rng([5, k]), frames=120, keep_every=40)
+        exposed = F.sample_params(np.random.default_rng([5, k]), frames=120, keep_every=40, exposed=True)
+        assert F.EXPOSED_GAIN[0] <= exposed.gain <= F.EXPOSED_GAIN[1] and replace(exposed, gain=0.0) == plain
+        sprites = [F.render_fields(*_fields(p), p, F.palettes(p)[0]) for p in (plain, exposed)]
+        assert np.all(sprites[1].mask[sprites[0].mask])
+        white = [(s.emission[s.mask].min(axis=1) > 230).mean() for s in sprites]
+        assert white[0] == 0.0 and white[1] > 0.05
+        green_over_red = [
+            np.median(s.emission[s.mask][:, 1] / np.maximum(s.emission[s.mask][:, 0], 1)) for s in sprites
+        ]
+        assert green_over_red[1] < green_over_red[0]
+    with pytest.raises(ValueError, match="gain"):
+        F.FlameParams(gain=-1.0)

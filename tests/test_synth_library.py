@@ -51,6 +51,11 @@ def test_procedural_library_is_seeded_and_folders_load(tmp_path):
     assert [s.meta["params"]["rising_smoke"] for s in risen] == [True, True]  # the key reaches the flames
     pairs = [(x, y) for s, t in zip(a, risen) for x, y in zip(s.sprites, t.sprites)]  # the same flames (their
     assert all(abs(int(x.mask.sum()) - int(y.mask.sum())) <= 0.03 * x.mask.sum() for x, y in pairs)  # crops differ)
+    exposed = L.build_library(
+        L.FlameLibraryConfig(sequences=2, seed=7, frames=40, keep_every=20, rare=0.0, exposed=True)
+    )
+    assert all(s.meta["params"]["gain"] > 0 for s in exposed) and all(s.meta["params"]["gain"] == 0 for s in a)
+    assert [len(s.sprites) for s in exposed] == [len(s.sprites) for s in a]  # the same frames, coloured otherwise
 
 
 def _tagged(name: str, generator: str) -> L.SpriteSequence:
