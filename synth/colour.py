@@ -132,8 +132,9 @@ def exposed_palette(
     camera records it: the linear colour ``blackbody_rgb(T) * (1 - exp(-exposure t^4)) * gain`` (``gain`` > 0: the
     camera's exposure, in units of the display palette's full scale) through a per-channel roll-off and a bloom to
     white (:data:`ROLL_OFF`, :data:`BLOOM`). Dim gas is red, brighter orange, then yellow as green saturates, and a
-    core bright enough is white, as fires are in photographs (the real train flames: a fifth of their pixels
-    near-white, the colourful ones at hue 30 degrees; the display palette's flames: 1 % and 42 degrees, README)."""
+    core bright enough is white, as fires are in photographs (``fuzzyfire synth colour``: the shared real train
+    flames have a quarter of their pixels near-white and the colourful ones at hue 31 degrees, the display palette's
+    composited flames 1 % and 37 degrees; README, "Exposed flames")."""
     if gain <= 0:
         raise ValueError(f"gain must be > 0, got {gain}")
     t = np.linspace(0.0, 1.0, n)

@@ -57,8 +57,8 @@ ASPECT_RANGE = (0.2, 2.0)
 MAX_STRETCH = 1.6  # a sequence is stretched sideways by at most this factor (or 1 / it) towards ``aspect``
 DRAG = 0.97  # sideways velocity kept per step: wind and swirls do not pile up into a flame blown flat
 #: Camera gain range of an exposed flame (:func:`exposed_gain`): with :data:`synth.colour.EXPOSED_T_MAX` the
-#: composited flames' pixels match the real train flames' near-white share, saturation and hue (README, "Exposed
-#: flames"); 4-16 gives a quarter near-white, 3-10 a fifth.
+#: composited flames come near the real train flames' near-white share, saturation and hue (``synth colour``;
+#: README, "Exposed flames").
 EXPOSED_GAIN = (3.0, 10.0)
 
 
