@@ -286,3 +286,5 @@ def test_blends_and_distractors_stay_out_of_existing_pool_identities() -> None:
     assert identity(replace(study, never_darken=False)) == "9a138ab4d9da"
     assert identity(replace(study, never_darken=True)) != "9a138ab4d9da"
     assert identity(replace(study, flames=replace(study.flames, rising_smoke=True))) != "9a138ab4d9da"
+    assert identity(replace(study, flames=replace(study.flames, exposed=False))) == "9a138ab4d9da"
+    assert identity(replace(study, flames=replace(study.flames, exposed=True))) != "9a138ab4d9da"
