@@ -24,7 +24,7 @@ Variants (on shared-data.yaml: panoramas, the flames' new look, 2 images per vie
 - ``rising_smoke``: ``look`` with the simulated flames' smoke only from their middle up (``flames.rising_smoke``);
 - ``opaque_rising``: ``rising_smoke`` with the flames' bright bodies hiding a bright background (``opaque_body``);
 - ``exposed``: ``look`` with the simulated flames coloured as a camera records fire (``flames.exposed``: white
-  cores, orange, red edges) and no chemical-colour flames (``flames.rare: 0``);
+  cores, orange, red edges; the chemical-colour ones keep theirs, so the variant shares the control);
 - ``photo_negatives``: the fire-free photos of ``fire-free/`` (less the 25 % held out as the false-alarm test set)
   as they are, with no flame, for every synthetic image (``backgrounds``, ``negatives: 1``): hard negatives alone;
 - ``look_photo_negatives``: ``look`` with a quarter of the views on those photos, left without flames
@@ -84,7 +84,7 @@ VARIANTS = {
     ],
     "rising_smoke": ["synth.method2.flames.rising_smoke=true"],
     "opaque_rising": ["synth.method2.flames.rising_smoke=true", "synth.method2.opaque_body=true"],
-    "exposed": ["synth.method2.flames.exposed=true", "synth.method2.flames.rare=0"],
+    "exposed": ["synth.method2.flames.exposed=true"],
     "photo_negatives": [
         "synth.method2.environments=[]",
         *PHOTOS,
