@@ -13,6 +13,8 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from synth.ramps import smoothstep
+
 _H, _C, _K = 6.62607015e-34, 2.99792458e8, 1.380649e-23
 WAVELENGTHS_NM: NDArray[np.float64] = np.arange(380.0, 781.0, 2.0)
 _XYZ_TO_SRGB = np.array([[3.2406, -1.5372, -0.4986], [-0.9689, 1.8758, 0.0415], [0.0557, -0.2040, 1.0570]])
@@ -140,6 +142,5 @@ def exposed_palette(
     t = np.linspace(0.0, 1.0, n)
     x = blackbody_rgb(t_min + t * (t_max - t_min)) * _intensity(t, exposure)[:, None] * gain
     rolled = 1.0 - np.exp(-ROLL_OFF * x)
-    white = np.clip((x.max(axis=-1, keepdims=True) - BLOOM[0]) / (BLOOM[1] - BLOOM[0]), 0.0, 1.0)
-    white = white * white * (3.0 - 2.0 * white)
+    white = smoothstep(x.max(axis=-1, keepdims=True), *BLOOM)
     return srgb_encode((1.0 - white) * rolled + white).astype(np.float32)

@@ -30,6 +30,7 @@ from numpy.typing import NDArray
 
 from synth.blend import ALL_MODES, EMISSIVE_MODES, PASTE_MODES, margin, paste
 from synth.harmonise import Look, apply_look
+from synth.ramps import smoothstep
 from synth.sprites import Sprite
 
 BLEND_MODES: tuple[str, ...] = EMISSIVE_MODES  # the modes flames were drawn from before synth.blend
@@ -39,17 +40,11 @@ OPAQUE_BRIGHTNESS = 0.6
 CLEAR_BRIGHTNESS = 0.15
 
 
-def _smoothstep(x: NDArray[np.float32], lo: float, hi: float) -> NDArray[np.float32]:
-    """``x`` (any shape) through a smoothstep from 0 at ``lo`` to 1 at ``hi``, float32."""
-    r = np.clip((x - lo) / (hi - lo), 0.0, 1.0)
-    return (r * r * (3.0 - 2.0 * r)).astype(np.float32)
-
-
 def coverage(brightness: NDArray[np.float32]) -> NDArray[np.float32]:
     """Luminous coverage in [0, 1] of emission ``brightness`` (any shape, 0..1): a smoothstep from 0 at
     :data:`CLEAR_BRIGHTNESS` to 1 at :data:`OPAQUE_BRIGHTNESS`. The dim edge only adds light (a bright wall
     behind it is reddened, never outlined in a darker colour); the bright body is opaque."""
-    return _smoothstep(brightness, CLEAR_BRIGHTNESS, OPAQUE_BRIGHTNESS)
+    return smoothstep(brightness, CLEAR_BRIGHTNESS, OPAQUE_BRIGHTNESS).astype(np.float32)
 
 
 #: Emission luma (0..1) over which an ``opaque_body`` flame goes from its dim edge (the ``never_darken`` cap) to its
@@ -61,7 +56,7 @@ def body_weight(luma: NDArray[np.float32]) -> NDArray[np.float32]:
     """Weight in [0, 1] of a flame pixel's body by its emission ``luma`` (any shape): a smoothstep over
     :data:`BODY_LUMA`. A luminous, sooty flame hides a bright wall behind it (the wall does not shine through its
     body as through a pale film); only its dim edge adds light without covering."""
-    return _smoothstep(luma, *BODY_LUMA)
+    return smoothstep(luma, *BODY_LUMA).astype(np.float32)
 
 
 @dataclass(frozen=True)

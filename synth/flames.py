@@ -35,6 +35,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from synth.colour import exposed_palette, flame_palette
+from synth.ramps import smoothstep
 from synth.sprites import Sprite, SpriteSequence, crop_to_content
 
 SHAPES: tuple[str, ...] = ("point", "line", "ring", "pool", "jet")
@@ -84,9 +85,7 @@ class FlameParams:
     palette: str = "blackbody"
     exposure: float = 9.0  # brightness curve of the palette (higher: brighter, more saturated flames)
     peak: float = 1.0  # linear brightness at the core; > 1 clips to yellow-white like an over-exposed camera
-    gain: float = (
-        0.0  # > 0: the camera-exposed palette at this gain (synth.colour.exposed_palette), not the display one
-    )
+    gain: float = 0.0  # > 0: the camera-exposed palette at this gain (synth.colour.exposed_palette)
     base_fade: float = 3.0  # the flame's base fades out over an irregular line up to this many cells high
     body: float = 0.25  # height of the burning body (fuel held at full temperature), fraction of the rows
     detail: float = 1.0  # edge turbulence: the rendered flame is warped by noise of this amplitude, grid cells
@@ -273,11 +272,6 @@ def fluid_step(s: FluidState, p: FlameParams, src: F32, grid: tuple[F32, F32], r
     s.temperature = cooled.astype(np.float32)
 
 
-def _smooth(r: NDArray[np.floating]) -> NDArray[np.floating]:
-    """The smoothstep of ``r`` in [0, 1] (any shape and float type, kept)."""
-    return r * r * (3.0 - 2.0 * r)
-
-
 def _border_window(shape: tuple[int, int], fraction: float = 0.25) -> F32:
     """(h, w) factor fading smoke to 0 towards the left, right and top borders over ``fraction`` of the side (the
     bottom over 0.4 of that), in a smoothstep: no hard or straight edge where the plume leaves the domain or
@@ -286,7 +280,7 @@ def _border_window(shape: tuple[int, int], fraction: float = 0.25) -> F32:
     ramp_x = np.clip(np.minimum(np.arange(w), np.arange(w)[::-1]) / max(fraction * w, 1.0), 0, 1)
     ramp_y = np.clip(np.arange(h) / max(fraction * h, 1.0), 0, 1)
     ramp_y = np.minimum(ramp_y, np.clip(np.arange(h)[::-1] / max(0.4 * fraction * h, 1.0), 0, 1))
-    return (_smooth(ramp_y)[:, None] * _smooth(ramp_x)[None, :]).astype(np.float32)
+    return (smoothstep(ramp_y)[:, None] * smoothstep(ramp_x)[None, :]).astype(np.float32)
 
 
 def _oval_window(shape: tuple[int, int]) -> F32:
@@ -295,7 +289,7 @@ def _oval_window(shape: tuple[int, int]) -> F32:
     h, w = shape
     y = (np.arange(h, dtype=np.float32) + 0.5) / h * 2.0 - 1.0
     x = (np.arange(w, dtype=np.float32) + 0.5) / w * 2.0 - 1.0
-    return _smooth(np.clip((1.0 - np.hypot(y[:, None], x[None, :])) / 0.5, 0.0, 1.0)).astype(np.float32)
+    return smoothstep((1.0 - np.hypot(y[:, None], x[None, :])) / 0.5).astype(np.float32)
 
 
 def tint_weight(p: FlameParams, bottom: int) -> F32 | None:
@@ -402,7 +396,7 @@ def rising(mask: NDArray[np.bool_]) -> F32:
     first = np.where(mask.any(axis=0), mask.argmax(axis=0), bottom).astype(np.float32)  # each column's flame top
     line = 0.5 * (np.minimum(first, 0.5 * (top + bottom)) + 0.5 * (top + bottom))  # between its top and the middle
     up = (line[None, :] - np.arange(mask.shape[0], dtype=np.float32)[:, None]) / (0.25 * height)
-    weight = _smooth(np.clip(up, 0.0, 1.0))
+    weight = smoothstep(up)
     thinning = np.clip(np.arange(mask.shape[0], dtype=np.float32) / max(top, 1.0), 0.0, 1.0) ** 0.7  # 0 at row 0
     weight = (weight * thinning[:, None]).astype(np.float32)
     return cv2.GaussianBlur(weight, (0, 0), sigmaX=0.1 * height).astype(np.float32)
@@ -454,7 +448,10 @@ def simulate_noise(p: FlameParams, rng: np.random.Generator) -> list[Sprite]:
     tall = sum(_noise(rng, (rows * 4, cols), c) * (c / 16) for c in (16, 8, 4))
     y = np.linspace(1.0, 0.0, rows, dtype=np.float32)[:, None]  # 0 at the bottom row, 1 at the top
     x = (np.arange(cols, dtype=np.float32) - cols / 2 + 0.5)[None, :] / cols
-    palette = palettes(p)[0] if p.gain > 0 else flame_palette(p.palette, exposure=p.exposure, peak=p.peak)
+    if p.gain > 0:
+        palette = exposed_palette(p.gain, exposure=p.exposure)
+    else:
+        palette = flame_palette(p.palette, exposure=p.exposure, peak=p.peak)
     base = base_attenuation(p, rows, rng)
     warp = edge_warp(p, rng) if p.detail > 0 else None
     texture_at = streaks_at(p, rng)
