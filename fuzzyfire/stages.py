@@ -172,6 +172,7 @@ def standin_stage(root: Path, name: str, cfg: Any) -> tuple[Stage, DataRef]:
 LATER_KEYS = (
     "environments", "flame_opacity", "closeup", "closeup_height", "background_holdout", "panorama_share", "streets",
     "kits", "blend", "distractors", "never_darken", "frames", "own_frames", "photo_negatives", "opaque_body",
+    "cutout_box",
 )  # fmt: skip
 
 #: Keys of a pool's ``flames`` added after pools were made; left out of its identity while at their default.
@@ -209,13 +210,18 @@ def synth_stage(root: Path, method: str, cfg: Any, base: Path, cutouts: Stage | 
         {"kind": method, "config": {**by_path, **files, **flames}},
         lambda out: runner(
             cfg,
-            build_library(cfg.flames, cutout_library(cutouts.folder) if cutouts else ()),
+            build_library(cfg.flames, cutout_library(cutouts.folder, _canvas(cfg)) if cutouts else ()),
             out,
             workers=os.cpu_count() or 1,  # the same bytes from any number of processes
         ),  # fmt: skip
         legacy={"kind": method, "config": by_path} if files and not flames else None,  # pools made by path before
     )
     return stage, DataRef(stage.folder, {"kind": method, "hash": stage.hash}, "coco")
+
+
+def _canvas(cfg: Any) -> bool:
+    """Whether a pool's cut-outs keep the box they were cut from (Method 2's ``cutout_box: source``)."""
+    return getattr(cfg, "cutout_box", "mask") == "source"
 
 
 def _renders_rooms(cfg: Any, places: Places | None = None) -> bool:

@@ -14,7 +14,7 @@ from typing import Literal
 import numpy as np
 
 from synth.flames import GENERATORS, generate_sequence, sample_params
-from synth.sprites import SpriteSequence, load_library
+from synth.sprites import SpriteSequence, load_library, load_rgba_folder
 
 #: Where a library's flames come from (``FlameLibraryConfig.source``).
 FLAME_SOURCES: tuple[str, ...] = ("simulated", "cutouts", "both")
@@ -104,10 +104,14 @@ def build_library(cfg: FlameLibraryConfig, cutouts: Sequence[SpriteSequence] = (
     return list(cutouts) + simulated
 
 
-def cutout_library(folder: Path) -> list[SpriteSequence]:
+def cutout_library(folder: Path, canvas: bool = False) -> list[SpriteSequence]:
     """The sequence folders of a ``fuzzyfire synth cutouts`` output ``folder`` (:func:`synth.cutouts.write_cutouts`),
-    each marked as cut-outs (``meta["generator"]`` = :data:`CUTOUT_GENERATOR`)."""
-    return [replace(seq, meta={**seq.meta, "generator": CUTOUT_GENERATOR}) for seq in load_library([folder])]
+    each marked as cut-outs (``meta["generator"]`` = :data:`CUTOUT_GENERATOR`); each sprite cropped to its content
+    (as a user's RGBA frames), or with ``canvas`` on the whole box it was cut from (Method 2's ``cutout_box:
+    source`` boxes a flame by it)."""
+    subs = sorted(p for p in folder.iterdir() if p.is_dir())
+    seqs = [load_rgba_folder(sub, crop=not canvas) for sub in subs]
+    return [replace(seq, meta={**seq.meta, "generator": CUTOUT_GENERATOR}) for seq in seqs]
 
 
 def pick_sequence(

@@ -28,7 +28,7 @@ from synth.decoys import plan_decoys
 from synth.distractors import DistractorConfig, draw_distractors, plan_distractors
 from synth.effects import CameraConfig, Effects, apply_effects, expose, sample_effects
 from synth.generate import generate
-from synth.library import FlameLibraryConfig, pick_sequence
+from synth.library import CUTOUT_GENERATOR, FlameLibraryConfig, pick_sequence
 from synth.schema import check_range, check_streets
 from synth.sprites import Sprite, SpriteSequence
 from synth.staging import boxes_from_masks
@@ -71,6 +71,8 @@ class Method2Config:
     closeup: float = 0.0  # fraction of fire images framed as a close-up: one flame of closeup_height x the image
     closeup_height: tuple[float, float] = (0.4, 1.0)  # close-up flame height, fraction of the image height
     min_box_px: int = 4  # visible flames smaller than this (either side) are dropped
+    cutout_box: Literal["mask", "source"] = "mask"  # a real cut-out flame's box: its seen flame pixels (mask), or
+    # the annotator's box it was cut from, moved and scaled with it (source: :func:`source_box`); simulated: mask
     smoke_class: bool = False
     light: bool = True  # flames light their surroundings (a warm cast around each flame)
     never_darken: bool = False  # a flame's dim edge reddens a bright background, never outlines it darker (composite)
@@ -95,6 +97,8 @@ class Method2Config:
         check_streets(self.streets, self.kits)
         if not 0.0 <= self.background_holdout < 1.0:
             raise ValueError(f"background_holdout must be in 0..1 (exclusive), got {self.background_holdout}")
+        if self.cutout_box not in ("mask", "source"):
+            raise ValueError(f"cutout_box must be mask or source, got {self.cutout_box!r}")
         if self.stand not in ("surfaces", "anywhere"):
             raise ValueError(f"stand must be surfaces or anywhere, got {self.stand!r}")
         if not 0.0 <= self.panorama_share <= 1.0:
@@ -288,6 +292,10 @@ def make_image(cfg: Method2Config, i: int, library: Sequence[SpriteSequence], vi
     planned = styled(cfg, planned, scene, extra)
     image, result, shown, seen = visible_composite(scene, planned, effects, cfg.min_box_px)
     kept, boxes, index = boxes_from_masks([v.part for v in seen], cfg.min_box_px)
+    if cfg.cutout_box == "source":
+        cut = cutout_names(library)
+        boxes = [source_box(shown[k][0], kept[j]) if shown[k][1].rsplit("/", 1)[0] in cut else boxes[j]
+                 for j, k in enumerate(index)]  # fmt: skip
     flames = [flame_record(shown[k][0], shown[k][1], seen[k]) for k in index]
     meta = {**view_meta, "flames": flames, "erased": len(planned) - len(shown), **added, "effects": effects.to_json()}
     boxes += view_meta.get("frame_boxes", [])  # a labelled frame's own fires, after the flames (no mask: audit)
@@ -296,6 +304,28 @@ def make_image(cfg: Method2Config, i: int, library: Sequence[SpriteSequence], vi
         return image, kept, record, None
     smoke, record["smoke_boxes"], _ = boxes_from_masks(result.smoke, cfg.min_box_px)
     return image, kept, record, smoke
+
+
+def cutout_names(library: Sequence[SpriteSequence]) -> set[str]:
+    """The names of ``library``'s real cut-out sequences (:data:`synth.library.CUTOUT_GENERATOR`)."""
+    return {seq.name for seq in library if seq.meta.get("generator") == CUTOUT_GENERATOR}
+
+
+def source_box(p: Placement, part: NDArray[np.bool_]) -> list[int]:
+    """[x, y, w, h] image pixels (integers, inside the (H, W) image of ``part``) of a cut-out flame boxed as its
+    annotator boxed it: the box of its seen pixels ``part`` (H, W) bool, grown on each side by the margin between
+    the sprite's flame mask and its canvas (the real box it was cut from, kept by
+    :func:`synth.library.cutout_library` with ``canvas``), scaled as the placement scales the sprite. A flame seen
+    whole gets its placed canvas (clipped to the image); a partly hidden one keeps the margins of its seen sides."""
+    sw, sh = p.sprite.size
+    rows, cols = np.flatnonzero(p.sprite.mask.any(axis=1)), np.flatnonzero(p.sprite.mask.any(axis=0))
+    sx, sy = p.width / sw, p.height / sh
+    x, y, w, h = (int(v) for v in mask_to_xywh(part))
+    height, width = part.shape
+    x0, y0 = max(int(round(x - cols[0] * sx)), 0), max(int(round(y - rows[0] * sy)), 0)
+    x1 = min(int(round(x + w + (sw - 1 - cols[-1]) * sx)), width)
+    y1 = min(int(round(y + h + (sh - 1 - rows[-1]) * sy)), height)
+    return [x0, y0, x1 - x0, y1 - y0]
 
 
 def flame_record(p: Placement, name: str, seen) -> dict:

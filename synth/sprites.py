@@ -165,8 +165,10 @@ def _read_over(folder: Path, i: int, shape: tuple[int, int]) -> NDArray[np.uint8
     return np.zeros((*shape, 4), np.uint8)
 
 
-def load_rgba_folder(folder: Path) -> SpriteSequence:
-    """A user's RGBA sequence: every ``*.png`` in ``folder`` with an alpha channel, cropped to its content."""
+def load_rgba_folder(folder: Path, crop: bool = True) -> SpriteSequence:
+    """A user's RGBA sequence: every ``*.png`` in ``folder`` with an alpha channel, cropped to its content (or,
+    ``crop`` False, each on its whole canvas: a real cut-out's canvas is the box it was cut from); frames with no
+    flame pixel are skipped."""
     paths = sorted(p for p in folder.glob("*.png") if p.is_file())
     if not paths:
         raise FileNotFoundError(f"{folder}: no sequence.json and no PNG frames")
@@ -175,7 +177,7 @@ def load_rgba_folder(folder: Path) -> SpriteSequence:
         rgba = _read_png(path)
         if rgba.ndim != 3 or rgba.shape[2] != 4:
             raise ImageError(path, "has no alpha channel (RGBA PNG needed)")
-        cropped = crop_to_content(sprite_from_rgba(rgba))
+        cropped = crop_to_content(sprite_from_rgba(rgba)) if crop else sprite_from_rgba(rgba)
         if cropped is not None and cropped.mask.any():
             sprites.append(cropped)
     if not sprites:

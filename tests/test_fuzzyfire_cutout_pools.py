@@ -219,3 +219,20 @@ def test_max_fill_cuts_a_stage_of_its_own_and_keeps_the_default_ones(built, tmp_
     assert cutout_stage(out / "data", train, max_fill=1.0).hash == full.hash
     count = [len(json.loads((s.folder / "cutouts.json").read_text())) for s in (full, strict)]
     assert 0 < count[1] < count[0]
+
+
+def test_source_boxes_are_pools_of_their_own_from_the_same_cutouts(built) -> None:
+    """``cutout_box: source``: other own pools (the key is in their identity) cut from the same cut-out stages,
+    whose flame boxes are larger than their masks' (the annotators' margins); the shared pool is the same stage."""
+    from dataclasses import replace
+
+    from synth.audit import audit_dataset
+
+    out, data, own, _, _ = built
+    cfg = _config("cutouts")
+    cfg = replace(cfg, synth=replace(cfg.synth, method2=replace(cfg.synth.method2, cutout_box="source")))
+    boxed_data, boxed, _, _ = _prepare(cfg, out)
+    assert boxed_data.pools == data.pools and sorted(boxed) == sorted(own)
+    for key, pool in boxed.items():
+        assert pool != own[key] and _cut_stage(out, pool.path) == _cut_stage(out, own[key].path)
+        assert audit_dataset(pool.path)["mean_iou"] < audit_dataset(own[key].path)["mean_iou"] == 1.0

@@ -106,3 +106,26 @@ def test_picks_keep_old_draws_and_share_flames_by_cutout_share():
         "real-1",
         "real-2",
     }
+
+
+def _cutout_folder(root: Path) -> Path:
+    """A ``synth cutouts``-style folder: one sequence of two 30x40 RGBA cut-outs whose flame fills only the middle
+    (the rest of the box transparent, as GrabCut leaves an annotator's margin)."""
+    from synth.sprites import write_png
+
+    (root / "real-000").mkdir(parents=True)
+    for k in range(2):
+        rgba = np.zeros((40, 30, 4), np.uint8)
+        rgba[6 + k : 34, 5:24] = (255, 170, 40, 255)
+        write_png(root / "real-000" / f"{k:05d}.png", rgba)
+    return root
+
+
+def test_cutouts_keep_the_box_they_were_cut_from_only_when_asked(tmp_path):
+    folder = _cutout_folder(tmp_path / "cut")
+    cropped, whole = L.cutout_library(folder), L.cutout_library(folder, canvas=True)
+    assert [s.meta["generator"] for s in cropped + whole] == [L.CUTOUT_GENERATOR] * 2
+    assert {s.size for s in whole[0].sprites} == {(30, 40)}  # the box: flame pixels span part of it
+    assert [s.size for s in cropped[0].sprites] == [(21, 30), (21, 29)]  # the flame and a 1 px pad
+    for a, b in zip(cropped[0].sprites, whole[0].sprites):
+        assert a.mask.sum() == b.mask.sum()  # the same flame either way

@@ -283,3 +283,66 @@ def test_the_flames_of_a_pool_carry_its_compositing_rule(library):
     cfg = replace(CFG, never_darken=True, opaque_body=True)
     placed = [p for i in range(5) for p, _ in M.plan_flames(cfg, library, depth, 1.0, np.random.default_rng(i))]
     assert placed and all(p.never_darken and p.opaque_body for p in placed)
+
+
+def test_source_box_is_the_placed_canvas_and_keeps_the_margins_of_a_partly_seen_flame():
+    from synth.composite import Placement
+    from synth.sprites import Sprite
+
+    mask = np.zeros((30, 20), bool)
+    mask[5:27, 4:16] = True  # flame rows 5..26, cols 4..15 of a 20 x 30 canvas
+    sprite = Sprite(np.zeros((30, 20, 4), np.uint8), np.zeros((30, 20, 3), np.uint8), mask)
+    p = Placement(sprite, 10, 8, 40, 60)  # scaled 2x
+    part = np.zeros((100, 100), bool)
+    part[8 + 10 : 8 + 54, 10 + 8 : 10 + 32] = True  # the whole flame, seen
+    assert M.source_box(p, part) == [10, 8, 40, 60]
+    lower = part.copy()
+    lower[: 8 + 30] = False  # its top hidden: the seen part grows by the same margins
+    assert M.source_box(p, lower) == [10, 8 + 30 - 10, 40, 60 - 30 + 10]
+    edge = Placement(sprite, -20, 70, 40, 60)  # half outside the image: clipped to it
+    seen = np.zeros((100, 100), bool)
+    seen[80:100, 0:12] = True
+    x, y, w, h = M.source_box(edge, seen)
+    assert (x, y, x + w, y + h) == (0, 70, 20, 100)
+    with pytest.raises(ValueError, match="cutout_box"):
+        M.Method2Config(cutout_box="canvas")
+
+
+def test_cutout_boxes_are_the_annotators_with_source_and_the_flame_pixels_without(tmp_path, library):
+    """``cutout_box: source``: each cut-out flame's box holds its seen flame pixels (the mask kept beside the image)
+    and the margin its annotator drew around them, so the audit finds it larger than the mask box; simulated
+    flames in the same pool keep their exact mask boxes; the default pool is unchanged by the key's existence."""
+    from dataclasses import replace
+
+    from test_synth_library import _cutout_folder
+
+    from curate.core.boxes import mask_to_xywh
+    from synth.library import cutout_library
+
+    folder = _cutout_folder(tmp_path / "cut")
+    cfg = replace(CFG, n=8, images_per_view=1, max_flames=2)
+    runs = {}
+    for rule in ("mask", "source"):
+        lib = cutout_library(folder, canvas=rule == "source") + list(library)
+        M.run_method2(replace(cfg, cutout_box=rule), lib, tmp_path / rule)
+        runs[rule] = audit_dataset(tmp_path / rule)
+    assert runs["mask"]["mean_iou"] == 1.0 and runs["source"]["mean_iou"] < 0.95
+    coco = json.loads((tmp_path / "source" / "annotations.json").read_text())
+    per_image = json.loads((tmp_path / "source" / "manifest.json").read_text())["args"]["per_image"]
+    by_image: dict[int, list] = {}
+    for a in coco["annotations"]:
+        by_image.setdefault(a["image_id"], []).append(a["bbox"])
+    cut = sim = 0
+    import cv2
+
+    for img, meta in zip(coco["images"], per_image):
+        labels = cv2.imread(str(tmp_path / "source" / "masks" / (Path(img["file_name"]).stem + ".png")), -1)
+        for k, (box, flame) in enumerate(zip(by_image.get(img["id"], []), meta["flames"])):
+            x, y, w, h = mask_to_xywh(labels == k + 1)
+            inside = box[0] <= x and box[1] <= y and x + w <= box[0] + box[2] and y + h <= box[1] + box[3]
+            assert inside and box[0] >= 0 and box[1] >= 0 and box[0] + box[2] <= cfg.width
+            if flame["flame"].startswith("real-"):
+                cut += box[2] * box[3] > w * h
+            else:
+                sim += list(box) == [x, y, w, h]
+    assert cut >= 3 and sim >= 1
