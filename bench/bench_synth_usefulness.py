@@ -15,6 +15,8 @@ Variants (on shared-data.yaml: panoramas, the flames' new look, 2 images per vie
   boxes (``own_frames: 1``);
 - ``own_frames_half``: half the views on own frames, half on the panoramas;
 - ``own_frames_cutouts``: own cut-out flames on own frames (copy-paste augmentation made by the study);
+- ``own_frames_cutouts_source_box``: ``own_frames_cutouts`` with each cut-out boxed by the box it was cut from,
+  moved and scaled with it (``cutout_box: source``: the annotators' margins around the flame pixels);
 - ``own_frames_cutouts_clean``: ``own_frames_cutouts`` without the cut-outs whose mask fills more than 85 % of
   their box (fire-lit rectangles: ``flames.cutout_max_fill: 0.85``);
 - ``own_frames_none``: own frames with no flame added (``negatives: 1``): what the frames give by themselves
@@ -76,6 +78,11 @@ VARIANTS = {
     "own_frames": ["synth.method2.own_frames=1.0"],
     "own_frames_half": ["synth.method2.own_frames=0.5"],
     "own_frames_cutouts": ["synth.method2.own_frames=1.0", "synth.method2.flames.source=cutouts"],
+    "own_frames_cutouts_source_box": [
+        "synth.method2.own_frames=1.0",
+        "synth.method2.flames.source=cutouts",
+        "synth.method2.cutout_box=source",
+    ],
     "own_frames_none": ["synth.method2.own_frames=1.0", "synth.method2.negatives=1.0"],
     "own_frames_cutouts_1": [
         "synth.method2.own_frames=1.0",
