@@ -17,6 +17,8 @@ Variants (on shared-data.yaml: panoramas, the flames' new look, 2 images per vie
 - ``own_frames_cutouts``: own cut-out flames on own frames (copy-paste augmentation made by the study);
 - ``own_frames_cutouts_source_box``: ``own_frames_cutouts`` with each cut-out boxed by the box it was cut from,
   moved and scaled with it (``cutout_box: source``: the annotators' margins around the flame pixels);
+- ``own_frames_cutouts_half_photo_negatives_upscale2``: ``own_frames_cutouts_half_photo_negatives`` with no
+  cut-out drawn above twice its own pixels (``cutout_max_upscale: 2``: no blurred blob from a small flame);
 - ``own_frames_cutouts_clean``: ``own_frames_cutouts`` without the cut-outs whose mask fills more than 85 % of
   their box (fire-lit rectangles: ``flames.cutout_max_fill: 0.85``);
 - ``own_frames_none``: own frames with no flame added (``negatives: 1``): what the frames give by themselves
@@ -114,6 +116,13 @@ VARIANTS = {
         "synth.method2.photo_negatives=0.5",
         "synth.method2.own_frames=1.0",
         "synth.method2.flames.source=cutouts",
+    ],
+    "own_frames_cutouts_half_photo_negatives_upscale2": [
+        *PHOTOS,
+        "synth.method2.photo_negatives=0.5",
+        "synth.method2.own_frames=1.0",
+        "synth.method2.flames.source=cutouts",
+        "synth.method2.cutout_max_upscale=2.0",
     ],
     "own_frames_cutouts_clean": [
         "synth.method2.own_frames=1.0",

@@ -55,7 +55,7 @@ def simulated(cfg: Method2Config) -> Method2Config:
     flames = replace(
         cfg.flames, source="simulated", cutout_share=default.cutout_share, cutout_max_fill=default.cutout_max_fill
     )
-    return replace(cfg, flames=flames, own_frames=0.0, cutout_box=type(cfg).cutout_box)
+    return replace(cfg, flames=flames, own_frames=0.0, cutout_box=type(cfg).cutout_box, cutout_max_upscale=None)
 
 
 def is_own(cfg: Method2Config | None) -> bool:

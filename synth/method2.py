@@ -71,6 +71,8 @@ class Method2Config:
     closeup: float = 0.0  # fraction of fire images framed as a close-up: one flame of closeup_height x the image
     closeup_height: tuple[float, float] = (0.4, 1.0)  # close-up flame height, fraction of the image height
     min_box_px: int = 4  # visible flames smaller than this (either side) are dropped
+    cutout_max_upscale: float | None = None  # a real cut-out is never drawn larger than this x its own pixels
+    # (its height drawn by depth is capped: no blurred blob from a 15 px flame); None = no cap
     cutout_box: Literal["mask", "source"] = "mask"  # a real cut-out flame's box: its seen flame pixels (mask), or
     # the annotator's box it was cut from, moved and scaled with it (source: :func:`source_box`); simulated: mask
     smoke_class: bool = False
@@ -97,6 +99,8 @@ class Method2Config:
         check_streets(self.streets, self.kits)
         if not 0.0 <= self.background_holdout < 1.0:
             raise ValueError(f"background_holdout must be in 0..1 (exclusive), got {self.background_holdout}")
+        if self.cutout_max_upscale is not None and self.cutout_max_upscale < 0.1:
+            raise ValueError(f"cutout_max_upscale must be >= 0.1 or null, got {self.cutout_max_upscale}")
         if self.cutout_box not in ("mask", "source"):
             raise ValueError(f"cutout_box must be mask or source, got {self.cutout_box!r}")
         if self.stand not in ("surfaces", "anywhere"):
@@ -155,6 +159,7 @@ def plan_flames(
             bx, by = int(rng.integers(0, cfg.width)), int(rng.integers(cfg.height // 3, cfg.height))
             d = float(depth[min(by, cfg.height - 1), bx]) or 10.0
             hpx = int(np.clip(fy * rng.uniform(*cfg.flame_height_m) / d, 12, 0.9 * cfg.height))
+        hpx = capped_height(cfg, seq, sprite, hpx)
         wpx, spx = sprite_pixels(sprite, hpx)
         blend = str(rng.choice(cfg.blend.modes))  # (screen, add) by default: the draws of pools made before
         glow, opacity = float(rng.uniform(0.1, 0.5)), float(rng.uniform(*cfg.flame_opacity))
@@ -164,6 +169,14 @@ def plan_flames(
         )  # fmt: skip
         out.append((place, f"{seq.name}/{frame}"))
     return out
+
+
+def capped_height(cfg: Method2Config, seq: SpriteSequence, sprite: Sprite, flame_px: int) -> int:
+    """``flame_px``, the height in image pixels drawn for a flame, capped for a real cut-out at
+    ``cfg.cutout_max_upscale`` x the height of its flame in its own pixels (never below 2); as drawn otherwise."""
+    if cfg.cutout_max_upscale is None or seq.meta.get("generator") != CUTOUT_GENERATOR:
+        return flame_px
+    return max(min(flame_px, int(cfg.cutout_max_upscale * flame_extent(sprite)[1])), 2)
 
 
 def flame_extent(sprite: Sprite) -> tuple[int, int]:

@@ -144,7 +144,12 @@ def test_shipped_configs_keep_the_pool_identities_they_had_before_flames_source(
     cfg = load_config(CONFIGS / config, ExperimentConfig)
     got = {m: _identity_digest(getattr(cfg.synth, m), m, CONFIGS, monkeypatch) for m in pinned}
     assert got == pinned
-    cut = load_config(CONFIGS / config, ExperimentConfig, ["synth.method2.flames.source=both"])
+    cut_keys = [
+        "synth.method2.flames.source=both",
+        "synth.method2.cutout_box=source",
+        "synth.method2.cutout_max_upscale=2",
+    ]
+    cut = load_config(CONFIGS / config, ExperimentConfig, cut_keys)
     shared = simulated(cut.synth.method2)  # the experiment's shared pool of a cut-out config is the same pool
     assert _identity_digest(shared, "method2", CONFIGS, monkeypatch) == pinned["method2"]
     assert _identity_digest(cut.synth.method2, "method2", CONFIGS, monkeypatch) != pinned["method2"]

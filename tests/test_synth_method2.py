@@ -346,3 +346,26 @@ def test_cutout_boxes_are_the_annotators_with_source_and_the_flame_pixels_withou
             else:
                 sim += list(box) == [x, y, w, h]
     assert cut >= 3 and sim >= 1
+
+
+def test_a_cutout_is_never_drawn_above_its_upscale_cap_and_simulated_flames_are_as_drawn(tmp_path, library):
+    """``cutout_max_upscale``: a real cut-out's drawn flame height is capped at the cap x its flame's own pixel
+    height (a 28 px flame at 2x: 56 px at most); simulated flames, and every flame without a cap, keep their draw."""
+    from dataclasses import replace
+
+    from test_synth_library import _cutout_folder
+
+    from synth.library import cutout_library
+
+    cut = cutout_library(_cutout_folder(tmp_path / "cut"))[0]
+    own = M.flame_extent(cut.sprites[0])[1]
+    capped = replace(CFG, cutout_max_upscale=2.0)
+    assert M.capped_height(capped, cut, cut.sprites[0], 300) == 2 * own
+    assert M.capped_height(capped, cut, cut.sprites[0], 40) == 40
+    assert M.capped_height(CFG, cut, cut.sprites[0], 300) == 300
+    assert M.capped_height(capped, library[0], library[0].sprites[0], 300) == 300
+    depth = np.full((CFG.height, CFG.width), 0.5, np.float32)  # near: flames drawn tall
+    placed = [p for i in range(20) for p, _ in M.plan_flames(capped, [cut], depth, 1.0, np.random.default_rng(i))]
+    assert placed and max(p.height for p in placed) <= 2 * cut.sprites[0].size[1]
+    with pytest.raises(ValueError, match="cutout_max_upscale"):
+        M.Method2Config(cutout_max_upscale=0.0)
