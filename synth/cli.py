@@ -342,6 +342,14 @@ def cmd_colour(args: argparse.Namespace) -> int:
     return 0
 
 
+def _add_pair(p: argparse.ArgumentParser, synthetic_help: str, real_help: str) -> None:
+    """The SYNTHETIC and REAL positionals of a command comparing two sets, and a split option for each."""
+    p.add_argument("synthetic", type=Path, help=synthetic_help)
+    p.add_argument("real", type=Path, help=real_help)
+    p.add_argument("--synthetic-split", help="only this split of SYNTHETIC (default: every image)")
+    p.add_argument("--real-split", help="only this split of REAL (default: every image)")
+
+
 def _register_colour(sub: argparse._SubParsersAction) -> None:
     p = add_command(
         sub,
@@ -354,10 +362,7 @@ def _register_colour(sub: argparse._SubParsersAction) -> None:
         "example:\n  fuzzyfire synth colour out/m2 ../shared/data/fire-cctv-416 --real-split train\n"
         "  fuzzyfire synth colour out/m2-exposed out/curated --real-split train --json",
     )
-    p.add_argument("synthetic", type=Path, help="synthetic dataset, any labelled format")
-    p.add_argument("real", type=Path, help="real dataset, any labelled format")
-    p.add_argument("--synthetic-split", help="only this split of SYNTHETIC (default: every image)")
-    p.add_argument("--real-split", help="only this split of REAL (default: every image)")
+    _add_pair(p, "synthetic dataset, any labelled format", "real dataset, any labelled format")
     p.add_argument("--class", dest="class_name", default="fire", help="the flames' class (default fire)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(func=cmd_colour)
@@ -636,13 +641,14 @@ def _register_gap(sub: argparse._SubParsersAction) -> None:
         "  fuzzyfire synth gap out/m2 ../shared/data/fire-cctv-416 --real-split train --crops\n"
         "  fuzzyfire synth gap renders/ photos/ --format images --real-format images --json",
     )
-    p.add_argument("synthetic", type=Path, help="synthetic dataset (or image folder with --format images)")
-    p.add_argument("real", type=Path, help="real dataset (or image folder with --real-format images)")
+    _add_pair(
+        p,
+        "synthetic dataset (or image folder with --format images)",
+        "real dataset (or image folder with --real-format images)",
+    )
     formats = ["auto", "coco", "yolo", "voc", "dfire", "images"]
     p.add_argument("--format", default="auto", choices=formats, help="layout of SYNTHETIC (default auto)")
     p.add_argument("--real-format", default="auto", choices=formats, help="layout of REAL (default auto)")
-    p.add_argument("--synthetic-split", help="only this split of SYNTHETIC (default: every image)")
-    p.add_argument("--real-split", help="only this split of REAL (default: every image)")
     p.add_argument("--draws", type=int, default=200, help="random equal-size draws (default 200)")
     p.add_argument("--size", type=int, help="images (crops) per side (default min(synthetic, real / 2))")
     p.add_argument("--crops", action="store_true", help="the flame gap: compare box crops, not whole images")
