@@ -19,6 +19,8 @@ Variants (on shared-data.yaml: panoramas, the flames' new look, 2 images per vie
   moved and scaled with it (``cutout_box: source``: the annotators' margins around the flame pixels);
 - ``own_frames_cutouts_half_photo_negatives_upscale2``: ``own_frames_cutouts_half_photo_negatives`` with no
   cut-out drawn above twice its own pixels (``cutout_max_upscale: 2``: no blurred blob from a small flame);
+- ``exposed_photos_half_negatives``: exposed simulated flames on half of those photos, the other half as they are,
+  no panoramas (``environments: []``, ``flames.exposed``, ``photo_negatives: 0.5``);
 - ``own_frames_cutouts_clean``: ``own_frames_cutouts`` without the cut-outs whose mask fills more than 85 % of
   their box (fire-lit rectangles: ``flames.cutout_max_fill: 0.85``);
 - ``own_frames_none``: own frames with no flame added (``negatives: 1``): what the frames give by themselves
@@ -123,6 +125,12 @@ VARIANTS = {
         "synth.method2.own_frames=1.0",
         "synth.method2.flames.source=cutouts",
         "synth.method2.cutout_max_upscale=2.0",
+    ],
+    "exposed_photos_half_negatives": [
+        *PHOTOS,
+        "synth.method2.environments=[]",
+        "synth.method2.flames.exposed=true",
+        "synth.method2.photo_negatives=0.5",
     ],
     "own_frames_cutouts_clean": [
         "synth.method2.own_frames=1.0",
