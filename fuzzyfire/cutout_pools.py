@@ -50,12 +50,20 @@ PoolKey = tuple[str, str, int]
 
 def simulated(cfg: Method2Config) -> Method2Config:
     """``cfg`` with simulated flames on its own places only: the experiment's shared pool (the same identity as a
-    config without ``flames.source``, ``own_frames`` and ``cutout_box``), which R0 mixtures and the report's samples and gap use."""
+    config without ``flames.source``, ``own_frames``, ``cutout_box`` and ``cutout_max_upscale``), which R0 mixtures
+    and the report's samples and gap use."""
     default = type(cfg.flames)()
     flames = replace(
         cfg.flames, source="simulated", cutout_share=default.cutout_share, cutout_max_fill=default.cutout_max_fill
     )
-    return replace(cfg, flames=flames, own_frames=0.0, cutout_box=type(cfg).cutout_box, cutout_max_upscale=None)
+    default_cfg = type(cfg)
+    return replace(
+        cfg,
+        flames=flames,
+        own_frames=0.0,
+        cutout_box=default_cfg.cutout_box,
+        cutout_max_upscale=default_cfg.cutout_max_upscale,
+    )
 
 
 def is_own(cfg: Method2Config | None) -> bool:

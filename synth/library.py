@@ -114,6 +114,11 @@ def cutout_library(folder: Path, canvas: bool = False) -> list[SpriteSequence]:
     return [replace(seq, meta={**seq.meta, "generator": CUTOUT_GENERATOR}) for seq in seqs]
 
 
+def is_cutout(seq: SpriteSequence) -> bool:
+    """Whether ``seq`` holds real cut-out flames (:func:`cutout_library`), not simulated ones."""
+    return seq.meta.get("generator") == CUTOUT_GENERATOR
+
+
 def pick_sequence(
     library: Sequence[SpriteSequence], cfg: FlameLibraryConfig, rng: np.random.Generator
 ) -> SpriteSequence:
@@ -123,5 +128,5 @@ def pick_sequence(
     if cfg.source != "both":
         return library[int(rng.integers(len(library)))]
     cut = rng.random() < cfg.cutout_share
-    group = [s for s in library if (s.meta.get("generator") == CUTOUT_GENERATOR) == cut] or list(library)
+    group = [s for s in library if is_cutout(s) == cut] or list(library)
     return group[int(rng.integers(len(group)))]

@@ -28,7 +28,7 @@ from synth.decoys import plan_decoys
 from synth.distractors import DistractorConfig, draw_distractors, plan_distractors
 from synth.effects import CameraConfig, Effects, apply_effects, expose, sample_effects
 from synth.generate import generate
-from synth.library import CUTOUT_GENERATOR, FlameLibraryConfig, pick_sequence
+from synth.library import FlameLibraryConfig, is_cutout, pick_sequence
 from synth.schema import check_range, check_streets
 from synth.sprites import Sprite, SpriteSequence
 from synth.staging import boxes_from_masks
@@ -174,7 +174,7 @@ def plan_flames(
 def capped_height(cfg: Method2Config, seq: SpriteSequence, sprite: Sprite, flame_px: int) -> int:
     """``flame_px``, the height in image pixels drawn for a flame, capped for a real cut-out at
     ``cfg.cutout_max_upscale`` x the height of its flame in its own pixels (never below 2); as drawn otherwise."""
-    if cfg.cutout_max_upscale is None or seq.meta.get("generator") != CUTOUT_GENERATOR:
+    if cfg.cutout_max_upscale is None or not is_cutout(seq):
         return flame_px
     return max(min(flame_px, int(cfg.cutout_max_upscale * flame_extent(sprite)[1])), 2)
 
@@ -306,9 +306,7 @@ def make_image(cfg: Method2Config, i: int, library: Sequence[SpriteSequence], vi
     image, result, shown, seen = visible_composite(scene, planned, effects, cfg.min_box_px)
     kept, boxes, index = boxes_from_masks([v.part for v in seen], cfg.min_box_px)
     if cfg.cutout_box == "source":
-        cut = cutout_names(library)
-        boxes = [source_box(shown[k][0], kept[j]) if shown[k][1].rsplit("/", 1)[0] in cut else boxes[j]
-                 for j, k in enumerate(index)]  # fmt: skip
+        boxes = annotator_boxes(library, [shown[k] for k in index], kept, boxes)
     flames = [flame_record(shown[k][0], shown[k][1], seen[k]) for k in index]
     meta = {**view_meta, "flames": flames, "erased": len(planned) - len(shown), **added, "effects": effects.to_json()}
     boxes += view_meta.get("frame_boxes", [])  # a labelled frame's own fires, after the flames (no mask: audit)
@@ -319,9 +317,16 @@ def make_image(cfg: Method2Config, i: int, library: Sequence[SpriteSequence], vi
     return image, kept, record, smoke
 
 
-def cutout_names(library: Sequence[SpriteSequence]) -> set[str]:
-    """The names of ``library``'s real cut-out sequences (:data:`synth.library.CUTOUT_GENERATOR`)."""
-    return {seq.name for seq in library if seq.meta.get("generator") == CUTOUT_GENERATOR}
+def annotator_boxes(
+    library: Sequence[SpriteSequence], flames: Sequence[tuple[Placement, str]], parts: Sequence, boxes: list
+) -> list:
+    """``boxes`` ([x, y, w, h] of the kept ``flames``, each (placement, "<sequence>/<frame>"), whose seen parts are
+    the (H, W) bool ``parts``, all in one order) with every real cut-out's box replaced by :func:`source_box`."""
+    cut = {seq.name for seq in library if is_cutout(seq)}
+    return [
+        source_box(p, part) if name.rsplit("/", 1)[0] in cut else box
+        for (p, name), part, box in zip(flames, parts, boxes, strict=True)
+    ]
 
 
 def source_box(p: Placement, part: NDArray[np.bool_]) -> list[int]:
