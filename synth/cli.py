@@ -236,7 +236,7 @@ def _blend_config(args: argparse.Namespace) -> dict:
     blend = BlendConfig(modes=modes, harmonise=args.harmonise, match_noise=args.match_noise, decoys=args.decoys)
     return {
         "blend": blend,
-        "distractors": DistractorConfig(share=args.distractors),
+        "distractors": DistractorConfig(share=args.distractors, **_distractor_kinds(args)),
         "never_darken": args.never_darken,
         "opaque_body": args.opaque_body,
     }
@@ -537,6 +537,8 @@ def _register_method2(sub: argparse._SubParsersAction) -> None:
         "  fuzzyfire synth method2 --n 200 --out out/m2-streets --streets 8 --kits ../shared/data/kits\n"
         "  fuzzyfire synth method2 --n 200 --out out/m2-hard --environments ../shared/data/panoramas "
         "--distractors 0.5 --blend screen,add,alpha,blur,poisson --harmonise --match-noise --decoys 0.3\n"
+        "  fuzzyfire synth method2 --n 200 --out out/m2-own-negatives --backgrounds my/negatives "
+        "--distractors 0.5 --distractor-kinds photo  # your photos' lamps and red sofas pasted, unboxed\n"
         "  fuzzyfire synth audit out/m2 --json",
     )
     _dataset_arguments(p, photos=True)
@@ -577,9 +579,21 @@ def _distractor_argument(p: argparse.ArgumentParser) -> None:
     )
 
 
+def _distractor_kinds(args: argparse.Namespace) -> dict:
+    """``kinds`` of Method 2's distractors from --distractor-kinds (none: the config's default kinds)."""
+    return {"kinds": tuple(k.strip() for k in args.distractor_kinds.split(","))} if args.distractor_kinds else {}
+
+
 def _blend_arguments(p: argparse.ArgumentParser) -> None:
     """Method 2's distractors and blends (synth/distractors.py, synth/blend.py)."""
     _distractor_argument(p)
+    p.add_argument(
+        "--distractor-kinds",
+        metavar="KINDS",
+        help="comma-separated distractor kinds: lamp, sun, cone, cloth, clothing, taillights, glare (drawn; the "
+        "default is all of them) and photo (fire-like regions cut from your --backgrounds photos: lamps, lit "
+        "windows, red sofas; synth/photo_regions.py)",
+    )
     p.add_argument(
         "--blend",
         metavar="MODES",

@@ -5,7 +5,10 @@ Kinds (:data:`KINDS`): ``lamp`` (a bare bulb with bloom and star streaks, or a g
 sun disc above the horizon with a sunset gradient over the sky; only where the view shows sky), ``cone`` (a traffic
 cone with reflective bands), ``cloth`` (a red or orange cloth with folds), ``clothing`` (an orange or red jacket,
 hi-vis strips), ``taillights`` (a car's pair of red rear lights, often with the dark car body and plate between
-them) and ``glare`` (an anamorphic glare streak, or a lamp's reflection on a glossy floor). Each is drawn as a
+them) and ``glare`` (an anamorphic glare streak, or a lamp's reflection on a glossy floor). One more kind is not
+drawn but cut: ``photo`` (:data:`PHOTO_KIND`, not in the default kinds), a fire-like region of the pool's own
+fire-free photos (:mod:`synth.photo_regions`: a lamp, a lit window, a red sofa), pasted anywhere in the image at
+0.7-1.3 x its height share of its photo, mirrored half the time. Each is drawn as a
 :class:`synth.sprites.Sprite` with an empty flame mask (reflective parts in ``over``, light in ``emission``) in
 image pixels; objects standing on the ground are sized by the view's depth like flames.
 
@@ -17,17 +20,21 @@ Randomness only through the explicit ``rng``.
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import cv2
 import numpy as np
 from numpy.typing import NDArray
 
 from synth.colour import blackbody_rgb, srgb_encode
+from synth.photo_regions import Region
 from synth.sites import sky_like
 from synth.sprites import Sprite
 
 KINDS: tuple[str, ...] = ("lamp", "sun", "cone", "cloth", "clothing", "taillights", "glare")
+PHOTO_KIND = "photo"  # cut from the pool's fire-free photos (Method 2 with backgrounds only), not drawn
+ALL_KINDS: tuple[str, ...] = (*KINDS, PHOTO_KIND)
+PHOTO_SCALE = (0.7, 1.3)  # a photo region's height in the image: this x its height share of its photo
 EMISSIVE_KINDS: tuple[str, ...] = ("lamp", "sun", "taillights", "glare")  # light: drawn after low-light exposure
 OUTDOOR_KINDS: tuple[str, ...] = ("sun", "taillights")  # never drawn in a rendered room (:func:`kinds_here`)
 #: Height range in metres of the kinds that stand on the ground (sized by depth like flames).
@@ -54,20 +61,27 @@ class DistractorConfig:
             raise ValueError(f"distractors.share must be in 0..1, got {self.share}")
         if self.max < 1:
             raise ValueError(f"distractors.max must be >= 1, got {self.max}")
-        if not self.kinds or any(k not in KINDS for k in self.kinds):
+        if not self.kinds or any(k not in ALL_KINDS for k in self.kinds):
             raise ValueError(
-                f"distractors.kinds must be a non-empty list of {', '.join(KINDS)}, got {list(self.kinds)}"
+                f"distractors.kinds must be a non-empty list of {', '.join(ALL_KINDS)}, got {list(self.kinds)}"
             )
+
+    @property
+    def photo(self) -> bool:
+        """Whether images may carry distractors cut from the pool's fire-free photos (:data:`PHOTO_KIND`)."""
+        return self.share > 0 and PHOTO_KIND in self.kinds
 
 
 @dataclass(frozen=True)
 class Distractor:
-    """A drawn distractor: its layers as a sprite with an empty flame mask, its top-left (x, y) in image pixels."""
+    """A drawn distractor: its layers as a sprite with an empty flame mask, its top-left (x, y) in image pixels;
+    a :data:`PHOTO_KIND` one also names the photo it was cut from."""
 
     kind: str
     sprite: Sprite
     x: int
     y: int
+    photo: str = ""
 
     @property
     def emissive(self) -> bool:
@@ -79,7 +93,7 @@ class Distractor:
         return [self.x, self.y, *self.sprite.size]
 
     def to_json(self) -> dict:
-        return {"kind": self.kind, "box": self.box}
+        return {"kind": self.kind, "box": self.box, **({"photo": self.photo} if self.photo else {})}
 
 
 # --- drawing primitives: float32 canvases, pixel centres at integer + 0.5 -------------------------------------
@@ -419,13 +433,38 @@ def _cropped(kind: str, layers: Layers, x: int, y: int) -> Distractor | None:
     return Distractor(kind, sprite, x + int(cols[0]), y + int(rows[0]))
 
 
+def draw_region(region: Region, height: int, rng: np.random.Generator) -> Layers:
+    """A fire-like photo ``region`` as layers ``height`` px tall (aspect kept; mirrored with probability 0.5):
+    its pixels laid over with its alpha, no light of its own."""
+    rgba = region.rgba[:, ::-1] if rng.random() < 0.5 else region.rgba
+    h = max(int(height), 2)
+    w = max(int(round(h * rgba.shape[1] / rgba.shape[0])), 1)
+    interp = cv2.INTER_AREA if h < rgba.shape[0] else cv2.INTER_LINEAR
+    f = cv2.resize(np.ascontiguousarray(rgba), (w, h), interpolation=interp).astype(np.float32) / 255.0
+    return f[..., :3], np.ascontiguousarray(f[..., 3]), np.zeros((h, w, 3), np.float32)
+
+
+def place_region(regions: Sequence[Region], height: int, width: int, rng: np.random.Generator) -> Distractor | None:
+    """A :data:`PHOTO_KIND` distractor: a random one of ``regions`` at :data:`PHOTO_SCALE` x its height share of
+    an image ``height`` x ``width`` px (8 px .. 0.6 of the height), wholly inside it at a random spot."""
+    region = regions[int(rng.integers(len(regions)))]
+    size = int(np.clip(region.height_share * height * rng.uniform(*PHOTO_SCALE), 8, 0.6 * height))
+    layers = draw_region(region, size, rng)
+    h, w = layers[1].shape
+    x, y = int(rng.integers(0, max(width - w, 0) + 1)), int(rng.integers(0, max(height - h, 0) + 1))
+    made = _cropped(PHOTO_KIND, layers, x, y)
+    return None if made is None else replace(made, photo=region.photo)
+
+
 def make_distractor(
     kind: str, background: NDArray[np.uint8], depth: NDArray[np.float32], fy: float, horizon: float | None,
-    rng: np.random.Generator,
+    rng: np.random.Generator, regions: Sequence[Region] = (),
 ) -> Distractor | None:  # fmt: skip
     """One distractor of ``kind`` for the (H, W, 3) ``background`` with its (H, W) ``depth`` (metres, 0 = not
     ground), focal length ``fy`` (pixels) and ``horizon`` row (None: unknown; no sun then); None when the kind does
-    not fit this view (a sun without sky)."""
+    not fit this view (a sun without sky, a photo region without ``regions``)."""
+    if kind == PHOTO_KIND:
+        return place_region(regions, *background.shape[:2], rng) if regions else None
     if kind == "sun":
         layers = draw_sun(background, horizon, rng) if horizon is not None else None
         return None if layers is None else _cropped(kind, layers, 0, 0)
@@ -451,11 +490,12 @@ def kinds_here(kinds: Sequence[str], meta: dict) -> tuple[str, ...]:
 
 def plan_distractors(
     cfg: DistractorConfig, background: NDArray[np.uint8], depth: NDArray[np.float32], meta: dict, fy: float,
-    avoid: Sequence[Sequence[float]], rng: np.random.Generator, tries: int = 8,
+    avoid: Sequence[Sequence[float]], rng: np.random.Generator, tries: int = 8, regions: Sequence[Region] = (),
 ) -> list[Distractor]:  # fmt: skip
     """The distractors of one image: none for a ``1 - cfg.share`` of images, else 1..``cfg.max`` of random kinds
     (each redrawn up to ``tries`` times), none overlapping the ``avoid`` boxes [x, y, w, h] (the flames) nor each
-    other, all inside the image at least in part."""
+    other, all inside the image at least in part. ``regions``: the fire-like regions the :data:`PHOTO_KIND` cuts
+    from (:mod:`synth.photo_regions`)."""
     if rng.random() >= cfg.share:
         return []
     kinds = kinds_here(cfg.kinds, meta)
@@ -464,7 +504,7 @@ def plan_distractors(
     out: list[Distractor] = []
     for _ in range(int(rng.integers(1, cfg.max + 1)) if kinds else 0):
         for _ in range(tries):
-            d = make_distractor(kinds[int(rng.integers(len(kinds)))], background, depth, fy, horizon, rng)
+            d = make_distractor(kinds[int(rng.integers(len(kinds)))], background, depth, fy, horizon, rng, regions)
             if d is None or not overlaps(d.box, [[0, 0, w, h]]):
                 continue
             if not overlaps(d.box, [*avoid, *(o.box for o in out)]):

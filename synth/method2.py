@@ -29,6 +29,7 @@ from synth.distractors import DistractorConfig, draw_distractors, plan_distracto
 from synth.effects import CameraConfig, Effects, apply_effects, expose, sample_effects
 from synth.generate import generate
 from synth.library import FlameLibraryConfig, is_cutout, pick_sequence
+from synth.photo_regions import Region
 from synth.schema import check_range, check_streets
 from synth.sprites import Sprite, SpriteSequence
 from synth.staging import boxes_from_masks
@@ -111,6 +112,8 @@ class Method2Config:
             raise ValueError(f"photo_share must be in 0..1, got {self.photo_share}")
         if self.max_flames < 1 or not 0.0 <= self.negatives <= 1.0 or self.min_box_px < 1:
             raise ValueError(f"invalid Method 2 config: {self}")
+        if self.distractors.photo and not self.backgrounds:
+            raise ValueError("distractors of kind photo are cut from the pool's fire-free photos: give backgrounds")
         if self.photo_negatives is not None and not 0.0 <= self.photo_negatives <= 1.0:
             raise ValueError(f"photo_negatives must be in 0..1 or null, got {self.photo_negatives}")
         check_range("flame_height_m", self.flame_height_m, 0.01)
@@ -249,15 +252,21 @@ def visible_composite(scene: NDArray[np.uint8], planned: Sequence[tuple[Placemen
 
 
 def dressed_scene(
-    cfg: Method2Config, background, depth, meta: dict, planned, library, effects: Effects, fy: float, rng
-):
+    cfg: Method2Config, background, depth, meta: dict, planned, library, effects: Effects, fy: float, rng,
+    regions: Sequence[Region] = (),
+):  # fmt: skip
     """The exposed scene flames are composited on, with this image's distractors (reflective ones before the
     low-light exposure, light sources after it) and decoy pastes, none overlapping a planned flame or what
     :func:`kept_clear` keeps clear (a photo site's people, a labelled frame's fires; boxes [x, y, w, h] in
     ``meta``); and
-    the metadata they add (``distractors``, ``decoys``: kind or blend and box [x, y, w, h]; only when on)."""
+    the metadata they add (``distractors``, ``decoys``: kind or blend and box [x, y, w, h]; only when on).
+    ``regions``: the fire-like regions of the pool's photos that ``photo`` distractors are cut from."""
     avoid = [*([p.x, p.y, p.width, p.height] for p, _ in planned), *kept_clear(meta)]
-    items = plan_distractors(cfg.distractors, background, depth, meta, fy, avoid, rng) if cfg.distractors.share else []
+    items = (
+        plan_distractors(cfg.distractors, background, depth, meta, fy, avoid, rng, regions=regions)
+        if cfg.distractors.share
+        else []
+    )
     scene = draw_distractors(expose(draw_distractors(background, items, False), effects), items, True)
     added: dict = {"distractors": [d.to_json() for d in items]} if cfg.distractors.share else {}
     if cfg.blend.decoys:
@@ -301,7 +310,8 @@ def make_image(cfg: Method2Config, i: int, library: Sequence[SpriteSequence], vi
     effects = sample_effects(rng, cfg.camera)
     extra = np.random.default_rng([cfg.seed, 2, i, 1])
     fy = float(render.intrinsics(yfov, cfg.width, cfg.height)[1, 1])
-    scene, added = dressed_scene(cfg, background, depth, view_meta, planned, library, effects, fy, extra)
+    regions = views.photos.regions() if cfg.distractors.photo and views.photos is not None else ()
+    scene, added = dressed_scene(cfg, background, depth, view_meta, planned, library, effects, fy, extra, regions)
     planned = styled(cfg, planned, scene, extra)
     image, result, shown, seen = visible_composite(scene, planned, effects, cfg.min_box_px)
     kept, boxes, index = boxes_from_masks([v.part for v in seen], cfg.min_box_px)

@@ -19,6 +19,7 @@ from numpy.typing import NDArray
 from curate.core.imageio import ImageError, read_image
 from curate.scan import list_image_files
 from synth.frames import Box, crop_boxes
+from synth.photo_regions import Region, photo_regions
 from synth.sites import Site, estimate_site, read_site_sidecar, sidecar_files
 
 
@@ -103,6 +104,14 @@ class PhotoBackgrounds:
         self.labels = dict(labels or {})
         self.order = np.random.default_rng([seed, 8]).permutation(len(self.photos))
         self.problems: dict[str, str] = {}
+        self._regions: tuple[Region, ...] | None = None
+
+    def regions(self) -> tuple[Region, ...]:
+        """The fire-like regions (:mod:`synth.photo_regions`) of the fire-free photos, not of the labelled frames:
+        the ``photo`` distractors' library, found on first use."""
+        if self._regions is None:
+            self._regions = photo_regions([p for p in self.photos if p not in self.labels])
+        return self._regions
 
     def photo(self, view_index: int) -> Path:
         return self.photos[int(self.order[view_index % len(self.photos)])]

@@ -251,3 +251,7 @@ def test_method2_distractors_and_blends_from_the_command_line(tmp_path, capsys):
     assert all("distractors" in m and "decoys" in m for m in manifest["per_image"])
     assert main(["synth", "method2", "--out", str(tmp_path / "x"), "--scenes", "1", "--blend", "glue"]) == 2
     assert "blend.modes" in capsys.readouterr().err
+    assert main([*args, "--distractors", "1", "--distractor-kinds", "photo", "--out", str(tmp_path / "p")]) == 2
+    assert "backgrounds" in capsys.readouterr().err  # photo regions come from --backgrounds
+    assert main([*args, "--distractors", "1", "--distractor-kinds", "lamp, dragon", "--out", str(tmp_path / "d")]) == 2
+    assert "distractors.kinds" in capsys.readouterr().err

@@ -7,9 +7,12 @@ import numpy as np
 import pytest
 
 from synth.distractors import (
+    ALL_KINDS,
     DRAWERS,
     KINDS,
     OUTDOOR_KINDS,
+    PHOTO_KIND,
+    PHOTO_SCALE,
     DistractorConfig,
     draw_distractors,
     draw_sun,
@@ -111,3 +114,49 @@ def test_rooms_get_no_outdoor_kinds():
 
 def test_kinds_cover_the_brief():
     assert set(KINDS) == set(DRAWERS) | {"sun"}
+
+
+def _regions():
+    """Two fire-like regions as :mod:`synth.photo_regions` cuts them: an orange disc and a red bar."""
+    from synth.photo_regions import Region
+
+    disc = np.zeros((20, 20, 4), np.uint8)
+    disc[..., :3] = (230, 90, 30)
+    disc[..., 3] = (np.hypot(*np.mgrid[-9.5:10:1, -9.5:10:1]) < 10) * 255  # touches its four sides
+    bar = np.full((6, 30, 4), (200, 30, 20, 255), np.uint8)
+    return (Region(disc, 0.25, "a.jpg"), Region(bar, 0.1, "b.jpg"))
+
+
+def test_photo_regions_are_pasted_whole_inside_the_image_at_their_share_of_its_height_and_repeat_per_seed():
+    img, depth = _outdoor()
+    regions = _regions()
+    heights = {0.25: [], 0.1: []}
+    for seed in range(30):
+        one = make_distractor(PHOTO_KIND, img, depth, 100.0, 40.0, np.random.default_rng(seed), regions)
+        two = make_distractor(PHOTO_KIND, img, depth, 100.0, 40.0, np.random.default_rng(seed), regions)
+        assert one is not None and one.kind == PHOTO_KIND and not one.emissive and not one.sprite.mask.any()
+        assert one.box == two.box and np.array_equal(one.sprite.over, two.sprite.over)
+        assert not one.sprite.emission.any() and one.sprite.over[..., 3].max() == 255
+        x, y, w, h = one.box
+        assert 0 <= x and x + w <= 128 and 0 <= y and y + h <= 96
+        red = one.sprite.over[..., 0].astype(int) - one.sprite.over[..., 2]
+        heights[0.25 if red.max() == 200 else 0.1].append(h)  # the disc: 230 - 30, the bar: 200 - 20
+    for share, hs in heights.items():
+        assert hs and all(max(8, share * 96 * PHOTO_SCALE[0]) - 1 <= h <= share * 96 * PHOTO_SCALE[1] + 1 for h in hs)
+    assert make_distractor(PHOTO_KIND, img, depth, 100.0, 40.0, np.random.default_rng(0)) is None  # no regions
+
+
+def test_photo_kind_is_opt_in_and_planned_only_from_regions():
+    assert PHOTO_KIND not in KINDS and set(ALL_KINDS) == {*KINDS, PHOTO_KIND}
+    assert DistractorConfig(share=0.5, kinds=(PHOTO_KIND,)).photo and not DistractorConfig(share=0.5).photo
+    assert not DistractorConfig(share=0.0, kinds=(PHOTO_KIND,)).photo
+    img, depth = _outdoor()
+    cfg = DistractorConfig(share=1.0, max=2, kinds=(PHOTO_KIND,))
+    avoid = [[40, 30, 30, 30]]
+    found = 0
+    for seed in range(10):
+        items = plan_distractors(cfg, img, depth, {}, 100.0, avoid, np.random.default_rng(seed), regions=_regions())
+        found += len(items)
+        assert all(d.kind == PHOTO_KIND and not overlaps(d.box, avoid) for d in items)
+    assert found >= 10
+    assert plan_distractors(cfg, img, depth, {}, 100.0, [], np.random.default_rng(0)) == []

@@ -237,6 +237,13 @@ def test_config_rejects_unknown_box_mode():
         M.Method1Config(box_mode="tight")
 
 
+def test_config_refuses_photo_distractors_that_only_a_method2_pool_has_photos_for():
+    from synth.distractors import DistractorConfig
+
+    with pytest.raises(ValueError, match="kind photo"):
+        M.Method1Config(distractors=DistractorConfig(share=0.5, kinds=("photo",)))
+
+
 def test_smoke_class_boxes_come_from_the_visible_smoke(tmp_path):
     from dataclasses import replace
 

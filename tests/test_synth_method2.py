@@ -369,3 +369,39 @@ def test_a_cutout_is_never_drawn_above_its_upscale_cap_and_simulated_flames_are_
     assert placed and max(p.height for p in placed) <= 2 * cut.sprites[0].size[1]
     with pytest.raises(ValueError, match="cutout_max_upscale"):
         M.Method2Config(cutout_max_upscale=0.0)
+
+
+def test_photo_distractors_are_cut_from_the_pools_fire_free_photos_and_get_no_box(tmp_path, library):
+    """``distractors.kinds: [photo]``: images carry fire-like regions of the pool's own photos (never of a held-out
+    photo), none boxed, none over a flame; the flames' boxes stay exact; the kind needs backgrounds."""
+    from dataclasses import replace
+
+    import cv2
+
+    (tmp_path / "photos").mkdir()
+    for k in range(3):
+        photo = np.full((150, 200, 3), 60 + 20 * k, np.uint8)
+        cv2.circle(photo, (60 + 30 * k, 50), 18, (30, 90, 230), -1)  # BGR: an orange disc, a lamp shade
+        cv2.imwrite(str(tmp_path / "photos" / f"p{k}.png"), photo)
+    from synth.photos import held_out
+
+    distractors = DistractorConfig(share=1.0, max=2, kinds=("photo",))
+    cfg = replace(CFG, n=8, images_per_view=2, scenes=0, backgrounds=(tmp_path / "photos",), distractors=distractors,
+                  background_holdout=0.4)  # fmt: skip
+    kept = {p.name for p in (tmp_path / "photos").iterdir() if not held_out(p, 0.4)}
+    assert 0 < len(kept) < 3  # the test needs a held-out photo and a kept one
+    M.run_method2(cfg, library, tmp_path / "a")
+    per_image = json.loads((tmp_path / "a" / "manifest.json").read_text())["args"]["per_image"]
+    items = [d for m in per_image for d in m["distractors"]]
+    assert len(items) >= 4 and {d["kind"] for d in items} == {"photo"} and {d["photo"] for d in items} <= kept
+    coco = json.loads((tmp_path / "a" / "annotations.json").read_text())
+    for img, m in zip(coco["images"], per_image):
+        boxes = [a["bbox"] for a in coco["annotations"] if a["image_id"] == img["id"]]
+        assert len(boxes) == len(m["flames"])  # a distractor gets no box
+        assert not any(overlaps(d["box"], boxes) for d in m["distractors"])
+    report = audit_dataset(tmp_path / "a")
+    assert report["mean_iou"] == 1.0 and report["boxes"] == sum(len(m["flames"]) for m in per_image)
+    M.run_method2(cfg, library, tmp_path / "b")
+    assert _files(tmp_path / "a") == _files(tmp_path / "b")
+    with pytest.raises(ValueError, match="kind photo"):
+        replace(CFG, distractors=distractors)
