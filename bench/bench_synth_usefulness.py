@@ -19,6 +19,9 @@ Variants (on shared-data.yaml: panoramas, the flames' new look, 2 images per vie
   moved and scaled with it (``cutout_box: source``: the annotators' margins around the flame pixels);
 - ``own_frames_cutouts_half_photo_negatives_upscale2``: ``own_frames_cutouts_half_photo_negatives`` with no
   cut-out drawn above twice its own pixels (``cutout_max_upscale: 2``: no blurred blob from a small flame);
+- ``own_frames_cutouts_half_photo_negatives_photo_distractors`` / ``..._distractors``: the same with half of the
+  images carrying 1-2 fire-like regions cut from those photos (``distractors: {share: 0.5, kinds: [photo]}``:
+  their lamps, lit windows, red sofas, pasted unboxed) / 1-2 drawn distractors (lamps, cones, tail lights ...);
 - ``exposed_photos_half_negatives``: exposed simulated flames on half of those photos, the other half as they are,
   no panoramas (``environments: []``, ``flames.exposed``, ``photo_negatives: 0.5``);
 - ``own_frames_cutouts_clean``: ``own_frames_cutouts`` without the cut-outs whose mask fills more than 85 % of
@@ -125,6 +128,21 @@ VARIANTS = {
         "synth.method2.own_frames=1.0",
         "synth.method2.flames.source=cutouts",
         "synth.method2.cutout_max_upscale=2.0",
+    ],
+    "own_frames_cutouts_half_photo_negatives_photo_distractors": [
+        *PHOTOS,
+        "synth.method2.photo_negatives=0.5",
+        "synth.method2.own_frames=1.0",
+        "synth.method2.flames.source=cutouts",
+        "synth.method2.distractors.share=0.5",
+        "synth.method2.distractors.kinds=[photo]",
+    ],
+    "own_frames_cutouts_half_photo_negatives_distractors": [
+        *PHOTOS,
+        "synth.method2.photo_negatives=0.5",
+        "synth.method2.own_frames=1.0",
+        "synth.method2.flames.source=cutouts",
+        "synth.method2.distractors.share=0.5",
     ],
     "exposed_photos_half_negatives": [
         *PHOTOS,
