@@ -18,8 +18,12 @@ procedural environments (the issue's file-scene targets: Method 2 <= 3 min, Meth
 ``../shared/data/kits`` beside the repository), 640x480 (issue 22's target: 1,000 images in <= 3 min, RSS flat;
 each street is built for its block of views and released after it, so RSS should not grow across streets).
 
-Usage: ``python bench/bench_synth.py [--n 1000] [--only flames,composite,method2,method1,streets]
-[--environments P] [--kits DIR] [--streets 8] [--workers 0]``.
+``--only photo_regions``: the fire-like regions the ``photo`` distractors are cut from
+(:mod:`synth.photo_regions`), found in ``--photos`` (default ``../shared/data/fire-free`` beside the repository, its
+held-out quarter left out as the study does): photos/s and regions found.
+
+Usage: ``python bench/bench_synth.py [--n 1000] [--only flames,composite,method2,method1,streets,photo_regions]
+[--environments P] [--kits DIR] [--streets 8] [--photos DIR] [--workers 0]``.
 Figures depend on the machine and on other load: take them on an otherwise idle machine.
 """
 
@@ -124,6 +128,19 @@ def bench_run(name: str, run: Callable[[Path], object], n: int) -> None:
     print(f"{name}_rss_peak: {max(mb for _, mb in rss.samples):.0f} MB")
 
 
+def bench_photo_regions(folder: Path) -> None:
+    from synth.photo_regions import photo_regions
+    from synth.photos import pool_photos
+
+    photos = pool_photos([folder], 0.25)
+    t = time.perf_counter()
+    regions = photo_regions(photos)
+    dt = time.perf_counter() - t
+    print(f"photo_regions_photos_per_s: {len(photos) / dt:.1f} photos/s")
+    print(f"photo_regions_found: {len(regions)} regions")
+    print(f"photo_regions_photos_with_one: {len({r.photo for r in regions})} photos")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--n", type=int, default=1000, help="images per Method run")
@@ -132,6 +149,8 @@ def main() -> None:
     kits = Path(__file__).resolve().parents[2] / "shared" / "data" / "kits"
     ap.add_argument("--kits", type=Path, default=kits, help=f"building kits for --only streets (default {kits})")
     ap.add_argument("--streets", type=int, default=8, help="kit streets for --only streets (default 8)")
+    photos = kits.parent / "fire-free"
+    ap.add_argument("--photos", type=Path, default=photos, help=f"--only photo_regions: photos (default {photos})")
     ap.add_argument(
         "--workers", type=int, default=0, help="image processes of the Method runs (default 0 = one per core)"
     )
@@ -143,6 +162,10 @@ def main() -> None:
     only = set(args.only.split(","))
     if "flames" in only:
         bench_flames()
+    if "photo_regions" in only:
+        bench_photo_regions(args.photos)
+    if not only & {"composite", "method2", "method1", "streets"}:
+        return
     t = time.perf_counter()
     library = build_library(FlameLibraryConfig())
     print(f"flame_library_12x240_steps: {time.perf_counter() - t:.1f} s")
