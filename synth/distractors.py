@@ -20,7 +20,7 @@ Randomness only through the explicit ``rng``.
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import cv2
 import numpy as np
@@ -419,8 +419,9 @@ def anchor(kind: str, depth: NDArray[np.float32], fy: float, rng: np.random.Gene
     return size, rng.uniform(0, w), rng.uniform(0.1 * h, top)
 
 
-def _cropped(kind: str, layers: Layers, x: int, y: int) -> Distractor | None:
-    """The layers cut to the pixels they change (alpha or light >= 1/255) as a :class:`Distractor`."""
+def _cropped(kind: str, layers: Layers, x: int, y: int, photo: str = "") -> Distractor | None:
+    """The layers cut to the pixels they change (alpha or light >= 1/255) as a :class:`Distractor` (cut from
+    ``photo``, if any)."""
     rgb, alpha, light = layers
     shown = (alpha >= 1 / 255) | (light.max(axis=-1) >= 1 / 255)
     rows, cols = np.flatnonzero(shown.any(axis=1)), np.flatnonzero(shown.any(axis=0))
@@ -430,7 +431,7 @@ def _cropped(kind: str, layers: Layers, x: int, y: int) -> Distractor | None:
     over = np.concatenate([rgb[cut], alpha[cut][..., None]], axis=-1)
     as_u8 = [np.round(np.clip(v, 0, 1) * 255).astype(np.uint8) for v in (over, light[cut])]
     sprite = Sprite(as_u8[0], as_u8[1], np.zeros(alpha[cut].shape, bool))
-    return Distractor(kind, sprite, x + int(cols[0]), y + int(rows[0]))
+    return Distractor(kind, sprite, x + int(cols[0]), y + int(rows[0]), photo)
 
 
 def draw_region(region: Region, height: int, rng: np.random.Generator) -> Layers:
@@ -452,8 +453,7 @@ def place_region(regions: Sequence[Region], height: int, width: int, rng: np.ran
     layers = draw_region(region, size, rng)
     h, w = layers[1].shape
     x, y = int(rng.integers(0, max(width - w, 0) + 1)), int(rng.integers(0, max(height - h, 0) + 1))
-    made = _cropped(PHOTO_KIND, layers, x, y)
-    return None if made is None else replace(made, photo=region.photo)
+    return _cropped(PHOTO_KIND, layers, x, y, region.photo)
 
 
 def make_distractor(

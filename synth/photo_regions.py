@@ -6,11 +6,11 @@ with the same kind of cut edge as) your own pasted flames.
 A photo is searched at :data:`SEARCH_SIDE` px on its longer side; its fire-coloured mask is closed and filled
 (:func:`synth.cutouts.filled`) and each connected component covering :data:`MIN_AREA`..:data:`MAX_AREA` of the
 photo, filling at least :data:`MIN_FILL` of its bounding box and at least :data:`MIN_SIDE` px across (a thing,
-not a ragged patch of warm texture, a sliver along an edge or a line) and of mean
-HSV saturation at least :data:`MIN_SATURATION` (warm and coloured: a white wall or sky passes the rule's bright
-core test but looks like nothing on fire) becomes a region: the component's bounding box of the (searched) photo,
-alpha = the component softened (Gaussian, sigma 1 px). Frames: image pixels, row 0 at the top. Deterministic: the same photos in the same order
-give the same regions.
+not a ragged patch of warm texture, a sliver along an edge or a line) and of mean HSV saturation at least
+:data:`MIN_SATURATION` (warm and coloured: a white wall or sky passes the rule's bright core test but looks like
+nothing on fire) becomes a region: the component's bounding box of the (searched) photo, alpha = the component
+softened (Gaussian, sigma 1 px). Frames: image pixels, row 0 at the top. Deterministic: the same photos in the
+same order give the same regions.
 """
 
 from __future__ import annotations
