@@ -22,6 +22,14 @@ Variants (on shared-data.yaml: panoramas, the flames' new look, 2 images per vie
 - ``own_frames_cutouts_half_photo_negatives_photo_distractors`` / ``..._distractors``: the same with half of the
   images carrying 1-2 fire-like regions cut from those photos (``distractors: {share: 0.5, kinds: [photo]}``:
   their lamps, lit windows, red sofas, pasted unboxed) / 1-2 drawn distractors (lamps, cones, tail lights ...);
+- ``own_frames_cutouts_photo_negatives_photo_distractors``: ``own_frames_cutouts_photo_negatives`` (every photo
+  left without a flame) with those photo distractors in half the images: the most negatives, for the alarm rate;
+- ``own_frames_exposed_half_photo_negatives_photo_distractors``: the photo-distractor pool with exposed simulated
+  flames in place of the cut-outs (``flames.source: simulated``, ``flames.exposed``): what simulated flames reach
+  in the best recipe;
+- ``own_frames_cutouts_half_photo_negatives_photo_distractors_blends``: the photo-distractor pool with each flame's
+  blend drawn from all five modes, harmonised to the local light, blur and grain matched to the background
+  (``blend: {modes: [screen, add, alpha, blur, poisson], harmonise, match_noise}``): no paste cue, trained;
 - ``exposed_photos_half_negatives``: exposed simulated flames on half of those photos, the other half as they are,
   no panoramas (``environments: []``, ``flames.exposed``, ``photo_negatives: 0.5``);
 - ``own_frames_cutouts_clean``: ``own_frames_cutouts`` without the cut-outs whose mask fills more than 85 % of
@@ -77,6 +85,8 @@ STUDY = [
 ]
 #: The fire-free photos as a pool's backgrounds, the quarter that is the false-alarm test set held out.
 PHOTOS = ["synth.method2.backgrounds=[../../shared/data/fire-free]", "synth.method2.background_holdout=0.25"]
+#: Half of the images carry 1-2 fire-like regions cut from those photos, unboxed.
+PHOTO_DISTRACTORS = ["synth.method2.distractors.share=0.5", "synth.method2.distractors.kinds=[photo]"]
 VARIANTS = {
     "flat": ["synth.method2.never_darken=false", "synth.method2.flames.texture=0"],
     "look": [],
@@ -143,6 +153,30 @@ VARIANTS = {
         "synth.method2.own_frames=1.0",
         "synth.method2.flames.source=cutouts",
         "synth.method2.distractors.share=0.5",
+    ],
+    "own_frames_cutouts_photo_negatives_photo_distractors": [
+        *PHOTOS,
+        "synth.method2.photo_negatives=1.0",
+        "synth.method2.own_frames=1.0",
+        "synth.method2.flames.source=cutouts",
+        *PHOTO_DISTRACTORS,
+    ],
+    "own_frames_exposed_half_photo_negatives_photo_distractors": [
+        *PHOTOS,
+        "synth.method2.photo_negatives=0.5",
+        "synth.method2.own_frames=1.0",
+        "synth.method2.flames.exposed=true",
+        *PHOTO_DISTRACTORS,
+    ],
+    "own_frames_cutouts_half_photo_negatives_photo_distractors_blends": [
+        *PHOTOS,
+        "synth.method2.photo_negatives=0.5",
+        "synth.method2.own_frames=1.0",
+        "synth.method2.flames.source=cutouts",
+        *PHOTO_DISTRACTORS,
+        "synth.method2.blend.modes=[screen,add,alpha,blur,poisson]",
+        "synth.method2.blend.harmonise=true",
+        "synth.method2.blend.match_noise=true",
     ],
     "exposed_photos_half_negatives": [
         *PHOTOS,
