@@ -127,6 +127,21 @@ def _print_errors(errors) -> None:  # errors: eval.errors.ErrorBreakdown
         )
 
 
+def _models(text: str) -> list[Path]:
+    """``A.onnx`` or ``A0.onnx,A1.onnx,...`` (one side of ``compare``: several runs, e.g. one per seed)."""
+    paths = [Path(part.strip()) for part in text.split(",") if part.strip()]
+    if not paths:
+        raise argparse.ArgumentTypeError(f"{text!r}: expected a model .onnx or a comma-separated list of them")
+    return paths
+
+
+def _side(models: list[Path], results: list) -> dict:  # results: list[eval.score.ScoreResult]
+    """One side of the compare document: its models' AP and AP50 averaged (the bootstrap's point), and each run."""
+    runs = [{"model": str(m), **{k: r.metrics.summary[k] for k in ("AP", "AP50")}} for m, r in zip(models, results)]
+    mean = {k: sum(run[k] for run in runs) / len(runs) for k in ("AP", "AP50")}
+    return {"model": ",".join(str(m) for m in models), **mean, "runs": runs}
+
+
 def cmd_compare(args: argparse.Namespace) -> int:
     import numpy as np
 
@@ -135,22 +150,23 @@ def cmd_compare(args: argparse.Namespace) -> int:
     from eval.score import ScoreError
     from eval.stats import MatchTable, paired_bootstrap
 
+    sides = (args.model_a, args.model_b)
     try:
         test = _load(args)
-        results = [_score_model(m, args, test.dataset, test.problems) for m in (args.model_a, args.model_b)]
+        results = [[_score_model(m, args, test.dataset, test.problems) for m in side] for side in sides]
     except (ModelError, ScoreError, ClassMatchError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
-    _report_problems(results[0])
-    tables = [MatchTable(r.evaluation) for r in results]
-    if not np.array_equal(tables[0].image_ids, tables[1].image_ids):
-        print("error: the models could not both be scored on the same images", file=sys.stderr)
+    _report_problems(results[0][0])
+    tables = [[MatchTable(r.evaluation) for r in side] for side in results]
+    if any(not np.array_equal(tables[0][0].image_ids, t.image_ids) for t in tables[0] + tables[1]):
+        print("error: the models could not all be scored on the same images", file=sys.stderr)
         return 2
     deltas = paired_bootstrap(tables[0], tables[1], np.random.default_rng(args.seed), args.samples)
     doc = {
-        "A": {"model": str(args.model_a), **{k: results[0].metrics.summary[k] for k in ("AP", "AP50")}},
-        "B": {"model": str(args.model_b), **{k: results[1].metrics.summary[k] for k in ("AP", "AP50")}},
-        "images": results[0].metrics.images,
+        "A": _side(args.model_a, results[0]),
+        "B": _side(args.model_b, results[1]),
+        "images": results[0][0].metrics.images,
         "delta": {k: d.to_dict() for k, d in deltas.items()},
         "samples": args.samples,
         "seed": args.seed,
@@ -159,7 +175,11 @@ def cmd_compare(args: argparse.Namespace) -> int:
         print(json.dumps(doc, indent=1))
         return 0
     for side in ("A", "B"):
-        print(f"{side}      {doc[side]['model']}  AP {_fmt(doc[side]['AP'])}  AP50 {_fmt(doc[side]['AP50'])}")
+        runs = doc[side]["runs"]
+        for run in runs if len(runs) > 1 else []:
+            print(f"{side}      {run['model']}  AP {_fmt(run['AP'])}  AP50 {_fmt(run['AP50'])}")
+        name = doc[side]["model"] if len(runs) == 1 else f"mean of {len(runs)} runs"
+        print(f"{side}      {name}  AP {_fmt(doc[side]['AP'])}  AP50 {_fmt(doc[side]['AP50'])}")
     for key, d in deltas.items():
         iv = d.interval
         print(
@@ -259,15 +279,23 @@ def register(sub: argparse._SubParsersAction) -> None:
         "compare",
         help="AP difference of two detectors on the same test images, with a paired bootstrap interval",
         description="Score two detector ONNX files on the same test set and report AP(B) - AP(A) with a 95%\n"
-        "interval and p-value from a paired image-level bootstrap (both models scored on each resample).\n\n"
+        "interval and p-value from a paired image-level bootstrap (both models scored on each resample).\n"
+        "Each side may be several runs, comma-separated (e.g. one per seed): their AP is averaged on each\n"
+        "resample, as the experiment's comparisons average seeds.\n\n"
         "example:\n  fuzzyfire compare runs/R1000_S0/seed0/best.onnx runs/R750_S250/seed0/best.onnx \\\n"
-        "      --data ../shared/data/fire-smoke-608 --split test --drop-class default",
+        "      --data ../shared/data/fire-smoke-608 --split test --drop-class default\n"
+        "  fuzzyfire compare a/seed0/best.onnx,a/seed1/best.onnx b/seed0/best.onnx,b/seed1/best.onnx \\\n"
+        "      --data out/study/data/curated-6407ecb64193 --split test",
     )
-    p.add_argument("model_a", type=Path, help="baseline detector .onnx (A)")
-    p.add_argument("model_b", type=Path, help="detector compared with it (B)")
+    p.add_argument("model_a", type=_models, help="baseline detector .onnx (A), or several: A0.onnx,A1.onnx,...")
+    p.add_argument("model_b", type=_models, help="detector compared with it (B), or several: B0.onnx,B1.onnx,...")
     _add_scoring_args(p)
     p.add_argument("--samples", type=int, default=1000, help="bootstrap resamples (default 1000)")
-    p.add_argument("--json", action="store_true", help='print {"A", "B", "images", "delta": {"AP": ...}, ...}')
+    p.add_argument(
+        "--json",
+        action="store_true",
+        help='print {"A": {"model", "AP", "AP50", "runs"}, "B", "images", "delta": {"AP": ...}, ...}',
+    )
     p.set_defaults(func=cmd_compare)
 
     from eval import cli_predict

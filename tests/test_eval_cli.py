@@ -153,6 +153,29 @@ def test_compare_gives_the_paired_delta(work, capsys):
     assert "B - A  AP +0.0 points, 95% CI [+0.0, +0.0], p = 1.000" in capsys.readouterr().out
 
 
+def test_compare_averages_several_runs_per_side(work, capsys):
+    good = oracle_model(work["root"] / "good2.onnx")
+    shifted = oracle_model(work["root"] / "shift2.onnx", rows=rows_for(shift=3.0, duplicates=True))
+    data = ["--data", str(work["test"]), "--samples", "200", "--format", "yolov5"]
+    assert main(["compare", str(good), str(shifted), *data, "--json"]) == 0
+    single = json.loads(capsys.readouterr().out)
+    assert main(["compare", f"{good},{good}", f"{good},{shifted}", *data, "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert [run["model"] for run in doc["B"]["runs"]] == [str(good), str(shifted)]
+    assert doc["B"]["AP"] == pytest.approx((1.0 + single["B"]["AP"]) / 2) and doc["A"]["AP"] == pytest.approx(1.0)
+    assert doc["delta"]["AP"]["value"] == pytest.approx(single["delta"]["AP"]["value"] / 2)
+    assert doc["delta"]["AP"]["low"] <= doc["delta"]["AP"]["value"] <= doc["delta"]["AP"]["high"] < 0
+    assert main(["compare", f"{good},{good}", f"{good},{shifted}", *data]) == 0
+    text = capsys.readouterr().out
+    assert f"B      {shifted}  AP " in text and "B      mean of 2 runs  AP " in text
+
+
+def test_compare_refuses_an_empty_side(work, capsys):
+    with pytest.raises(SystemExit):
+        main(["compare", ",", str(work["root"] / "x.onnx"), "--data", str(work["test"])])
+    assert "expected a model .onnx or a comma-separated list" in capsys.readouterr().err
+
+
 def test_errors_breakdown_from_the_cli(work, tmp_path):
     model = oracle_model(work["root"] / "errs.onnx")
     doc = run_json(model, "--data", work["test"], "--errors", "--out", tmp_path / "o")
