@@ -283,11 +283,23 @@ def cmd_gap(args: argparse.Namespace) -> int:
         image_kinds,
         measure_gap,
         split_by_kind,
+        synthetic_boxes,
     )
 
     sides = [(args.synthetic, args.synthetic_split, args.format), (args.real, args.real_split, args.real_format)]
     if args.crops:
         boxes = [dataset_boxes(path, split, fmt, args.class_name) for path, split, fmt in sides]
+        if not args.all_boxes:
+            boxes[0], left = synthetic_boxes(args.synthetic, boxes[0])
+            if left:
+                print(
+                    f"{args.synthetic}: left out {left} boxes without a flame mask (a labelled frame's own fires, "
+                    "real; --all-boxes keeps them)",
+                    file=sys.stderr,
+                )
+            if not boxes[0]:
+                print(f"error: {args.synthetic}: no {args.class_name!r} box of a drawn flame", file=sys.stderr)
+                return 2
         embedder, _ = load_model_from_args(args)
         synthetic, real = (embed_crops(str(s[0]), b, embedder, args.context) for s, b in zip(sides, boxes))
     else:
@@ -667,6 +679,12 @@ def _register_gap(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--size", type=int, help="images (crops) per side (default min(synthetic, real / 2))")
     p.add_argument("--crops", action="store_true", help="the flame gap: compare box crops, not whole images")
     p.add_argument("--class", dest="class_name", default="fire", help="with --crops: the boxes' class (default fire)")
+    p.add_argument(
+        "--all-boxes",
+        action="store_true",
+        help="with --crops: also the boxes a pool has no flame mask for (the own fires of the labelled frames it "
+        "composited on; left out by default: they are real flames)",
+    )
     p.add_argument(
         "--context", type=float, default=0.1, help="with --crops: context around a box, fraction of its size (0.1)"
     )

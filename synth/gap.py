@@ -8,7 +8,8 @@ half (the floor a perfect generator reaches); see :mod:`curate.frechet`.
 The *flame gap* (``--crops``) compares the objects instead of the whole images: every box of a class (``fire``)
 is cut out with :data:`CROP_CONTEXT` of its size as context on each side (clipped to the image), resized by the
 embedder's own preprocessing and embedded (no cache: crops are not files). The same Fréchet distance and floor
-are then taken over crops rather than images.
+are then taken over crops rather than images. Of a pool composited on labelled frames only the flames it drew are
+cut out (:func:`synthetic_boxes`): the frames' own fires are real.
 """
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
 
+import cv2
 import numpy as np
 from numpy.typing import NDArray
 
@@ -156,6 +158,27 @@ def dataset_boxes(
     if not out:
         raise ValueError(f"{path}: no {category!r} boxes")
     return out
+
+
+def synthetic_boxes(
+    folder: Path, items: Sequence[tuple[Path, Sequence[Sequence[float]]]]
+) -> tuple[list[tuple[Path, list[tuple[float, float, float, float]]]], int]:
+    """``items`` (from :func:`dataset_boxes` of the pool at ``folder``) with only the boxes of flames the pool drew,
+    and how many boxes were left out: a pool composited on labelled frames keeps each frame's own fire boxes, which
+    have no mask (:mod:`synth.audit`: ``masks/<image stem>.png`` value k marks the k-th fire box; a frame's boxes
+    follow the drawn flames'), and are real flames. ``items`` unchanged (0 left out) without ``folder/masks``."""
+    masks = folder / "masks"
+    if not masks.is_dir():
+        return [(p, list(b)) for p, b in items], 0
+    out, left = [], 0
+    for path, boxes in items:
+        mask = cv2.imread(str(masks / f"{Path(path).stem}.png"), cv2.IMREAD_UNCHANGED)
+        drawn = set() if mask is None else {int(v) for v in np.unique(mask) if v > 0}
+        kept = [tuple(box) for k, box in enumerate(boxes, start=1) if k in drawn]
+        left += len(boxes) - len(kept)
+        if kept:
+            out.append((path, kept))
+    return out, left
 
 
 def crop_box(rgb: NDArray[np.uint8], box: Sequence[float], context: float = CROP_CONTEXT) -> NDArray[np.uint8] | None:

@@ -11,7 +11,15 @@ from curate_helpers import save, scene, transformed, use_session_cache, write_sc
 
 from curate.embed import load_embedder
 from fuzzyfire.cli import main
-from synth.gap import crop_box, dataset_boxes, dataset_images, embed_crops, embed_set, measure_gap
+from synth.gap import (
+    crop_box,
+    dataset_boxes,
+    dataset_images,
+    embed_crops,
+    embed_set,
+    measure_gap,
+    synthetic_boxes,
+)
 
 
 @pytest.fixture
@@ -103,6 +111,43 @@ def _flat_dataset(root: Path, n: int) -> Path:
         (root / "train" / "labels" / f"f{i}.txt").write_text(f"0 0.5 0.5 {0.1 + 0.01 * i:.2f} 0.25\n")
     (root / "data.yaml").write_text("train: train/images\nnc: 1\nnames: [fire]\n")
     return root
+
+
+def _pool_on_frames(root: Path, n: int) -> Path:
+    """:func:`_flat_dataset` as a pool composited on labelled frames: each image a drawn flame (box 1, its mask
+    value 1 in ``masks/``) and the frame's own fire after it (box 2, no mask), as Method 2 writes them."""
+    _flat_dataset(root, n)
+    for i in range(n):
+        (root / "train" / "labels" / f"f{i}.txt").write_text("0 0.3 0.5 0.2 0.25\n0 0.75 0.5 0.2 0.25\n")
+        mask = np.zeros((120, 160), np.uint8)
+        mask[45:75, 32:64] = 1
+        save(mask, root / "masks" / f"f{i}.png")
+    return root
+
+
+def test_synthetic_boxes_keep_only_the_drawn_flames(tmp_path: Path) -> None:
+    pool = _pool_on_frames(tmp_path / "pool", 3)
+    items = dataset_boxes(pool)
+    assert [len(b) for _, b in items] == [2, 2, 2]
+    kept, left = synthetic_boxes(pool, items)
+    assert left == 3 and [b for _, b in kept] == [[items[0][1][0]], [items[1][1][0]], [items[2][1][0]]]
+    (pool / "masks" / "f2.png").unlink()  # no mask: nothing of that image was drawn
+    kept, left = synthetic_boxes(pool, items)
+    assert left == 4 and len(kept) == 2
+    plain = _flat_dataset(tmp_path / "plain", 2)  # no masks/ folder: every box kept
+    assert synthetic_boxes(plain, dataset_boxes(plain)) == ([(p, list(b)) for p, b in dataset_boxes(plain)], 0)
+
+
+def test_gap_command_with_crops_leaves_the_frames_own_fires_out(tmp_path: Path, capsys) -> None:
+    real = write_scene_dataset(tmp_path / "real", {f"r{i}": (100 + i, None) for i in range(24)}, ("fire",))
+    pool = _pool_on_frames(tmp_path / "pool", 12)
+    args = ["synth", "gap", str(pool), str(real), "--crops", "--draws", "5", "--json"]
+    assert main(args) == 0
+    captured = capsys.readouterr()
+    assert json.loads(captured.out)["sets"]["synthetic"]["images"] == 12
+    assert "left out 12 boxes without a flame mask" in captured.err
+    assert main([*args, "--all-boxes"]) == 0
+    assert json.loads(capsys.readouterr().out)["sets"]["synthetic"]["images"] == 24
 
 
 def test_crop_box_adds_context_and_clips() -> None:
