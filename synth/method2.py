@@ -69,6 +69,7 @@ class Method2Config:
     # flames: hard negatives of the user's own kind; None = ``negatives`` (frames and other places keep that)
     flame_height_m: tuple[float, float] = (0.3, 2.5)  # flame height in the scene, metres
     flame_opacity: tuple[float, float] = (0.85, 1.0)  # luminous coverage of a flame's body (1 = hides what is behind)
+    flame_glow: tuple[float, float] = (0.1, 0.5)  # halo and warm cast a flame spills (synth.composite), per flame
     closeup: float = 0.0  # fraction of fire images framed as a close-up: one flame of closeup_height x the image
     closeup_height: tuple[float, float] = (0.4, 1.0)  # close-up flame height, fraction of the image height
     min_box_px: int = 4  # visible flames smaller than this (either side) are dropped
@@ -118,6 +119,7 @@ class Method2Config:
             raise ValueError(f"photo_negatives must be in 0..1 or null, got {self.photo_negatives}")
         check_range("flame_height_m", self.flame_height_m, 0.01)
         check_range("closeup_height", self.closeup_height, 0.05)
+        check_range("flame_glow", self.flame_glow, 0.0)
         if not 0.0 <= self.closeup <= 1.0:
             raise ValueError(f"closeup must be in 0..1, got {self.closeup}")
         if not 0.0 <= self.flame_opacity[0] <= self.flame_opacity[1] <= 1.0:
@@ -165,7 +167,7 @@ def plan_flames(
         hpx = capped_height(cfg, seq, sprite, hpx)
         wpx, spx = sprite_pixels(sprite, hpx)
         blend = str(rng.choice(cfg.blend.modes))  # (screen, add) by default: the draws of pools made before
-        glow, opacity = float(rng.uniform(0.1, 0.5)), float(rng.uniform(*cfg.flame_opacity))
+        glow, opacity = float(rng.uniform(*cfg.flame_glow)), float(rng.uniform(*cfg.flame_opacity))
         place = Placement(
             sprite, bx - wpx // 2, by - spx, wpx, spx, blend, glow, opacity, cfg.light,
             never_darken=cfg.never_darken, opaque_body=cfg.opaque_body,

@@ -12,6 +12,7 @@ from curate_helpers import save, scene, transformed, use_session_cache, write_sc
 from curate.embed import load_embedder
 from fuzzyfire.cli import main
 from synth.gap import (
+    ImageSet,
     crop_box,
     dataset_boxes,
     dataset_images,
@@ -184,3 +185,14 @@ def test_gap_command_with_crops(tmp_path: Path, capsys) -> None:
     report = json.loads(capsys.readouterr().out)
     assert report["unit"] == "crops" and report["size"] == 12 and report["sets"]["real"]["images"] == 24
     assert report["frechet"]["ratio"]["low"] > 1.0
+
+
+def test_ratio_falls_toward_one_as_sets_shrink_and_the_report_says_so() -> None:
+    rng = np.random.default_rng(0)
+    real = ImageSet("real", rng.normal(size=(400, 16)).astype(np.float32), ())
+    shifted = ImageSet("synthetic", (rng.normal(size=(200, 16)) + 0.3).astype(np.float32), ())
+    full = measure_gap(shifted, real, "m", np.random.default_rng(1), 20)
+    small = measure_gap(shifted, real, "m", np.random.default_rng(1), 20, size=20)
+    assert full.gap.size == 200 and small.gap.size == 20
+    assert 1.0 < small.gap.ratio.median < full.gap.ratio.median  # the floor grows faster than the distance
+    assert full.size_note() == [] and "below the real set's half (200)" in small.lines()[-1]

@@ -108,6 +108,17 @@ def test_closeups_frame_one_large_flame_at_the_bottom(library) -> None:
         M.Method2Config(closeup=1.5)
 
 
+def test_flame_glow_is_drawn_in_its_range(library) -> None:
+    from dataclasses import replace
+
+    cfg = replace(CFG, negatives=0.0, flame_glow=(0.7, 0.9))
+    depth = np.full((cfg.height, cfg.width), 4.0, np.float32)
+    glows = [p.glow for i in range(10) for p, _ in M.plan_flames(cfg, library, depth, 1.0, np.random.default_rng(i))]
+    assert glows and all(0.7 <= g <= 0.9 for g in glows)
+    with pytest.raises(ValueError, match="flame_glow"):
+        M.Method2Config(flame_glow=(0.5, 0.2))
+
+
 def test_a_config_with_no_place_is_refused_unless_the_experiment_adds_its_own_frames() -> None:
     with pytest.raises(ValueError, match="nothing to composite on"):
         M.Method2Config(scenes=0)
