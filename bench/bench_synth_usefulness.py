@@ -27,6 +27,11 @@ Variants (on shared-data.yaml: panoramas, the flames' new look, 2 images per vie
 - ``own_frames_exposed_half_photo_negatives_photo_distractors``: the photo-distractor pool with exposed simulated
   flames in place of the cut-outs (``flames.source: simulated``, ``flames.exposed``): what simulated flames reach
   in the best recipe;
+- ``own_frames_cutouts_half_photo_negatives_photo_distractors_4``: the photo-distractor pool with four images per
+  view (``images_per_view: 4``: each view carries four draws of flames, half as many views);
+- ``own_frames_exposed_lowgap_half_photo_negatives_photo_distractors``: the exposed-flame pool with the flames of
+  the lowest flame gap measured (``flames: {rare: 0, texture: 0, sequences: 48, keep_every: 24}``, harmonised and
+  noise-matched blends);
 - ``own_frames_cutouts_half_photo_negatives_photo_distractors_blends``: the photo-distractor pool with each flame's
   blend drawn from all five modes, harmonised to the local light, blur and grain matched to the background
   (``blend: {modes: [screen, add, alpha, blur, poisson], harmonise, match_noise}``): no paste cue, trained;
@@ -167,6 +172,27 @@ VARIANTS = {
         "synth.method2.own_frames=1.0",
         "synth.method2.flames.exposed=true",
         *PHOTO_DISTRACTORS,
+    ],
+    "own_frames_cutouts_half_photo_negatives_photo_distractors_4": [
+        *PHOTOS,
+        "synth.method2.photo_negatives=0.5",
+        "synth.method2.own_frames=1.0",
+        "synth.method2.flames.source=cutouts",
+        *PHOTO_DISTRACTORS,
+        "synth.method2.images_per_view=4",
+    ],
+    "own_frames_exposed_lowgap_half_photo_negatives_photo_distractors": [
+        *PHOTOS,
+        "synth.method2.photo_negatives=0.5",
+        "synth.method2.own_frames=1.0",
+        "synth.method2.flames.exposed=true",
+        *PHOTO_DISTRACTORS,
+        "synth.method2.flames.rare=0.0",
+        "synth.method2.flames.texture=0.0",
+        "synth.method2.flames.sequences=48",
+        "synth.method2.flames.keep_every=24",
+        "synth.method2.blend.harmonise=true",
+        "synth.method2.blend.match_noise=true",
     ],
     "own_frames_cutouts_half_photo_negatives_photo_distractors_blends": [
         *PHOTOS,
