@@ -30,7 +30,7 @@ from curate.mix import mixture_dir, parse_mixture, write_mixture
 from eval.errors import ALARMS
 from fuzzyfire.aggregate import STANDIN_NOTICE, result_rows, write_report, write_summary
 from fuzzyfire.controls import CONTROL, CONTROL_TABLE, control_pools, has_control
-from fuzzyfire.cutout_pools import cutout_pools, simulated
+from fuzzyfire.cutout_pools import cutout_pools, is_own, simulated
 from fuzzyfire.datasets import DataRef, Datasets
 from fuzzyfire.executors import Outcome
 from fuzzyfire.experiment_config import METHODS, EvalSetConfig, ExperimentConfig
@@ -122,6 +122,18 @@ def grid_entries(cfg: ExperimentConfig) -> list[GridEntry]:
 def needed_methods(grid: Sequence[GridEntry]) -> list[str]:
     """The synthetic pools the runs of ``grid`` draw from, in :data:`METHODS` order."""
     return [m for m in METHODS if any(e.method == m for e in grid)]
+
+
+def shared_methods(cfg: ExperimentConfig, grid: Sequence[GridEntry]) -> list[str]:
+    """The methods of :func:`needed_methods` whose *shared* pool some run of ``grid`` draws: Method 2's is left
+    out when every Method 2 run has real images and own pools (:func:`fuzzyfire.cutout_pools.is_own`) take its
+    place, so a study of own pools does not build a simulated pool nothing trains on."""
+    own = is_own(cfg.synth.method2)
+    return [
+        m
+        for m in needed_methods(grid)
+        if not (m == "method2" and own and all(parse_mixture(e.mixture).real for e in grid if e.method == m))
+    ]
 
 
 def _empty(root: Path, classes: Sequence[str]) -> Dataset:
@@ -317,7 +329,7 @@ def run_experiment(cfg: ExperimentConfig, base: Path, out: Path, executor=None) 
     datasets = Datasets(cfg.classes)
     data = prepare_data(cfg, base, out, ())  # the real and test sets, checked before any pool is built
     check_data(cfg, data, datasets, pool_photos(cfg.synth, needed_methods(grid), base))
-    data = replace(data, pools=prepare_pools(cfg, base, out, needed_methods(grid)))
+    data = replace(data, pools=prepare_pools(cfg, base, out, shared_methods(cfg, grid)))
     if data.standin:
         _say(STANDIN_NOTICE)
     drawn = [e.mixture for e in grid if e.method == "method2"]

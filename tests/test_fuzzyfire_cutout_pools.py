@@ -20,7 +20,14 @@ from curate.core.config import build_config, load_config
 from curate.core.formats.coco import read_coco
 from fuzzyfire.cutout_pools import cutout_pools, cutout_stage, simulated
 from fuzzyfire.datasets import Datasets
-from fuzzyfire.experiment import grid_entries, needed_methods, prepare_data, write_mixtures
+from fuzzyfire.experiment import (
+    grid_entries,
+    needed_methods,
+    prepare_data,
+    run_experiment,
+    shared_methods,
+    write_mixtures,
+)
 from fuzzyfire.experiment_config import ExperimentConfig
 
 CONFIGS = Path(__file__).resolve().parents[1] / "configs"
@@ -101,6 +108,20 @@ def test_r0_mixtures_keep_the_shared_simulated_pool_and_say_so(built) -> None:
     for seed in SEEDS:
         assert refs[("R0_S6", "method2", seed)].identity["synth"] == data.pools["method2"].with_split(None).key()
     assert "R0_S6 have no real images of their own: the shared simulated pool" in printed
+
+
+def test_a_study_of_own_pools_only_builds_no_shared_simulated_pool(tmp_path: Path) -> None:
+    """The shared Method 2 pool is built only when a run draws it: an R0 mixture, or flames.source simulated."""
+    own_only = _config("cutouts", mixtures=["R6_S6"], seeds=[0])
+    assert shared_methods(own_only, grid_entries(own_only)) == []
+    assert needed_methods(grid_entries(own_only)) == ["method2"]  # its photos are still checked for leakage
+    for cfg in (_config("cutouts"), _config(None, mixtures=["R6_S6"])):  # R0_S6 draws it; simulated flames share it
+        assert shared_methods(cfg, grid_entries(cfg)) == ["method2"]
+    with contextlib.redirect_stdout(io.StringIO()):
+        result = run_experiment(own_only, tmp_path, tmp_path / "study")  # no executor: builds data, trains nothing
+    pools = sorted(p.name for p in (tmp_path / "study" / "data").glob("method2-*"))
+    assert pools and all(name.startswith("method2-cutouts-") for name in pools), pools
+    assert result.report.is_file()
 
 
 def test_configs_without_the_key_keep_their_pools_and_mixtures(built) -> None:
