@@ -227,8 +227,9 @@ def _workers(args: argparse.Namespace) -> int:
 
 
 def _blend_config(args: argparse.Namespace) -> dict:
-    """Method 2's ``blend``, ``distractors`` and ``never_darken`` from --blend, --harmonise, --match-noise,
-    --decoys, --distractors, --never-darken (the defaults: today's blend, none of them but never_darken)."""
+    """Method 2's ``blend``, ``distractors``, ``never_darken``, ``opaque_body`` and ``auto_exposure`` from --blend,
+    --harmonise, --match-noise, --decoys, --distractors, --never-darken, --opaque-body, --auto-exposure (the
+    defaults: today's blend, none of them but never_darken)."""
     from synth.blend import BlendConfig
     from synth.distractors import DistractorConfig
 
@@ -239,6 +240,7 @@ def _blend_config(args: argparse.Namespace) -> dict:
         "distractors": DistractorConfig(share=args.distractors, **_distractor_kinds(args)),
         "never_darken": args.never_darken,
         "opaque_body": args.opaque_body,
+        "auto_exposure": args.auto_exposure,
     }
 
 
@@ -625,6 +627,12 @@ def _blend_arguments(p: argparse.ArgumentParser) -> None:
         action="store_true",
         help="with --never-darken: a flame's bright body still hides a bright background (no pale film over a "
         "sunlit wall); only its dim edge never darkens",
+    )
+    p.add_argument(
+        "--auto-exposure",
+        action="store_true",
+        help="the camera meters each frame with its flames in view: bright flames lower the exposure of the scene "
+        "around them, as in real fire footage (no washed-out film over bright walls; synth/metering.py)",
     )
     p.add_argument("--match-noise", action="store_true", help="blur and grain each flame like the background around it")
     p.add_argument(

@@ -78,13 +78,19 @@ def sample_effects(rng: np.random.Generator, camera: CameraConfig | None = None)
 
 
 def expose(img: NDArray[np.uint8], e: Effects, keep: NDArray[np.bool_] | None = None) -> NDArray[np.uint8]:
-    """The scene at ``e.exposure`` (linear light, sRGB-ish gamma 2.2); pixels where ``keep`` (H, W) is True
-    (flames already drawn) stay as they are. Identity at exposure 1."""
-    if e.exposure >= 1.0:
+    """The scene at ``e.exposure`` (:func:`scale_light`); pixels where ``keep`` (H, W) is True (flames already
+    drawn) stay as they are. Identity at exposure 1."""
+    dark = scale_light(img, e.exposure)
+    return dark if keep is None or dark is img else np.where(keep[..., None], img, dark)
+
+
+def scale_light(img: NDArray[np.uint8], gain: float) -> NDArray[np.uint8]:
+    """(H, W, 3) uint8 ``img`` with its light scaled by ``gain`` <= 1 in linear light (sRGB-ish gamma 2.2): an
+    exposure ``gain`` times the one it was taken at. ``img`` itself at gain 1 or more."""
+    if gain >= 1.0:
         return img
-    linear = (img.astype(np.float32) / 255.0) ** 2.2 * e.exposure
-    dark = np.round(255.0 * linear ** (1 / 2.2)).astype(np.uint8)
-    return dark if keep is None else np.where(keep[..., None], img, dark)
+    linear = (img.astype(np.float32) / 255.0) ** 2.2 * gain
+    return np.round(255.0 * linear ** (1 / 2.2)).astype(np.uint8)
 
 
 def _disk(radius: float) -> NDArray[np.float32]:

@@ -12,7 +12,7 @@ views and camera effects of every image, and the default config draws nothing fr
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Literal
@@ -26,9 +26,10 @@ from synth.blend import BlendConfig, sample_style
 from synth.composite import Placement, composite, scaled_layers
 from synth.decoys import plan_decoys
 from synth.distractors import DistractorConfig, draw_distractors, plan_distractors
-from synth.effects import CameraConfig, Effects, apply_effects, expose, sample_effects
+from synth.effects import CameraConfig, Effects, apply_effects, expose, sample_effects, scale_light
 from synth.generate import generate
 from synth.library import FlameLibraryConfig, is_cutout, pick_sequence
+from synth.metering import draw_radiance, flame_share, mean_linear_luma, metered_gain
 from synth.photo_regions import Region
 from synth.schema import check_range, check_streets
 from synth.sprites import Sprite, SpriteSequence
@@ -79,6 +80,8 @@ class Method2Config:
     # the annotator's box it was cut from, moved and scaled with it (source: :func:`source_box`); simulated: mask
     smoke_class: bool = False
     light: bool = True  # flames light their surroundings (a warm cast around each flame)
+    auto_exposure: bool = False  # the camera meters the frame with its flames: bright flames lower the exposure of
+    # the scene around them (synth.metering); off = the photo's own exposure (pools made before this key)
     never_darken: bool = False  # a flame's dim edge reddens a bright background, never outlines it darker (composite)
     opaque_body: bool = False  # with never_darken: the flame's bright body still hides a bright background (no pale
     # translucent film over a sunlit wall or road); only the dim edge keeps never_darken's cap (composite)
@@ -234,16 +237,27 @@ def kept_clear(meta: dict) -> list:
     return [*meta.get("people", []), *meta.get("frame_boxes", [])]
 
 
-def visible_composite(scene: NDArray[np.uint8], planned: Sequence[tuple[Placement, str]], effects, min_box_px: int):
+def visible_composite(
+    scene: NDArray[np.uint8],
+    planned: Sequence[tuple[Placement, str]],
+    effects,
+    min_box_px: int,
+    meter: Callable[[NDArray[np.uint8], list[Placement]], NDArray[np.uint8]] | None = None,
+):
     """Composite ``planned`` on the exposed ``scene`` and take it through the camera (``effects``), erasing every
     flame that cannot be seen (:mod:`synth.visibility`: contrast against the plate, the scene through the same
     camera without flames) or whose seen part is smaller than ``min_box_px``, and compositing again without it
-    until every flame left is seen (erasing one can unhide another). Returns (image (H, W, 3) uint8, the
-    composite, the flames kept (a sublist of ``planned``), their :class:`synth.visibility.Visibility`)."""
-    plate = apply_effects(scene, effects)
+    until every flame left is seen (erasing one can unhide another). ``meter(scene, placements)``: the scene as
+    the camera exposes it with those flames in view (:mod:`synth.metering`; the plate is that scene too), redone
+    for the flames left after each erasure. Returns (image (H, W, 3) uint8, the composite, the flames kept (a
+    sublist of ``planned``), their :class:`synth.visibility.Visibility`)."""
+    plate = apply_effects(scene, effects) if meter is None else None
     shown = list(planned)
     while True:
-        result = composite(scene, [p for p, _ in shown])
+        lit = scene if meter is None else meter(scene, [p for p, _ in shown])
+        if meter is not None:
+            plate = apply_effects(lit, effects)
+        result = composite(lit, [p for p, _ in shown])
         image = apply_effects(result.image, effects)
         delta = delta_e(image, plate)
         seen = [measure(delta, m) for m in result.flames]
@@ -299,6 +313,30 @@ def negative_share(cfg: Method2Config, view_meta: dict) -> float:
     return cfg.photo_negatives if photo and cfg.photo_negatives is not None else cfg.negatives
 
 
+@dataclass(frozen=True)
+class Meter:
+    """A camera's auto exposure for one image (:mod:`synth.metering`): its flames' ``radiance``; called with the
+    scene and the placements in view, returns the scene at the exposure it meters."""
+
+    radiance: float
+    width: int
+    height: int
+
+    def gain(self, scene: NDArray[np.uint8], placements: Sequence[Placement]) -> float:
+        share = flame_share(placements, self.width, self.height)
+        return metered_gain(mean_linear_luma(scene), share, self.radiance) if share else 1.0
+
+    def __call__(self, scene: NDArray[np.uint8], placements: list[Placement]) -> NDArray[np.uint8]:
+        return scale_light(scene, self.gain(scene, placements))
+
+
+def metering(cfg: Method2Config, i: int, scene: NDArray[np.uint8]) -> Meter:
+    """Image ``i``'s :class:`Meter`, its radiance drawn from its own rng ``default_rng([seed, 2, i, 2])`` (turning
+    ``auto_exposure`` on keeps every other draw)."""
+    radiance = draw_radiance(np.random.default_rng([cfg.seed, 2, i, 2]))
+    return Meter(radiance, scene.shape[1], scene.shape[0])
+
+
 def make_image(cfg: Method2Config, i: int, library: Sequence[SpriteSequence], views: ViewCache):
     """Image ``i``: ((H, W, 3) uint8, kept fire masks, record dict (boxes xywh, metadata), kept smoke masks or
     None when smoke is not a class). A flame nobody could see is erased, not left unboxed
@@ -315,12 +353,15 @@ def make_image(cfg: Method2Config, i: int, library: Sequence[SpriteSequence], vi
     regions = views.photos.regions() if cfg.distractors.photo and views.photos is not None else ()
     scene, added = dressed_scene(cfg, background, depth, view_meta, planned, library, effects, fy, extra, regions)
     planned = styled(cfg, planned, scene, extra)
-    image, result, shown, seen = visible_composite(scene, planned, effects, cfg.min_box_px)
+    meter = metering(cfg, i, scene) if cfg.auto_exposure else None
+    image, result, shown, seen = visible_composite(scene, planned, effects, cfg.min_box_px, meter)
     kept, boxes, index = boxes_from_masks([v.part for v in seen], cfg.min_box_px)
     if cfg.cutout_box == "source":
         boxes = annotator_boxes(library, [shown[k] for k in index], kept, boxes)
     flames = [flame_record(shown[k][0], shown[k][1], seen[k]) for k in index]
     meta = {**view_meta, "flames": flames, "erased": len(planned) - len(shown), **added, "effects": effects.to_json()}
+    if meter is not None:
+        meta["exposure_gain"] = round(meter.gain(scene, [p for p, _ in shown]), 4)
     boxes += view_meta.get("frame_boxes", [])  # a labelled frame's own fires, after the flames (no mask: audit)
     record = {"width": cfg.width, "height": cfg.height, "boxes": boxes, "meta": meta}
     if not cfg.smoke_class:

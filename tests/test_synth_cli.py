@@ -255,3 +255,18 @@ def test_method2_distractors_and_blends_from_the_command_line(tmp_path, capsys):
     assert "backgrounds" in capsys.readouterr().err  # photo regions come from --backgrounds
     assert main([*args, "--distractors", "1", "--distractor-kinds", "lamp, dragon", "--out", str(tmp_path / "d")]) == 2
     assert "distractors.kinds" in capsys.readouterr().err
+
+
+def test_method2_auto_exposure_from_the_command_line(tmp_path):
+    """--auto-exposure: each fire image's metered exposure is in its manifest record."""
+    from factories import write_image
+
+    for k in range(2):
+        write_image(tmp_path / "photos" / f"p{k}.jpg", 160, 120, seed=k)
+    out = tmp_path / "m2"
+    flames = _flames(tmp_path)
+    args = ["synth", "method2", "--n", "4", "--out", str(out), "--size", "96x72", "--flames", str(flames)]
+    assert main([*args, "--backgrounds", str(tmp_path / "photos"), "--auto-exposure"]) == 0
+    per_image = json.loads((out / "manifest.json").read_text())["args"]["per_image"]
+    assert all(0.25 <= m["exposure_gain"] <= 1.0 for m in per_image if m["flames"])
+    assert any(m["flames"] for m in per_image)

@@ -13,6 +13,7 @@ from synth import method2 as M
 from synth.audit import audit_dataset
 from synth.blend import ALL_MODES, BlendConfig
 from synth.distractors import DistractorConfig, overlaps
+from synth.metering import mean_linear_luma
 from synth.staging import staging_dir
 
 CFG = M.Method2Config(n=6, seed=3, width=96, height=72, scenes=2, images_per_view=3, max_flames=3, negatives=0.0)
@@ -416,3 +417,34 @@ def test_photo_distractors_are_cut_from_the_pools_fire_free_photos_and_get_no_bo
     assert _files(tmp_path / "a") == _files(tmp_path / "b")
     with pytest.raises(ValueError, match="kind photo"):
         replace(CFG, distractors=distractors)
+
+
+def test_auto_exposure_darkens_only_the_scene_of_fire_images_and_keeps_boxes_exact(written, library, tmp_path):
+    """``auto_exposure``: the same flames, places and effects (its own rng), each fire image's scene metered down
+    (``exposure_gain`` < 1 in the manifest), boxes still the final masks' boxes; off, the pool is as before."""
+    from dataclasses import replace
+
+    out = tmp_path / "ae"
+    M.run_method2(replace(CFG, auto_exposure=True), library, out)
+    assert audit_dataset(out)["min_iou"] == 1.0
+    plain = json.loads((written / "manifest.json").read_text())["args"]["per_image"]
+    metered = json.loads((out / "manifest.json").read_text())["args"]["per_image"]
+    assert [m["effects"] for m in plain] == [m["effects"] for m in metered]
+    assert [[f["flame"] for f in m["flames"]] for m in plain] == [[f["flame"] for f in m["flames"]] for m in metered]
+    gains = [m["exposure_gain"] for m in metered if m["flames"]]
+    assert gains and all(0.25 <= g < 1.0 for g in gains) and not any("exposure_gain" in m for m in plain)
+    coco = json.loads((written / "annotations.json").read_text())
+    images = [img["file_name"] for img in coco["images"]]
+    darker = [
+        mean_linear_luma(_read(out / "images" / Path(f).name))
+        < mean_linear_luma(_read(written / "images" / Path(f).name))
+        for f, m in zip(images, metered)
+        if m["flames"] and m["exposure_gain"] < 0.9
+    ]
+    assert darker and all(darker)
+
+
+def _read(path: Path) -> np.ndarray:
+    import cv2
+
+    return cv2.cvtColor(cv2.imread(str(path)), cv2.COLOR_BGR2RGB)
