@@ -315,26 +315,28 @@ def negative_share(cfg: Method2Config, view_meta: dict) -> float:
 
 @dataclass(frozen=True)
 class Meter:
-    """A camera's auto exposure for one image (:mod:`synth.metering`): its flames' ``radiance``; called with the
-    scene and the placements in view, returns the scene at the exposure it meters."""
+    """A camera's auto exposure for one image's scene (:mod:`synth.metering`): the scene's ``mean`` linear
+    luminance (read once), its flames' ``radiance``; called with the scene and the placements in view, returns the
+    scene at the exposure it meters."""
 
     radiance: float
+    mean: float
     width: int
     height: int
 
-    def gain(self, scene: NDArray[np.uint8], placements: Sequence[Placement]) -> float:
+    def gain(self, placements: Sequence[Placement]) -> float:
         share = flame_share(placements, self.width, self.height)
-        return metered_gain(mean_linear_luma(scene), share, self.radiance) if share else 1.0
+        return metered_gain(self.mean, share, self.radiance) if share else 1.0
 
     def __call__(self, scene: NDArray[np.uint8], placements: list[Placement]) -> NDArray[np.uint8]:
-        return scale_light(scene, self.gain(scene, placements))
+        return scale_light(scene, self.gain(placements))
 
 
 def metering(cfg: Method2Config, i: int, scene: NDArray[np.uint8]) -> Meter:
-    """Image ``i``'s :class:`Meter`, its radiance drawn from its own rng ``default_rng([seed, 2, i, 2])`` (turning
-    ``auto_exposure`` on keeps every other draw)."""
+    """Image ``i``'s :class:`Meter` of ``scene``, its radiance drawn from its own rng ``default_rng([seed, 2, i, 2])``
+    (turning ``auto_exposure`` on keeps every other draw)."""
     radiance = draw_radiance(np.random.default_rng([cfg.seed, 2, i, 2]))
-    return Meter(radiance, scene.shape[1], scene.shape[0])
+    return Meter(radiance, mean_linear_luma(scene), scene.shape[1], scene.shape[0])
 
 
 def make_image(cfg: Method2Config, i: int, library: Sequence[SpriteSequence], views: ViewCache):
@@ -361,7 +363,7 @@ def make_image(cfg: Method2Config, i: int, library: Sequence[SpriteSequence], vi
     flames = [flame_record(shown[k][0], shown[k][1], seen[k]) for k in index]
     meta = {**view_meta, "flames": flames, "erased": len(planned) - len(shown), **added, "effects": effects.to_json()}
     if meter is not None:
-        meta["exposure_gain"] = round(meter.gain(scene, [p for p, _ in shown]), 4)
+        meta["exposure_gain"] = round(meter.gain([p for p, _ in shown]), 4)
     boxes += view_meta.get("frame_boxes", [])  # a labelled frame's own fires, after the flames (no mask: audit)
     record = {"width": cfg.width, "height": cfg.height, "boxes": boxes, "meta": meta}
     if not cfg.smoke_class:
