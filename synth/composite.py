@@ -30,6 +30,7 @@ from numpy.typing import NDArray
 
 from synth.blend import ALL_MODES, EMISSIVE_MODES, PASTE_MODES, margin, paste
 from synth.harmonise import Look, apply_look
+from synth.light import luma
 from synth.ramps import smoothstep
 from synth.sprites import Sprite
 
@@ -135,11 +136,6 @@ def _clip(p: Placement, w: int, h: int) -> tuple[slice, slice, slice, slice] | N
     return slice(y0, y1), slice(x0, x1), slice(y0 - p.y, y1 - p.y), slice(x0 - p.x, x1 - p.x)
 
 
-def _luma(rgb: NDArray[np.float32]) -> NDArray[np.float32]:
-    """(..., 3) -> (..., 1) Rec. 709 luma of display values."""
-    return rgb @ np.asarray([[0.2126], [0.7152], [0.0722]], np.float32)
-
-
 def _keeping_cover(behind: NDArray[np.float32], light: NDArray[np.float32], blend: str) -> NDArray[np.float32]:
     """The largest coverage whose covered background plus ``light`` (added or screened by ``blend``) keeps the
     luma ``behind`` it (both (..., 1) in 0..1): ``L / B`` with ``add``, ``L (1 - B) / (B (1 - L))`` with ``screen``."""
@@ -217,9 +213,9 @@ def composite(background: NDArray[np.uint8], placements: Sequence[Placement]) ->
                 light = emission[sy, sx]
                 flame = (1.0 - a) * p.opacity * coverage(light.max(axis=-1, keepdims=True))
                 if p.never_darken:
-                    cap = _keeping_cover(_luma(img[ys, xs]), _luma(light), p.blend)
+                    cap = _keeping_cover(luma(img[ys, xs]), luma(light), p.blend)
                     if p.opaque_body:
-                        cap = cap + np.clip(1.0 - cap, 0.0, 1.0) * body_weight(_luma(light))
+                        cap = cap + np.clip(1.0 - cap, 0.0, 1.0) * body_weight(luma(light))
                     flame = np.minimum(flame, cap)
                 cover = a + flame
                 img[ys, xs] = img[ys, xs] * (1.0 - cover) + over[sy, sx, :3] * a

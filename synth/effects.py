@@ -12,6 +12,8 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
+from synth.light import to_display, to_linear
+
 
 @dataclass(frozen=True)
 class CameraConfig:
@@ -89,8 +91,7 @@ def scale_light(img: NDArray[np.uint8], gain: float) -> NDArray[np.uint8]:
     exposure ``gain`` times the one it was taken at. ``img`` itself at gain 1 or more."""
     if gain >= 1.0:
         return img
-    linear = (img.astype(np.float32) / 255.0) ** 2.2 * gain
-    return np.round(255.0 * linear ** (1 / 2.2)).astype(np.uint8)
+    return to_display(to_linear(img) * gain)
 
 
 def _disk(radius: float) -> NDArray[np.float32]:

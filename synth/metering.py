@@ -22,6 +22,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from synth.composite import Placement, scaled_layers
+from synth.light import REC709, to_linear
 
 #: A flame's radiance in units of the sensor's white, drawn log-uniform per image.
 RADIANCE = (4.0, 16.0)
@@ -29,7 +30,6 @@ RADIANCE = (4.0, 16.0)
 MIN_GAIN = 0.25
 #: Darkest mean linear luminance the meter reads (a black frame is not metered to infinity).
 MIN_MEAN = 0.02
-_LUMA = np.asarray([0.2126, 0.7152, 0.0722], np.float32)
 
 
 def draw_radiance(rng: np.random.Generator) -> float:
@@ -40,8 +40,7 @@ def draw_radiance(rng: np.random.Generator) -> float:
 
 def mean_linear_luma(img: NDArray[np.uint8]) -> float:
     """Mean linear luminance in 0..1 of the (H, W, 3) uint8 display ``img`` (gamma 2.2)."""
-    linear = (img.astype(np.float32) / 255.0) ** 2.2
-    return float((linear @ _LUMA).mean())
+    return float((to_linear(img) @ REC709).mean())
 
 
 def flame_share(placements: Sequence[Placement], width: int, height: int) -> float:

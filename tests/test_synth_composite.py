@@ -136,12 +136,12 @@ def test_paste_placements_grow_by_their_margin_and_emissive_ones_do_not():
 @pytest.mark.parametrize("blend", ["add", "screen"])
 def test_never_darken_keeps_the_luma_behind_a_mid_bright_edge(blend: str) -> None:
     """An orange edge of brightness ~0.45 half-covers a pale wall and outlines it darker; capped, it reddens it."""
-    from synth.composite import _luma
+    from synth.light import luma as rec709
 
     edge = _flame(value=0)
     edge.emission[:] = (115, 55, 10)  # orange, brightest channel 0.45: coverage ~0.75
     pale = np.full((10, 10, 3), 235, np.uint8)
-    luma = lambda img: float(_luma(img.astype(np.float32) / 255.0).mean())  # noqa: E731
+    luma = lambda img: float(rec709(img.astype(np.float32) / 255.0).mean())  # noqa: E731
     outlined = composite(pale, [Placement(edge, 0, 0, 10, 10, blend, 0.0, 1.0)]).image
     kept = composite(pale, [Placement(edge, 0, 0, 10, 10, blend, 0.0, 1.0, never_darken=True)]).image
     assert luma(outlined) < luma(pale) - 0.2  # the outline: darker than the wall
@@ -158,7 +158,8 @@ def test_never_darken_keeps_the_luma_behind_a_mid_bright_edge(blend: str) -> Non
 def test_an_opaque_body_hides_a_bright_wall_and_its_dim_edge_still_never_darkens(blend: str) -> None:
     """A saturated orange-yellow body (luma ~0.76, darker than a 235 wall) is a pale film under never_darken alone
     and its own colour with opaque_body; the dim orange edge never darkens the wall either way."""
-    from synth.composite import _luma, body_weight
+    from synth.composite import body_weight
+    from synth.light import luma as rec709
 
     body = _flame(value=0)
     body.emission[:] = (255, 190, 60)
@@ -169,7 +170,7 @@ def test_an_opaque_body_hides_a_bright_wall_and_its_dim_edge_still_never_darkens
     assert int(film[5, 5, 2]) > int(solid[5, 5, 2]) + 30  # the wall's blue shines through the film
     edge = _flame(value=0)
     edge.emission[:] = (115, 55, 10)
-    luma = lambda img: float(_luma(img.astype(np.float32) / 255.0).mean())  # noqa: E731
+    luma = lambda img: float(rec709(img.astype(np.float32) / 255.0).mean())  # noqa: E731
     kept = composite(pale, [Placement(edge, 0, 0, 10, 10, blend, 0.0, 1.0, never_darken=True, opaque_body=True)])
     assert luma(kept.image) >= luma(pale) - 0.03
     assert body_weight(np.float32([0.0, 0.45, 0.6, 0.75, 1.0])).tolist() == pytest.approx([0, 0, 0.5, 1, 1])
