@@ -181,6 +181,14 @@ VARIANTS = {
         *PHOTO_DISTRACTORS,
         "synth.method2.auto_exposure=true",
     ],
+    "own_frames_cutouts_half_photo_negatives_photo_distractors_auto_exposure": [
+        *PHOTOS,
+        "synth.method2.photo_negatives=0.5",
+        "synth.method2.own_frames=1.0",
+        "synth.method2.flames.source=cutouts",
+        *PHOTO_DISTRACTORS,
+        "synth.method2.auto_exposure=true",
+    ],
     "own_frames_cutouts_half_photo_negatives_photo_distractors_4": [
         *PHOTOS,
         "synth.method2.photo_negatives=0.5",
