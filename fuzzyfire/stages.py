@@ -263,9 +263,8 @@ PHOTO_SITES = 2
 
 #: The version of the fire-like regions cut from the fire-free photos (:mod:`synth.photo_regions`) in the identity
 #: of every pool with ``photo`` distractors: 2 = their soft edge fades out on every side (a region filling its box
-#: was cut straight along it: a pasted rectangle); 3 = a region the photo's frame cuts is pasted flush against the
-#: same side of the image, and a band across the photo is none.
-PHOTO_REGIONS = 3
+#: was cut straight along it: a pasted rectangle).
+PHOTO_REGIONS = 2
 
 
 def content_identity(cfg: Any, places: Places | None = None) -> dict[str, Any]:

@@ -8,8 +8,7 @@ hi-vis strips), ``taillights`` (a car's pair of red rear lights, often with the 
 them) and ``glare`` (an anamorphic glare streak, or a lamp's reflection on a glossy floor). One more kind is not
 drawn but cut: ``photo`` (:data:`PHOTO_KIND`, not in the default kinds), a fire-like region of the pool's own
 fire-free photos (:mod:`synth.photo_regions`: a lamp, a lit window, a red sofa), pasted anywhere in the image at
-0.7-1.3 x its height share of its photo, mirrored half the time (one the photo's frame cut is pasted flush against
-the same side of the image, so its straight edge is the image's edge). Each is drawn as a
+0.7-1.3 x its height share of its photo, mirrored half the time. Each is drawn as a
 :class:`synth.sprites.Sprite` with an empty flame mask (reflective parts in ``over``, light in ``emission``) in
 image pixels; objects standing on the ground are sized by the view's depth like flames.
 
@@ -435,10 +434,10 @@ def _cropped(kind: str, layers: Layers, x: int, y: int, photo: str = "") -> Dist
     return Distractor(kind, sprite, x + int(cols[0]), y + int(rows[0]), photo)
 
 
-def draw_region(region: Region, height: int, mirror: bool) -> Layers:
-    """A fire-like photo ``region`` as layers ``height`` px tall (aspect kept; left-right ``mirror``ed): its pixels
-    laid over with its alpha, no light of its own."""
-    rgba = region.rgba[:, ::-1] if mirror else region.rgba
+def draw_region(region: Region, height: int, rng: np.random.Generator) -> Layers:
+    """A fire-like photo ``region`` as layers ``height`` px tall (aspect kept; mirrored with probability 0.5):
+    its pixels laid over with its alpha, no light of its own."""
+    rgba = region.rgba[:, ::-1] if rng.random() < 0.5 else region.rgba
     h = max(int(height), 2)
     w = max(int(round(h * rgba.shape[1] / rgba.shape[0])), 1)
     interp = cv2.INTER_AREA if h < rgba.shape[0] else cv2.INTER_LINEAR
@@ -448,19 +447,12 @@ def draw_region(region: Region, height: int, mirror: bool) -> Layers:
 
 def place_region(regions: Sequence[Region], height: int, width: int, rng: np.random.Generator) -> Distractor | None:
     """A :data:`PHOTO_KIND` distractor: a random one of ``regions`` at :data:`PHOTO_SCALE` x its height share of
-    an image ``height`` x ``width`` px (8 px .. 0.6 of the height), mirrored with probability 0.5, wholly inside
-    it at a random spot, flush against the image's sides that cut the region in its photo (``Region.cut``,
-    mirrored with it)."""
+    an image ``height`` x ``width`` px (8 px .. 0.6 of the height), wholly inside it at a random spot."""
     region = regions[int(rng.integers(len(regions)))]
     size = int(np.clip(region.height_share * height * rng.uniform(*PHOTO_SCALE), 8, 0.6 * height))
-    mirror = bool(rng.random() < 0.5)
-    layers = draw_region(region, size, mirror)
+    layers = draw_region(region, size, rng)
     h, w = layers[1].shape
     x, y = int(rng.integers(0, max(width - w, 0) + 1)), int(rng.integers(0, max(height - h, 0) + 1))
-    swap = {"left": "right", "right": "left"} if mirror else {}
-    cut = {swap.get(side, side) for side in region.cut}
-    x = 0 if "left" in cut else max(width - w, 0) if "right" in cut else x
-    y = 0 if "top" in cut else max(height - h, 0) if "bottom" in cut else y
     return _cropped(PHOTO_KIND, layers, x, y, region.photo)
 
 

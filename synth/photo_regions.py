@@ -10,10 +10,7 @@ not a ragged patch of warm texture, a sliver along an edge or a line) and of mea
 :data:`MIN_SATURATION` (warm and coloured: a white wall or sky passes the rule's bright core test but looks like
 nothing on fire) becomes a region: the component's bounding box of the (searched) photo grown by :data:`PAD` px
 (within the photo), alpha = the component softened (Gaussian, sigma :data:`FEATHER` px, nothing beyond the photo
-or the grown box: an edge of the component along its bounding box fades too instead of being cut straight). A
-component the photo's frame cuts (it reaches the photo's edge) keeps that straight edge, so a region records the
-sides it is cut on (``cut``: the distractor is pasted flush against the same side of an image, where a thing cut
-by the frame belongs); one cut on two opposite sides (a band across the photo) is not a region. Frames: image pixels, row 0 at the top. Deterministic: the same photos in the
+or the grown box: an edge of the component along its bounding box fades too instead of being cut straight). Frames: image pixels, row 0 at the top. Deterministic: the same photos in the
 same order give the same regions.
 """
 
@@ -38,18 +35,16 @@ MIN_SIDE = 8  # shorter side of a region's bounding box at least, px of the sear
 MIN_SATURATION = 0.4  # mean HSV saturation (0..1) of a region's pixels at least
 FEATHER = 1.0  # sigma of the alpha's soft edge, px of the searched photo
 PAD = 3  # px the region's box grows by on each side, so the soft edge fits in it
-SIDES = ("top", "bottom", "left", "right")
 
 
 @dataclass(frozen=True)
 class Region:
     """A fire-like region: ``rgba`` (h, w, 4) uint8 (alpha: the region's pixels, soft edge), its height as a
-    share of its photo's height, the photo's file name and the sides where the photo's frame cuts it."""
+    share of its photo's height and the photo's file name."""
 
     rgba: NDArray[np.uint8]
     height_share: float
     photo: str
-    cut: tuple[str, ...] = ()  # sides of the photo's frame that cut it: of "top", "bottom", "left", "right"
 
 
 def searched(rgb: NDArray[np.uint8]) -> NDArray[np.uint8]:
@@ -75,14 +70,11 @@ def regions_of(rgb: NDArray[np.uint8], name: str = "") -> list[Region]:
             continue
         if float(saturation[y : y + bh, x : x + bw][labels[y : y + bh, x : x + bw] == k].mean()) < MIN_SATURATION:
             continue
-        cut = tuple(side for side, edge in zip(SIDES, (y == 0, y + bh == h, x == 0, x + bw == w)) if edge)
-        if {"top", "bottom"} <= set(cut) or {"left", "right"} <= set(cut):
-            continue
         y0, y1, x0, x1 = max(y - PAD, 0), min(y + bh + PAD, h), max(x - PAD, 0), min(x + bw + PAD, w)
         part = (labels[y0:y1, x0:x1] == k).astype(np.float32)
         alpha = np.clip(cv2.GaussianBlur(part, (0, 0), FEATHER, borderType=cv2.BORDER_CONSTANT), 0.0, 1.0)
         rgba = np.dstack([image[y0:y1, x0:x1], np.round(alpha * 255.0).astype(np.uint8)])
-        out.append(Region(np.ascontiguousarray(rgba), (y1 - y0) / h, name, cut))
+        out.append(Region(np.ascontiguousarray(rgba), (y1 - y0) / h, name))
     return out
 
 

@@ -160,21 +160,3 @@ def test_photo_kind_is_opt_in_and_planned_only_from_regions():
         assert all(d.kind == PHOTO_KIND and not overlaps(d.box, avoid) for d in items)
     assert found >= 10
     assert plan_distractors(cfg, img, depth, {}, 100.0, [], np.random.default_rng(0)) == []
-
-
-def test_a_region_the_photo_frame_cut_is_pasted_flush_against_the_same_side():
-    """A region cut by its photo's right edge lands on the image's right edge (its left when mirrored); one cut
-    at the bottom stands on the image's bottom edge: the straight edge is never inside the image."""
-    from synth.distractors import place_region
-    from synth.photo_regions import Region
-
-    rgba = np.full((20, 12, 4), (230, 90, 30, 255), np.uint8)
-    right, bottom = Region(rgba, 0.2, "r.jpg", ("right",)), Region(rgba, 0.2, "b.jpg", ("bottom",))
-    sides = set()
-    for seed in range(20):
-        x, y, w, h = place_region((right,), 96, 128, np.random.default_rng(seed)).box
-        assert x == 0 or x + w == 128
-        sides.add(x == 0)
-        x, y, w, h = place_region((bottom,), 96, 128, np.random.default_rng(seed)).box
-        assert y + h == 96
-    assert sides == {True, False}  # mirrored half the time: both sides seen
