@@ -261,11 +261,6 @@ STANDING = 1
 #: horizon only from open sky (a white ceiling's edge put it near the top of a room and flames at ceiling height).
 PHOTO_SITES = 2
 
-#: The version of the fire-like regions cut from the fire-free photos (:mod:`synth.photo_regions`) in the identity
-#: of every pool with ``photo`` distractors: 2 = their soft edge fades out on every side (a region filling its box
-#: was cut straight along it: a pasted rectangle).
-PHOTO_REGIONS = 2
-
 
 def content_identity(cfg: Any, places: Places | None = None) -> dict[str, Any]:
     """The environment files, panoramas, building kits and background photos of ``cfg`` by content (only the keys
@@ -286,9 +281,6 @@ def content_identity(cfg: Any, places: Places | None = None) -> dict[str, Any]:
     if getattr(cfg, "backgrounds", ()):
         out["backgrounds"] = photo_fingerprints(cfg.backgrounds, cfg.background_holdout)
         out["photo_sites"] = PHOTO_SITES  # photos became sites: pools made before that are other data
-        distractors = getattr(cfg, "distractors", None)
-        if distractors is not None and distractors.photo:
-            out["photo_regions"] = PHOTO_REGIONS
     if getattr(cfg, "frames", ()):
         from synth.frames import frame_fingerprints
 

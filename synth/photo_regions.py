@@ -8,9 +8,8 @@ A photo is searched at :data:`SEARCH_SIDE` px on its longer side; its fire-colou
 photo, filling at least :data:`MIN_FILL` of its bounding box and at least :data:`MIN_SIDE` px across (a thing,
 not a ragged patch of warm texture, a sliver along an edge or a line) and of mean HSV saturation at least
 :data:`MIN_SATURATION` (warm and coloured: a white wall or sky passes the rule's bright core test but looks like
-nothing on fire) becomes a region: the component's bounding box of the (searched) photo grown by :data:`PAD` px
-(within the photo), alpha = the component softened (Gaussian, sigma :data:`FEATHER` px, nothing beyond the photo
-or the grown box: an edge of the component along its bounding box fades too instead of being cut straight). Frames: image pixels, row 0 at the top. Deterministic: the same photos in the
+nothing on fire) becomes a region: the component's bounding box of the (searched) photo, alpha = the component
+softened (Gaussian, sigma 1 px). Frames: image pixels, row 0 at the top. Deterministic: the same photos in the
 same order give the same regions.
 """
 
@@ -33,8 +32,6 @@ MAX_AREA = 0.1  # largest region (a whole warm wall is a background, not a thing
 MIN_FILL = 0.35  # share of its bounding box a region fills at least
 MIN_SIDE = 8  # shorter side of a region's bounding box at least, px of the searched photo
 MIN_SATURATION = 0.4  # mean HSV saturation (0..1) of a region's pixels at least
-FEATHER = 1.0  # sigma of the alpha's soft edge, px of the searched photo
-PAD = 3  # px the region's box grows by on each side, so the soft edge fits in it
 
 
 @dataclass(frozen=True)
@@ -68,13 +65,13 @@ def regions_of(rgb: NDArray[np.uint8], name: str = "") -> list[Region]:
         x, y, bw, bh, area = (int(v) for v in stats[k])
         if not MIN_AREA * h * w <= area <= MAX_AREA * h * w or area < MIN_FILL * bw * bh or min(bw, bh) < MIN_SIDE:
             continue
-        if float(saturation[y : y + bh, x : x + bw][labels[y : y + bh, x : x + bw] == k].mean()) < MIN_SATURATION:
+        part = labels[y : y + bh, x : x + bw] == k
+        if float(saturation[y : y + bh, x : x + bw][part].mean()) < MIN_SATURATION:
             continue
-        y0, y1, x0, x1 = max(y - PAD, 0), min(y + bh + PAD, h), max(x - PAD, 0), min(x + bw + PAD, w)
-        part = (labels[y0:y1, x0:x1] == k).astype(np.float32)
-        alpha = np.clip(cv2.GaussianBlur(part, (0, 0), FEATHER, borderType=cv2.BORDER_CONSTANT), 0.0, 1.0)
-        rgba = np.dstack([image[y0:y1, x0:x1], np.round(alpha * 255.0).astype(np.uint8)])
-        out.append(Region(np.ascontiguousarray(rgba), (y1 - y0) / h, name))
+        part = part.astype(np.float32)
+        alpha = np.clip(cv2.GaussianBlur(part, (0, 0), 1.0), 0.0, 1.0)
+        rgba = np.dstack([image[y : y + bh, x : x + bw], np.round(alpha * 255.0).astype(np.uint8)])
+        out.append(Region(np.ascontiguousarray(rgba), bh / h, name))
     return out
 
 

@@ -288,24 +288,3 @@ def test_blends_and_distractors_stay_out_of_existing_pool_identities() -> None:
     assert identity(replace(study, flames=replace(study.flames, rising_smoke=True))) != "9a138ab4d9da"
     assert identity(replace(study, flames=replace(study.flames, exposed=False))) == "9a138ab4d9da"
     assert identity(replace(study, flames=replace(study.flames, exposed=True))) != "9a138ab4d9da"
-
-
-def test_photo_regions_enter_only_pools_with_photo_distractors(tmp_path: Path) -> None:
-    """Pools that paste fire-like regions of their photos carry the regions' version (an earlier cut made other
-    images); pools with drawn distractors or none keep their identities."""
-    from dataclasses import replace
-
-    from factories_train import painted_dataset
-
-    from fuzzyfire.stages import PHOTO_REGIONS, PHOTO_SITES, content_identity
-    from synth.distractors import DistractorConfig
-    from synth.method2 import Method2Config
-
-    painted_dataset(tmp_path / "photos", 2, seed=0)
-    plain = Method2Config(n=2, width=64, height=48, scenes=0, backgrounds=(tmp_path / "photos",))
-    drawn = replace(plain, distractors=DistractorConfig(share=0.5, kinds=("lamp",)))
-    photo = replace(plain, distractors=DistractorConfig(share=0.5, kinds=("photo", "lamp")))
-    assert content_identity(plain)["photo_sites"] == PHOTO_SITES == 2
-    assert "photo_regions" not in content_identity(plain) and "photo_regions" not in content_identity(drawn)
-    assert content_identity(photo)["photo_regions"] == PHOTO_REGIONS
-    assert {k: v for k, v in content_identity(photo).items() if k != "photo_regions"} == content_identity(plain)
