@@ -257,9 +257,8 @@ FLAME_LOOK = 2
 #: in their config but were composited anywhere in the lower 2/3 of the view).
 STANDING = 1
 
-#: The version of the photo-site rules (:mod:`synth.sites`) in the identity of every pool with photos: 2 = the
-#: horizon only from open sky (a white ceiling's edge put it near the top of a room and flames at ceiling height).
-PHOTO_SITES = 2
+#: The version of the photo-site rules (:mod:`synth.sites`) in the identity of every pool with photos.
+PHOTO_SITES = 1
 
 
 def content_identity(cfg: Any, places: Places | None = None) -> dict[str, Any]:

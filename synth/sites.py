@@ -11,12 +11,9 @@ A **site** is read from a sidecar when there is one (a fixed camera whose floor 
       ground: [[0.05, 0.55], [0.95, 0.55], [1.0, 1.0], [0.0, 1.0]]   # polygon (x, y fractions): fire only here
 
 - **Estimate** (no sidecar): *sky* is the smooth, bright or blue region connected to the top edge; the
-  *horizon* is the median lowest sky row over the columns that show sky when that region is **open sky**: it
-  spans 40 % of the columns, is blue (a white or dark region at the top is as often a ceiling or a wall as an
-  overcast sky, and a ceiling's lower edge is not the horizon: flames would float at ceiling height) and ends on a
-  fairly even line (its lowest rows spread over at most ``RAGGED`` of the height between the 10th and 90th
-  percentile column: a street between buildings shows sky far above eye level). Otherwise the horizon is drawn in
-  0.3..0.5 of the height, and never above the median lowest row of the top region; *water* is sky-like pixels below the horizon (a lake mirrors the sky) and fairly smooth,
+  *horizon* is the median lowest sky row over the columns that show sky when the sky spans 40 % of them
+  (otherwise - rooms, streets between buildings - it is drawn in 0.3..0.5 of the height, and never above the
+  lowest sky pixel); *water* is sky-like pixels below the horizon (a lake mirrors the sky) and fairly smooth,
   saturated blue or blue-green ones; *people* are OpenCV's HOG pedestrian detections (upright people only: a seated person
   is missed - the README says how often a flame lands on one). Ground = below the horizon, none of those.
 
@@ -43,8 +40,6 @@ MAX_GROUND_M = 40.0  # farther ground is not a place for a visible fire
 _KEYS = {"horizon", "camera_height", "yfov", "ground"}
 _WORK = 160  # long side, pixels, of the picture the estimate runs on
 SKY_COLUMNS = 0.4  # the sky must span this share of the columns to place the horizon (else it is drawn)
-RAGGED = 0.2  # open sky ends on an even line: its lowest rows (10th..90th percentile column) within this height share
-OPEN_SKY_B = -5.0  # open sky is blue: mean CIE b* of its pixels below this (a ceiling or a wall is white to warm)
 
 
 @dataclass(frozen=True)
@@ -120,11 +115,9 @@ def estimate_site(image: NDArray[np.uint8], rng: np.random.Generator, sidecar: d
     if "horizon" in sidecar:
         horizon = sidecar["horizon"] * h
     else:
+        wide_sky = sky.any(axis=0).mean() >= SKY_COLUMNS and sky.mean() > 0.03
         drawn = float(rng.uniform(0.3, 0.5)) * h
-        lowest = _lowest_sky_rows(sky)
-        horizon = float(np.median(lowest)) * h if len(lowest) else 0.0
-        if not is_open_sky(small, sky):
-            horizon = max(drawn, horizon)
+        horizon = _horizon_from_sky(sky, h) if wide_sky else max(drawn, _lowest_sky(sky, h))
     below = (np.arange(h)[:, None] >= horizon) & np.ones((1, w), bool)
     if "ground" in sidecar:
         ground = polygon_mask(sidecar["ground"], w, h) & below
@@ -170,24 +163,10 @@ def water_like(rgb: NDArray[np.uint8]) -> NDArray[np.bool_]:
     return cv2.dilate(wet.astype(np.uint8), np.ones((5, 5), np.uint8)).astype(bool)
 
 
-def is_open_sky(rgb: NDArray[np.uint8], sky: NDArray[np.bool_]) -> bool:
-    """Whether the top-connected sky-like region ``sky`` (H, W) bool of ``rgb`` (H, W, 3) uint8 is open sky whose
-    lower edge is the horizon (module docstring): wide, blue and ending on an even line."""
-    lowest = _lowest_sky_rows(sky)
-    if sky.any(axis=0).mean() < SKY_COLUMNS or sky.mean() <= 0.03:
-        return False
-    lab = cv2.cvtColor(rgb, cv2.COLOR_RGB2LAB)[sky].astype(np.float32)
-    if float(lab[:, 2].mean()) - 128.0 >= OPEN_SKY_B:
-        return False
-    p10, p90 = np.percentile(lowest, [10, 90])
-    return bool(p90 - p10 <= RAGGED)
-
-
-def _lowest_sky_rows(sky: NDArray[np.bool_]) -> NDArray[np.float64]:
-    """Per column that shows sky, the row below its lowest sky pixel as a fraction of the height (empty: no sky)."""
-    cols = sky.any(axis=0)
-    lowest = sky.shape[0] - np.argmax(sky[::-1], axis=0)
-    return lowest[cols].astype(np.float64) / sky.shape[0]
+def _lowest_sky(sky: NDArray[np.bool_], height: int) -> float:
+    """The row below the lowest sky pixel, in ``height``-row px (0 without sky)."""
+    rows = np.flatnonzero(sky.any(axis=1))
+    return float(rows[-1] + 1) * height / sky.shape[0] if len(rows) else 0.0
 
 
 def _top_connected(mask: NDArray[np.bool_]) -> NDArray[np.bool_]:
@@ -195,6 +174,13 @@ def _top_connected(mask: NDArray[np.bool_]) -> NDArray[np.bool_]:
     n, labels = cv2.connectedComponents(mask.astype(np.uint8), connectivity=8)
     top = set(np.unique(labels[0][mask[0]]).tolist()) - {0}
     return np.isin(labels, list(top)) if top else np.zeros_like(mask)
+
+
+def _horizon_from_sky(sky: NDArray[np.bool_], height: int) -> float:
+    """Median over the columns that show sky of the row below their lowest sky pixel, in ``height``-row px."""
+    cols = sky.any(axis=0)
+    lowest = sky.shape[0] - np.argmax(sky[::-1], axis=0)
+    return float(np.median(lowest[cols])) * height / sky.shape[0]
 
 
 def detect_people(image: NDArray[np.uint8]) -> tuple[tuple[int, int, int, int], ...]:
