@@ -1,6 +1,6 @@
 """Display values and linear light: the gamma 2.2 encoding and the Rec. 709 luminance weights that exposure
-(:func:`synth.effects.scale_light`), the meter (:mod:`synth.metering`) and compositing (:mod:`synth.composite`)
-share. Display values are in 0..1 (or uint8 0..255), linear light in 0..1 relative to the sensor's white."""
+(:func:`synth.effects.scale_light`), the meter (:mod:`synth.metering`), compositing (:mod:`synth.composite`) and
+the panoramas' tone mapping (:func:`synth.panorama.tone_map`, weights only) share. Display values are in 0..1 (or uint8 0..255), linear light in 0..1 relative to the sensor's white."""
 
 from __future__ import annotations
 

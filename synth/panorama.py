@@ -33,6 +33,7 @@ from curate.core.config import ConfigError, build_config
 from curate.core.imageio import MAX_PIXELS, ImageError, image_size, read_image
 from curate.core.walk import walk_files
 from synth import render
+from synth.light import REC709
 from synth.schema import check_range
 
 PANORAMA_SUFFIXES = (".jpg", ".jpeg", ".png", ".hdr", ".exr")
@@ -234,7 +235,7 @@ def render_view(
 def tone_map(linear: NDArray[np.float32], key: float) -> tuple[NDArray[np.uint8], float]:
     """(H, W, 3) linear RGB -> uint8 sRGB: exposure mapping the log-average luminance to ``key`` (middle grey),
     extended Reinhard curve with white at the 99th luminance percentile (at least 1); and the exposure in EV."""
-    lum = linear @ np.array([0.2126, 0.7152, 0.0722], np.float32)
+    lum = linear @ REC709
     delta = 1e-3 * float(lum.mean()) + 1e-12
     scale = key / float(np.exp(np.log(lum + delta).mean()))
     ls = lum * scale
