@@ -69,6 +69,9 @@ class Method2Config:
     photo_negatives: float | None = None  # fraction of the images on a fire-free photo (``backgrounds``) without
     # flames: hard negatives of the user's own kind; None = ``negatives`` (frames and other places keep that)
     flame_height_m: tuple[float, float] = (0.3, 2.5)  # flame height in the scene, metres
+    flame_heights: Literal["uniform", "log"] = "uniform"  # how a height is drawn in flame_height_m: uniform in metres
+    # (pools made before this key), or uniform in its logarithm (as many 0.3-0.9 m flames as 0.9-2.5 m: more small,
+    # far flames, like the common set's boxes, whose heights in pixels are about log-uniform: :func:`flame_height`)
     flame_opacity: tuple[float, float] = (0.85, 1.0)  # luminous coverage of a flame's body (1 = hides what is behind)
     flame_glow: tuple[float, float] = (0.1, 0.5)  # halo and warm cast a flame spills (synth.composite), per flame
     closeup: float = 0.0  # fraction of fire images framed as a close-up: one flame of closeup_height x the image
@@ -121,6 +124,8 @@ class Method2Config:
         if self.photo_negatives is not None and not 0.0 <= self.photo_negatives <= 1.0:
             raise ValueError(f"photo_negatives must be in 0..1 or null, got {self.photo_negatives}")
         check_range("flame_height_m", self.flame_height_m, 0.01)
+        if self.flame_heights not in ("uniform", "log"):
+            raise ValueError(f"flame_heights must be uniform or log, got {self.flame_heights!r}")
         check_range("closeup_height", self.closeup_height, 0.05)
         check_range("flame_glow", self.flame_glow, 0.0)
         if not 0.0 <= self.closeup <= 1.0:
@@ -166,7 +171,7 @@ def plan_flames(
         else:
             bx, by = int(rng.integers(0, cfg.width)), int(rng.integers(cfg.height // 3, cfg.height))
             d = float(depth[min(by, cfg.height - 1), bx]) or 10.0
-            hpx = int(np.clip(fy * rng.uniform(*cfg.flame_height_m) / d, 12, 0.9 * cfg.height))
+            hpx = int(np.clip(fy * flame_height(cfg, rng) / d, 12, 0.9 * cfg.height))
         hpx = capped_height(cfg, seq, sprite, hpx)
         wpx, spx = sprite_pixels(sprite, hpx)
         blend = str(rng.choice(cfg.blend.modes))  # (screen, add) by default: the draws of pools made before
@@ -177,6 +182,15 @@ def plan_flames(
         )  # fmt: skip
         out.append((place, f"{seq.name}/{frame}"))
     return out
+
+
+def flame_height(cfg: Method2Config, rng: np.random.Generator) -> float:
+    """A flame's height in the scene, metres, in ``cfg.flame_height_m``: uniform, or log-uniform when
+    ``cfg.flame_heights`` is ``log``; one draw from ``rng`` either way (the other draws of a pool stay put)."""
+    lo, hi = cfg.flame_height_m
+    if cfg.flame_heights == "log":
+        return float(np.exp(rng.uniform(np.log(lo), np.log(hi))))
+    return float(rng.uniform(lo, hi))
 
 
 def capped_height(cfg: Method2Config, seq: SpriteSequence, sprite: Sprite, flame_px: int) -> int:
@@ -221,7 +235,7 @@ def site_spot(
         return None
     for _ in range(tries):
         by, bx = divmod(int(ground[rng.integers(len(ground))]), cfg.width)
-        hpx = max(int(fy * rng.uniform(*cfg.flame_height_m) / float(depth[by, bx])), 12)
+        hpx = max(int(fy * flame_height(cfg, rng) / float(depth[by, bx])), 12)
         wpx = max(int(round(hpx * flame_size[0] / flame_size[1])), 2)
         x0, y0 = bx - wpx // 2, by - hpx
         if hpx <= SITE_MAX_HEIGHT * cfg.height and not any(
