@@ -120,6 +120,21 @@ def test_flame_glow_is_drawn_in_its_range(library) -> None:
         M.Method2Config(flame_glow=(0.5, 0.2))
 
 
+def test_log_flame_heights_stay_in_range_with_their_median_at_the_geometric_mean_and_draw_once() -> None:
+    from dataclasses import replace
+
+    cfg = replace(CFG, flame_height_m=(0.3, 2.7), flame_heights="log")
+    rng, twin = np.random.default_rng(5), np.random.default_rng(5)
+    logs = np.array([M.flame_height(cfg, rng) for _ in range(4000)])
+    uniform = np.array([M.flame_height(replace(cfg, flame_heights="uniform"), twin) for _ in range(4000)])
+    assert logs.min() >= 0.3 and logs.max() <= 2.7 and uniform.min() >= 0.3 and uniform.max() <= 2.7
+    assert abs(np.median(logs) - 0.9) < 0.05  # sqrt(0.3 * 2.7): as many below 0.9 m as above
+    assert abs(np.median(uniform) - 1.5) < 0.05
+    assert rng.random() == twin.random()  # one draw each: a pool's other draws do not move
+    with pytest.raises(ValueError, match="flame_heights"):
+        M.Method2Config(flame_heights="normal")  # type: ignore[arg-type]
+
+
 def test_a_config_with_no_place_is_refused_unless_the_experiment_adds_its_own_frames() -> None:
     with pytest.raises(ValueError, match="nothing to composite on"):
         M.Method2Config(scenes=0)
