@@ -227,8 +227,9 @@ def _workers(args: argparse.Namespace) -> int:
 
 
 def _blend_config(args: argparse.Namespace) -> dict:
-    """Method 2's ``blend``, ``distractors``, ``never_darken``, ``opaque_body`` and ``auto_exposure`` from --blend,
-    --harmonise, --match-noise, --decoys, --distractors, --never-darken, --opaque-body, --auto-exposure (the
+    """Method 2's ``blend``, ``distractors``, ``never_darken``, ``opaque_body``, ``auto_exposure``, ``flame_jitter`` and
+    ``flame_heights`` from --blend, --harmonise, --match-noise, --decoys, --distractors, --never-darken,
+    --opaque-body, --auto-exposure, --flame-jitter, --flame-heights (the
     defaults: today's blend, none of them but never_darken)."""
     from synth.blend import BlendConfig
     from synth.distractors import DistractorConfig
@@ -241,6 +242,8 @@ def _blend_config(args: argparse.Namespace) -> dict:
         "never_darken": args.never_darken,
         "opaque_body": args.opaque_body,
         "auto_exposure": args.auto_exposure,
+        "flame_jitter": args.flame_jitter,
+        "flame_heights": args.flame_heights,
     }
 
 
@@ -633,6 +636,17 @@ def _blend_arguments(p: argparse.ArgumentParser) -> None:
         action="store_true",
         help="the camera meters each frame with its flames in view: bright flames lower the exposure of the scene "
         "around them, as in real fire footage (no washed-out film over bright walls; synth/metering.py)",
+    )
+    p.add_argument(
+        "--flame-jitter",
+        action="store_true",
+        help="each flame mirrored or not, 0.75-1.33x as wide, its hue and saturation turned a little (synth/jitter.py)",
+    )
+    p.add_argument(
+        "--flame-heights",
+        choices=("uniform", "log"),
+        default="uniform",
+        help="flame heights in metres drawn uniform (default) or log-uniform (more small, far flames)",
     )
     p.add_argument("--match-noise", action="store_true", help="blur and grain each flame like the background around it")
     p.add_argument(

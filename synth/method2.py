@@ -28,6 +28,7 @@ from synth.decoys import plan_decoys
 from synth.distractors import DistractorConfig, draw_distractors, plan_distractors
 from synth.effects import CameraConfig, Effects, apply_effects, expose, sample_effects, scale_light
 from synth.generate import generate
+from synth.jitter import draw_jitter, jittered, stretched_width
 from synth.library import FlameLibraryConfig, is_cutout, pick_sequence
 from synth.metering import draw_radiance, flame_share, mean_linear_luma, metered_gain
 from synth.photo_regions import Region
@@ -69,6 +70,8 @@ class Method2Config:
     photo_negatives: float | None = None  # fraction of the images on a fire-free photo (``backgrounds``) without
     # flames: hard negatives of the user's own kind; None = ``negatives`` (frames and other places keep that)
     flame_height_m: tuple[float, float] = (0.3, 2.5)  # flame height in the scene, metres
+    flame_jitter: bool = False  # each flame mirrored or not, its width stretched 0.75-1.33x, hue and saturation
+    # turned a little (synth.jitter): one cut-out pasted twice is two flames; off = pools made before this key
     flame_heights: Literal["uniform", "log"] = "uniform"  # how a height is drawn in flame_height_m: uniform in metres
     # (pools made before this key), or uniform in its logarithm (as many 0.3-0.9 m flames as 0.9-2.5 m: more small,
     # far flames, like the common set's boxes, whose heights in pixels are about log-uniform: :func:`flame_height`)
@@ -320,6 +323,17 @@ def styled(cfg: Method2Config, planned, scene, rng) -> list[tuple[Placement, str
     return out
 
 
+def varied(planned: list[tuple[Placement, str]], rng: np.random.Generator) -> list[tuple[Placement, str]]:
+    """``planned`` with each flame jittered (:mod:`synth.jitter`: four draws of ``rng`` per flame): its sprite
+    mirrored and recoloured, its placement stretched in width about its centre (base and height kept)."""
+    out = []
+    for p, name in planned:
+        j = draw_jitter(rng)
+        width = stretched_width(p.width, j)
+        out.append((replace(p, sprite=jittered(p.sprite, j), x=p.x + (p.width - width) // 2, width=width), name))
+    return out
+
+
 def negative_share(cfg: Method2Config, view_meta: dict) -> float:
     """The probability that an image on the view of ``view_meta`` gets no flame: ``cfg.photo_negatives`` on a
     fire-free photo (a ``backgrounds`` photo, not a labelled frame) when set, else ``cfg.negatives``."""
@@ -364,6 +378,8 @@ def make_image(cfg: Method2Config, i: int, library: Sequence[SpriteSequence], vi
     yfov = view_meta["camera"]["yfov"]
     planned = plan_flames(cfg, library, depth, yfov, rng, avoid, negative_share(cfg, view_meta))
     effects = sample_effects(rng, cfg.camera)
+    if cfg.flame_jitter:
+        planned = varied(planned, np.random.default_rng([cfg.seed, 2, i, 3]))
     extra = np.random.default_rng([cfg.seed, 2, i, 1])
     fy = float(render.intrinsics(yfov, cfg.width, cfg.height)[1, 1])
     regions = views.photos.regions() if cfg.distractors.photo and views.photos is not None else ()

@@ -1,6 +1,8 @@
 import json
 from pathlib import Path
 
+import pytest
+
 from fuzzyfire.cli import main
 
 
@@ -270,3 +272,29 @@ def test_method2_auto_exposure_from_the_command_line(tmp_path):
     per_image = json.loads((out / "manifest.json").read_text())["args"]["per_image"]
     assert all(0.25 <= m["exposure_gain"] <= 1.0 for m in per_image if m["flames"])
     assert any(m["flames"] for m in per_image)
+
+
+def test_method2_flame_jitter_and_heights_from_the_command_line(tmp_path):
+    """--flame-jitter and --flame-heights reach the pool's config (its manifest args); a wrong choice is refused."""
+    from factories import write_image
+
+    for k in range(2):
+        write_image(tmp_path / "photos" / f"p{k}.jpg", 160, 120, seed=k)
+    flames = _flames(tmp_path)
+    args = [
+        "synth",
+        "method2",
+        "--n",
+        "2",
+        "--size",
+        "96x72",
+        "--flames",
+        str(flames),
+        "--backgrounds",
+        str(tmp_path / "photos"),
+    ]
+    assert main([*args, "--out", str(tmp_path / "m2"), "--flame-jitter", "--flame-heights", "log"]) == 0
+    got = json.loads((tmp_path / "m2" / "manifest.json").read_text())["args"]
+    assert got["flame_jitter"] is True and got["flame_heights"] == "log"
+    with pytest.raises(SystemExit):
+        main([*args, "--out", str(tmp_path / "bad"), "--flame-heights", "normal"])

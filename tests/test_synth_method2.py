@@ -226,6 +226,33 @@ def test_distractors_leave_the_flames_as_they_were(written, hard, library, tmp_p
     assert _files(again) == _files(hard)
 
 
+def test_jittered_flames_keep_exact_boxes_the_same_flames_and_effects_and_change_their_widths(
+    written, library, tmp_path
+):
+    """flame_jitter: the same flames, views and camera effects as without it (its own rng), each flame mirrored,
+    stretched and recoloured; boxes still exact (audit IoU 1.000)."""
+    from dataclasses import replace
+
+    out = tmp_path / "jitter"
+    M.run_method2(replace(CFG, flame_jitter=True), library, out)
+    report = audit_dataset(out)
+    assert report["boxes"] > 0 and report["min_iou"] == 1.0
+    plain = json.loads((written / "manifest.json").read_text())["args"]["per_image"]
+    varied = json.loads((out / "manifest.json").read_text())["args"]["per_image"]
+    assert [m["effects"] for m in plain] == [m["effects"] for m in varied]
+    names = lambda per_image: [[(f["flame"], f["blend"]) for f in m["flames"]] for m in per_image]  # noqa: E731
+    assert sum(map(len, names(plain))) > 0 and names(varied) == names(plain)
+    widths = lambda folder: [a["bbox"][2] for a in json.loads((folder / "annotations.json").read_text())["annotations"]]  # noqa: E731
+    assert widths(out) != widths(written)
+    planned = M.plan_flames(
+        CFG, library, np.full((CFG.height, CFG.width), 4.0, np.float32), 1.0, np.random.default_rng(0)
+    )
+    for (p, name), (q, same) in zip(planned, M.varied(planned, np.random.default_rng(1)), strict=True):
+        assert (
+            name == same and q.height == p.height and q.y == p.y and abs((q.x + q.width / 2) - (p.x + p.width / 2)) <= 1
+        )
+
+
 def test_distractors_never_cover_a_photo_sites_people():
     """A site's people boxes are avoided like flames: nothing fire-like is drawn on a person."""
     from dataclasses import replace
