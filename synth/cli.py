@@ -227,9 +227,9 @@ def _workers(args: argparse.Namespace) -> int:
 
 
 def _blend_config(args: argparse.Namespace) -> dict:
-    """Method 2's ``blend``, ``distractors``, ``never_darken``, ``opaque_body``, ``auto_exposure``, ``flame_jitter`` and
-    ``flame_heights`` from --blend, --harmonise, --match-noise, --decoys, --distractors, --never-darken,
-    --opaque-body, --auto-exposure, --flame-jitter, --flame-heights (the
+    """Method 2's ``blend``, ``distractors``, ``never_darken``, ``opaque_body``, ``auto_exposure``, ``flame_jitter``,
+    ``separate_flames`` and ``flame_heights`` from --blend, --harmonise, --match-noise, --decoys, --distractors,
+    --never-darken, --opaque-body, --auto-exposure, --flame-jitter, --separate-flames, --flame-heights (the
     defaults: today's blend, none of them but never_darken)."""
     from synth.blend import BlendConfig
     from synth.distractors import DistractorConfig
@@ -243,6 +243,7 @@ def _blend_config(args: argparse.Namespace) -> dict:
         "opaque_body": args.opaque_body,
         "auto_exposure": args.auto_exposure,
         "flame_jitter": args.flame_jitter,
+        "separate_flames": args.separate_flames,
         "flame_heights": args.flame_heights,
     }
 
@@ -641,6 +642,11 @@ def _blend_arguments(p: argparse.ArgumentParser) -> None:
         "--flame-jitter",
         action="store_true",
         help="each flame mirrored or not, 0.75-1.33x as wide, its hue and saturation turned a little (synth/jitter.py)",
+    )
+    p.add_argument(
+        "--separate-flames",
+        action="store_true",
+        help="on a photo or panorama no two flames overlap (each keeps clear of the ones placed before it)",
     )
     p.add_argument(
         "--flame-heights",

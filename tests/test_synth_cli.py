@@ -275,7 +275,7 @@ def test_method2_auto_exposure_from_the_command_line(tmp_path):
 
 
 def test_method2_flame_jitter_and_heights_from_the_command_line(tmp_path):
-    """--flame-jitter and --flame-heights reach the pool's config (its manifest args); a wrong choice is refused."""
+    """--flame-jitter, --separate-flames and --flame-heights reach the pool's config (its manifest args); a wrong choice is refused."""
     from factories import write_image
 
     for k in range(2):
@@ -293,8 +293,11 @@ def test_method2_flame_jitter_and_heights_from_the_command_line(tmp_path):
         "--backgrounds",
         str(tmp_path / "photos"),
     ]
-    assert main([*args, "--out", str(tmp_path / "m2"), "--flame-jitter", "--flame-heights", "log"]) == 0
+    assert (
+        main([*args, "--out", str(tmp_path / "m2"), "--flame-jitter", "--separate-flames", "--flame-heights", "log"])
+        == 0
+    )
     got = json.loads((tmp_path / "m2" / "manifest.json").read_text())["args"]
-    assert got["flame_jitter"] is True and got["flame_heights"] == "log"
+    assert got["flame_jitter"] is True and got["separate_flames"] is True and got["flame_heights"] == "log"
     with pytest.raises(SystemExit):
         main([*args, "--out", str(tmp_path / "bad"), "--flame-heights", "normal"])

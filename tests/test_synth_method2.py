@@ -135,6 +135,32 @@ def test_log_flame_heights_stay_in_range_with_their_median_at_the_geometric_mean
         M.Method2Config(flame_heights="normal")  # type: ignore[arg-type]
 
 
+def test_separate_flames_never_overlap_on_a_site_and_the_default_draws_as_before(library) -> None:
+    from dataclasses import replace
+
+    cfg = replace(CFG, width=160, height=120, max_flames=3, negatives=0.0)
+    depth = np.full((cfg.height, cfg.width), 3.0, np.float32)  # every pixel ground, 3 m away
+    overlapping = 0
+    for i in range(40):
+        rng, twin = np.random.default_rng(i), np.random.default_rng(i)
+        before = M.plan_flames(cfg, library, depth, 1.0, rng, avoid=[])
+        assert before == M.plan_flames(replace(cfg, separate_flames=False), library, depth, 1.0, twin, avoid=[])
+        apart = M.plan_flames(replace(cfg, separate_flames=True), library, depth, 1.0, np.random.default_rng(i), [])
+        boxes = [M.mask_box(p) for p, _ in apart]
+        for (p, _), (x, y, w, h) in zip(apart, boxes, strict=True):  # the box covers the mask as drawn
+            rows, cols = np.nonzero(M.scaled_layers(p.sprite, p.width, p.height)[2])
+            assert (
+                x <= p.x + cols.min()
+                and p.x + cols.max() < x + w
+                and y <= p.y + rows.min()
+                and p.y + rows.max() < y + h
+            )
+        assert apart and not any(overlaps(box, boxes[k + 1 :]) for k, box in enumerate(boxes)), (i, boxes)
+        drawn = [M.mask_box(p) for p, _ in before]
+        overlapping += any(overlaps(box, drawn[k + 1 :]) for k, box in enumerate(drawn))
+    assert overlapping > 0  # without the key, flames do overlap on this crowded site
+
+
 def test_a_config_with_no_place_is_refused_unless_the_experiment_adds_its_own_frames() -> None:
     with pytest.raises(ValueError, match="nothing to composite on"):
         M.Method2Config(scenes=0)
