@@ -153,13 +153,18 @@ def _glow(img: NDArray[np.float32], emission: NDArray[np.float32], p: Placement,
     """Blurred emission added around the sprite (light spill), in place."""
     h, w = img.shape[:2]
     r = max(int(0.25 * max(p.width, p.height)), 2)
-    canvas = np.zeros((p.height + 2 * r, p.width + 2 * r, 3), np.float32)
-    canvas[r : r + p.height, r : r + p.width] = emission
-    blurred = cv2.GaussianBlur(canvas, (0, 0), sigmaX=r / 2.5) * p.glow
     big = replace(p, x=p.x - r, y=p.y - r, width=p.width + 2 * r, height=p.height + 2 * r)
     c = _clip(big, w, h)
-    if c is not None:
-        img[c[0], c[1]] = _add_light(img[c[0], c[1]], blurred[c[2], c[3]], p.blend)
+    if c is None:
+        return
+    if emission.any():
+        canvas = np.zeros((p.height + 2 * r, p.width + 2 * r, 3), np.float32)
+        canvas[r : r + p.height, r : r + p.width] = emission
+        light = (cv2.GaussianBlur(canvas, (0, 0), sigmaX=r / 2.5) * p.glow)[c[2], c[3]]
+    else:  # nothing emits (an RGBA cut-out): the blur is zeros; skip it (a sprite drawn thousands of pixels
+        # large made that blur take minutes) and add the same zeros, so the image keeps its bytes
+        light = np.zeros((c[0].stop - c[0].start, c[1].stop - c[1].start, 3), np.float32)
+    img[c[0], c[1]] = _add_light(img[c[0], c[1]], light, p.blend)
 
 
 def _cast(img: NDArray[np.float32], emission: NDArray[np.float32], mask: NDArray[np.bool_], p: Placement) -> None:

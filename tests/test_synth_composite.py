@@ -174,3 +174,36 @@ def test_an_opaque_body_hides_a_bright_wall_and_its_dim_edge_still_never_darkens
     kept = composite(pale, [Placement(edge, 0, 0, 10, 10, blend, 0.0, 1.0, never_darken=True, opaque_body=True)])
     assert luma(kept.image) >= luma(pale) - 0.03
     assert body_weight(np.float32([0.0, 0.45, 0.6, 0.75, 1.0])).tolist() == pytest.approx([0, 0, 0.5, 1, 1])
+
+
+def test_a_sprite_that_emits_nothing_keeps_the_bytes_of_a_blurred_zero_glow(monkeypatch) -> None:
+    """An RGBA cut-out (no emission) skips the glow's blur: the same image as the glow before (the blur of the
+    zero emission, added), screen and add, also for a sprite far larger than the image."""
+    from dataclasses import replace
+
+    import cv2
+
+    import synth.composite as C
+
+    def blurred_glow(img, emission, p, cut):  # the glow as every pool before this change was made
+        h, w = img.shape[:2]
+        r = max(int(0.25 * max(p.width, p.height)), 2)
+        canvas = np.zeros((p.height + 2 * r, p.width + 2 * r, 3), np.float32)
+        canvas[r : r + p.height, r : r + p.width] = emission
+        blurred = cv2.GaussianBlur(canvas, (0, 0), sigmaX=r / 2.5) * p.glow
+        c = C._clip(replace(p, x=p.x - r, y=p.y - r, width=p.width + 2 * r, height=p.height + 2 * r), w, h)
+        if c is not None:
+            img[c[0], c[1]] = C._add_light(img[c[0], c[1]], blurred[c[2], c[3]], p.blend)
+
+    rng = np.random.default_rng(4)
+    background = rng.integers(0, 256, (48, 64, 3), dtype=np.uint8)
+    rgba = rng.integers(0, 256, (10, 6, 4), dtype=np.uint8)
+    sprite = Sprite(rgba, np.zeros((10, 6, 3), np.uint8), rgba[..., 3] > 128)
+    lit = Sprite(rgba, rng.integers(0, 256, (10, 6, 3), dtype=np.uint8), rgba[..., 3] > 128)
+    cases = [Placement(s, x, y, w, h, blend, 0.4, 1.0) for s in (sprite, lit) for blend in ("screen", "add")
+             for x, y, w, h in ((20, 10, 12, 20), (-40, -200, 300, 500))]  # fmt: skip
+    now = [composite(background, [p]).image for p in cases]
+    monkeypatch.setattr(C, "_glow", blurred_glow)
+    before = [composite(background, [p]).image for p in cases]
+    assert all(np.array_equal(a, b) for a, b in zip(now, before, strict=True))
+    assert not np.array_equal(now[-1], composite(background, [replace(cases[-1], glow=0.0)]).image)  # lit: a glow
