@@ -18,12 +18,17 @@ procedural environments (the issue's file-scene targets: Method 2 <= 3 min, Meth
 ``../shared/data/kits`` beside the repository), 640x480 (issue 22's target: 1,000 images in <= 3 min, RSS flat;
 each street is built for its block of views and released after it, so RSS should not grow across streets).
 
+``--only cutouts``: Method 2 with real flame cut-outs (``--cutouts DIR``, a ``fuzzyfire synth cutouts`` output;
+default: cut here from the train split of ``../shared/data/fire-cctv-416``) composited on ``--photos`` at 416x416,
+the study's own-cut-out pools: an RGBA cut-out emits no light, so its glow is no blur (the same bytes; a cut-out
+drawn thousands of pixels large used to stall a worker for minutes).
+
 ``--only photo_regions``: the fire-like regions the ``photo`` distractors are cut from
 (:mod:`synth.photo_regions`), found in ``--photos`` (default ``../shared/data/fire-free`` beside the repository, its
 held-out quarter left out as the study does): photos/s and regions found.
 
-Usage: ``python bench/bench_synth.py [--n 1000] [--only flames,composite,method2,method1,streets,photo_regions]
-[--environments P] [--kits DIR] [--streets 8] [--photos DIR] [--workers 0]``.
+Usage: ``python bench/bench_synth.py [--n 1000] [--only flames,composite,method2,method1,streets,photo_regions,cutouts]
+[--environments P] [--kits DIR] [--streets 8] [--photos DIR] [--cutouts DIR] [--workers 0]``.
 Figures depend on the machine and on other load: take them on an otherwise idle machine.
 """
 
@@ -116,13 +121,13 @@ def bench_composite(library) -> None:
     print(f"composite_640x480: {len(plans) / (time.perf_counter() - t):.1f} img/s")
 
 
-def bench_run(name: str, run: Callable[[Path], object], n: int) -> None:
+def bench_run(name: str, run: Callable[[Path], object], n: int, size: str = "640x480") -> None:
     with tempfile.TemporaryDirectory() as tmp, RssSampler() as rss:
         t = time.perf_counter()
         run(Path(tmp) / name)
         dt = time.perf_counter() - t
-    print(f"{name}_640x480_images_per_s: {n / dt:.2f} img/s")
-    print(f"{name}_640x480_{n}_images: {dt:.1f} s")
+    print(f"{name}_{size}_images_per_s: {n / dt:.2f} img/s")
+    print(f"{name}_{size}_{n}_images: {dt:.1f} s")
     print(f"{name}_rss_growth_10_to_90pct: {rss.at(0.85) - rss.at(0.1):.1f} MB")
     print(f"{name}_rss_growth_50_to_90pct: {rss.at(0.85) - rss.at(0.5):.1f} MB")  # all 48 environments built
     print(f"{name}_rss_peak: {max(mb for _, mb in rss.samples):.0f} MB")
@@ -141,6 +146,23 @@ def bench_photo_regions(folder: Path) -> None:
     print(f"photo_regions_photos_with_one: {len({r.photo for r in regions})} photos")
 
 
+def bench_cutouts(n: int, cutouts: Path | None, real: Path, photos: Path, workers: int) -> None:
+    from fuzzyfire.cli import main as cli
+    from synth.library import cutout_library
+
+    with tempfile.TemporaryDirectory() as tmp:
+        if cutouts is None:
+            cutouts = Path(tmp) / "cutouts"
+            t = time.perf_counter()
+            if cli(["synth", "cutouts", str(real), "--split", "train", "--out", str(cutouts)]) != 0:
+                raise SystemExit(f"could not cut flames from {real}")
+            print(f"cutouts_from_train_split: {time.perf_counter() - t:.1f} s")
+        library = cutout_library(cutouts)
+        cfg = Method2Config(n=n, width=416, height=416, scenes=0, backgrounds=(photos,), background_holdout=0.25,
+                            images_per_view=2, flames=FlameLibraryConfig(source="cutouts"))  # fmt: skip
+        bench_run("method2_cutouts", lambda out: run_method2(cfg, library, out, workers=workers), n, "416x416")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--n", type=int, default=1000, help="images per Method run")
@@ -151,6 +173,7 @@ def main() -> None:
     ap.add_argument("--streets", type=int, default=8, help="kit streets for --only streets (default 8)")
     photos = kits.parent / "fire-free"
     ap.add_argument("--photos", type=Path, default=photos, help=f"--only photo_regions: photos (default {photos})")
+    ap.add_argument("--cutouts", type=Path, help="--only cutouts: a synth cutouts folder (default: cut them here)")
     ap.add_argument(
         "--workers", type=int, default=0, help="image processes of the Method runs (default 0 = one per core)"
     )
@@ -164,6 +187,8 @@ def main() -> None:
         bench_flames()
     if "photo_regions" in only:
         bench_photo_regions(args.photos)
+    if "cutouts" in only:
+        bench_cutouts(args.n, args.cutouts, kits.parent / "fire-cctv-416", args.photos, workers)
     if not only & {"composite", "method2", "method1", "streets"}:
         return
     t = time.perf_counter()
