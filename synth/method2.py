@@ -71,8 +71,8 @@ class Method2Config:
     # flames: hard negatives of the user's own kind; None = ``negatives`` (frames and other places keep that)
     flame_height_m: tuple[float, float] = (0.3, 2.5)  # flame height in the scene, metres
     separate_flames: bool = False  # on a site (photo, frame, panorama) each flame keeps clear of the flames placed
-    # before it: no two flames' mask boxes overlap (one that would is not drawn) (5 % of fire-cctv-416's train box pairs in an image overlap, 20 % of a
-    # cut-out pool's flames did); off = pools made before this key
+    # before it: no two flames' mask boxes overlap, one that would is not drawn (5 % of fire-cctv-416's train box
+    # pairs in an image overlap, 20 % of a cut-out pool's flame pairs did); off = pools made before this key
     flame_jitter: bool = False  # each flame mirrored or not, its width stretched 0.75-1.33x, hue and saturation
     # turned a little (synth.jitter): one cut-out pasted twice is two flames; off = pools made before this key
     flame_heights: Literal["uniform", "log"] = "uniform"  # how a height is drawn in flame_height_m: uniform in metres
@@ -154,7 +154,8 @@ def plan_flames(
     site (``avoid`` given: a photo or panorama, :mod:`synth.sites`) only at pixels whose depth is > 0 (the ground)
     and never over the ``avoid`` boxes [x, y, w, h] (:func:`kept_clear`); or,
     for a ``cfg.closeup`` share of the fire images, one flame filling ``cfg.closeup_height`` of the frame with
-    its base near the bottom edge (a fire seen from close by; the part outside the frame is cut off). No flame
+    its base near the bottom edge (a fire seen from close by; the part outside the frame is cut off). On a site with
+    ``cfg.separate_flames`` each flame also keeps clear of the flames before it (:func:`mask_box`). No flame
     (an empty list) with probability ``negatives`` (default ``cfg.negatives``; per view: :func:`negative_share`)."""
     if rng.random() < (cfg.negatives if negatives is None else negatives):
         return []
