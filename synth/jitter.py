@@ -33,10 +33,6 @@ class Jitter:
     hue: float
     saturation: float
 
-    def to_json(self) -> dict:
-        return {"mirror": self.mirror, "stretch": round(self.stretch, 4), "hue": round(self.hue, 2),
-                "saturation": round(self.saturation, 4)}  # fmt: skip
-
 
 def draw_jitter(rng: np.random.Generator) -> Jitter:
     """A :class:`Jitter` from four draws of ``rng`` (always four: the draws after it do not move)."""
