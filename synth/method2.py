@@ -7,8 +7,8 @@ Image ``i`` uses view ``i // images_per_view`` (see :mod:`synth.views`) and its 
 ``default_rng([seed, 2, i])``, so any image can be (re)made alone: runs resume and are byte-reproducible.
 Distractors (:mod:`synth.distractors`), decoy pastes (:mod:`synth.decoys`) and the flames' paste edges and looks
 (:mod:`synth.blend`) draw from a second rng, ``default_rng([seed, 2, i, 1])``: turning them on keeps the flames,
-views and camera effects of every image, and the default config draws nothing from it. ``flame_jitter`` draws from
-a third, ``default_rng([seed, 2, i, 3])`` (:func:`varied`), and auto exposure from a fourth (:func:`metering`).
+views and camera effects of every image, and the default config draws nothing from it. Auto exposure draws from
+``default_rng([seed, 2, i, 2])`` (:func:`metering`), ``flame_jitter`` from ``default_rng([seed, 2, i, 3])`` (:func:`varied`).
 """
 
 from __future__ import annotations
