@@ -92,6 +92,17 @@ STUDY = [
 PHOTOS = ["synth.method2.backgrounds=[../../shared/data/fire-free]", "synth.method2.background_holdout=0.25"]
 #: Half of the images carry 1-2 fire-like regions cut from those photos, unboxed.
 PHOTO_DISTRACTORS = ["synth.method2.distractors.share=0.5", "synth.method2.distractors.kinds=[photo]"]
+#: ASAE: own frames and own cut-outs, half the fire-free photos with flames, photo distractors, auto exposure
+#: (the best own-cut-out pool of the AMD machine; the base of the variants that add one key to it).
+ASAE = [
+    *PHOTOS,
+    "synth.method2.photo_negatives=0.5",
+    "synth.method2.own_frames=1.0",
+    "synth.method2.flames.source=cutouts",
+    *PHOTO_DISTRACTORS,
+    "synth.method2.auto_exposure=true",
+]
+
 VARIANTS = {
     "flat": ["synth.method2.never_darken=false", "synth.method2.flames.texture=0"],
     "look": [],
@@ -181,39 +192,17 @@ VARIANTS = {
         *PHOTO_DISTRACTORS,
         "synth.method2.auto_exposure=true",
     ],
-    "own_frames_cutouts_half_photo_negatives_photo_distractors_auto_exposure": [
-        *PHOTOS,
-        "synth.method2.photo_negatives=0.5",
-        "synth.method2.own_frames=1.0",
-        "synth.method2.flames.source=cutouts",
-        *PHOTO_DISTRACTORS,
-        "synth.method2.auto_exposure=true",
-    ],
+    "own_frames_cutouts_half_photo_negatives_photo_distractors_auto_exposure": ASAE,
     "own_frames_cutouts_half_photo_negatives_photo_distractors_auto_exposure_log_heights": [
-        *PHOTOS,
-        "synth.method2.photo_negatives=0.5",
-        "synth.method2.own_frames=1.0",
-        "synth.method2.flames.source=cutouts",
-        *PHOTO_DISTRACTORS,
-        "synth.method2.auto_exposure=true",
+        *ASAE,
         "synth.method2.flame_heights=log",
     ],
     "own_frames_cutouts_half_photo_negatives_photo_distractors_auto_exposure_jitter": [
-        *PHOTOS,
-        "synth.method2.photo_negatives=0.5",
-        "synth.method2.own_frames=1.0",
-        "synth.method2.flames.source=cutouts",
-        *PHOTO_DISTRACTORS,
-        "synth.method2.auto_exposure=true",
+        *ASAE,
         "synth.method2.flame_jitter=true",
     ],
     "own_frames_cutouts_half_photo_negatives_photo_distractors_auto_exposure_separate": [
-        *PHOTOS,
-        "synth.method2.photo_negatives=0.5",
-        "synth.method2.own_frames=1.0",
-        "synth.method2.flames.source=cutouts",
-        *PHOTO_DISTRACTORS,
-        "synth.method2.auto_exposure=true",
+        *ASAE,
         "synth.method2.separate_flames=true",
     ],
     "own_frames_cutouts_half_photo_negatives_photo_distractors_4": [

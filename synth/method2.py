@@ -220,10 +220,20 @@ def capped_height(cfg: Method2Config, seq: SpriteSequence, sprite: Sprite, flame
 def flame_extent(sprite: Sprite) -> tuple[int, int]:
     """(width, height) in sprite pixels of the box of the sprite's flame mask (the sprite's size when the mask is
     empty): what a flame's size in the scene refers to (smoke above it is not the flame)."""
-    rows, cols = np.nonzero(sprite.mask.any(axis=1))[0], np.nonzero(sprite.mask.any(axis=0))[0]
-    if not rows.size:
+    span = mask_span(sprite)
+    if span is None:
         return sprite.size
-    return int(cols[-1] - cols[0] + 1), int(rows[-1] - rows[0] + 1)
+    c0, r0, c1, r1 = span
+    return c1 - c0 + 1, r1 - r0 + 1
+
+
+def mask_span(sprite: Sprite) -> tuple[int, int, int, int] | None:
+    """(first column, first row, last column, last row), inclusive sprite pixels, of the sprite's flame mask; None
+    when the mask is empty."""
+    rows, cols = np.flatnonzero(sprite.mask.any(axis=1)), np.flatnonzero(sprite.mask.any(axis=0))
+    if not rows.size:
+        return None
+    return int(cols[0]), int(rows[0]), int(cols[-1]), int(rows[-1])
 
 
 def sprite_pixels(sprite: Sprite, flame_px: int) -> tuple[int, int]:
@@ -252,10 +262,8 @@ def site_spot(
     for _ in range(tries):
         by, bx = divmod(int(ground[rng.integers(len(ground))]), cfg.width)
         hpx = max(int(fy * flame_height(cfg, rng) / float(depth[by, bx])), 12)
-        x0, y0, wpx, hpx = flame_box(bx, by, hpx, flame_size)
-        if hpx <= SITE_MAX_HEIGHT * cfg.height and not any(
-            x0 < ax + aw and ax < x0 + wpx and y0 < ay + ah and ay < by for ax, ay, aw, ah in avoid
-        ):
+        box = flame_box(bx, by, hpx, flame_size)
+        if hpx <= SITE_MAX_HEIGHT * cfg.height and not overlaps(box, avoid):
             return bx, by, hpx
     return None
 
@@ -263,13 +271,13 @@ def site_spot(
 def mask_box(p: Placement) -> list[int]:
     """[x, y, w, h] image pixels covering the flame mask of placement ``p`` (its sprite's mask box scaled to the
     placement, rounded outwards)."""
-    sw, sh = p.sprite.size
-    rows, cols = np.flatnonzero(p.sprite.mask.any(axis=1)), np.flatnonzero(p.sprite.mask.any(axis=0))
-    if not rows.size:
+    span = mask_span(p.sprite)
+    if span is None:
         return [p.x, p.y, p.width, p.height]
-    sx, sy = p.width / sw, p.height / sh
-    x0, y0 = p.x + int(np.floor(cols[0] * sx)), p.y + int(np.floor(rows[0] * sy))
-    x1, y1 = p.x + int(np.ceil((cols[-1] + 1) * sx)), p.y + int(np.ceil((rows[-1] + 1) * sy))
+    c0, r0, c1, r1 = span
+    sx, sy = p.width / p.sprite.size[0], p.height / p.sprite.size[1]
+    x0, y0 = p.x + int(np.floor(c0 * sx)), p.y + int(np.floor(r0 * sy))
+    x1, y1 = p.x + int(np.ceil((c1 + 1) * sx)), p.y + int(np.ceil((r1 + 1) * sy))
     return [x0, y0, x1 - x0, y1 - y0]
 
 
@@ -453,13 +461,13 @@ def source_box(p: Placement, part: NDArray[np.bool_]) -> list[int]:
     :func:`synth.library.cutout_library` with ``canvas``), scaled as the placement scales the sprite. A flame seen
     whole gets its placed canvas (clipped to the image); a partly hidden one keeps the margins of its seen sides."""
     sw, sh = p.sprite.size
-    rows, cols = np.flatnonzero(p.sprite.mask.any(axis=1)), np.flatnonzero(p.sprite.mask.any(axis=0))
+    c0, r0, c1, r1 = mask_span(p.sprite) or (0, 0, sw - 1, sh - 1)  # a kept flame has mask pixels
     sx, sy = p.width / sw, p.height / sh
     x, y, w, h = (int(v) for v in mask_to_xywh(part))
     height, width = part.shape
-    x0, y0 = max(int(round(x - cols[0] * sx)), 0), max(int(round(y - rows[0] * sy)), 0)
-    x1 = min(int(round(x + w + (sw - 1 - cols[-1]) * sx)), width)
-    y1 = min(int(round(y + h + (sh - 1 - rows[-1]) * sy)), height)
+    x0, y0 = max(int(round(x - c0 * sx)), 0), max(int(round(y - r0 * sy)), 0)
+    x1 = min(int(round(x + w + (sw - 1 - c1) * sx)), width)
+    y1 = min(int(round(y + h + (sh - 1 - r1) * sy)), height)
     return [x0, y0, x1 - x0, y1 - y0]
 
 
