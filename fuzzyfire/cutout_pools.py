@@ -50,11 +50,15 @@ PoolKey = tuple[str, str, int]
 
 def simulated(cfg: Method2Config) -> Method2Config:
     """``cfg`` with simulated flames on its own places only: the experiment's shared pool (the same identity as a
-    config without ``flames.source``, ``own_frames``, ``cutout_box`` and ``cutout_max_upscale``), which R0 mixtures
+    config without ``flames.source`` and its cut-out keys, ``own_frames``, ``cutout_box`` and ``cutout_max_upscale``), which R0 mixtures
     and the report's samples and gap use."""
     default = type(cfg.flames)()
     flames = replace(
-        cfg.flames, source="simulated", cutout_share=default.cutout_share, cutout_max_fill=default.cutout_max_fill
+        cfg.flames,
+        source="simulated",
+        cutout_share=default.cutout_share,
+        cutout_max_fill=default.cutout_max_fill,
+        cutout_feather=default.cutout_feather,
     )
     default_cfg = type(cfg)
     return replace(

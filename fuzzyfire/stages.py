@@ -176,7 +176,7 @@ LATER_KEYS = (
 )  # fmt: skip
 
 #: Keys of a pool's ``flames`` added after pools were made; left out of its identity while at their default.
-LATER_FLAME_KEYS = ("source", "cutout_share", "texture", "cutout_max_fill", "rising_smoke", "exposed")
+LATER_FLAME_KEYS = ("source", "cutout_share", "texture", "cutout_max_fill", "rising_smoke", "exposed", "cutout_feather")
 
 
 def synth_stage(root: Path, method: str, cfg: Any, base: Path, cutouts: Stage | None = None) -> tuple[Stage, DataRef]:
@@ -186,7 +186,7 @@ def synth_stage(root: Path, method: str, cfg: Any, base: Path, cutouts: Stage | 
     moved to another folder or machine finds its pools (and runs) again. ``cutouts``: a stage of real flame
     cut-outs (:mod:`fuzzyfire.cutout_pools`) for a ``flames.source`` cutouts | both pool, named
     ``<method>-cutouts-<hash>``; its hash enters the pool's identity. The pool is made in one process per core."""
-    from synth.library import build_library, cutout_library
+    from synth.library import build_library
     from synth.method1 import run_method1
     from synth.method2 import run_method2
 
@@ -210,13 +210,21 @@ def synth_stage(root: Path, method: str, cfg: Any, base: Path, cutouts: Stage | 
         {"kind": method, "config": {**by_path, **files, **flames}},
         lambda out: runner(
             cfg,
-            build_library(cfg.flames, cutout_library(cutouts.folder, _canvas(cfg)) if cutouts else ()),
+            build_library(cfg.flames, _cutout_library(cfg, cutouts) if cutouts else ()),
             out,
             workers=os.cpu_count() or 1,  # the same bytes from any number of processes
         ),  # fmt: skip
         legacy={"kind": method, "config": by_path} if files and not flames else None,  # pools made by path before
     )
     return stage, DataRef(stage.folder, {"kind": method, "hash": stage.hash}, "coco")
+
+
+def _cutout_library(cfg: Any, cutouts: Stage) -> list:
+    """The pool's real flames: the cut-outs of stage ``cutouts``, on their canvas with ``cutout_box: source``, faded
+    at the box sides their flames touch by ``flames.cutout_feather``."""
+    from synth.library import cutout_library
+
+    return cutout_library(cutouts.folder, _canvas(cfg), cfg.flames.cutout_feather)
 
 
 def _canvas(cfg: Any) -> bool:

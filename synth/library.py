@@ -13,8 +13,9 @@ from typing import Literal
 
 import numpy as np
 
+from synth.feather import feathered
 from synth.flames import GENERATORS, generate_sequence, sample_params
-from synth.sprites import SpriteSequence, load_library, load_rgba_folder
+from synth.sprites import SpriteSequence, crop_to_content, load_library, load_rgba_folder
 
 #: Where a library's flames come from (``FlameLibraryConfig.source``).
 FLAME_SOURCES: tuple[str, ...] = ("simulated", "cutouts", "both")
@@ -35,6 +36,7 @@ class FlameLibraryConfig:
     source: Literal["simulated", "cutouts", "both"] = "simulated"  # simulated (or folders) | real cut-outs | both
     cutout_share: float = 0.5  # source both: share of flames drawn from the cut-outs, 0..1
     cutout_max_fill: float = 1.0  # experiment's cut-outs: none whose mask fills more of its box (synth.cutouts.cut)
+    cutout_feather: float = 0.0  # cut-outs faded towards the box sides their flame touches, this share of the box
     texture: float = 0.0  # simulated flames' inner streaks and soft edge (synth.flames.streaks), 0..1; 0 = flat body
     rising_smoke: bool = False  # simulated flames' smoke only from the flame's middle up (synth.flames.rising)
     exposed: bool = False  # simulated flames coloured as a camera records fire: white cores, red edges (synth.colour)
@@ -50,6 +52,10 @@ class FlameLibraryConfig:
             raise ValueError(f"flames.texture must be in [0, 1), got {self.texture}")
         if not 0.0 < self.cutout_max_fill <= 1.0:
             raise ValueError(f"flames.cutout_max_fill must be in (0, 1], got {self.cutout_max_fill}")
+        if not 0.0 <= self.cutout_feather <= 0.5:
+            raise ValueError(f"flames.cutout_feather must be in [0, 0.5], got {self.cutout_feather}")
+        if self.source == "simulated" and self.cutout_feather:
+            raise ValueError("flames.cutout_feather softens real cut-outs: give it with source cutouts or both")
         if not 0.0 <= self.cutout_share <= 1.0:
             raise ValueError(f"flames.cutout_share must be in 0..1, got {self.cutout_share}")
         if self.source != "both" and self.cutout_share != FlameLibraryConfig.cutout_share:
@@ -104,14 +110,29 @@ def build_library(cfg: FlameLibraryConfig, cutouts: Sequence[SpriteSequence] = (
     return list(cutouts) + simulated
 
 
-def cutout_library(folder: Path, canvas: bool = False) -> list[SpriteSequence]:
+def cutout_library(folder: Path, canvas: bool = False, feather: float = 0.0) -> list[SpriteSequence]:
     """The sequence folders of a ``fuzzyfire synth cutouts`` output ``folder`` (:func:`synth.cutouts.write_cutouts`),
     each marked as cut-outs (``meta["generator"]`` = :data:`CUTOUT_GENERATOR`); each sprite cropped to its content
     (as a user's RGBA frames), or with ``canvas`` on the whole box it was cut from (Method 2's ``cutout_box:
-    source`` boxes a flame by it)."""
+    source`` boxes a flame by it). ``feather`` > 0: each sprite first faded towards the box sides its flame
+    touches (:func:`synth.feather.feathered`, ``flames.cutout_feather``), on its whole canvas."""
     subs = sorted(p for p in folder.iterdir() if p.is_dir())
-    seqs = [load_rgba_folder(sub, crop=not canvas) for sub in subs]
+    seqs = [load_rgba_folder(sub, crop=not canvas and not feather) for sub in subs]
+    if feather:
+        seqs = [_feathered(seq, feather, crop=not canvas) for seq in seqs]
     return [replace(seq, meta={**seq.meta, "generator": CUTOUT_GENERATOR}) for seq in seqs]
+
+
+def _feathered(seq: SpriteSequence, feather: float, crop: bool) -> SpriteSequence:
+    """``seq``'s whole-canvas sprites feathered (:func:`synth.feather.feathered`), each cropped to its content when
+    ``crop``; a sprite whose flame the feather fades out entirely is left out (a sequence keeps at least one)."""
+    sprites = []
+    for sprite in seq.sprites:
+        soft = feathered(sprite, feather)
+        soft = crop_to_content(soft) if crop else soft
+        if soft is not None and soft.mask.any():
+            sprites.append(soft)
+    return replace(seq, sprites=tuple(sprites) or seq.sprites[:1])
 
 
 def is_cutout(seq: SpriteSequence) -> bool:

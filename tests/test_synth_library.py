@@ -129,3 +129,31 @@ def test_cutouts_keep_the_box_they_were_cut_from_only_when_asked(tmp_path):
     assert [s.size for s in cropped[0].sprites] == [(21, 30), (21, 29)]  # the flame and a 1 px pad
     for a, b in zip(cropped[0].sprites, whole[0].sprites):
         assert a.mask.sum() == b.mask.sum()  # the same flame either way
+
+
+def test_feathered_cutouts_fade_where_the_box_cut_the_flame(tmp_path):
+    """``feather``: sprites faded on their whole canvas (the toy flames reach their box's bottom, not its other
+    sides), then cropped; 0 leaves the library as it was."""
+    from synth.sprites import write_png
+
+    folder = tmp_path / "cut"
+    (folder / "real-000").mkdir(parents=True)
+    for k in range(2):
+        rgba = np.zeros((40, 30, 4), np.uint8)
+        rgba[6 + k :, 5:24] = (255, 170, 40, 255)
+        write_png(folder / "real-000" / f"{k:05d}.png", rgba)
+    plain, soft = L.cutout_library(folder), L.cutout_library(folder, feather=0.25)
+    assert [s.meta["generator"] for s in soft] == [L.CUTOUT_GENERATOR]
+    assert [s.sprites[0].over.tobytes() for s in L.cutout_library(folder, feather=0.0)] == [
+        s.sprites[0].over.tobytes() for s in plain
+    ]
+    for a, b in zip(plain[0].sprites, soft[0].sprites):
+        assert a.size[0] == b.size[0] and b.mask.sum() < a.mask.sum()  # the cut bottom fades, the sides stay
+        middle = b.size[0] // 2
+        assert b.over[-1, middle, 3] < 10 and b.over[5, middle, 3] == 255 and b.over[5, 1, 3] == 255
+    whole = L.cutout_library(folder, canvas=True, feather=0.25)
+    assert {s.size for s in whole[0].sprites} == {(30, 40)}
+    with pytest.raises(ValueError, match="cutout_feather"):
+        L.FlameLibraryConfig(cutout_feather=0.2)  # simulated flames have no box sides
+    with pytest.raises(ValueError, match="cutout_feather"):
+        L.FlameLibraryConfig(source="cutouts", cutout_feather=0.7)
