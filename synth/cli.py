@@ -171,6 +171,7 @@ def _dataset_config(args: argparse.Namespace) -> dict:
         texture=_texture(args),
         rising_smoke=args.rising_smoke,
         exposed=args.exposed,
+        cutout_feather=args.cutout_feather,
     )
     return {
         "n": args.n,
@@ -497,6 +498,14 @@ def _dataset_arguments(p: argparse.ArgumentParser, photos: bool = False) -> None
         help="building kit folders, or a folder of them (Kenney City Kit Suburban, Retro Urban: synth/kits.py)",
     )
     p.add_argument("--flames", type=Path, nargs="*", help="sequence folders (synth flames output, or RGBA PNGs)")
+    p.add_argument(
+        "--cutout-feather",
+        type=float,
+        default=0.0,
+        metavar="F",
+        help="with --flames folders written by synth cutouts: fade each cut-out towards the sides of its box that its "
+        "flame runs into, over F (0..0.5) of the box (no hard rectangle edges; synth/feather.py; default 0)",
+    )
     p.add_argument(
         "--library",
         type=int,

@@ -54,8 +54,11 @@ class FlameLibraryConfig:
             raise ValueError(f"flames.cutout_max_fill must be in (0, 1], got {self.cutout_max_fill}")
         if not 0.0 <= self.cutout_feather <= 0.5:
             raise ValueError(f"flames.cutout_feather must be in [0, 0.5], got {self.cutout_feather}")
-        if self.source == "simulated" and self.cutout_feather:
-            raise ValueError("flames.cutout_feather softens real cut-outs: give it with source cutouts or both")
+        if self.source == "simulated" and self.cutout_feather and not self.folders:
+            raise ValueError(
+                "flames.cutout_feather softens real cut-outs: give it with source cutouts or both, or with "
+                "flames.folders written by fuzzyfire synth cutouts"
+            )
         if not 0.0 <= self.cutout_share <= 1.0:
             raise ValueError(f"flames.cutout_share must be in 0..1, got {self.cutout_share}")
         if self.source != "both" and self.cutout_share != FlameLibraryConfig.cutout_share:
@@ -103,11 +106,25 @@ def build_library(cfg: FlameLibraryConfig, cutouts: Sequence[SpriteSequence] = (
     if cfg.source == "cutouts":
         return list(cutouts)
     if cfg.folders:
-        simulated = load_library(list(cfg.folders))
+        simulated = _folders(cfg.folders, cfg.cutout_feather)
     else:
         args = (cfg.sequences, cfg.seed, cfg.frames, cfg.keep_every, cfg.rare, cfg.generator, cfg.texture)
         simulated = procedural_library(*args, cfg.rising_smoke, cfg.exposed)
     return list(cutouts) + simulated
+
+
+def _folders(folders: Sequence[Path], feather: float) -> list[SpriteSequence]:
+    """The sequences of ``folders`` (:func:`synth.sprites.load_library`); with ``feather`` > 0 each must be a
+    ``fuzzyfire synth cutouts`` output, loaded by :func:`cutout_library` with that feather (ValueError if not)."""
+    if not feather:
+        return load_library(list(folders))
+    for folder in folders:
+        if not (folder / "cutouts.json").is_file():
+            raise ValueError(
+                f"{folder}: holds no cutouts.json, so not real cut-outs to feather (flames.cutout_feather, "
+                "--cutout-feather); write them with fuzzyfire synth cutouts"
+            )
+    return [seq for folder in folders for seq in cutout_library(folder, feather=feather)]
 
 
 def cutout_library(folder: Path, canvas: bool = False, feather: float = 0.0) -> list[SpriteSequence]:

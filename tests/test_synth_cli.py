@@ -116,6 +116,28 @@ def test_method2_on_photographs(tmp_path, capsys):
     assert json.loads(capsys.readouterr().out)["mean_iou"] == 1.0
 
 
+def test_method2_feathers_a_users_cutouts_on_photographs(tmp_path, capsys):
+    """--cutout-feather with a synth cutouts folder: pasted flames fade where their box cut them, boxes stay exact."""
+    import numpy as np
+    from factories import write_image
+
+    from synth.cutouts import Cutout, write_cutouts
+
+    for k in range(2):
+        write_image(tmp_path / "photos" / f"p{k}.jpg", 200, 150, seed=k)
+    rgba = np.zeros((40, 24, 4), np.uint8)
+    rgba[..., :3], rgba[..., 3] = (255, 180, 60), 255  # a fire-lit rectangle filling its box
+    write_cutouts(iter([Cutout(rgba, "a.jpg", (0, 0, 24, 40), 1.0)] * 3), tmp_path / "cut")
+    out = tmp_path / "m2"
+    args = ["synth", "method2", "--n", "4", "--out", str(out), "--size", "96x64", "--backgrounds"]
+    assert main([*args, str(tmp_path / "photos"), "--flames", str(tmp_path / "cut"), "--cutout-feather", "0.2"]) == 0
+    manifest = json.loads((out / "manifest.json").read_text())
+    assert manifest["args"]["flames"]["cutout_feather"] == 0.2
+    capsys.readouterr()
+    assert main(["synth", "audit", str(out), "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["mean_iou"] == 1.0
+
+
 def _flames(tmp_path: Path, *extra: str) -> Path:
     flames = ["synth", "flames", "--out", str(tmp_path / "fl"), "--n", "1", "--frames", "60", "--keep-every", "30"]
     assert main([*flames, *extra]) == 0
@@ -150,6 +172,7 @@ def test_what_can_be_checked_fails_in_one_line_before_rendering(tmp_path, capsys
         (["--overwrite", "--library", "3"], "--library makes procedural flames, which --flames replaces"),
         (["--overwrite", "--rising-smoke"], "--rising-smoke shapes procedural flames, which --flames replaces"),
         (["--overwrite", "--exposed"], "--exposed colours procedural flames, which --flames replaces"),
+        (["--overwrite", "--cutout-feather", "0.2"], "holds no cutouts.json, so not real cut-outs to feather"),
         (["--overwrite", "--photo-negatives", "1"], "--photo-negatives is the share of --backgrounds photos left"),
         (["--overwrite", "--streets", "2"], "--streets needs --kits DIR"),
         (["--overwrite", "--kits", str(tmp_path)], "--kits are the building kits of --streets N"),
