@@ -205,6 +205,10 @@ VARIANTS = {
         *ASAE,
         "synth.method2.separate_flames=true",
     ],
+    "own_frames_cutouts_half_photo_negatives_photo_distractors_auto_exposure_feather": [
+        *ASAE,
+        "synth.method2.flames.cutout_feather=0.2",
+    ],
     "own_frames_cutouts_half_photo_negatives_photo_distractors_4": [
         *PHOTOS,
         "synth.method2.photo_negatives=0.5",
