@@ -63,7 +63,7 @@ def control_config(cfg: Method2Config) -> Method2Config:
     defaults = type(cfg.flames)
     flames = replace(simulated(cfg).flames, rising_smoke=defaults.rising_smoke)  # no decoy draws smoke
     if not cfg.blend.decoys:  # nothing of a flame shows in a control without decoys
-        flames = replace(flames, exposed=defaults.exposed)
+        flames = replace(flames, exposed=defaults.exposed, cluster=defaults.cluster)
     return type(cfg)(**kept, flames=flames, scenes=0, own_frames=1.0, negatives=1.0)
 
 

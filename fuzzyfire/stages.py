@@ -176,7 +176,16 @@ LATER_KEYS = (
 )  # fmt: skip
 
 #: Keys of a pool's ``flames`` added after pools were made; left out of its identity while at their default.
-LATER_FLAME_KEYS = ("source", "cutout_share", "texture", "cutout_max_fill", "rising_smoke", "exposed", "cutout_feather")
+LATER_FLAME_KEYS = (
+    "source",
+    "cutout_share",
+    "texture",
+    "cutout_max_fill",
+    "rising_smoke",
+    "exposed",
+    "cutout_feather",
+    "cluster",
+)
 
 
 def synth_stage(root: Path, method: str, cfg: Any, base: Path, cutouts: Stage | None = None) -> tuple[Stage, DataRef]:

@@ -13,6 +13,7 @@ from typing import Literal
 
 import numpy as np
 
+from synth.clusters import clustered_library
 from synth.feather import feathered
 from synth.flames import GENERATORS, generate_sequence, sample_params
 from synth.sprites import SpriteSequence, crop_to_content, load_library, load_rgba_folder
@@ -37,6 +38,7 @@ class FlameLibraryConfig:
     cutout_share: float = 0.5  # source both: share of flames drawn from the cut-outs, 0..1
     cutout_max_fill: float = 1.0  # experiment's cut-outs: none whose mask fills more of its box (synth.cutouts.cut)
     cutout_feather: float = 0.0  # cut-outs faded towards the box sides their flame touches, this share of the box
+    cluster: int = 1  # simulated fires of 1..cluster flames side by side on one base, boxed whole (synth.clusters)
     texture: float = 0.0  # simulated flames' inner streaks and soft edge (synth.flames.streaks), 0..1; 0 = flat body
     rising_smoke: bool = False  # simulated flames' smoke only from the flame's middle up (synth.flames.rising)
     exposed: bool = False  # simulated flames coloured as a camera records fire: white cores, red edges (synth.colour)
@@ -52,6 +54,10 @@ class FlameLibraryConfig:
             raise ValueError(f"flames.texture must be in [0, 1), got {self.texture}")
         if not 0.0 < self.cutout_max_fill <= 1.0:
             raise ValueError(f"flames.cutout_max_fill must be in (0, 1], got {self.cutout_max_fill}")
+        if not 1 <= self.cluster <= 8:
+            raise ValueError(f"flames.cluster must be 1..8 flames per fire, got {self.cluster}")
+        if self.source == "cutouts" and self.cluster != 1:
+            raise ValueError("flames.cluster groups simulated flames into fires: give it with source simulated or both")
         if not 0.0 <= self.cutout_feather <= 0.5:
             raise ValueError(f"flames.cutout_feather must be in [0, 0.5], got {self.cutout_feather}")
         if self.source == "simulated" and self.cutout_feather and not self.folders:
@@ -94,7 +100,8 @@ def procedural_library(
 
 def build_library(cfg: FlameLibraryConfig, cutouts: Sequence[SpriteSequence] = ()) -> list[SpriteSequence]:
     """The sequences ``cfg`` describes: ``source`` simulated: loaded from ``folders`` when given, else simulated;
-    cutouts: ``cutouts`` (:func:`cutout_library`); both: ``cutouts`` then the simulated ones. ValueError when
+    cutouts: ``cutouts`` (:func:`cutout_library`); both: ``cutouts`` then the simulated ones. The simulated (or
+    loaded) ones as fires of up to ``cfg.cluster`` flames (:func:`synth.clusters.clustered_library`). ValueError when
     ``cutouts`` are missing for a source that needs them or given to one that does not."""
     if cfg.source == "simulated" and cutouts:
         raise ValueError("cut-outs given to a flame library whose source is simulated")
@@ -110,7 +117,7 @@ def build_library(cfg: FlameLibraryConfig, cutouts: Sequence[SpriteSequence] = (
     else:
         args = (cfg.sequences, cfg.seed, cfg.frames, cfg.keep_every, cfg.rare, cfg.generator, cfg.texture)
         simulated = procedural_library(*args, cfg.rising_smoke, cfg.exposed)
-    return list(cutouts) + simulated
+    return list(cutouts) + clustered_library(simulated, cfg.cluster, cfg.seed)
 
 
 def _folders(folders: Sequence[Path], feather: float) -> list[SpriteSequence]:

@@ -34,7 +34,7 @@ from synth.library import FlameLibraryConfig, is_cutout, pick_sequence
 from synth.metering import draw_radiance, flame_share, mean_linear_luma, metered_gain
 from synth.photo_regions import Region
 from synth.schema import check_range, check_streets
-from synth.sprites import Sprite, SpriteSequence
+from synth.sprites import Sprite, SpriteSequence, mask_span
 from synth.staging import boxes_from_masks
 from synth.views import ViewCache
 from synth.visibility import delta_e, measure
@@ -225,15 +225,6 @@ def flame_extent(sprite: Sprite) -> tuple[int, int]:
         return sprite.size
     c0, r0, c1, r1 = span
     return c1 - c0 + 1, r1 - r0 + 1
-
-
-def mask_span(sprite: Sprite) -> tuple[int, int, int, int] | None:
-    """(first column, first row, last column, last row), inclusive sprite pixels, of the sprite's flame mask; None
-    when the mask is empty."""
-    rows, cols = np.flatnonzero(sprite.mask.any(axis=1)), np.flatnonzero(sprite.mask.any(axis=0))
-    if not rows.size:
-        return None
-    return int(cols[0]), int(rows[0]), int(cols[-1]), int(rows[-1])
 
 
 def sprite_pixels(sprite: Sprite, flame_px: int) -> tuple[int, int]:

@@ -71,6 +71,15 @@ class SpriteSequence:
     meta: Mapping[str, Any]
 
 
+def mask_span(sprite: Sprite) -> tuple[int, int, int, int] | None:
+    """(first column, first row, last column, last row), inclusive sprite pixels, of the sprite's flame mask; None
+    when the mask is empty."""
+    rows, cols = np.flatnonzero(sprite.mask.any(axis=1)), np.flatnonzero(sprite.mask.any(axis=0))
+    if not rows.size:
+        return None
+    return int(cols[0]), int(rows[0]), int(cols[-1]), int(rows[-1])
+
+
 def crop_to_content(sprite: Sprite, threshold: int = 2, pad: int = 1) -> Sprite | None:
     """The sprite cropped to pixels that show anything (alpha, emission or mask above ``threshold``), with
     ``pad`` pixels margin; None when it shows nothing."""
