@@ -172,6 +172,7 @@ def _dataset_config(args: argparse.Namespace) -> dict:
         rising_smoke=args.rising_smoke,
         exposed=args.exposed,
         cutout_feather=args.cutout_feather,
+        cluster=args.cluster,
     )
     return {
         "n": args.n,
@@ -498,6 +499,14 @@ def _dataset_arguments(p: argparse.ArgumentParser, photos: bool = False) -> None
         help="building kit folders, or a folder of them (Kenney City Kit Suburban, Retro Urban: synth/kits.py)",
     )
     p.add_argument("--flames", type=Path, nargs="*", help="sequence folders (synth flames output, or RGBA PNGs)")
+    p.add_argument(
+        "--cluster",
+        type=int,
+        default=1,
+        metavar="N",
+        help="each flame a fire of 1..N flames side by side on one base, boxed whole as annotators box a burning "
+        "region (synth/clusters.py; default 1: single flames)",
+    )
     p.add_argument(
         "--cutout-feather",
         type=float,

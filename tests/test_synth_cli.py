@@ -138,6 +138,16 @@ def test_method2_feathers_a_users_cutouts_on_photographs(tmp_path, capsys):
     assert json.loads(capsys.readouterr().out)["mean_iou"] == 1.0
 
 
+def test_method2_clusters_procedural_flames_into_fires(tmp_path, capsys):
+    out = tmp_path / "m2"
+    args = ["synth", "method2", "--n", "3", "--out", str(out), "--size", "64x48", "--scenes", "1", "--library", "1"]
+    assert main([*args, "--cluster", "3"]) == 0
+    assert json.loads((out / "manifest.json").read_text())["args"]["flames"]["cluster"] == 3
+    capsys.readouterr()
+    assert main(["synth", "audit", str(out), "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["mean_iou"] == 1.0
+
+
 def _flames(tmp_path: Path, *extra: str) -> Path:
     flames = ["synth", "flames", "--out", str(tmp_path / "fl"), "--n", "1", "--frames", "60", "--keep-every", "30"]
     assert main([*flames, *extra]) == 0
@@ -173,6 +183,7 @@ def test_what_can_be_checked_fails_in_one_line_before_rendering(tmp_path, capsys
         (["--overwrite", "--rising-smoke"], "--rising-smoke shapes procedural flames, which --flames replaces"),
         (["--overwrite", "--exposed"], "--exposed colours procedural flames, which --flames replaces"),
         (["--overwrite", "--cutout-feather", "0.2"], "holds no cutouts.json, so not real cut-outs to feather"),
+        (["--overwrite", "--cluster", "0"], "flames.cluster must be 1..8 flames per fire"),
         (["--overwrite", "--photo-negatives", "1"], "--photo-negatives is the share of --backgrounds photos left"),
         (["--overwrite", "--streets", "2"], "--streets needs --kits DIR"),
         (["--overwrite", "--kits", str(tmp_path)], "--kits are the building kits of --streets N"),
