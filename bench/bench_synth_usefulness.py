@@ -192,6 +192,15 @@ VARIANTS = {
         *PHOTO_DISTRACTORS,
         "synth.method2.auto_exposure=true",
     ],
+    "own_frames_exposed_half_photo_negatives_photo_distractors_auto_exposure_cluster": [
+        *PHOTOS,
+        "synth.method2.photo_negatives=0.5",
+        "synth.method2.own_frames=1.0",
+        "synth.method2.flames.exposed=true",
+        *PHOTO_DISTRACTORS,
+        "synth.method2.auto_exposure=true",
+        "synth.method2.flames.cluster=2",
+    ],
     "own_frames_cutouts_half_photo_negatives_photo_distractors_auto_exposure": ASAE,
     "own_frames_cutouts_half_photo_negatives_photo_distractors_auto_exposure_log_heights": [
         *ASAE,
