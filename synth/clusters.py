@@ -23,17 +23,12 @@ import numpy as np
 from numpy.typing import NDArray
 
 from synth.composite import scaled_layers
-from synth.sprites import Sprite, SpriteSequence, mask_span
+from synth.sprites import Sprite, SpriteSequence, flame_rect
 
 #: Heights of the other flames of a fire, share of the main flame's height (uniform).
 HEIGHTS = (0.4, 0.95)
 #: Distance between neighbouring flames' centres on one side, share of the main flame's width (uniform).
 SPACING = (0.35, 0.7)
-
-
-def flame_rect(sprite: Sprite) -> tuple[int, int, int, int]:
-    """:func:`synth.sprites.mask_span` of ``sprite``, its whole canvas when the mask is empty."""
-    return mask_span(sprite) or (0, 0, sprite.size[0] - 1, sprite.size[1] - 1)
 
 
 def merged_fire(flames: Sequence[Sprite], heights: Sequence[float], offsets: Sequence[float]) -> Sprite:

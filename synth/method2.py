@@ -34,7 +34,7 @@ from synth.library import FlameLibraryConfig, is_cutout, pick_sequence
 from synth.metering import draw_radiance, flame_share, mean_linear_luma, metered_gain
 from synth.photo_regions import Region
 from synth.schema import check_range, check_streets
-from synth.sprites import Sprite, SpriteSequence, mask_span
+from synth.sprites import Sprite, SpriteSequence, flame_rect, mask_span
 from synth.staging import boxes_from_masks
 from synth.views import ViewCache
 from synth.visibility import delta_e, measure
@@ -220,10 +220,7 @@ def capped_height(cfg: Method2Config, seq: SpriteSequence, sprite: Sprite, flame
 def flame_extent(sprite: Sprite) -> tuple[int, int]:
     """(width, height) in sprite pixels of the box of the sprite's flame mask (the sprite's size when the mask is
     empty): what a flame's size in the scene refers to (smoke above it is not the flame)."""
-    span = mask_span(sprite)
-    if span is None:
-        return sprite.size
-    c0, r0, c1, r1 = span
+    c0, r0, c1, r1 = flame_rect(sprite)
     return c1 - c0 + 1, r1 - r0 + 1
 
 
@@ -452,7 +449,7 @@ def source_box(p: Placement, part: NDArray[np.bool_]) -> list[int]:
     :func:`synth.library.cutout_library` with ``canvas``), scaled as the placement scales the sprite. A flame seen
     whole gets its placed canvas (clipped to the image); a partly hidden one keeps the margins of its seen sides."""
     sw, sh = p.sprite.size
-    c0, r0, c1, r1 = mask_span(p.sprite) or (0, 0, sw - 1, sh - 1)  # a kept flame has mask pixels
+    c0, r0, c1, r1 = flame_rect(p.sprite)  # a kept flame has mask pixels
     sx, sy = p.width / sw, p.height / sh
     x, y, w, h = (int(v) for v in mask_to_xywh(part))
     height, width = part.shape

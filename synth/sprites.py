@@ -80,6 +80,11 @@ def mask_span(sprite: Sprite) -> tuple[int, int, int, int] | None:
     return int(cols[0]), int(rows[0]), int(cols[-1]), int(rows[-1])
 
 
+def flame_rect(sprite: Sprite) -> tuple[int, int, int, int]:
+    """:func:`mask_span` of ``sprite``, its whole canvas when the mask is empty."""
+    return mask_span(sprite) or (0, 0, sprite.size[0] - 1, sprite.size[1] - 1)
+
+
 def crop_to_content(sprite: Sprite, threshold: int = 2, pad: int = 1) -> Sprite | None:
     """The sprite cropped to pixels that show anything (alpha, emission or mask above ``threshold``), with
     ``pad`` pixels margin; None when it shows nothing."""
