@@ -218,6 +218,14 @@ VARIANTS = {
         *ASAE,
         "synth.method2.flames.cutout_feather=0.2",
     ],
+    "own_frames_cutouts_half_photo_negatives_photo_distractors_auto_exposure_groups": [
+        *ASAE,
+        "synth.method2.flames.cutout_groups=true",
+    ],
+    "own_frames_cutouts_half_photo_negatives_photo_distractors_auto_exposure_camera_cctv": [
+        *ASAE,
+        "synth.method2.camera.cctv=0.5",
+    ],
     "own_frames_cutouts_half_photo_negatives_photo_distractors_4": [
         *PHOTOS,
         "synth.method2.photo_negatives=0.5",

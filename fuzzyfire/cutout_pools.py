@@ -59,6 +59,7 @@ def simulated(cfg: Method2Config) -> Method2Config:
         cutout_share=default.cutout_share,
         cutout_max_fill=default.cutout_max_fill,
         cutout_feather=default.cutout_feather,
+        cutout_groups=default.cutout_groups,
     )
     default_cfg = type(cfg)
     return replace(

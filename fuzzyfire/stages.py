@@ -185,6 +185,7 @@ LATER_FLAME_KEYS = (
     "exposed",
     "cutout_feather",
     "cluster",
+    "cutout_groups",
 )
 
 

@@ -172,6 +172,7 @@ def _dataset_config(args: argparse.Namespace) -> dict:
         rising_smoke=args.rising_smoke,
         exposed=args.exposed,
         cutout_feather=args.cutout_feather,
+        cutout_groups=args.cutout_groups,
         cluster=args.cluster,
     )
     return {
@@ -514,6 +515,13 @@ def _dataset_arguments(p: argparse.ArgumentParser, photos: bool = False) -> None
         metavar="F",
         help="with --flames folders written by synth cutouts: fade each cut-out towards the sides of its box that its "
         "flame runs into, over F (0..0.5) of the box (no hard rectangle edges; synth/feather.py; default 0)",
+    )
+    p.add_argument(
+        "--cutout-groups",
+        action="store_true",
+        help="Method 2, with --flames folders written by synth cutouts: a cut-out comes with the other cut-outs of its "
+        "image, where they sat and as large, each with its own box (a burning building boxed window by window; "
+        "synth/groups.py)",
     )
     p.add_argument(
         "--library",

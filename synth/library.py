@@ -6,6 +6,7 @@ supplies (``fuzzyfire experiment`` cuts them from each mixture's own real traini
 
 from __future__ import annotations
 
+import json
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -16,10 +17,13 @@ import numpy as np
 from synth.clusters import clustered_library
 from synth.feather import feathered
 from synth.flames import GENERATORS, generate_sequence, sample_params
-from synth.sprites import SpriteSequence, crop_to_content, load_library, load_rgba_folder
+from synth.sprites import SpriteSequence, content_rect, crop_sprite, load_library, load_rgba_folder
 
 #: Where a library's flames come from (``FlameLibraryConfig.source``).
 FLAME_SOURCES: tuple[str, ...] = ("simulated", "cutouts", "both")
+
+#: Where a cut-out sprite sat in its source image: (image, x, y) of its top-left, pixels.
+Origin = tuple[str, int, int]
 
 #: ``meta["generator"]`` of a cut-out sequence (:func:`cutout_library`).
 CUTOUT_GENERATOR = "cutouts"
@@ -38,6 +42,7 @@ class FlameLibraryConfig:
     cutout_share: float = 0.5  # source both: share of flames drawn from the cut-outs, 0..1
     cutout_max_fill: float = 1.0  # experiment's cut-outs: none whose mask fills more of its box (synth.cutouts.cut)
     cutout_feather: float = 0.0  # cut-outs faded towards the box sides their flame touches, this share of the box
+    cutout_groups: bool = False  # a cut-out comes with the other cut-outs of its image, where they sat (synth.groups)
     cluster: int = 1  # simulated fires of 1..cluster flames side by side on one base, boxed whole (synth.clusters)
     texture: float = 0.0  # simulated flames' inner streaks and soft edge (synth.flames.streaks), 0..1; 0 = flat body
     rising_smoke: bool = False  # simulated flames' smoke only from the flame's middle up (synth.flames.rising)
@@ -64,6 +69,11 @@ class FlameLibraryConfig:
             raise ValueError(
                 "flames.cutout_feather softens real cut-outs: give it with source cutouts or both, or with "
                 "flames.folders written by fuzzyfire synth cutouts"
+            )
+        if self.source == "simulated" and self.cutout_groups and not self.folders:
+            raise ValueError(
+                "flames.cutout_groups pastes real cut-outs with the others of their image: give it with source "
+                "cutouts or both, or with flames.folders written by fuzzyfire synth cutouts"
             )
         if not 0.0 <= self.cutout_share <= 1.0:
             raise ValueError(f"flames.cutout_share must be in 0..1, got {self.cutout_share}")
@@ -113,23 +123,24 @@ def build_library(cfg: FlameLibraryConfig, cutouts: Sequence[SpriteSequence] = (
     if cfg.source == "cutouts":
         return list(cutouts)
     if cfg.folders:
-        simulated = _folders(cfg.folders, cfg.cutout_feather)
+        simulated = _folders(cfg.folders, cfg.cutout_feather, cfg.cutout_groups)
     else:
         args = (cfg.sequences, cfg.seed, cfg.frames, cfg.keep_every, cfg.rare, cfg.generator, cfg.texture)
         simulated = procedural_library(*args, cfg.rising_smoke, cfg.exposed)
     return list(cutouts) + clustered_library(simulated, cfg.cluster, cfg.seed)
 
 
-def _folders(folders: Sequence[Path], feather: float) -> list[SpriteSequence]:
-    """The sequences of ``folders`` (:func:`synth.sprites.load_library`); with ``feather`` > 0 each must be a
-    ``fuzzyfire synth cutouts`` output, loaded by :func:`cutout_library` with that feather (ValueError if not)."""
-    if not feather:
+def _folders(folders: Sequence[Path], feather: float, groups: bool = False) -> list[SpriteSequence]:
+    """The sequences of ``folders`` (:func:`synth.sprites.load_library`); with ``feather`` > 0 or ``groups`` each
+    must be a ``fuzzyfire synth cutouts`` output, loaded by :func:`cutout_library` (with that feather; it knows
+    where each cut-out sat in its image) — ValueError if not."""
+    if not feather and not groups:
         return load_library(list(folders))
+    key = "flames.cutout_feather, --cutout-feather" if feather else "flames.cutout_groups, --cutout-groups"
     for folder in folders:
         if not (folder / "cutouts.json").is_file():
             raise ValueError(
-                f"{folder}: holds no cutouts.json, so not real cut-outs to feather (flames.cutout_feather, "
-                "--cutout-feather); write them with fuzzyfire synth cutouts"
+                f"{folder}: holds no cutouts.json, so not real cut-outs ({key}); write them with fuzzyfire synth cutouts"
             )
     return [seq for folder in folders for seq in cutout_library(folder, feather=feather)]
 
@@ -139,24 +150,56 @@ def cutout_library(folder: Path, canvas: bool = False, feather: float = 0.0) -> 
     each marked as cut-outs (``meta["generator"]`` = :data:`CUTOUT_GENERATOR`); each sprite cropped to its content
     (as a user's RGBA frames), or with ``canvas`` on the whole box it was cut from (Method 2's ``cutout_box:
     source`` boxes a flame by it). ``feather`` > 0: each sprite first faded towards the box sides its flame
-    touches (:func:`synth.feather.feathered`, ``flames.cutout_feather``), on its whole canvas."""
+    touches (:func:`synth.feather.feathered`, ``flames.cutout_feather``), on its whole canvas. ``meta["origins"]``:
+    per sprite (source image, x, y), the pixel of its source image at the sprite's top-left (from
+    ``cutouts.json``; None for a PNG it does not list): which cut-outs share an image, and where each sat."""
     subs = sorted(p for p in folder.iterdir() if p.is_dir())
     seqs = [load_rgba_folder(sub, crop=not canvas and not feather) for sub in subs]
     if feather:
         seqs = [_feathered(seq, feather, crop=not canvas) for seq in seqs]
-    return [replace(seq, meta={**seq.meta, "generator": CUTOUT_GENERATOR}) for seq in seqs]
+    boxes = _source_boxes(folder)
+    return [
+        replace(seq, meta={**seq.meta, "generator": CUTOUT_GENERATOR, "origins": _origins(seq, boxes)}) for seq in seqs
+    ]
+
+
+def _source_boxes(folder: Path) -> dict[str, tuple[str, list[float]]]:
+    """``"<sequence>/<png>"`` -> (source image, its box [x, y, w, h] px) of every cut-out in ``folder``'s
+    ``cutouts.json`` (none when the folder has no such file)."""
+    index = folder / "cutouts.json"
+    if not index.is_file():
+        return {}
+    return {row["png"]: (row["file"], row["box"]) for row in json.loads(index.read_text(encoding="utf-8"))}
+
+
+def _origins(seq: SpriteSequence, boxes: dict[str, tuple[str, list[float]]]) -> tuple[Origin | None, ...]:
+    """Per sprite of ``seq`` (loaded by :func:`synth.sprites.load_rgba_folder`: its kept ``files`` and
+    ``offsets``): (source image, x, y) of its top-left in the source image's pixels, or None when unlisted."""
+    out: list[Origin | None] = []
+    for name, (dx, dy) in zip(seq.meta["files"], seq.meta["offsets"], strict=True):
+        found = boxes.get(f"{seq.name}/{name}")
+        out.append(None if found is None else (found[0], int(found[1][0]) + dx, int(found[1][1]) + dy))
+    return tuple(out)
 
 
 def _feathered(seq: SpriteSequence, feather: float, crop: bool) -> SpriteSequence:
     """``seq``'s whole-canvas sprites feathered (:func:`synth.feather.feathered`), each cropped to its content when
-    ``crop``; a sprite whose flame the feather fades out entirely is left out (a sequence keeps at least one)."""
-    sprites = []
-    for sprite in seq.sprites:
+    ``crop``; a sprite whose flame the feather fades out entirely is left out (a sequence keeps at least one).
+    ``meta``'s ``files`` and ``offsets`` follow the sprites kept."""
+    sprites, files, offsets = [], [], []
+    for sprite, name in zip(seq.sprites, seq.meta["files"], strict=True):
         soft = feathered(sprite, feather)
-        soft = crop_to_content(soft) if crop else soft
-        if soft is not None and soft.mask.any():
+        rect = content_rect(soft) if crop else (0, 0, *soft.size)
+        if rect is None:
+            continue
+        soft = crop_sprite(soft, rect) if crop else soft
+        if soft.mask.any():
             sprites.append(soft)
-    return replace(seq, sprites=tuple(sprites) or seq.sprites[:1])
+            files.append(name)
+            offsets.append((int(rect[0]), int(rect[1])))
+    if not sprites:
+        sprites, files, offsets = [seq.sprites[0]], [seq.meta["files"][0]], [(0, 0)]
+    return replace(seq, sprites=tuple(sprites), meta={**seq.meta, "files": files, "offsets": offsets})
 
 
 def is_cutout(seq: SpriteSequence) -> bool:

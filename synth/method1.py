@@ -85,6 +85,8 @@ class Method1Config:
             raise ValueError(f"unknown box mode {self.box_mode!r}; choose one of {', '.join(BOX_MODES)}")
         if self.flames.source != "simulated":
             raise ValueError(f"flames.source {self.flames.source}: cut-out flames are for Method 2 pools only")
+        if self.flames.cutout_groups:
+            raise ValueError("flames.cutout_groups places the cut-outs of one image together: Method 2 pools only")
         if self.distractors.photo:
             raise ValueError("distractors of kind photo are cut from a Method 2 pool's fire-free photos (backgrounds)")
         if self.n < 1 or self.scenes < 0 or self.images_per_view < 1 or self.width < 16 or self.height < 16:

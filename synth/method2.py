@@ -29,6 +29,7 @@ from synth.decoys import plan_decoys
 from synth.distractors import DistractorConfig, draw_distractors, overlaps, plan_distractors
 from synth.effects import CameraConfig, Effects, apply_effects, expose, sample_effects, scale_light
 from synth.generate import generate
+from synth.groups import group_index, grouped
 from synth.jitter import draw_jitter, jittered, stretched_width
 from synth.library import FlameLibraryConfig, is_cutout, pick_sequence
 from synth.metering import draw_radiance, flame_share, mean_linear_luma, metered_gain
@@ -156,7 +157,9 @@ def plan_flames(
     and never over the ``avoid`` boxes [x, y, w, h] (:func:`kept_clear`); or,
     for a ``cfg.closeup`` share of the fire images, one flame filling ``cfg.closeup_height`` of the frame with
     its base near the bottom edge (a fire seen from close by; the part outside the frame is cut off). On a site with
-    ``cfg.separate_flames`` each flame also keeps clear of the flames before it (:func:`mask_box`). No flame
+    ``cfg.separate_flames`` each flame also keeps clear of the flames before it (:func:`mask_box`). With
+    ``cfg.flames.cutout_groups`` a real cut-out brings the other cut-outs of its image (:func:`synth.groups.grouped`;
+    beyond ``max_flames``, none over ``avoid``). No flame
     (an empty list) with probability ``negatives`` (default ``cfg.negatives``; per view: :func:`negative_share`)."""
     if rng.random() < (cfg.negatives if negatives is None else negatives):
         return []
@@ -164,6 +167,7 @@ def plan_flames(
     fy = render.intrinsics(yfov, cfg.width, cfg.height)[1, 1]
     keep_clear = list(avoid) if avoid is not None else None  # grows by each flame with separate_flames
     taken: list[list[int]] = []  # the flames' mask boxes so far (separate_flames)
+    groups = group_index(library) if cfg.flames.cutout_groups else None
     out = []
     for _ in range(1 if closeup else int(rng.integers(1, cfg.max_flames + 1))):
         seq = pick_sequence(library, cfg.flames, rng)
@@ -196,7 +200,11 @@ def plan_flames(
                 continue
             taken.append(box)
             keep_clear.append(box)
-        out.append((place, f"{seq.name}/{frame}"))
+        if groups is None:
+            out.append((place, f"{seq.name}/{frame}"))
+        else:  # the anchor, then the rest of its image's fire, none over what the view keeps clear
+            first, *rest = grouped(place, f"{seq.name}/{frame}", groups, cfg.width, cfg.height)
+            out += [first, *(m for m in rest if not overlaps(mask_box(m[0]), avoid or ()))]
     return out
 
 

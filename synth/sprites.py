@@ -85,16 +85,26 @@ def flame_rect(sprite: Sprite) -> tuple[int, int, int, int]:
     return mask_span(sprite) or (0, 0, sprite.size[0] - 1, sprite.size[1] - 1)
 
 
-def crop_to_content(sprite: Sprite, threshold: int = 2, pad: int = 1) -> Sprite | None:
-    """The sprite cropped to pixels that show anything (alpha, emission or mask above ``threshold``), with
-    ``pad`` pixels margin; None when it shows nothing."""
+def content_rect(sprite: Sprite, threshold: int = 2, pad: int = 1) -> tuple[int, int, int, int] | None:
+    """(x0, y0, x1, y1), sprite pixels, end exclusive: the pixels that show anything (alpha, emission or mask above
+    ``threshold``) with ``pad`` pixels margin, inside the sprite; None when it shows nothing."""
     visible = (sprite.over[..., 3] > threshold) | (sprite.emission.max(axis=-1) > threshold) | sprite.mask
     rows, cols = np.nonzero(visible.any(axis=1))[0], np.nonzero(visible.any(axis=0))[0]
     if rows.size == 0:
         return None
     h, w = sprite.mask.shape
-    y0, y1 = max(rows[0] - pad, 0), min(rows[-1] + 1 + pad, h)
-    x0, x1 = max(cols[0] - pad, 0), min(cols[-1] + 1 + pad, w)
+    return max(cols[0] - pad, 0), max(rows[0] - pad, 0), min(cols[-1] + 1 + pad, w), min(rows[-1] + 1 + pad, h)
+
+
+def crop_to_content(sprite: Sprite, threshold: int = 2, pad: int = 1) -> Sprite | None:
+    """The sprite cropped to :func:`content_rect`; None when it shows nothing."""
+    rect = content_rect(sprite, threshold, pad)
+    return None if rect is None else crop_sprite(sprite, rect)
+
+
+def crop_sprite(sprite: Sprite, rect: tuple[int, int, int, int]) -> Sprite:
+    """The part (x0, y0, x1, y1) of ``sprite`` (sprite pixels, end exclusive), copied."""
+    x0, y0, x1, y1 = (int(v) for v in rect)
     cut = (slice(y0, y1), slice(x0, x1))
     return Sprite(sprite.over[cut].copy(), sprite.emission[cut].copy(), sprite.mask[cut].copy())
 
@@ -182,21 +192,28 @@ def _read_over(folder: Path, i: int, shape: tuple[int, int]) -> NDArray[np.uint8
 def load_rgba_folder(folder: Path, crop: bool = True) -> SpriteSequence:
     """A user's RGBA sequence: every ``*.png`` in ``folder`` with an alpha channel, cropped to its content (or,
     ``crop`` False, each on its whole canvas: a real cut-out's canvas is the box it was cut from); frames with no
-    flame pixel are skipped."""
+    flame pixel are skipped. ``meta``: ``files``, the PNG of each kept sprite, and ``offsets``, the (x, y) of
+    each kept sprite's top-left in its PNG's pixels ((0, 0) on the whole canvas)."""
     paths = sorted(p for p in folder.glob("*.png") if p.is_file())
     if not paths:
         raise FileNotFoundError(f"{folder}: no sequence.json and no PNG frames")
-    sprites = []
+    sprites, files, offsets = [], [], []
     for path in paths:
         rgba = _read_png(path)
         if rgba.ndim != 3 or rgba.shape[2] != 4:
             raise ImageError(path, "has no alpha channel (RGBA PNG needed)")
-        cropped = crop_to_content(sprite_from_rgba(rgba)) if crop else sprite_from_rgba(rgba)
-        if cropped is not None and cropped.mask.any():
-            sprites.append(cropped)
+        whole = sprite_from_rgba(rgba)
+        rect = content_rect(whole) if crop else (0, 0, *whole.size)
+        if rect is None:
+            continue
+        sprite = crop_sprite(whole, rect) if crop else whole
+        if sprite.mask.any():
+            sprites.append(sprite)
+            files.append(path.name)
+            offsets.append((int(rect[0]), int(rect[1])))
     if not sprites:
         raise ImageError(folder, "no frame shows a flame (bright, opaque pixels)")
-    return SpriteSequence(folder.name, tuple(sprites), {"generator": "user-rgba", "files": [p.name for p in paths]})
+    return SpriteSequence(folder.name, tuple(sprites), {"generator": "user-rgba", "files": files, "offsets": offsets})
 
 
 def load_library(folders: Sequence[Path]) -> list[SpriteSequence]:

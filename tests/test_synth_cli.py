@@ -138,6 +138,32 @@ def test_method2_feathers_a_users_cutouts_on_photographs(tmp_path, capsys):
     assert json.loads(capsys.readouterr().out)["mean_iou"] == 1.0
 
 
+def test_method2_pastes_a_users_cutouts_with_their_image_mates(tmp_path, capsys):
+    """--cutout-groups with a synth cutouts folder: both boxes of one image come together, each boxed exactly."""
+    import numpy as np
+    from factories import write_image
+
+    from synth.cutouts import Cutout, write_cutouts
+
+    for k in range(2):
+        write_image(tmp_path / "photos" / f"p{k}.jpg", 200, 150, seed=k)
+    rgba = np.zeros((20, 12, 4), np.uint8)
+    rgba[2:18, 2:10] = (255, 180, 60, 255)
+    write_cutouts(iter([Cutout(rgba, "a.jpg", (0, 0, 12, 20), 1.0), Cutout(rgba, "a.jpg", (30, 4, 12, 20), 1.0)]),
+                  tmp_path / "cut")  # fmt: skip
+    args = ["synth", "method2", "--n", "4", "--size", "96x64", "--backgrounds", str(tmp_path / "photos"), "--flames"]
+    runs = {}
+    for name, extra in (("plain", []), ("groups", ["--cutout-groups"])):
+        assert main([*args, str(tmp_path / "cut"), "--out", str(tmp_path / name), *extra]) == 0
+        manifest = json.loads((tmp_path / name / "manifest.json").read_text())
+        runs[name] = sum(len(img["flames"]) for img in manifest["args"]["per_image"])
+        assert manifest["args"]["flames"]["cutout_groups"] is (name == "groups")
+        capsys.readouterr()
+        assert main(["synth", "audit", str(tmp_path / name), "--json"]) == 0
+        assert json.loads(capsys.readouterr().out)["mean_iou"] == 1.0
+    assert runs["groups"] > runs["plain"]
+
+
 def test_method2_clusters_procedural_flames_into_fires(tmp_path, capsys):
     out = tmp_path / "m2"
     args = ["synth", "method2", "--n", "3", "--out", str(out), "--size", "64x48", "--scenes", "1", "--library", "1"]
@@ -182,7 +208,11 @@ def test_what_can_be_checked_fails_in_one_line_before_rendering(tmp_path, capsys
         (["--overwrite", "--library", "3"], "--library makes procedural flames, which --flames replaces"),
         (["--overwrite", "--rising-smoke"], "--rising-smoke shapes procedural flames, which --flames replaces"),
         (["--overwrite", "--exposed"], "--exposed colours procedural flames, which --flames replaces"),
-        (["--overwrite", "--cutout-feather", "0.2"], "holds no cutouts.json, so not real cut-outs to feather"),
+        (
+            ["--overwrite", "--cutout-feather", "0.2"],
+            "holds no cutouts.json, so not real cut-outs (flames.cutout_feather",
+        ),
+        (["--overwrite", "--cutout-groups"], "holds no cutouts.json, so not real cut-outs (flames.cutout_groups"),
         (["--overwrite", "--cluster", "0"], "flames.cluster must be 1..8 flames per fire"),
         (["--overwrite", "--photo-negatives", "1"], "--photo-negatives is the share of --backgrounds photos left"),
         (["--overwrite", "--streets", "2"], "--streets needs --kits DIR"),

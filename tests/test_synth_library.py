@@ -157,3 +157,12 @@ def test_feathered_cutouts_fade_where_the_box_cut_the_flame(tmp_path):
         L.FlameLibraryConfig(cutout_feather=0.2)  # simulated flames have no box sides
     with pytest.raises(ValueError, match="cutout_feather"):
         L.FlameLibraryConfig(source="cutouts", cutout_feather=0.7)
+
+
+def test_cutout_groups_are_for_real_cutouts_in_method2_only():
+    with pytest.raises(ValueError, match="cutout_groups"):
+        L.FlameLibraryConfig(cutout_groups=True)  # simulated flames have no image mates
+    assert L.FlameLibraryConfig(source="cutouts", cutout_groups=True).cutout_groups
+    assert L.FlameLibraryConfig(folders=(Path("cut"),), cutout_groups=True).cutout_groups
+    with pytest.raises(ValueError, match="Method 2 pools only"):
+        Method1Config(flames=L.FlameLibraryConfig(folders=(Path("cut"),), cutout_groups=True))
