@@ -17,7 +17,7 @@ import numpy as np
 from synth.clusters import clustered_library
 from synth.feather import feathered
 from synth.flames import GENERATORS, generate_sequence, sample_params
-from synth.sprites import SpriteSequence, content_rect, crop_sprite, load_library, load_rgba_folder
+from synth.sprites import SpriteSequence, load_library, load_rgba_folder, shown_part
 
 #: Where a library's flames come from (``FlameLibraryConfig.source``).
 FLAME_SOURCES: tuple[str, ...] = ("simulated", "cutouts", "both")
@@ -188,15 +188,11 @@ def _feathered(seq: SpriteSequence, feather: float, crop: bool) -> SpriteSequenc
     ``meta``'s ``files`` and ``offsets`` follow the sprites kept."""
     sprites, files, offsets = [], [], []
     for sprite, name in zip(seq.sprites, seq.meta["files"], strict=True):
-        soft = feathered(sprite, feather)
-        rect = content_rect(soft) if crop else (0, 0, *soft.size)
-        if rect is None:
-            continue
-        soft = crop_sprite(soft, rect) if crop else soft
-        if soft.mask.any():
-            sprites.append(soft)
+        kept = shown_part(feathered(sprite, feather), crop)
+        if kept is not None:
+            sprites.append(kept[0])
             files.append(name)
-            offsets.append((int(rect[0]), int(rect[1])))
+            offsets.append(kept[1])
     if not sprites:
         sprites, files, offsets = [seq.sprites[0]], [seq.meta["files"][0]], [(0, 0)]
     return replace(seq, sprites=tuple(sprites), meta={**seq.meta, "files": files, "offsets": offsets})

@@ -102,6 +102,16 @@ def crop_to_content(sprite: Sprite, threshold: int = 2, pad: int = 1) -> Sprite 
     return None if rect is None else crop_sprite(sprite, rect)
 
 
+def shown_part(sprite: Sprite, crop: bool = True) -> tuple[Sprite, tuple[int, int]] | None:
+    """(``sprite`` cropped to :func:`content_rect` when ``crop``, else whole; (x, y) of that part's top-left in
+    ``sprite``), or None when the part holds no flame pixel."""
+    rect = content_rect(sprite) if crop else (0, 0, *sprite.size)
+    if rect is None:
+        return None
+    part = crop_sprite(sprite, rect) if crop else sprite
+    return (part, (int(rect[0]), int(rect[1]))) if part.mask.any() else None
+
+
 def crop_sprite(sprite: Sprite, rect: tuple[int, int, int, int]) -> Sprite:
     """The part (x0, y0, x1, y1) of ``sprite`` (sprite pixels, end exclusive), copied."""
     x0, y0, x1, y1 = (int(v) for v in rect)
@@ -202,15 +212,11 @@ def load_rgba_folder(folder: Path, crop: bool = True) -> SpriteSequence:
         rgba = _read_png(path)
         if rgba.ndim != 3 or rgba.shape[2] != 4:
             raise ImageError(path, "has no alpha channel (RGBA PNG needed)")
-        whole = sprite_from_rgba(rgba)
-        rect = content_rect(whole) if crop else (0, 0, *whole.size)
-        if rect is None:
-            continue
-        sprite = crop_sprite(whole, rect) if crop else whole
-        if sprite.mask.any():
-            sprites.append(sprite)
+        kept = shown_part(sprite_from_rgba(rgba), crop)
+        if kept is not None:
+            sprites.append(kept[0])
             files.append(path.name)
-            offsets.append((int(rect[0]), int(rect[1])))
+            offsets.append(kept[1])
     if not sprites:
         raise ImageError(folder, "no frame shows a flame (bright, opaque pixels)")
     return SpriteSequence(folder.name, tuple(sprites), {"generator": "user-rgba", "files": files, "offsets": offsets})
