@@ -1,5 +1,5 @@
-"""Dataset statistics: counts per split and class, negatives, box sizes (COCO small/medium/large), and a
-box-size histogram PNG."""
+"""Dataset statistics: counts per split and class, negatives, box sizes (COCO small/medium/large), boxes by how
+many share their image, and a box-size histogram PNG."""
 
 from __future__ import annotations
 
@@ -10,6 +10,9 @@ from typing import Any
 import numpy as np
 
 from curate.core.dataset import Dataset
+
+#: Buckets of :func:`crowding`: boxes whose image holds 1, 2, 3-4 or 5+ boxes.
+CROWDING: tuple[tuple[str, int, int], ...] = (("1", 1, 1), ("2", 2, 2), ("3-4", 3, 4), ("5+", 5, 2**31))
 
 #: COCO's area thresholds (pixels squared) between small / medium / large.
 SMALL_AREA = 32.0**2
@@ -52,7 +55,15 @@ def dataset_stats(ds: Dataset, unlabelled: frozenset[int] = frozenset()) -> dict
             "large": int((areas >= LARGE_AREA).sum()),
         },
         "crowd_boxes": sum(a.iscrowd for a in ds.annotations),
+        "boxes_by_crowding": crowding(ds),
     }
+
+
+def crowding(ds: Dataset) -> dict[str, int]:
+    """Boxes counted by how many boxes their image holds (:data:`CROWDING` buckets): a fire boxed patch by patch
+    (a burning building, window by window) puts many boxes in one image, and detectors merge or miss them."""
+    counts = Counter(len(boxes) for boxes in ds.annotations_by_image().values() if boxes)
+    return {name: sum(k * n for k, n in counts.items() if lo <= k <= hi) for name, lo, hi in CROWDING}
 
 
 def relative_box_sizes(ds: Dataset) -> dict[str, np.ndarray]:

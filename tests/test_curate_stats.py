@@ -17,6 +17,7 @@ def test_counts(tmp_path):
         "valid": {"images": 2, "boxes": 0, "negatives": 2, "no_label_file": 1, "empty_labels": 1},
     }
     assert sum(stats["box_sizes"].values()) == 3
+    assert stats["boxes_by_crowding"] == {"1": 1, "2": 2, "3-4": 0, "5+": 0}  # a.jpg holds two, b.jpg one
 
 
 def test_histogram_png(tmp_path):

@@ -84,6 +84,8 @@ def cmd_stats(args: argparse.Namespace) -> int:
     )
     print(f"boxes      {stats['boxes']}  " + "  ".join(f"{k} {v}" for k, v in stats["boxes_per_class"].items()))
     print("sizes      " + "  ".join(f"{k} {v}" for k, v in stats["box_sizes"].items()) + "  (COCO area buckets)")
+    crowd = "  ".join(f"{k} {v}" for k, v in stats["boxes_by_crowding"].items())
+    print(f"crowding   {crowd}  (boxes in images that hold 1, 2, 3-4, 5+ boxes)")
     for split, entry in stats["per_split"].items():
         print(f"split {split:<8} " + "  ".join(f"{k} {v}" for k, v in entry.items()))
     for note in (p for p in result.problems if p.code == "negatives-only"):
