@@ -1,8 +1,8 @@
 """Real fires of several boxes, pasted whole (``flames.cutout_groups``).
 
-Annotators box a burning building window by window and a spreading fire patch by patch: 41 % of the common test
-split's fire boxes sit in images with five or more of them, and a detector trained on single pasted flames merges
-such fires into one box or misses their small patches. With ``cutout_groups`` a real cut-out drawn for a flame
+Annotators box a burning building window by window and a spreading fire patch by patch: 35 % of the fire boxes
+of the shared curated set sit in images with five or more of them (``fuzzyfire stats``: crowding), and a detector
+trained on single pasted flames merges such fires into one box or misses their small patches. With ``cutout_groups`` a real cut-out drawn for a flame
 comes with the other cut-outs of its source image (:func:`synth.library.cutout_library`'s ``origins``), each
 moved and scaled with it so that the group keeps the layout and relative sizes it had in its image; each member
 is a placement of its own, so it keeps its own box. Nothing is drawn from an rng: the pool's other draws (places,
