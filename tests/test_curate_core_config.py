@@ -76,6 +76,33 @@ def test_invalid_yaml(tmp_path):
         load_config(tmp_path / "list.yaml", Outer)
 
 
+def test_a_file_extends_another_in_its_folder(tmp_path):
+    (tmp_path / "base.yaml").write_text(
+        "name: base\ninner: {epochs: 2, lr: 0.5}\nitems: [{mode: slow}]\ntags: {a: 1}\npath: a/b\n"
+    )
+    (tmp_path / "mid.yaml").write_text("extends: base.yaml\ninner: {epochs: 4}\nitems: []\n")
+    (tmp_path / "top.yaml").write_text("extends: mid.yaml\nname: top\ntags: {b: 2}\npath: null\n")
+    cfg = load_config(tmp_path / "top.yaml", Outer, ["inner.lr=0.25"])
+    assert cfg.name == "top" and cfg.inner == Inner(4, 0.25)  # mappings merge key by key, through the chain
+    assert cfg.items == () and cfg.path is None and cfg.tags == {"a": 1, "b": 2}  # a list or null replaces
+    assert load_config(tmp_path / "mid.yaml", Outer).inner == Inner(4, 0.5)  # the base file is only read
+
+
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [
+        ("extends: loop.yaml\nname: x\n", "extends itself through loop.yaml"),
+        ("extends: ../base.yaml\n", "expected the name of a .yaml file in the same folder"),
+        ("extends: [base.yaml]\n", "expected the name of a .yaml file in the same folder"),
+        ("extends: nowhere.yaml\n", "extends nowhere.yaml: no such file"),
+    ],
+)
+def test_extends_refuses_what_it_cannot_read(tmp_path, text, message):
+    (tmp_path / "loop.yaml").write_text(text)
+    with pytest.raises(ConfigError, match=message):
+        load_config(tmp_path / "loop.yaml", Outer)
+
+
 def test_shipped_configs_load():
     from curate.sources import MergeConfig
 

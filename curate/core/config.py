@@ -1,7 +1,8 @@
 """Typed configuration: commented YAML -> frozen dataclasses, once, at the boundary.
 
 Unknown keys, missing required keys and wrong types raise :class:`ConfigError` naming the key's path
-(``sources[1].format``). ``--set a.b=c`` overrides go through the same validation (values parsed as YAML).
+(``sources[1].format``). ``--set a.b=c`` overrides go through the same validation (values parsed as YAML). A file
+may ``extends:`` another in its folder and override some of its keys (:func:`read_yaml`).
 Supported field types: ``str int float bool Path``, ``Literal[...]``, ``Optional[T]``, ``list[T]``,
 ``tuple[T, ...]``, ``dict[str, T]`` and nested dataclasses.
 """
@@ -25,8 +26,17 @@ class ConfigError(ValueError):
 
 
 def load_config(path: Path | str, schema: type[T], overrides: Sequence[str] = ()) -> T:
-    """Read the YAML file ``path``, apply ``overrides`` (``a.b=value``), build ``schema``."""
-    path = Path(path)
+    """Read the YAML file ``path`` (with the files it ``extends``: :func:`read_yaml`), apply ``overrides``
+    (``a.b=value``), build ``schema``."""
+    return build_config(apply_overrides(read_yaml(Path(path)), overrides), schema)
+
+
+def read_yaml(path: Path, seen: tuple[Path, ...] = ()) -> dict[str, Any]:
+    """The mapping of the YAML file ``path``. A top-level ``extends: NAME.yaml`` names a file in the same folder
+    (so relative paths mean the same in both) whose keys this file's keys override: mappings merge key by key,
+    anything else (a list, a value, null) replaces; a chain of such files is read in turn, a cycle is refused."""
+    if path.resolve() in seen:
+        raise ConfigError(f"{path}: extends itself through {' -> '.join(p.name for p in seen)}")
     try:
         raw = yaml.safe_load(path.read_text(encoding="utf-8"))
     except yaml.YAMLError as exc:
@@ -34,7 +44,23 @@ def load_config(path: Path | str, schema: type[T], overrides: Sequence[str] = ()
     raw = {} if raw is None else raw
     if not isinstance(raw, dict):
         raise ConfigError(f"{path}: the top level must be a mapping of keys")
-    return build_config(apply_overrides(raw, overrides), schema)
+    base = raw.pop("extends", None)
+    if base is None:
+        return raw
+    if not isinstance(base, str) or Path(base).name != base or not base.endswith((".yaml", ".yml")):
+        raise ConfigError(f"{path}: extends: expected the name of a .yaml file in the same folder, got {base!r}")
+    if not (path.parent / base).is_file():
+        raise ConfigError(f"{path}: extends {base}: no such file in {path.parent}")
+    return merged(read_yaml(path.parent / base, (*seen, path.resolve())), raw)
+
+
+def merged(base: Mapping[str, Any], top: Mapping[str, Any]) -> dict[str, Any]:
+    """``base`` with ``top``'s keys over it: where both hold a mapping, merged the same way; else ``top``'s value."""
+    out = _deepcopy(dict(base))
+    for key, value in top.items():
+        both = isinstance(value, dict) and isinstance(out.get(key), dict)
+        out[key] = merged(out[key], value) if both else _deepcopy(value)
+    return out
 
 
 def build_config(raw: Mapping[str, Any], schema: type[T]) -> T:
