@@ -87,7 +87,7 @@ def cmd_score(args: argparse.Namespace) -> int:
     from curate.core.cocoeval import ClassMatchError
     from curate.core.commands import print_problems
     from eval.onnx_model import ModelError
-    from eval.score import ScoreError, error_pictures, score_errors, write_outputs
+    from eval.score import ScoreError, error_pictures, score_errors, score_found, write_outputs
 
     try:
         test = _load(args)
@@ -98,21 +98,23 @@ def cmd_score(args: argparse.Namespace) -> int:
     _report_problems(result)
     intervals = _intervals(result, args.ci, args.seed) if args.ci else {}
     errors = score_errors(result, args.alarm_conf) if args.errors else None
+    found = score_found(result, args.alarm_conf) if args.errors else None
     if args.out:
         files = write_outputs(result, args.out, intervals)
-        if errors is not None:
-            files["errors"] = errors.write(args.out)
+        if errors is not None and found is not None:
+            files["errors"] = errors.write(args.out, {"boxes_found": found.to_dict()})
             files["error_pictures"], not_drawn = error_pictures(result, args.out)
             if not_drawn:
                 print_problems(not_drawn, sys.stderr, limit=20)
         print(f"wrote {', '.join(str(p) for p in files.values())}", file=sys.stderr)
     if args.json:
-        extra = {"errors": errors.to_dict()} if errors is not None else {}
+        extra = {"errors": errors.to_dict(), "boxes_found": found.to_dict()} if errors and found else {}
         print(json.dumps({**result.metrics.to_dict(), **intervals, **extra}, indent=1))
     else:
         _print_text(result, intervals, _split_label(test))
-        if errors is not None:
+        if errors is not None and found is not None:
             _print_errors(errors)
+            _print_found(found)
     return 0
 
 
@@ -125,6 +127,21 @@ def _print_errors(errors) -> None:  # errors: eval.errors.ErrorBreakdown
             f"alarms {errors.false_alarms_per_100:.1f} detections >= {errors.alarm_conf:g} per 100 images without "
             f"fire ({100 * errors.alarm_image_share:.0f}% of the {errors.negatives} such images raise one)"
         )
+
+
+def _print_found(found) -> None:  # found: eval.found.BoxesFound
+    if not found.boxes:
+        return
+    o = found.outcomes
+    poor = o["merged"] + o["split"] + o["too_large"] + o["too_small"]
+    print(
+        f"boxes  at confidence >= {found.conf:g}: {o['found']} of {found.boxes} found at IoU >= 0.5 "
+        f"({100 * o['found'] / found.boxes:.0f}%), {poor} boxed poorly (merged with neighbours {o['merged']}, split "
+        f"{o['split']}, too large {o['too_large']}, too small {o['too_small']}), {o['missed']} missed"
+    )
+    for label, table in (("by size (px)", found.by_size), ("by boxes in image", found.by_crowding)):
+        cells = "  ".join(f"{k} {100 * f / n:.0f}% of {n}" for k, (f, n) in table.items() if n)
+        print(f"       found {label:<17} {cells}")
 
 
 def _models(text: str) -> list[Path]:
@@ -259,11 +276,15 @@ def register(sub: argparse._SubParsersAction) -> None:
         "--errors",
         action="store_true",
         help="TIDE-style breakdown: AP50 lost to classification, localisation, both, duplicate, background and "
-        "missed errors, and false alarms on images without fire; with --out, pictures of the worst false alarms "
-        "and misses in OUT/errors/",
+        "missed errors, false alarms on images without fire, and which boxes are found at --alarm-conf (merged "
+        "with neighbours, split, too large or small, missed; by size and by boxes per image: eval/found.py); "
+        "with --out, pictures of the worst false alarms and misses in OUT/errors/",
     )
     p.add_argument(
-        "--alarm-conf", type=float, default=0.25, help="confidence of a false alarm for --errors (default 0.25)"
+        "--alarm-conf",
+        type=float,
+        default=0.25,
+        help="confidence of a false alarm and of a found box for --errors (default 0.25)",
     )
     p.add_argument("--json", action="store_true", help='print {"AP", "AP50", "images", "boxes", "per_class", ...}')
     p.add_argument(

@@ -59,10 +59,11 @@ class ErrorBreakdown:
     false_alarms_per_100: float | None
     alarm_image_share: float | None
 
-    def write(self, folder: Path) -> Path:
-        """Write :meth:`to_dict` as ``folder/errors.json`` (:data:`ERRORS_FILE`); returns its path."""
+    def write(self, folder: Path, extra: dict[str, Any] | None = None) -> Path:
+        """Write :meth:`to_dict` (and ``extra`` keys) as ``folder/errors.json`` (:data:`ERRORS_FILE`); returns its
+        path."""
         path = folder / ERRORS_FILE
-        path.write_text(json.dumps(self.to_dict(), indent=1) + "\n", encoding="utf-8")
+        path.write_text(json.dumps({**self.to_dict(), **(extra or {})}, indent=1) + "\n", encoding="utf-8")
         return path
 
     def to_dict(self) -> dict[str, Any]:
@@ -191,7 +192,7 @@ def _classify(dataset: Dataset, records: Sequence[dict[str, Any]], cats: set[int
         dets = np.array([records[i]["bbox"] for i in idx], dtype=np.float64).reshape(-1, 4)
         iou = box_iou_xyxy(xywh_to_xyxy(dets), xywh_to_xyxy(boxes)) if len(anns) else np.zeros((len(idx), 0))
         crowd = np.array([a.iscrowd for a in anns], dtype=bool)
-        ioa = _ioa(dets, boxes) if crowd.any() else iou
+        ioa = area_inside(dets, boxes) if crowd.any() else iou
         for row, i in enumerate(idx):
             error = _one(row, records[i]["category_id"], anns, iou, ioa, crowd, matched)
             if error is not None:
@@ -236,8 +237,9 @@ def _one(
     return "background", None
 
 
-def _ioa(dets: NDArray[np.float64], boxes: NDArray[np.float64]) -> NDArray[np.float64]:
-    """(D, G) intersection over the detection's area: how COCO matches a detection to a crowd box."""
+def area_inside(dets: NDArray[np.float64], boxes: NDArray[np.float64]) -> NDArray[np.float64]:
+    """(D, G) share of each [x, y, w, h] box of ``dets`` that lies inside each of ``boxes``: intersection over the
+    first's area (how COCO matches a detection to a crowd box)."""
     x0 = np.maximum(dets[:, None, 0], boxes[None, :, 0])
     y0 = np.maximum(dets[:, None, 1], boxes[None, :, 1])
     x1 = np.minimum(dets[:, None, 0] + dets[:, None, 2], boxes[None, :, 0] + boxes[None, :, 2])

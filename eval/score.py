@@ -18,6 +18,7 @@ from curate.core.load import SplitError, pick_split
 from curate.core.problems import Problem
 from eval.error_pictures import WORST, write_error_pictures
 from eval.errors import ALARM_CONF, ErrorBreakdown, error_breakdown
+from eval.found import BoxesFound, boxes_found
 from eval.onnx_model import ModelSpec, OnnxDetector
 from eval.plots import plot_pr_curves, pr_curves_from_eval
 from eval.predict import PredictOptions, predict_dataset
@@ -148,6 +149,13 @@ def score_errors(result: ScoreResult, alarm_conf: float = ALARM_CONF) -> ErrorBr
     """The error breakdown (:mod:`eval.errors`) of a scored result, over the images and classes it was scored on."""
     scored, cat_ids = _scored(result)
     return error_breakdown(scored, result.records, cat_ids, alarm_conf)
+
+
+def score_found(result: ScoreResult, conf: float = ALARM_CONF) -> BoxesFound:
+    """Which ground-truth boxes a scored result finds at ``conf`` (:mod:`eval.found`), over the images and
+    classes it was scored on."""
+    scored, cat_ids = _scored(result)
+    return boxes_found(scored, result.records, cat_ids, conf)
 
 
 def error_pictures(result: ScoreResult, out: Path, count: int = WORST) -> tuple[Path, list[Problem]]:

@@ -54,6 +54,17 @@ def write_yolo_dataset(root: Path, names: tuple[str, ...] = ("fire", "smoke")) -
     return rows
 
 
+def planted_dataset(root: Path, gts: list, size: int = 100) -> Dataset:
+    """A fire/smoke test set of ``size`` x ``size`` images: ``gts`` per image a list of (category id, xywh)
+    (1 fire, 2 smoke); an empty list is a negative image."""
+    builder = DatasetBuilder(root, ["fire", "smoke"])
+    for k, boxes in enumerate(gts):
+        image_id = builder.add_image(f"{k}.jpg", size, size, "real:x", "test")
+        for cat, box in boxes:
+            builder.add_box(image_id, ["fire", "smoke"][cat - 1], box)
+    return builder.build({})
+
+
 def tiny_pool(root: Path, n: int, source: str, category: str = "fire") -> Dataset:
     """``n`` tiny images on disk, each with one box, tagged ``source``."""
     builder = DatasetBuilder(root, [category])

@@ -184,7 +184,9 @@ def test_errors_breakdown_from_the_cli(work, tmp_path):
     assert set(errors["delta_AP50"]) == {"classification", "localisation", "both", "duplicate", "background", "missed"}
     assert all(v == pytest.approx(0.0) for v in errors["delta_AP50"].values())  # the oracle makes no error
     assert errors["negatives"] >= 1 and errors["false_alarms_per_100_negatives"] == 0.0
-    assert json.loads((tmp_path / "o" / "errors.json").read_text()) == errors
+    found = doc["boxes_found"]  # the oracle finds every box at the alarm threshold
+    assert found["outcomes"]["found"] == found["boxes"] > 0 and found["conf"] == errors["alarm_conf"]
+    assert json.loads((tmp_path / "o" / "errors.json").read_text()) == {**errors, "boxes_found": found}
 
 
 def test_a_mistyped_test_set_class_is_an_error_before_scoring(work, capsys):

@@ -4,6 +4,7 @@ pycocotools gives with it fixed by hand, nothing on a perfect detector, false al
 from __future__ import annotations
 
 import pytest
+from factories import planted_dataset
 
 from curate.core.cocoeval import run_cocoeval
 from curate.core.dataset import DatasetBuilder
@@ -13,13 +14,7 @@ FIRE, SMOKE = 1, 2
 
 
 def _dataset(tmp_path, gts):
-    """``gts``: per image a list of (category id, xywh); an empty list is a negative image."""
-    builder = DatasetBuilder(tmp_path, ["fire", "smoke"])
-    for k, boxes in enumerate(gts):
-        image_id = builder.add_image(f"{k}.jpg", 100, 100, "real:x", "test")
-        for cat, box in boxes:
-            builder.add_box(image_id, ["fire", "smoke"][cat - 1], box)
-    return builder.build({})
+    return planted_dataset(tmp_path, gts)
 
 
 def _rec(image_id, cat, box, score):
