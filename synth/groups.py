@@ -2,10 +2,10 @@
 
 Annotators box a burning building window by window and a spreading fire patch by patch: 35 % of the fire boxes
 of the shared curated set sit in images with five or more of them (``fuzzyfire stats``: crowding), and a detector
-trained on single pasted flames merges such fires into one box or misses their small patches. With ``cutout_groups`` a real cut-out drawn for a flame
-comes with the other cut-outs of its source image (:func:`synth.library.cutout_library`'s ``origins``), each
-moved and scaled with it so that the group keeps the layout and relative sizes it had in its image; each member
-is a placement of its own, so it keeps its own box. Nothing is drawn from an rng: the pool's other draws (places,
+trained on single pasted flames merges such fires into one box or misses their small patches. With
+``cutout_groups`` a real cut-out drawn for a flame comes with the other cut-outs of its source image
+(:func:`synth.library.cutout_library`'s ``origins``), each moved and scaled with it so that the group keeps the
+layout and relative sizes it had in its image; each member is a placement of its own, so it keeps its own box. Nothing is drawn from an rng: the pool's other draws (places,
 flames, looks) stay those of the same pool without groups.
 """
 
@@ -46,8 +46,9 @@ def grouped(
     offset in the source image times the anchor's scale (image pixels per source pixel, per axis), its size its own
     times that scale, with the anchor's blend, glow, opacity and look. A group is never drawn larger than it was in
     its source image (upscaling blurs, and that is how large that fire was in a frame), nor spanning more than
-    :data:`FIT` of the image's height or width: the scale (anchor included) shrinks about the anchor's base. Members under 2 px on a side or wholly outside the image are left out; an anchor that is no
-    cut-out of a known image, or alone in it, comes back as it is."""
+    :data:`FIT` of the image's height or width: the scale (anchor included) shrinks about the anchor's base.
+    Members under 2 px on a side or wholly outside the image are left out; an anchor that is no cut-out of a known
+    image, or alone in it, comes back as it is."""
     members = index.get(name, ())
     if len(members) < 2:
         return [(anchor, name)]

@@ -159,8 +159,8 @@ def plan_flames(
     its base near the bottom edge (a fire seen from close by; the part outside the frame is cut off). On a site with
     ``cfg.separate_flames`` each flame also keeps clear of the flames before it (:func:`mask_box`). With
     ``cfg.flames.cutout_groups`` a real cut-out brings the other cut-outs of its image (:func:`synth.groups.grouped`;
-    beyond ``max_flames``, none over ``avoid``). No flame
-    (an empty list) with probability ``negatives`` (default ``cfg.negatives``; per view: :func:`negative_share`)."""
+    beyond ``max_flames``, none over ``avoid``). No flame (an empty list) with probability ``negatives`` (default
+    ``cfg.negatives``; per view: :func:`negative_share`)."""
     if rng.random() < (cfg.negatives if negatives is None else negatives):
         return []
     closeup = cfg.closeup > 0 and rng.random() < cfg.closeup
