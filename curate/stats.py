@@ -62,8 +62,16 @@ def dataset_stats(ds: Dataset, unlabelled: frozenset[int] = frozenset()) -> dict
 def crowding(ds: Dataset) -> dict[str, int]:
     """Boxes counted by how many boxes their image holds (:data:`CROWDING` buckets): a fire boxed patch by patch
     (a burning building, window by window) puts many boxes in one image, and detectors merge or miss them."""
-    counts = Counter(len(boxes) for boxes in ds.annotations_by_image().values() if boxes)
-    return {name: sum(k * n for k, n in counts.items() if lo <= k <= hi) for name, lo, hi in CROWDING}
+    out = dict.fromkeys((name for name, _, _ in CROWDING), 0)
+    for boxes in ds.annotations_by_image().values():
+        if boxes:
+            out[crowding_bucket(len(boxes))] += len(boxes)
+    return out
+
+
+def crowding_bucket(boxes: int) -> str:
+    """The :data:`CROWDING` bucket of a box whose image holds ``boxes`` boxes (>= 1)."""
+    return next(name for name, lo, hi in CROWDING if lo <= boxes <= hi)
 
 
 def relative_box_sizes(ds: Dataset) -> dict[str, np.ndarray]:

@@ -24,7 +24,7 @@ import numpy as np
 
 from curate.core.boxes import box_iou_xyxy, xywh_to_xyxy
 from curate.core.dataset import Dataset
-from curate.stats import CROWDING
+from curate.stats import CROWDING, crowding_bucket
 from eval.errors import ALARM_CONF, T_BG, T_FG, area_inside
 
 #: Box size buckets: (name, smallest, largest) square root of the area in pixels, the largest excluded.
@@ -76,7 +76,7 @@ def boxes_found(
             side = float(np.sqrt(ann.bbox[2] * ann.bbox[3]))
             for table, key in (
                 (by_size, _bucket(SIZES, side)),
-                (by_crowd, _bucket(CROWDING, len(boxes), last_in=True)),
+                (by_crowd, crowding_bucket(len(boxes))),
             ):
                 table[key][0] += kind == "found"
                 table[key][1] += 1
@@ -103,9 +103,9 @@ def outcome(box: Sequence[float], image_boxes: Sequence[Sequence[float]], dets: 
     return "too_large" if d[best, 2] * d[best, 3] > box[2] * box[3] else "too_small"
 
 
-def _bucket(buckets: Sequence[tuple[str, float, float]], value: float, last_in: bool = False) -> str:
-    """The name of the bucket (name, lo, hi) holding ``value``: lo <= value < hi, or <= hi with ``last_in``."""
-    return next(name for name, lo, hi in buckets if lo <= value and (value < hi or (last_in and value <= hi)))
+def _bucket(buckets: Sequence[tuple[str, float, float]], value: float) -> str:
+    """The name of the bucket (name, lo, hi) holding ``value``: lo <= value < hi."""
+    return next(name for name, lo, hi in buckets if lo <= value < hi)
 
 
 def _tuples(table: dict[str, list[int]]) -> dict[str, tuple[int, int]]:
