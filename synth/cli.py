@@ -582,7 +582,7 @@ def _register_method2(sub: argparse._SubParsersAction) -> None:
         "  fuzzyfire synth method2 --n 200 --out out/m2-hard --environments ../shared/data/panoramas "
         "--distractors 0.5 --blend screen,add,alpha,blur,poisson --harmonise --match-noise --decoys 0.3\n"
         "  fuzzyfire synth method2 --n 200 --out out/m2-own-negatives --backgrounds my/negatives "
-        "--distractors 0.5 --distractor-kinds photo  # your photos' lamps and red sofas pasted, unboxed\n"
+        "--distractors 0.5 --distractor-kinds photo,lights  # your photos' lamps and red sofas pasted, unboxed\n"
         "  fuzzyfire synth audit out/m2 --json",
     )
     _dataset_arguments(p, photos=True)
@@ -635,8 +635,9 @@ def _blend_arguments(p: argparse.ArgumentParser) -> None:
         "--distractor-kinds",
         metavar="KINDS",
         help="comma-separated distractor kinds: lamp, sun, cone, cloth, clothing, taillights, glare (drawn; the "
-        "default is all of them) and photo (fire-like regions cut from your --backgrounds photos: lamps, lit "
-        "windows, red sofas; synth/photo_regions.py)",
+        "default is all of them), photo (fire-coloured regions cut from your --backgrounds photos: orange lamp "
+        "shades, lit windows, red sofas) and lights (their light sources with their glow: white-hot lamps, street "
+        "lights, windows at night; synth/photo_regions.py)",
     )
     p.add_argument(
         "--blend",

@@ -5,10 +5,11 @@ Kinds (:data:`KINDS`): ``lamp`` (a bare bulb with bloom and star streaks, or a g
 sun disc above the horizon with a sunset gradient over the sky; only where the view shows sky), ``cone`` (a traffic
 cone with reflective bands), ``cloth`` (a red or orange cloth with folds), ``clothing`` (an orange or red jacket,
 hi-vis strips), ``taillights`` (a car's pair of red rear lights, often with the dark car body and plate between
-them) and ``glare`` (an anamorphic glare streak, or a lamp's reflection on a glossy floor). One more kind is not
-drawn but cut: ``photo`` (:data:`PHOTO_KIND`, not in the default kinds), a fire-like region of the pool's own
-fire-free photos (:mod:`synth.photo_regions`: a lamp, a lit window, a red sofa), pasted anywhere in the image at
-0.7-1.3 x its height share of its photo, mirrored half the time. Each is drawn as a
+them) and ``glare`` (an anamorphic glare streak, or a lamp's reflection on a glossy floor). Two more kinds are not
+drawn but cut from the pool's own fire-free photos (:data:`PHOTO_KINDS`, not in the default kinds;
+:mod:`synth.photo_regions`): ``photo``, a fire-coloured region (an orange lamp shade, a lit window, a red sofa),
+and ``lights``, a light source with its warm glow (a white-hot lamp shade, a street light, a window at night),
+each pasted anywhere in the image at 0.7-1.3 x its height share of its photo, mirrored half the time. Each is drawn as a
 :class:`synth.sprites.Sprite` with an empty flame mask (reflective parts in ``over``, light in ``emission``) in
 image pixels; objects standing on the ground are sized by the view's depth like flames.
 
@@ -27,13 +28,14 @@ import numpy as np
 from numpy.typing import NDArray
 
 from synth.colour import blackbody_rgb, srgb_encode
-from synth.photo_regions import Region
+from synth.photo_regions import RULES, Region
 from synth.sites import sky_like
 from synth.sprites import Sprite
 
 KINDS: tuple[str, ...] = ("lamp", "sun", "cone", "cloth", "clothing", "taillights", "glare")
 PHOTO_KIND = "photo"  # cut from the pool's fire-free photos (Method 2 with backgrounds only), not drawn
-ALL_KINDS: tuple[str, ...] = (*KINDS, PHOTO_KIND)
+PHOTO_KINDS: tuple[str, ...] = RULES  # the kinds cut from photos, each by its rule of synth.photo_regions
+ALL_KINDS: tuple[str, ...] = (*KINDS, *PHOTO_KINDS)
 PHOTO_SCALE = (0.7, 1.3)  # a photo region's height in the image: this x its height share of its photo
 EMISSIVE_KINDS: tuple[str, ...] = ("lamp", "sun", "taillights", "glare")  # light: drawn after low-light exposure
 OUTDOOR_KINDS: tuple[str, ...] = ("sun", "taillights")  # never drawn in a rendered room (:func:`kinds_here`)
@@ -68,14 +70,19 @@ class DistractorConfig:
 
     @property
     def photo(self) -> bool:
-        """Whether images may carry distractors cut from the pool's fire-free photos (:data:`PHOTO_KIND`)."""
-        return self.share > 0 and PHOTO_KIND in self.kinds
+        """Whether images may carry distractors cut from the pool's fire-free photos (:data:`PHOTO_KINDS`)."""
+        return bool(self.photo_kinds)
+
+    @property
+    def photo_kinds(self) -> tuple[str, ...]:
+        """The :data:`PHOTO_KINDS` images may carry (none when ``share`` is 0), in :data:`PHOTO_KINDS`' order."""
+        return tuple(k for k in PHOTO_KINDS if k in self.kinds) if self.share > 0 else ()
 
 
 @dataclass(frozen=True)
 class Distractor:
     """A drawn distractor: its layers as a sprite with an empty flame mask, its top-left (x, y) in image pixels;
-    a :data:`PHOTO_KIND` one also names the photo it was cut from."""
+    one of :data:`PHOTO_KINDS` also names the photo it was cut from."""
 
     kind: str
     sprite: Sprite
@@ -445,15 +452,18 @@ def draw_region(region: Region, height: int, rng: np.random.Generator) -> Layers
     return f[..., :3], np.ascontiguousarray(f[..., 3]), np.zeros((h, w, 3), np.float32)
 
 
-def place_region(regions: Sequence[Region], height: int, width: int, rng: np.random.Generator) -> Distractor | None:
-    """A :data:`PHOTO_KIND` distractor: a random one of ``regions`` at :data:`PHOTO_SCALE` x its height share of
-    an image ``height`` x ``width`` px (8 px .. 0.6 of the height), wholly inside it at a random spot."""
+def place_region(
+    regions: Sequence[Region], height: int, width: int, rng: np.random.Generator, kind: str = PHOTO_KIND
+) -> Distractor | None:
+    """A ``kind`` (one of :data:`PHOTO_KINDS`) distractor: a random one of ``regions`` at :data:`PHOTO_SCALE` x its
+    height share of an image ``height`` x ``width`` px (8 px .. 0.6 of the height), wholly inside it at a random
+    spot."""
     region = regions[int(rng.integers(len(regions)))]
     size = int(np.clip(region.height_share * height * rng.uniform(*PHOTO_SCALE), 8, 0.6 * height))
     layers = draw_region(region, size, rng)
     h, w = layers[1].shape
     x, y = int(rng.integers(0, max(width - w, 0) + 1)), int(rng.integers(0, max(height - h, 0) + 1))
-    return _cropped(PHOTO_KIND, layers, x, y, region.photo)
+    return _cropped(kind, layers, x, y, region.photo)
 
 
 def make_distractor(
@@ -462,9 +472,10 @@ def make_distractor(
 ) -> Distractor | None:  # fmt: skip
     """One distractor of ``kind`` for the (H, W, 3) ``background`` with its (H, W) ``depth`` (metres, 0 = not
     ground), focal length ``fy`` (pixels) and ``horizon`` row (None: unknown; no sun then); None when the kind does
-    not fit this view (a sun without sky, a photo region without ``regions``)."""
-    if kind == PHOTO_KIND:
-        return place_region(regions, *background.shape[:2], rng) if regions else None
+    not fit this view (a sun without sky, a photo kind without ``regions`` of its rule)."""
+    if kind in PHOTO_KINDS:
+        mine = [r for r in regions if r.kind == kind]
+        return place_region(mine, *background.shape[:2], rng, kind) if mine else None
     if kind == "sun":
         layers = draw_sun(background, horizon, rng) if horizon is not None else None
         return None if layers is None else _cropped(kind, layers, 0, 0)
@@ -494,8 +505,8 @@ def plan_distractors(
 ) -> list[Distractor]:  # fmt: skip
     """The distractors of one image: none for a ``1 - cfg.share`` of images, else 1..``cfg.max`` of random kinds
     (each redrawn up to ``tries`` times), none overlapping the ``avoid`` boxes [x, y, w, h] (the flames) nor each
-    other, all inside the image at least in part. ``regions``: the fire-like regions the :data:`PHOTO_KIND` cuts
-    from (:mod:`synth.photo_regions`)."""
+    other, all inside the image at least in part. ``regions``: the regions the :data:`PHOTO_KINDS` are cut from
+    (:mod:`synth.photo_regions`; each kind takes those of its rule)."""
     if rng.random() >= cfg.share:
         return []
     kinds = kinds_here(cfg.kinds, meta)

@@ -88,7 +88,10 @@ class Method1Config:
         if self.flames.cutout_groups:
             raise ValueError("flames.cutout_groups places the cut-outs of one image together: Method 2 pools only")
         if self.distractors.photo:
-            raise ValueError("distractors of kind photo are cut from a Method 2 pool's fire-free photos (backgrounds)")
+            raise ValueError(
+                f"distractors of kind {', '.join(self.distractors.photo_kinds)} are cut from a Method 2 pool's "
+                "fire-free photos (backgrounds)"
+            )
         if self.n < 1 or self.scenes < 0 or self.images_per_view < 1 or self.width < 16 or self.height < 16:
             raise ValueError(f"invalid Method 1 config: {self}")
         if self.scenes == 0 and not self.environments and not self.streets:

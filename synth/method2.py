@@ -128,7 +128,10 @@ class Method2Config:
         if self.max_flames < 1 or not 0.0 <= self.negatives <= 1.0 or self.min_box_px < 1:
             raise ValueError(f"invalid Method 2 config: {self}")
         if self.distractors.photo and not self.backgrounds:
-            raise ValueError("distractors of kind photo are cut from the pool's fire-free photos: give backgrounds")
+            raise ValueError(
+                f"distractors of kind {', '.join(self.distractors.photo_kinds)} are cut from the pool's fire-free "
+                "photos: give backgrounds"
+            )
         if self.photo_negatives is not None and not 0.0 <= self.photo_negatives <= 1.0:
             raise ValueError(f"photo_negatives must be in 0..1 or null, got {self.photo_negatives}")
         check_range("flame_height_m", self.flame_height_m, 0.01)
@@ -329,7 +332,7 @@ def dressed_scene(
     :func:`kept_clear` keeps clear (a photo site's people, a labelled frame's fires; boxes [x, y, w, h] in
     ``meta``); and
     the metadata they add (``distractors``, ``decoys``: kind or blend and box [x, y, w, h]; only when on).
-    ``regions``: the fire-like regions of the pool's photos that ``photo`` distractors are cut from."""
+    ``regions``: the regions of the pool's photos that the photo kinds of distractors are cut from."""
     avoid = [*([p.x, p.y, p.width, p.height] for p, _ in planned), *kept_clear(meta)]
     items = (
         plan_distractors(cfg.distractors, background, depth, meta, fy, avoid, rng, regions=regions)
@@ -418,7 +421,8 @@ def make_image(cfg: Method2Config, i: int, library: Sequence[SpriteSequence], vi
         planned = varied(planned, np.random.default_rng([cfg.seed, 2, i, 3]))
     extra = np.random.default_rng([cfg.seed, 2, i, 1])
     fy = float(render.intrinsics(yfov, cfg.width, cfg.height)[1, 1])
-    regions = views.photos.regions() if cfg.distractors.photo and views.photos is not None else ()
+    photos = views.photos if cfg.distractors.photo else None
+    regions = photos.regions(cfg.distractors.photo_kinds) if photos is not None else ()
     scene, added = dressed_scene(cfg, background, depth, view_meta, planned, library, effects, fy, extra, regions)
     planned = styled(cfg, planned, scene, extra)
     meter = metering(cfg, i, scene) if cfg.auto_exposure else None

@@ -104,14 +104,15 @@ class PhotoBackgrounds:
         self.labels = dict(labels or {})
         self.order = np.random.default_rng([seed, 8]).permutation(len(self.photos))
         self.problems: dict[str, str] = {}
-        self._regions: tuple[Region, ...] | None = None
+        self._regions: dict[tuple[str, ...], tuple[Region, ...]] = {}
 
-    def regions(self) -> tuple[Region, ...]:
-        """The fire-like regions (:mod:`synth.photo_regions`) of the fire-free photos, not of the labelled frames:
-        the ``photo`` distractors' library, found on first use."""
-        if self._regions is None:
-            self._regions = photo_regions([p for p in self.photos if p not in self.labels])
-        return self._regions
+    def regions(self, rules: Sequence[str] = ("photo",)) -> tuple[Region, ...]:
+        """The regions the ``rules`` find (:mod:`synth.photo_regions`) in the fire-free photos, not in the
+        labelled frames: the photo distractors' library, found on first use."""
+        key = tuple(rules)
+        if key not in self._regions:
+            self._regions[key] = photo_regions([p for p in self.photos if p not in self.labels], key)
+        return self._regions[key]
 
     def photo(self, view_index: int) -> Path:
         return self.photos[int(self.order[view_index % len(self.photos)])]

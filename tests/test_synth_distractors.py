@@ -12,6 +12,7 @@ from synth.distractors import (
     KINDS,
     OUTDOOR_KINDS,
     PHOTO_KIND,
+    PHOTO_KINDS,
     PHOTO_SCALE,
     DistractorConfig,
     draw_distractors,
@@ -147,9 +148,11 @@ def test_photo_regions_are_pasted_whole_inside_the_image_at_their_share_of_its_h
 
 
 def test_photo_kind_is_opt_in_and_planned_only_from_regions():
-    assert PHOTO_KIND not in KINDS and set(ALL_KINDS) == {*KINDS, PHOTO_KIND}
+    assert not set(PHOTO_KINDS) & set(KINDS) and set(ALL_KINDS) == {*KINDS, *PHOTO_KINDS} and PHOTO_KIND in PHOTO_KINDS
     assert DistractorConfig(share=0.5, kinds=(PHOTO_KIND,)).photo and not DistractorConfig(share=0.5).photo
     assert not DistractorConfig(share=0.0, kinds=(PHOTO_KIND,)).photo
+    assert DistractorConfig(share=0.5, kinds=("lights", "lamp", "photo")).photo_kinds == ("photo", "lights")
+    assert DistractorConfig(share=0.0, kinds=("lights",)).photo_kinds == ()
     img, depth = _outdoor()
     cfg = DistractorConfig(share=1.0, max=2, kinds=(PHOTO_KIND,))
     avoid = [[40, 30, 30, 30]]
@@ -160,3 +163,22 @@ def test_photo_kind_is_opt_in_and_planned_only_from_regions():
         assert all(d.kind == PHOTO_KIND and not overlaps(d.box, avoid) for d in items)
     assert found >= 10
     assert plan_distractors(cfg, img, depth, {}, 100.0, [], np.random.default_rng(0)) == []
+
+
+def test_each_photo_kind_is_cut_only_from_the_regions_of_its_rule():
+    from synth.photo_regions import Region
+
+    img, depth = _outdoor()
+    glow = np.zeros((16, 16, 4), np.uint8)
+    glow[..., :3], glow[..., 3] = (255, 250, 240), 255
+    regions = (*_regions(), Region(glow, 0.2, "lamp.jpg", "lights"))
+    for seed in range(20):
+        light = make_distractor("lights", img, depth, 100.0, 40.0, np.random.default_rng(seed), regions)
+        photo = make_distractor(PHOTO_KIND, img, depth, 100.0, 40.0, np.random.default_rng(seed), regions)
+        assert light is not None and light.kind == "lights" and light.photo == "lamp.jpg" and not light.emissive
+        assert photo is not None and photo.kind == PHOTO_KIND and photo.photo in ("a.jpg", "b.jpg")
+        assert light.to_json()["kind"] == "lights"
+    assert make_distractor("lights", img, depth, 100.0, 40.0, np.random.default_rng(0), _regions()) is None
+    only_photo = make_distractor(PHOTO_KIND, img, depth, 100.0, 40.0, np.random.default_rng(3), _regions())
+    mixed = make_distractor(PHOTO_KIND, img, depth, 100.0, 40.0, np.random.default_rng(3), regions)
+    assert only_photo is not None and mixed is not None and only_photo.box == mixed.box  # lights never change photo

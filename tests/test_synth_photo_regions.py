@@ -61,3 +61,58 @@ def test_the_same_photos_give_the_same_regions_and_a_broken_one_is_skipped(tmp_p
     one, two = photo_regions([good, broken]), photo_regions([good])
     assert len(one) == len(two) == 1 and np.array_equal(one[0].rgba, two[0].rgba)
     assert photo_regions([broken]) == ()
+
+
+def _lamp_room(h=240, w=320, warm=True, glow=True):
+    """A dim room with a blown-out lamp shade (a 24 x 30 px white core at (150, 100)) in its warm glow (a
+    Gaussian of orange light around it, or none) on a brown or blue wall."""
+    wall = (70, 50, 35) if warm else (35, 50, 80)
+    img = np.empty((h, w, 3), np.float32)
+    img[:] = wall
+    if glow:
+        y, x = np.mgrid[0:h, 0:w]
+        g = np.exp(-0.5 * (((x - 162) / 30.0) ** 2 + ((y - 115) / 30.0) ** 2))[..., None]
+        img += g * np.array([180, 110, 40], np.float32)
+    img[100:130, 150:174] = 255
+    return np.clip(img, 0, 255).astype(np.uint8)
+
+
+def test_a_blown_out_lamp_is_a_light_cut_with_its_glow():
+    from synth.photo_regions import LIGHT_MARGIN, lights_of
+
+    img = _lamp_room()
+    lights = lights_of(img, "lamp.jpg")
+    assert len(lights) == 1
+    r = lights[0]
+    assert r.kind == "lights" and r.photo == "lamp.jpg"
+    h, w = r.rgba.shape[:2]
+    m = round(LIGHT_MARGIN * 30)
+    assert (h, w) == (30 + 2 * m, 24 + 2 * m) and abs(r.height_share - h / 240) < 1e-9  # the core and its glow
+    alpha = r.rgba[..., 3]
+    assert alpha[h // 2, w // 2] == 255 and alpha[0, 0] < 32  # opaque core, glow fading out before the edge
+
+
+def test_white_without_a_warm_glow_is_not_a_light():
+    from synth.photo_regions import lights_of
+
+    assert lights_of(_lamp_room(glow=False)) == []  # white paper on a brown desk: no light fading outwards
+    assert lights_of(_lamp_room(warm=False, glow=False)) == []  # a white sign on a blue wall
+    sky = np.full((240, 320, 3), 255, np.uint8)  # a blown-out sky: too large to be a light source
+    assert lights_of(sky) == []
+
+
+def test_the_rules_are_chosen_and_the_photo_rule_is_the_same_with_or_without_lights(tmp_path: Path):
+    import pytest
+
+    from synth.photo_regions import RULES
+
+    room, lamp = tmp_path / "room.png", tmp_path / "lamp.png"
+    cv2.imwrite(str(room), _room()[..., ::-1])
+    cv2.imwrite(str(lamp), _lamp_room()[..., ::-1])
+    both = photo_regions([room, lamp], RULES)
+    photo = photo_regions([room, lamp])
+    assert {r.kind for r in both} == set(RULES)
+    kept = [r for r in both if r.kind == "photo"]
+    assert len(kept) == len(photo) and all(np.array_equal(a.rgba, b.rgba) for a, b in zip(kept, photo, strict=True))
+    with pytest.raises(ValueError, match="unknown region rules"):
+        photo_regions([room], ("photo", "moon"))
