@@ -226,6 +226,15 @@ VARIANTS = {
         *ASAE,
         "synth.method2.camera.cctv=0.5",
     ],
+    "own_frames_cutouts_half_photo_negatives_auto_exposure": [  # ASAE without its distractors
+        *[k for k in ASAE if k not in PHOTO_DISTRACTORS],
+    ],
+    "own_frames_cutouts_half_photo_negatives_photo_lights_distractors_auto_exposure": [  # lights, in every image
+        *[k for k in ASAE if k not in PHOTO_DISTRACTORS],
+        "synth.method2.distractors.share=1.0",
+        "synth.method2.distractors.max=3",
+        "synth.method2.distractors.kinds=[photo,lights]",
+    ],
     "own_frames_cutouts_half_photo_negatives_photo_distractors_4": [
         *PHOTOS,
         "synth.method2.photo_negatives=0.5",

@@ -516,3 +516,30 @@ def _read(path: Path) -> np.ndarray:
     import cv2
 
     return cv2.cvtColor(cv2.imread(str(path)), cv2.COLOR_BGR2RGB)
+
+
+def test_light_distractors_are_cut_from_the_pools_photos_with_their_glow_and_get_no_box(tmp_path, library):
+    """``distractors.kinds: [photo, lights]``: a pool of lamp-lit photos carries their light sources, cut by the
+    ``lights`` rule, unboxed and clear of the flames; the audit stays exact."""
+    from dataclasses import replace
+
+    import cv2
+
+    (tmp_path / "photos").mkdir()
+    y, x = np.mgrid[0:150, 0:200]
+    for k in range(3):
+        glow = np.exp(-0.5 * (((x - 60 - 30 * k) / 20.0) ** 2 + ((y - 50) / 20.0) ** 2))[..., None]
+        photo = np.clip(np.array([35, 50, 70], np.float32) + glow * np.array([40, 110, 180], np.float32), 0, 255)
+        photo[40:60, 52 + 30 * k : 68 + 30 * k] = 255  # BGR: a blown-out lamp shade in its warm glow
+        cv2.imwrite(str(tmp_path / "photos" / f"p{k}.png"), photo.astype(np.uint8))
+    distractors = DistractorConfig(share=1.0, max=2, kinds=("photo", "lights"))
+    cfg = replace(CFG, n=8, images_per_view=2, scenes=0, backgrounds=(tmp_path / "photos",), distractors=distractors)
+    M.run_method2(cfg, library, tmp_path / "a")
+    per_image = json.loads((tmp_path / "a" / "manifest.json").read_text())["args"]["per_image"]
+    items = [d for m in per_image for d in m["distractors"]]
+    assert "lights" in {d["kind"] for d in items} and {d["kind"] for d in items} <= {"photo", "lights"}
+    coco = json.loads((tmp_path / "a" / "annotations.json").read_text())
+    for img, m in zip(coco["images"], per_image, strict=True):
+        boxes = [a["bbox"] for a in coco["annotations"] if a["image_id"] == img["id"]]
+        assert len(boxes) == len(m["flames"]) and not any(overlaps(d["box"], boxes) for d in m["distractors"])
+    assert audit_dataset(tmp_path / "a")["mean_iou"] == 1.0
