@@ -103,6 +103,9 @@ ASAE = [
     "synth.method2.auto_exposure=true",
 ]
 
+#: ASAE without its photo distractors (the base of the designs that change them).
+ASAE_WITHOUT_DISTRACTORS = [k for k in ASAE if k not in PHOTO_DISTRACTORS]
+
 VARIANTS = {
     "flat": ["synth.method2.never_darken=false", "synth.method2.flames.texture=0"],
     "look": [],
@@ -226,11 +229,9 @@ VARIANTS = {
         *ASAE,
         "synth.method2.camera.cctv=0.5",
     ],
-    "own_frames_cutouts_half_photo_negatives_auto_exposure": [  # ASAE without its distractors
-        *[k for k in ASAE if k not in PHOTO_DISTRACTORS],
-    ],
+    "own_frames_cutouts_half_photo_negatives_auto_exposure": ASAE_WITHOUT_DISTRACTORS,
     "own_frames_cutouts_half_photo_negatives_photo_lights_distractors_auto_exposure": [  # lights, in every image
-        *[k for k in ASAE if k not in PHOTO_DISTRACTORS],
+        *ASAE_WITHOUT_DISTRACTORS,
         "synth.method2.distractors.share=1.0",
         "synth.method2.distractors.max=3",
         "synth.method2.distractors.kinds=[photo,lights]",

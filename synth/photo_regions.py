@@ -114,23 +114,23 @@ def lights_of(rgb: NDArray[np.uint8], name: str = "") -> list[Region]:
         x, y, bw, bh, area = (int(v) for v in stats[k])
         if not LIGHT_MIN_AREA * h * w <= area <= LIGHT_MAX_AREA * h * w or area < MIN_FILL * bw * bh:
             continue
-        if min(bw, bh) >= LIGHT_MIN_SIDE and (region := _lit(image, hsv, labels == k, (x, y, bw, bh), name)):
+        if min(bw, bh) >= LIGHT_MIN_SIDE and (region := _lit(image, hsv, labels, k, (x, y, bw, bh), name)):
             out.append(region)
     return out
 
 
 def _lit(
-    image: NDArray[np.uint8], hsv: NDArray[np.float32], core: NDArray[np.bool_], box: tuple[int, int, int, int],
-    name: str,
+    image: NDArray[np.uint8], hsv: NDArray[np.float32], labels: NDArray[np.int32], k: int,
+    box: tuple[int, int, int, int], name: str,
 ) -> Region | None:  # fmt: skip
-    """The light of the (H, W) bool ``core`` whose box is ``box`` (x, y, w, h) in the searched (H, W, 3) RGB
-    ``image`` (its HSV in 0..1: ``hsv``), cut with its glow; None when its surround is not warm or does not fade
+    """The light of component ``k`` of the (H, W) ``labels`` (its box ``box``: x, y, w, h) in the searched (H, W, 3)
+    RGB ``image`` (its HSV in 0..1: ``hsv``), cut with its glow; None when its surround is not warm or does not fade
     outwards (module docstring)."""
     x, y, bw, bh = box
     h, w = image.shape[:2]
     m = max(int(round(LIGHT_MARGIN * max(bw, bh))), 2)
     x0, y0, x1, y1 = max(x - m, 0), max(y - m, 0), min(x + bw + m, w), min(y + bh + m, h)
-    part = core[y0:y1, x0:x1]
+    part = labels[y0:y1, x0:x1] == k
     grown = cv2.dilate(part.astype(np.uint8), np.ones((m | 1, m | 1), np.uint8)).astype(np.float32)
     inner, outer = (grown > 0) & ~part, grown == 0
     if not inner.any() or not outer.any():
