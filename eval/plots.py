@@ -86,7 +86,7 @@ def plot_figure5(results: Sequence[Mapping[str, object]], path: Path, metric: st
     has it, mixtures in Table 2 order. ``results`` as for :func:`eval.tables.table2`; AP metrics in percent,
     :data:`eval.errors.ALARMS` (the sets without fire) as false alarms per 100 images."""
     from eval.errors import ALARMS
-    from eval.tables import shown_scale, table2
+    from eval.tables import METRIC_LABELS, shown_scale, table2
 
     table = table2(results, metrics=(metric,))  # type: ignore[arg-type]
     groups = table.rows
@@ -97,6 +97,6 @@ def plot_figure5(results: Sequence[Mapping[str, object]], path: Path, metric: st
         means = [c.mean * f if c else np.nan for c in cells]
         stds = [c.std * f if c and c.std is not None else np.nan for c in cells]
         series[test_set] = (means, stds)
-    ylabel = "false alarms per 100 images" if metric == ALARMS else f"{metric} (%)"
-    name = "false alarms" if metric == ALARMS else metric
+    ylabel = "false alarms per 100 images" if metric == ALARMS else f"{METRIC_LABELS.get(metric, metric)} (%)"
+    name = "false alarms" if metric == ALARMS else METRIC_LABELS.get(metric, metric)
     return plot_bars(groups, series, path, ylabel=ylabel, title=title or f"{name} by training mixture")

@@ -16,6 +16,7 @@ from curate.core.dataset import Dataset
 from curate.core.imageio import ImageError, read_image
 from eval.draw import draw_boxes
 from eval.errors import ALARMS
+from eval.operating import RECALL_AT_ALARMS
 from eval.tables import METRIC_LABELS, Table, heading, marks, shown_scale, to_csv, to_latex, to_markdown
 
 _CSS = """body{font-family:system-ui,sans-serif;margin:2em auto;max-width:1100px;color:#222}
@@ -171,14 +172,14 @@ def errors_html(rows: Sequence[Mapping[str, Any]]) -> str:
 
 def comparisons_html(rows: Sequence[Mapping[str, Any]]) -> str:
     """Paired comparisons: rows with ``test_set``, ``mixture``, ``baseline``, ``metric`` and a
-    :meth:`eval.stats.PairedDelta.to_dict` (``value``, ``low``, ``high``, ``p_value``), in AP points."""
+    :meth:`eval.stats.PairedDelta.to_dict` (``value``, ``low``, ``high``, ``p_value``), in AP (or recall) points."""
     head = "<tr><th>test set</th><th>mixture</th><th>vs</th><th>metric</th><th>Δ</th><th>95% CI</th><th>p</th></tr>"
     body = []
     for r in rows:
-        d = r["delta"]
+        d, metric = r["delta"], METRIC_LABELS.get(r["metric"], str(r["metric"]))
         body.append(
             f"<tr><td>{html.escape(str(r['test_set']))}</td><td>{html.escape(str(r['mixture']))}</td>"
-            f"<td>{html.escape(str(r['baseline']))}</td><td>{html.escape(str(r['metric']))}</td>"
+            f"<td>{html.escape(str(r['baseline']))}</td><td>{html.escape(metric)}</td>"
             f"<td>{100 * d['value']:+.1f}</td><td>[{100 * d['low']:+.1f}, {100 * d['high']:+.1f}]</td>"
             f"<td>{d['p_value']:.3f}</td></tr>"
         )
@@ -239,9 +240,11 @@ def write_study_report(
     if gaps:
         sections.append(("Realism gap of the synthetic pools", gaps_html(gaps)))
     if results:
-        t2 = table2(results, metrics=table_metrics(results))
+        metrics = table_metrics(results)
+        t2 = table2(results, metrics=metrics)
         write_table_files(t2, out / "tables", "table2")
-        shown = ("AP", "AP50", *((ALARMS,) if any(r.get(ALARMS) is not None for r in results) else ()))
+        alarms = (ALARMS,) if any(r.get(ALARMS) is not None for r in results) else ()
+        shown = ("AP", "AP50", *alarms, *(m for m in metrics if m == RECALL_AT_ALARMS))
         figures = [plot_figure5(results, out / "figures" / f"figure5_{m}.png", m) for m in shown]
         sections.append(("Table 2 — training mixtures", table_html(t2)))
         sections.append(("Figure 5", "".join(figure_html(f, out, f.stem) for f in figures)))
@@ -282,10 +285,13 @@ def drop_stale_tables(folder: Path, written: Collection[str], comparisons: bool)
 
 
 def table_metrics(results: Sequence[Mapping[str, Any]]) -> tuple[str, ...]:
-    """The paper's AP and AP50, and AP25 (:mod:`curate.core.cocoeval`) when every row of a set with fire has it
-    (runs scored before AP25 existed do not); the sets without fire have their alarm column whatever this says."""
+    """The paper's AP and AP50, then AP25 (:mod:`curate.core.cocoeval`; runs scored before it existed lack it) and
+    the recall at 10 alarms per 100 images without fire (:mod:`eval.operating`; only studies with a set without
+    fire have it), each when every row of a set with fire has it; the sets without fire have their alarm column
+    whatever this says."""
     fire = [r for r in results if r.get(ALARMS) is None]
-    return ("AP", "AP50", "AP25") if fire and all(r.get("AP25") is not None for r in fire) else ("AP", "AP50")
+    extra = [m for m in ("AP25", RECALL_AT_ALARMS) if fire and all(r.get(m) is not None for r in fire)]
+    return ("AP", "AP50", *extra)
 
 
 def _slug(label: str) -> str:

@@ -161,7 +161,8 @@ class Interval:
         return {"value": self.point, "low": self.low, "high": self.high, "level": self.level}
 
 
-def _interval(point: float, samples: NDArray[np.float64], level: float) -> Interval:
+def interval(point: float, samples: NDArray[np.float64], level: float) -> Interval:
+    """``point`` with the percentile interval at ``level`` of the finite ``samples`` (S,) (NaN bounds when none)."""
     finite = samples[np.isfinite(samples)]
     if finite.size == 0:
         return Interval(point, math.nan, math.nan, level, samples)
@@ -176,7 +177,7 @@ def bootstrap_ap(
     weights = resample_weights(len(table.image_ids), num_samples, rng)
     point = table.ap()
     samples = [table.ap(w) for w in weights]
-    return {key: _interval(point[key], np.array([s[key] for s in samples]), level) for key in point}
+    return {key: interval(point[key], np.array([s[key] for s in samples]), level) for key in point}
 
 
 @dataclass(frozen=True)
@@ -219,10 +220,12 @@ def paired_bootstrap(
         sa, sb = _mean_ap(ta, w), _mean_ap(tb, w)
         for key in deltas:
             deltas[key].append(sb[key] - sa[key])
-    out = {}
-    for key, values in deltas.items():
-        arr = np.asarray(values)
-        finite = arr[np.isfinite(arr)]
-        p = min(1.0, 2 * min(np.mean(finite <= 0), np.mean(finite >= 0))) if finite.size else math.nan
-        out[key] = PairedDelta(_interval(pb[key] - pa[key], arr, level), float(p))
-    return out
+    return {key: paired_delta(pb[key] - pa[key], np.asarray(values), level) for key, values in deltas.items()}
+
+
+def paired_delta(point: float, samples: NDArray[np.float64], level: float = 0.95) -> PairedDelta:
+    """A paired difference ``point`` with its resampled differences ``samples`` (S,): the percentile interval and
+    the two-sided bootstrap p-value of :class:`PairedDelta` over the finite samples (NaN when none)."""
+    finite = samples[np.isfinite(samples)]
+    p = min(1.0, 2 * min(np.mean(finite <= 0), np.mean(finite >= 0))) if finite.size else math.nan
+    return PairedDelta(interval(point, samples, level), float(p))

@@ -5,7 +5,9 @@ italic; rendered as Markdown, CSV and LaTeX.
 A run result is a mapping with ``mixture`` (``R750_S250``), ``seed``, ``test_set`` and metric values
 (``AP``, ``AP50`` in [0, 1]); Table 1 results also carry ``method`` (``method1`` / ``method2``). A result of a
 test set without fire carries :data:`eval.errors.ALARMS` (false alarms per 100 images) instead of AP: that set's
-one column is its alarm rate, shown as is (not in percent), lower being better.
+one column is its alarm rate, shown as is (not in percent), lower being better. A test set with fire may also
+carry :data:`eval.operating.RECALL_AT_ALARMS`, the share of its boxes found at the run's threshold for 10 alarms per
+100 images without fire (in percent, like AP).
 """
 
 from __future__ import annotations
@@ -19,12 +21,16 @@ from typing import Any
 
 from curate.mix import Mixture, parse_mixture
 from eval.errors import ALARMS
+from eval.operating import ALARM_BUDGET, RECALL_AT_ALARMS
 from eval.stats import MeanStd, mean_std
 
 Key = tuple[str, str]  # (row label, column label)
 STRATEGIES: tuple[str, ...] = ("Real only", "Real + synthetic", "Synthetic only")
 METHOD_LABELS: Mapping[str, str] = {"method1": "Method 1 (3D)", "method2": "Method 2 (2D)"}
-METRIC_LABELS: Mapping[str, str] = {ALARMS: "alarms/100"}  # column headings of metrics not named as they are keyed
+METRIC_LABELS: Mapping[str, str] = {
+    ALARMS: "alarms/100",
+    RECALL_AT_ALARMS: f"recall@{ALARM_BUDGET:g} alarms/100",
+}  # column headings of metrics not named as they are keyed
 
 
 @dataclass(frozen=True)

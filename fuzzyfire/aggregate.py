@@ -4,6 +4,7 @@
 
 from __future__ import annotations
 
+import hashlib
 import json
 from collections.abc import Iterator, Mapping, Sequence
 from pathlib import Path
@@ -13,6 +14,16 @@ import numpy as np
 from curate.core.config import to_dict
 from curate.mix import parse_mixture
 from eval.errors import ALARMS
+from eval.operating import (
+    RECALL_AT_ALARMS,
+    Alarms,
+    FoundScores,
+    alarms_of,
+    found_scores,
+    operating_point,
+    paired_recall_bootstrap,
+    pooled,
+)
 from fuzzyfire.controls import CONTROL, CONTROL_TABLE, control_label
 from fuzzyfire.datasets import DataRef, Datasets
 from fuzzyfire.experiment_config import ExperimentConfig
@@ -24,6 +35,8 @@ STANDIN_NOTICE = (
     "composited on photographs shipped with matplotlib), not real fire photographs. The numbers show that the "
     "pipeline works; they say nothing about real fire detection. Point real: and rare: at your own folders."
 )
+
+OPERATING = "operating"  # a row's (found boxes, alarms) for the paired recall comparisons; not written out
 
 
 def _scored(specs: Sequence[RunSpec], results: Sequence[dict | None]) -> Iterator[tuple[RunSpec, EvalSet, dict, Path]]:
@@ -42,14 +55,24 @@ def result_rows(
     """One row per (finished run, test set): mixture, method, seed, test_set, AP, AP50, AP25, run folder (relative
     to ``out``), the tables it belongs to (as its spec says) and its matches file; a set without boxes (AP None)
     also :data:`eval.errors.ALARMS`, its false alarms per 100 images. Runs scored before AP25 existed get it
-    from their predictions once (:func:`run_ap25`) when ``datasets`` is given, else None."""
+    from their predictions once (:func:`run_ap25`) when ``datasets`` is given, else None. With ``datasets``, a set
+    with boxes of a run also scored on sets without fire carries :data:`eval.operating.RECALL_AT_ALARMS`, the
+    share of its boxes found at the threshold where the run raises at most
+    :data:`eval.operating.ALARM_BUDGET` alarms per 100 of those images (pooled), and that ``threshold_at_alarms``."""
     rows = []
+    alarms = {} if datasets is None else {s.out: run_alarms(datasets, s, r) for s, r in zip(specs, results) if r}
     for spec, test, m, folder in _scored(specs, results):
         negatives = m.get(ALARMS) is not None
         ap25 = m.get("AP25") if datasets is None or negatives else run_ap25(datasets, folder, test.data, m)
+        point = operating = None
+        if datasets is not None and m.get("boxes") and (raised := alarms.get(spec.out)) is not None:
+            operating = (run_found(datasets, folder, test.data), raised)
+            point = operating_point(*operating)
         rows.append({
             "mixture": spec.mixture, "method": spec.method or "-", "seed": spec.seed, "test_set": test.name,
             "AP": m["AP"], "AP50": m["AP50"], "AP25": ap25, **({ALARMS: m[ALARMS]} if negatives else {}),
+            **({RECALL_AT_ALARMS: point.recall, "threshold_at_alarms": point.threshold, OPERATING: operating}
+               if point else {}),
             "run": spec.out.relative_to(out).as_posix(), "tables": list(spec.tables),
             "matches": (folder / "matches.npz").as_posix(),
         })  # fmt: skip
@@ -73,6 +96,39 @@ def run_ap25(datasets: Datasets, folder: Path, test: DataRef, scored: dict) -> f
     value = loose_ap(ds, _predictions(folder), [c.id for c in ds.categories])
     path.write_text(json.dumps({"AP25": value}) + "\n", encoding="utf-8")
     return value
+
+
+FOUND_FILE = "found_scores.json"  # the scores of the detections that found a box, kept beside the predictions
+
+
+def run_found(datasets: Datasets, folder: Path, test: DataRef) -> FoundScores:
+    """The :class:`eval.operating.FoundScores` of a run's scoring of a test set with fire, from
+    ``folder/predictions.json``; kept in ``folder/found_scores.json`` with the digest of the predictions it was
+    read from (a set scored again is read again)."""
+    predictions = (folder / "predictions.json").read_bytes()
+    key = hashlib.sha256(predictions).hexdigest()[:16]
+    path = folder / FOUND_FILE
+    if path.is_file() and (kept := json.loads(path.read_text(encoding="utf-8"))).get("predictions") == key:
+        arrays = {k: np.asarray(kept[k], dtype=np.int64) for k in ("image", "image_boxes")}
+        return FoundScores(np.asarray(kept["scores"], dtype=np.float64), **arrays)
+    ds = datasets.get(test)
+    found = found_scores(ds, json.loads(predictions), [c.id for c in ds.categories])
+    doc = {"predictions": key, "scores": found.scores.tolist(), "image": found.image.tolist(),
+           "image_boxes": found.image_boxes.tolist()}  # fmt: skip
+    path.write_text(json.dumps(doc) + "\n", encoding="utf-8")
+    return found
+
+
+def run_alarms(datasets: Datasets, spec: RunSpec, run: dict) -> Alarms | None:
+    """A finished run's detections on its sets without fire, pooled (:func:`eval.operating.pooled`); None when it
+    was scored on none (``run``: its ``results.json``)."""
+    sets = [(t, run["tests"][t.name]) for t in spec.test_sets if run["tests"].get(t.name, {}).get(ALARMS) is not None]
+    if not sets:
+        return None
+    found = [
+        alarms_of(_predictions(spec.out / m["scores"]), [i.id for i in datasets.get(t.data).images]) for t, m in sets
+    ]
+    return pooled(found)
 
 
 def _predictions(folder: Path) -> list[dict]:
@@ -103,15 +159,22 @@ def comparisons(cfg: ExperimentConfig, rows: Sequence[dict]) -> list[dict]:
         return []
     out = []
     rngs = {"table2": np.random.default_rng(0), CONTROL_TABLE: np.random.default_rng(1)}  # controls leave the rest
+    at_budget = np.random.default_rng(2)  # the recall comparisons draw apart: the AP ones stay as they were
     for test in dict.fromkeys(r["test_set"] for r in scored if "table2" in r["tables"]):
         runs: dict[tuple[str, str], list[MatchTable]] = {}
+        points: dict[tuple[str, str], list[tuple[FoundScores, Alarms] | None]] = {}
         for r in (r for r in scored if r["test_set"] == test):
             matches = MatchTable.load(Path(r["matches"]))
             for table in r["tables"]:
                 runs.setdefault((table, r["mixture"]), []).append(matches)
+                points.setdefault((table, r["mixture"]), []).append(r.get(OPERATING))
         for table, base, base_label, name in pairs:
             a, b = runs.get((table, base), []), runs.get(("table2", name), [])
-            for metric, d in (paired_bootstrap(a, b, rngs[table], cfg.report.bootstrap) if a and b else {}).items():
+            deltas = paired_bootstrap(a, b, rngs[table], cfg.report.bootstrap) if a and b else {}
+            pa, pb = points.get((table, base), []), points.get(("table2", name), [])
+            if pa and pb and None not in pa + pb:  # every run on both sides scored on the sets without fire
+                deltas[RECALL_AT_ALARMS] = paired_recall_bootstrap(pa, pb, at_budget, cfg.report.bootstrap)  # type: ignore[arg-type]
+            for metric, d in deltas.items():
                 out.append({"test_set": test, "mixture": name, "baseline": base_label, "metric": metric,
                             "delta": d.to_dict()})  # fmt: skip
     return out
@@ -142,7 +205,7 @@ def write_report(
     samples.update({f"synthetic {m}": ref for m, ref in pools.items()})
     samples.update(data.tests)
     shown = {k: datasets.get(ref) for k, ref in samples.items()} if cfg.report.samples else {}
-    alarms = (ALARMS,) if any(ALARMS in r for r in rows) else ()
+    alarms = tuple(k for k in (ALARMS, RECALL_AT_ALARMS) if any(k in r for r in rows))
     columns = ("mixture", "method", "seed", "test_set", "AP", "AP50", "AP25", *alarms, "run")
     title = cfg.report.title + (" — STAND-IN DATA" if data.standin else "")
     return write_study_report(
@@ -257,7 +320,7 @@ def write_summary(cfg: ExperimentConfig, specs, results, rows, out: Path, standi
     if standin:
         doc["notice"] = STANDIN_NOTICE
     (out / "experiment.json").write_text(json.dumps(doc, indent=1) + "\n", encoding="utf-8")
-    lines = [json.dumps({k: v for k, v in r.items() if k != "matches"}, sort_keys=True) for r in rows]
+    lines = [json.dumps({k: v for k, v in r.items() if k not in ("matches", OPERATING)}, sort_keys=True) for r in rows]
     (out / "results.jsonl").write_text("".join(line + "\n" for line in lines), encoding="utf-8")
 
 

@@ -152,3 +152,33 @@ def test_a_set_without_fire_shows_its_alarm_rate_in_tables_figures_and_runs(tmp_
     assert "<th>fire-free alarms/100</th>" in page and "<td><b>13.0 ± 0.7</b></td>" in page  # as is, not in percent
     assert "<th>alarms/100</th>" in page and "<td>12.5</td>" in page and "<td>30.0</td>" in page  # the run list
     assert "fire-free alarms/100" in (out / "tables" / "table2.md").read_text()
+
+
+def test_the_recall_at_the_alarm_budget_is_a_column_and_a_figure_when_every_fire_row_has_it(tmp_path):
+    from eval.errors import ALARMS
+    from eval.operating import RECALL_AT_ALARMS
+    from eval.report import table_metrics
+
+    fire = [
+        {
+            "mixture": m,
+            "seed": s,
+            "test_set": "common",
+            "AP": 0.3,
+            "AP50": 0.6,
+            "AP25": 0.7,
+            RECALL_AT_ALARMS: r + s / 10,
+        }
+        for m, r in (("R1000_S0", 0.2), ("R500_S500", 0.4))
+        for s in (0, 1)
+    ]
+    free = [{**r, "test_set": "fire-free", "AP": None, "AP50": None, "AP25": None, ALARMS: 9.0} for r in fire]
+    for r in free:
+        del r[RECALL_AT_ALARMS]
+    assert table_metrics([*fire, *free]) == ("AP", "AP50", "AP25", RECALL_AT_ALARMS)
+    assert table_metrics([*fire, {**fire[0], "seed": 2, RECALL_AT_ALARMS: None}]) == ("AP", "AP50", "AP25")
+    out = tmp_path / "study"
+    page = write_study_report(out, [*fire, *free], np.random.default_rng(0)).read_text()
+    assert (out / "figures" / f"figure5_{RECALL_AT_ALARMS}.png").is_file()
+    assert "<th>common recall@10 alarms/100</th>" in page and "<td><b>45.0 ± 7.1</b></td>" in page  # in percent
+    assert "common recall@10 alarms/100" in (out / "tables" / "table2.md").read_text()

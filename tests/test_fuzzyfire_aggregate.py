@@ -1,5 +1,6 @@
 """Aggregation: rows carry the tables their run's spec names, and when comparisons are skipped; a named set
-without fire gives rows with its alarm rate and no comparison."""
+without fire gives rows with its alarm rate and no comparison, and the sets with fire of a run scored on it their
+recall at the alarm budget (read once, again when scored again)."""
 
 from __future__ import annotations
 
@@ -77,6 +78,107 @@ def test_a_named_set_without_fire_gives_alarm_rows_and_no_comparison(
     monkeypatch.setattr(stats, "paired_bootstrap", lambda *a: {})
     assert comparisons(toy_config(mixtures=["R12_S0", "R6_S6"]), rows) == []
     assert sorted(set(loaded)) == ["common", "rare"]  # no AP on the set without fire: nothing to compare
+
+
+def test_a_set_with_fire_carries_its_recall_at_the_alarm_budget(tmp_path: Path) -> None:
+    import json
+    from dataclasses import replace
+
+    from factories import planted_dataset
+
+    from eval.errors import ALARMS
+    from eval.operating import RECALL_AT_ALARMS
+    from fuzzyfire.aggregate import FOUND_FILE
+
+    common = planted_dataset(tmp_path / "data", [[(1, (10, 10, 20, 20))], [(1, (50, 50, 20, 20))]])
+    free_images = planted_dataset(tmp_path / "free", [[] for _ in range(20)])
+    free_ref = DataRef(Path("/free"), {"kind": "free"})
+
+    class Loader:  # Datasets.get: the test sets' images and boxes; counts the reads of sets with fire
+        reads = 0
+
+        def get(self, ref: DataRef):
+            if ref == free_ref:
+                return free_images
+            Loader.reads += 1
+            return common
+
+    with_free = replace(_spec(tmp_path, "R12_S0", None, tables=("table2",)), evals=(EvalSet("fire-free", free_ref),))
+    without = _spec(tmp_path, "R6_S6", "method2", tables=("table2",))
+    box = lambda i, b, s: {"image_id": i, "category_id": 1, "bbox": b, "score": s}  # noqa: E731
+    for spec in (with_free, without):
+        for name, records in (("common", [box(1, [10, 10, 20, 20], 0.9), box(2, [50, 50, 20, 20], 0.3)]),
+                              ("rare", [box(1, [10, 10, 20, 20], 0.8)]),
+                              ("fire-free", [box(1, [0, 0, 5, 5], s) for s in (0.95, 0.5, 0.4, 0.2)])):  # fmt: skip
+            (spec.out / "scores" / name).mkdir(parents=True, exist_ok=True)
+            (spec.out / "scores" / name / "predictions.json").write_text(json.dumps(records), encoding="utf-8")
+    fire = {"AP": 0.5, "AP50": 0.5, "AP25": 0.5, "boxes": 2}
+    free = {"AP": None, "AP50": None, ALARMS: 50.0, "images": 20, "scores": "scores/fire-free"}
+    tests = {"common": {**fire, "scores": "scores/common"}, "rare": {**fire, "scores": "scores/rare"}}
+    results = [{"tests": {**tests, "fire-free": free}}, {"tests": tests}]
+    rows = result_rows([with_free, without], results, tmp_path, Loader())  # type: ignore[arg-type]
+    at = {(r["mixture"], r["test_set"]): r.get(RECALL_AT_ALARMS) for r in rows}
+    # 20 images without fire, 10 per 100: two alarms allowed, so the threshold lies just above 0.4 (the third)
+    assert at == {("R12_S0", "common"): 0.5, ("R12_S0", "rare"): 0.5, ("R12_S0", "fire-free"): None,
+                  ("R6_S6", "common"): None, ("R6_S6", "rare"): None}  # fmt: skip
+    assert 0.4 < rows[0]["threshold_at_alarms"] < 0.41 and Loader.reads == 2
+    assert (with_free.out / "scores" / "common" / FOUND_FILE).is_file()
+    assert result_rows([with_free], results[:1], tmp_path, Loader())[0][RECALL_AT_ALARMS] == 0.5  # type: ignore[arg-type]
+    assert Loader.reads == 2  # read from found_scores.json
+    (with_free.out / "scores" / "common" / "predictions.json").write_text(
+        json.dumps([box(1, [10, 10, 20, 20], 0.9), box(2, [50, 50, 20, 20], 0.6)]), encoding="utf-8"
+    )  # scored again: read again
+    assert result_rows([with_free], results[:1], tmp_path, Loader())[0][RECALL_AT_ALARMS] == 1.0  # type: ignore[arg-type]
+    assert Loader.reads == 3
+
+
+def test_the_recall_at_the_alarm_budget_is_compared_when_every_run_has_it(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    import json
+    from dataclasses import replace
+
+    from factories import planted_dataset
+
+    import eval.stats as stats
+    from eval.errors import ALARMS
+    from eval.operating import RECALL_AT_ALARMS
+
+    common = planted_dataset(tmp_path / "data", [[(1, (10, 10, 20, 20))], [(1, (50, 50, 20, 20))]])
+    free_images = planted_dataset(tmp_path / "free", [[] for _ in range(20)])
+    free_ref = DataRef(Path("/free"), {"kind": "free"})
+
+    class Loader:  # Datasets.get
+        def get(self, ref: DataRef):
+            return free_images if ref == free_ref else common
+
+    box = lambda i, b, s: {"image_id": i, "category_id": 1, "bbox": b, "score": s}  # noqa: E731
+    specs = [replace(_spec(tmp_path, m, method, tables=("table2",)), evals=(EvalSet("fire-free", free_ref),))
+             for m, method in (("R12_S0", None), ("R6_S6", "method2"))]  # fmt: skip
+    one = [box(1, [10, 10, 20, 20], 0.9)]
+    found = {"R12_S0": one, "R6_S6": [*one, box(2, [50, 50, 20, 20], 0.8)]}
+    for spec in specs:
+        for name, records in (("common", found[spec.mixture]), ("rare", found[spec.mixture]),
+                              ("fire-free", [box(1, [0, 0, 5, 5], 0.5)])):  # fmt: skip
+            (spec.out / "scores" / name).mkdir(parents=True, exist_ok=True)
+            (spec.out / "scores" / name / "predictions.json").write_text(json.dumps(records), encoding="utf-8")
+    fire = {"AP": 0.5, "AP50": 0.5, "AP25": 0.5, "boxes": 2}
+    free = {"AP": None, "AP50": None, ALARMS: 5.0, "images": 20, "scores": "scores/fire-free"}
+    tests = {
+        "common": {**fire, "scores": "scores/common"},
+        "rare": {**fire, "scores": "scores/rare"},
+        "fire-free": free,
+    }
+    rows = result_rows(specs, [{"tests": tests}, {"tests": tests}], tmp_path, Loader())  # type: ignore[arg-type]
+    monkeypatch.setattr(stats.MatchTable, "load", staticmethod(lambda path: path))
+    monkeypatch.setattr(stats, "paired_bootstrap", lambda *a: {})  # the AP comparisons: their own tests
+    out = comparisons(toy_config(mixtures=["R12_S0", "R6_S6"]), rows)
+    assert [(c["test_set"], c["mixture"], c["baseline"], c["metric"]) for c in out] == [
+        ("common", "R6_S6", "R12_S0", RECALL_AT_ALARMS), ("rare", "R6_S6", "R12_S0", RECALL_AT_ALARMS)]  # fmt: skip
+    assert out[0]["delta"]["value"] == 0.5  # one alarm of 20 images allowed at 10 per 100: 2 of 2 found vs 1 of 2
+    for row in rows:  # a run scored on no set without fire has none
+        row.pop("operating", None)
+    assert all(c["metric"] != RECALL_AT_ALARMS for c in comparisons(toy_config(mixtures=["R12_S0", "R6_S6"]), rows))
 
 
 def test_report_shows_the_pools_the_mixtures_trained_on() -> None:

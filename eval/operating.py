@@ -1,0 +1,186 @@
+"""A fire alarm's operating curve: the share of fire boxes a detector finds against the false alarms it raises on
+images without fire, as its confidence threshold moves - what a user who must pick a threshold asks, and the
+comparison of two detectors at the same alarm rate instead of at one fixed confidence (cf. the miss rate against
+false positives per image of pedestrian detection: Dollár et al., "Pedestrian Detection: An Evaluation of the
+State of the Art", TPAMI 2012).
+
+A fire box is *found* at threshold ``t`` when a detection of its class with score >= ``t`` matches it at IoU >=
+0.5 by COCO's matching (pycocotools: detections best first, each box once, at most 100 per image, crowd boxes
+ignored), so the recall at the lowest threshold is COCO's recall at IoU 0.5. An *alarm* is any detection with
+score >= ``t`` on an image of a set without boxes (:mod:`eval.errors` counts them at ``t`` = 0.25); the alarm
+rate is alarms per 100 such images. :func:`operating_point` reads the curve at an alarm budget: the lowest
+threshold at which the rate is at most the budget, and the recall there. Scores are those the detector wrote
+(the scoring keeps detections from ``score.conf``, 0.001 by default), so a budget above every alarm the
+detector raised is met at threshold 0 with every kept detection.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from curate.core.cocoeval import run_cocoeval
+from curate.core.dataset import Dataset
+from eval.stats import PairedDelta, paired_delta, resample_weights
+
+ALARM_BUDGET = 10.0  # false alarms per 100 images without fire at which Table 2 reads the recall (issue 23)
+RECALL_AT_ALARMS = "recall_at_10_alarms"  # result key of the recall of fire boxes at ALARM_BUDGET (0..1)
+FOUND_IOU = 0.5
+
+
+@dataclass(frozen=True)
+class FoundScores:
+    """The fire boxes of a scored set: ``scores`` (F,) float64, best first, of the detections that found a box at
+    IoU >= 0.5 (module docstring; one per found box), ``image`` (F,) int64 the index of each one's image and
+    ``image_boxes`` (I,) int64 the boxes a detection could find in each image (crowd boxes left out), images in
+    the order of their ids."""
+
+    scores: NDArray[np.float64]
+    image: NDArray[np.int64]
+    image_boxes: NDArray[np.int64]
+
+    @property
+    def boxes(self) -> int:
+        return int(self.image_boxes.sum())
+
+    def recall(self, threshold: float, weights: NDArray | None = None) -> float:
+        """Share (0..1) of the boxes found by detections with score >= ``threshold`` (0 when there is no box);
+        ``weights`` (I,): how often each image counts (a bootstrap resample; default once)."""
+        if weights is None:
+            return float(np.count_nonzero(self.scores >= threshold)) / self.boxes if self.boxes else 0.0
+        boxes = float(weights @ self.image_boxes)
+        return float(weights[self.image] @ (self.scores >= threshold)) / boxes if boxes else 0.0
+
+
+@dataclass(frozen=True)
+class Alarms:
+    """The detections on a set of ``images`` images without fire: ``scores`` (A,) float64 best first and
+    ``image`` (A,) int64 the index of each one's image."""
+
+    scores: NDArray[np.float64]
+    image: NDArray[np.int64]
+    images: int
+
+    def threshold(self, budget: float, weights: NDArray | None = None) -> float:
+        """The lowest threshold at which at most ``budget`` alarms per 100 images are raised (``weights`` (N,):
+        how often each image counts; default once): ``floor(budget * images / 100)`` are allowed, and when there
+        are more the threshold lies just above the first score over the allowance (ties there all left out);
+        0 when every alarm is allowed."""
+        if self.images < 1:
+            raise ValueError("the alarm rate needs at least one image without fire")
+        if budget < 0:
+            raise ValueError(f"the alarm budget must be >= 0, got {budget}")
+        w = np.ones(self.images) if weights is None else np.asarray(weights, dtype=np.float64)
+        allowed = np.floor(budget * w.sum() / 100.0 + 1e-9)
+        over = np.searchsorted(np.cumsum(w[self.image]), allowed, side="right")
+        return 0.0 if over >= len(self.scores) else float(np.nextafter(self.scores[over], np.inf))
+
+    def per_100(self, threshold: float) -> float:
+        """Alarms per 100 images at ``threshold`` (scores >= it)."""
+        return 100.0 * float(np.count_nonzero(self.scores >= threshold)) / self.images
+
+
+@dataclass(frozen=True)
+class OperatingPoint:
+    """A detector read at ``threshold`` (detections with score >= it count): ``alarms_per_100`` images without
+    fire, and ``recall`` (0..1) of the fire boxes."""
+
+    threshold: float
+    alarms_per_100: float
+    recall: float
+
+    def to_dict(self) -> dict[str, float]:
+        return {"threshold": self.threshold, "alarms_per_100": self.alarms_per_100, "recall": self.recall}
+
+
+def found_scores(dataset: Dataset, records: Sequence[dict[str, Any]], cat_ids: Sequence[int]) -> FoundScores:
+    """The :class:`FoundScores` of COCO result ``records`` ({image_id, category_id, bbox xywh px, score}) on
+    ``dataset`` over the categories ``cat_ids``, by pycocotools' matching at IoU 0.5 (module docstring)."""
+    ev = run_cocoeval(dataset, records, cat_ids, iou_thresholds=[FOUND_IOU])
+    num_areas, num_images = len(ev.params.areaRng), len(ev.params.imgIds)
+    max_det = ev.params.maxDets[-1]
+    image_boxes = np.zeros(num_images, dtype=np.int64)
+    scores, image = [np.zeros(0)], [np.zeros(0, dtype=np.int64)]
+    for k in range(len(ev.params.catIds)):
+        first = k * num_areas * num_images  # area "all" of class k
+        for i, e in enumerate(ev.evalImgs[first : first + num_images]):
+            if e is None:
+                continue
+            image_boxes[i] += int(np.count_nonzero(np.asarray(e["gtIgnore"]) == 0))
+            found = (np.asarray(e["dtMatches"])[0, :max_det] != 0) & ~np.asarray(e["dtIgnore"], dtype=bool)[0, :max_det]
+            scores.append(np.asarray(e["dtScores"][:max_det], dtype=np.float64)[found])
+            image.append(np.full(int(found.sum()), i, dtype=np.int64))
+    all_scores = np.concatenate(scores)
+    order = np.argsort(-all_scores, kind="stable")
+    return FoundScores(all_scores[order], np.concatenate(image)[order], image_boxes)
+
+
+def alarms_of(records: Sequence[dict[str, Any]], image_ids: Sequence[int]) -> Alarms:
+    """The :class:`Alarms` of the detections ``records`` (COCO results) on the images ``image_ids`` without fire
+    (their order is the images' index; a record on another image is an error)."""
+    index = {int(i): k for k, i in enumerate(image_ids)}
+    try:
+        image = np.asarray([index[int(r["image_id"])] for r in records], dtype=np.int64)
+    except KeyError as exc:
+        raise ValueError(f"a detection on image {exc.args[0]}, which is not among the images without fire") from None
+    scores = np.asarray([r["score"] for r in records], dtype=np.float64)
+    order = np.argsort(-scores, kind="stable")
+    return Alarms(scores[order], image[order], len(index))
+
+
+def pooled(sets: Sequence[Alarms]) -> Alarms:
+    """Several sets of images without fire as one (their images one after the other)."""
+    if not sets:
+        raise ValueError("no set of images without fire to pool")
+    offsets = np.cumsum([0, *(a.images for a in sets)])[:-1]
+    scores = np.concatenate([a.scores for a in sets])
+    image = np.concatenate([a.image + o for a, o in zip(sets, offsets)])
+    order = np.argsort(-scores, kind="stable")
+    return Alarms(scores[order], image[order], int(sum(a.images for a in sets)))
+
+
+def operating_point(found: FoundScores, alarms: Alarms, budget: float = ALARM_BUDGET) -> OperatingPoint:
+    """The detector at the lowest threshold that raises at most ``budget`` alarms per 100 images without fire
+    (:meth:`Alarms.threshold`), with its alarm rate and ``found``'s recall there."""
+    threshold = alarms.threshold(budget)
+    return OperatingPoint(threshold, alarms.per_100(threshold), found.recall(threshold))
+
+
+def operating_curve(found: FoundScores, alarms: Alarms) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """(alarms per 100 images (P,), recall (P,)) at every threshold where either changes (the scores of both
+    sides), from the highest threshold down: both rise monotonically."""
+    thresholds = np.unique(np.concatenate([found.scores, alarms.scores]))[::-1]
+    rate = 100.0 * np.searchsorted(-alarms.scores, -thresholds, side="right") / alarms.images
+    recall = np.searchsorted(-found.scores, -thresholds, side="right") / max(found.boxes, 1)
+    return rate.astype(np.float64), recall.astype(np.float64)
+
+
+def paired_recall_bootstrap(
+    a: Sequence[tuple[FoundScores, Alarms]],
+    b: Sequence[tuple[FoundScores, Alarms]],
+    rng: np.random.Generator,
+    num_samples: int = 1000,
+    budget: float = ALARM_BUDGET,
+    level: float = 0.95,
+) -> PairedDelta:
+    """Paired bootstrap of the recall difference ``b - a`` at ``budget`` alarms per 100 images: each resample
+    draws the images with fire and, independently, the images without fire, and reads every model at its own
+    threshold on the drawn images (the threshold is part of what is resampled). Each side may be several runs
+    (e.g. one per seed), averaged per resample; all must be scored on the same images."""
+    if not a or not b:
+        raise ValueError("paired bootstrap needs at least one run on each side")
+    runs = [*a, *b]
+    if any(len(f.image_boxes) != len(runs[0][0].image_boxes) or al.images != runs[0][1].images for f, al in runs):
+        raise ValueError("paired bootstrap needs every run scored on the same images")
+
+    def mean_recall(side, wf=None, wn=None) -> float:
+        return float(np.mean([f.recall(al.threshold(budget, wn), wf) for f, al in side]))
+
+    fire = resample_weights(len(runs[0][0].image_boxes), num_samples, rng)
+    free = resample_weights(runs[0][1].images, num_samples, rng)
+    samples = np.array([mean_recall(b, wf, wn) - mean_recall(a, wf, wn) for wf, wn in zip(fire, free)])
+    return paired_delta(mean_recall(b) - mean_recall(a), samples, level)
