@@ -30,6 +30,7 @@ from eval.stats import PairedDelta, paired_delta, resample_weights
 ALARM_BUDGET = 10.0  # false alarms per 100 images without fire at which Table 2 reads the recall (issue 23)
 RECALL_AT_ALARMS = "recall_at_10_alarms"  # result key of the recall of fire boxes at ALARM_BUDGET (0..1)
 FOUND_IOU = 0.5
+OPERATING = "operating"  # a study row's (FoundScores, Alarms): its curve and paired comparisons; not written out
 
 
 @dataclass(frozen=True)
@@ -184,3 +185,11 @@ def paired_recall_bootstrap(
     free = resample_weights(runs[0][1].images, num_samples, rng)
     samples = np.array([mean_recall(b, wf, wn) - mean_recall(a, wf, wn) for wf, wn in zip(fire, free)])
     return paired_delta(mean_recall(b) - mean_recall(a), samples, level)
+
+
+def recall_at_rates(found: FoundScores, alarms: Alarms, rates: NDArray[np.float64]) -> NDArray[np.float64]:
+    """The recall (R,) at each alarm budget of ``rates`` (R,) (alarms per 100 images): :func:`operating_point`
+    read along the curve."""
+    rate, recall = operating_curve(found, alarms)
+    at = np.searchsorted(rate, rates, side="right") - 1  # the last curve point within each budget
+    return np.where(at >= 0, recall[np.maximum(at, 0)], found.recall(np.inf)).astype(np.float64)

@@ -1,4 +1,5 @@
-"""PNG figures: precision-recall curves of one evaluation and Figure-5-style bars with error bars.
+"""PNG figures: precision-recall curves of one evaluation, Figure-5-style bars with error bars, and recall against
+false alarms (:mod:`eval.operating`).
 
 matplotlib's object API only (``Figure``), so plotting touches no global state.
 """
@@ -100,3 +101,38 @@ def plot_figure5(results: Sequence[Mapping[str, object]], path: Path, metric: st
     ylabel = "false alarms per 100 images" if metric == ALARMS else f"{METRIC_LABELS.get(metric, metric)} (%)"
     name = "false alarms" if metric == ALARMS else METRIC_LABELS.get(metric, metric)
     return plot_bars(groups, series, path, ylabel=ylabel, title=title or f"{name} by training mixture")
+
+
+def plot_operating_curves(
+    curves: Mapping[str, NDArray[np.float64]],
+    rates: NDArray[np.float64],
+    path: Path,
+    budget: float | None = None,
+    title: str = "",
+) -> Path:
+    """Recall (in percent) against false alarms per 100 images without fire: per label (e.g. a mixture) its runs'
+    recall (N, R) at the alarm rates ``rates`` (R,), the mean as a line and the runs' range as a band; a dotted
+    line at ``budget``."""
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(5.8, 4.4), dpi=110)
+    ax = fig.add_subplot()
+    for label, recall in curves.items():
+        runs = 100.0 * np.atleast_2d(recall)
+        (line,) = ax.plot(rates, runs.mean(axis=0), label=f"{label} ({len(runs)} run{'s' * (len(runs) > 1)})")
+        if len(runs) > 1:
+            ax.fill_between(rates, runs.min(axis=0), runs.max(axis=0), color=line.get_color(), alpha=0.15)
+    if budget is not None:
+        ax.axvline(budget, color="0.4", linestyle=":", linewidth=1)
+    ax.set_xlim(float(rates[0]), float(rates[-1]))
+    ax.set_ylim(bottom=0)
+    ax.set_xlabel("false alarms per 100 images without fire")
+    ax.set_ylabel("fire boxes found at IoU 0.5 (%)")
+    ax.grid(alpha=0.3)
+    ax.set_title(title)
+    if curves:
+        ax.legend(loc="lower right", fontsize=8)
+    fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path)
+    return path

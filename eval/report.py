@@ -16,7 +16,7 @@ from curate.core.dataset import Dataset
 from curate.core.imageio import ImageError, read_image
 from eval.draw import draw_boxes
 from eval.errors import ALARMS
-from eval.operating import RECALL_AT_ALARMS
+from eval.operating import ALARM_BUDGET, OPERATING, RECALL_AT_ALARMS, recall_at_rates
 from eval.tables import METRIC_LABELS, Table, heading, marks, shown_scale, to_csv, to_latex, to_markdown
 
 _CSS = """body{font-family:system-ui,sans-serif;margin:2em auto;max-width:1100px;color:#222}
@@ -226,7 +226,9 @@ def write_study_report(
     (``out/tables/controls.{md,csv,tex}``, rows labelled ``<mixture> copies``) and listed with the runs;
     ``gaps``: see :func:`gaps_html` (also written as ``out/tables/gap.json``); ``comparisons``: see :func:`comparisons_html` (also written as
     ``out/tables/comparisons.csv``, :func:`comparisons_csv`); ``errors``: see :func:`errors_html`;
-    ``samples``: datasets to show a few images of, by label; ``notice``: shown at the top of the page."""
+    ``samples``: datasets to show a few images of, by label; ``notice``: shown at the top of the page. Rows of sets
+    with fire that carry :data:`eval.operating.OPERATING` also draw ``out/figures/operating_<test set>.png``
+    (:func:`operating_figures`)."""
     from eval.plots import plot_figure5
     from eval.tables import control_table, table1, table2
 
@@ -248,6 +250,9 @@ def write_study_report(
         figures = [plot_figure5(results, out / "figures" / f"figure5_{m}.png", m) for m in shown]
         sections.append(("Table 2 — training mixtures", table_html(t2)))
         sections.append(("Figure 5", "".join(figure_html(f, out, f.stem) for f in figures)))
+        if curves := operating_figures(results, out / "figures"):
+            caption = f"the dotted line: {ALARM_BUDGET:g} alarms per 100, where Table 2 reads the recall"
+            sections.append(("Fire found against false alarms", "".join(figure_html(f, out, caption) for f in curves)))
     if controls:
         tc = control_table(controls, metrics=table_metrics(controls))
         write_table_files(tc, out / "tables", "controls")
@@ -282,6 +287,27 @@ def drop_stale_tables(folder: Path, written: Collection[str], comparisons: bool)
     stale = [folder / f"{stem}{suffix}" for stem in TABLE_STEMS if stem not in written for suffix in TABLE_SUFFIXES]
     for path in stale + ([] if comparisons else [folder / COMPARISONS_FILE]):
         path.unlink(missing_ok=True)
+
+
+OPERATING_RATES = np.linspace(0.0, 100.0, 401)  # alarms per 100 images at which the operating curves are drawn
+
+
+def operating_figures(results: Sequence[Mapping[str, Any]], folder: Path) -> list[Path]:
+    """``folder/operating_<test set>.png`` per set with fire whose rows carry :data:`eval.operating.OPERATING`:
+    each mixture's recall against false alarms per 100 images without fire (:func:`eval.plots.plot_operating_curves`,
+    its seeds' mean and range), up to 100 alarms per 100 images."""
+    from eval.plots import plot_operating_curves
+
+    paths = []
+    for test in dict.fromkeys(r["test_set"] for r in results if r.get(OPERATING) is not None):
+        curves: dict[str, list] = {}
+        for r in (r for r in results if r["test_set"] == test and r.get(OPERATING) is not None):
+            curves.setdefault(r["mixture"], []).append(recall_at_rates(*r[OPERATING], OPERATING_RATES))
+        title = f"{test}: fire found against false alarms"
+        path = folder / f"operating_{_slug(test)}.png"
+        paths.append(plot_operating_curves({m: np.stack(c) for m, c in curves.items()}, OPERATING_RATES, path,
+                                           ALARM_BUDGET, title))  # fmt: skip
+    return paths
 
 
 def table_metrics(results: Sequence[Mapping[str, Any]]) -> tuple[str, ...]:

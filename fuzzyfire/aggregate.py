@@ -15,6 +15,7 @@ from curate.core.config import to_dict
 from curate.mix import parse_mixture
 from eval.errors import ALARMS
 from eval.operating import (
+    OPERATING,
     RECALL_AT_ALARMS,
     Alarms,
     FoundScores,
@@ -35,8 +36,6 @@ STANDIN_NOTICE = (
     "composited on photographs shipped with matplotlib), not real fire photographs. The numbers show that the "
     "pipeline works; they say nothing about real fire detection. Point real: and rare: at your own folders."
 )
-
-OPERATING = "operating"  # a row's (found boxes, alarms) for the paired recall comparisons; not written out
 
 
 def _scored(specs: Sequence[RunSpec], results: Sequence[dict | None]) -> Iterator[tuple[RunSpec, EvalSet, dict, Path]]:

@@ -19,6 +19,7 @@ from eval.operating import (
     operating_point,
     paired_recall_bootstrap,
     pooled,
+    recall_at_rates,
 )
 
 FIRE, SMOKE = 1, 2
@@ -134,6 +135,11 @@ def test_the_point_lies_on_the_curve_and_the_curve_rises() -> None:
         within = rate <= budget
         best = recall[within].max() if within.any() else 0.0
         assert point.alarms_per_100 <= budget and point.recall == pytest.approx(best)
+    budgets = np.array([0.0, 1.9, 2.0, 5.0, 10.0, 33.0, 100.0])
+    expected = [operating_point(found, alarms, b).recall for b in budgets]
+    assert recall_at_rates(found, alarms, budgets).tolist() == pytest.approx(expected)
+    top = _alarms([1.0], 50)  # the best score is an alarm: nothing is found within half an alarm per 100
+    assert recall_at_rates(found, top, np.array([0.5, 2.0])).tolist() == [0.0, pytest.approx(40 / 60)]
 
 
 def test_the_paired_bootstrap_brackets_the_difference_and_is_deterministic() -> None:

@@ -50,3 +50,19 @@ def test_figure5_of_a_metric_has_a_bar_per_set_that_has_it(tmp_path, monkeypatch
     _png(plot_figure5(rows, tmp_path / "ap.png", "AP"))
     _png(plot_figure5(rows, tmp_path / "alarms.png", ALARMS))
     assert drawn == {"AP (%)": {"common": [25.0, 25.0]}, "false alarms per 100 images": {"free": [40.0, 40.0]}}
+
+
+def test_operating_curves_draw_a_line_per_label_and_a_band_over_several_runs(tmp_path, monkeypatch):
+    from matplotlib.axes import Axes
+
+    from eval.plots import plot_operating_curves
+
+    rates = np.linspace(0, 100, 11)
+    bands: list[int] = []
+    original = Axes.fill_between
+    monkeypatch.setattr(
+        Axes, "fill_between", lambda self, x, lo, hi, **k: bands.append(len(x)) or original(self, x, lo, hi, **k)
+    )
+    curves = {"two runs": np.stack([rates / 200, rates / 100]), "one run": rates[None] / 150}
+    w, h = _png(plot_operating_curves(curves, rates, tmp_path / "op.png", 10.0))
+    assert w > 300 and h > 300 and bands == [11]  # the range of the two runs; one run has none

@@ -182,3 +182,22 @@ def test_the_recall_at_the_alarm_budget_is_a_column_and_a_figure_when_every_fire
     assert (out / "figures" / f"figure5_{RECALL_AT_ALARMS}.png").is_file()
     assert "<th>common recall@10 alarms/100</th>" in page and "<td><b>45.0 ± 7.1</b></td>" in page  # in percent
     assert "common recall@10 alarms/100" in (out / "tables" / "table2.md").read_text()
+
+
+def test_rows_with_their_operating_data_draw_the_recall_against_false_alarms(tmp_path):
+    from eval.operating import OPERATING, FoundScores, alarms_of
+
+    def row(mixture: str, seed: int, found: list[float]) -> dict:
+        scores = np.array(found)
+        operating = (FoundScores(scores, np.arange(len(found)), np.ones(10, dtype=np.int64)),
+                     alarms_of([{"image_id": 1, "score": 0.5}], [1, 2, 3, 4]))  # fmt: skip
+        return {"mixture": mixture, "seed": seed, "test_set": "common", "AP": 0.3, "AP50": 0.6, OPERATING: operating}
+
+    rows = [row("R1000_S0", 0, [0.9, 0.4]), row("R1000_S0", 1, [0.6]), row("R500_S500", 0, [0.9, 0.8, 0.7])]
+    out = tmp_path / "study"
+    page = write_study_report(out, rows, np.random.default_rng(0)).read_text()
+    assert (out / "figures" / "operating_common.png").is_file()
+    assert "Fire found against false alarms" in page and "figures/operating_common.png" in page
+    plain = tmp_path / "plain"
+    write_study_report(plain, [{k: v for k, v in r.items() if k != OPERATING} for r in rows], np.random.default_rng(0))
+    assert not (plain / "figures" / "operating_common.png").exists()
