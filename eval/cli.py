@@ -11,6 +11,7 @@ from pathlib import Path
 from curate.core.commands import add_command
 from curate.core.formats.registry import FORMATS
 from eval.cli_options import add_model_args, build_detector
+from eval.operating import ALARM_BUDGET, RECALL_AT_ALARMS
 
 
 def _fmt(value: float | None) -> str:
@@ -188,22 +189,87 @@ def cmd_compare(args: argparse.Namespace) -> int:
         "samples": args.samples,
         "seed": args.seed,
     }
+    if args.negatives is not None:
+        try:
+            points = _operating_data(args, results)
+        except (ModelError, ScoreError, ClassMatchError, ValueError) as exc:
+            print(f"error: {exc}", file=sys.stderr)
+            return 2
+        deltas[RECALL_AT_ALARMS] = _add_operating(doc, points, args)
     if args.json:
         print(json.dumps(doc, indent=1))
         return 0
     for side in ("A", "B"):
         runs = doc[side]["runs"]
         for run in runs if len(runs) > 1 else []:
-            print(f"{side}      {run['model']}  AP {_fmt(run['AP'])}  AP50 {_fmt(run['AP50'])}")
+            print(f"{side}      {run['model']}  AP {_fmt(run['AP'])}  AP50 {_fmt(run['AP50'])}{_at_budget(run)}")
         name = doc[side]["model"] if len(runs) == 1 else f"mean of {len(runs)} runs"
-        print(f"{side}      {name}  AP {_fmt(doc[side]['AP'])}  AP50 {_fmt(doc[side]['AP50'])}")
-    for key, d in deltas.items():
-        iv = d.interval
         print(
-            f"B - A  {key} {100 * iv.point:+.1f} points, 95% CI [{100 * iv.low:+.1f}, {100 * iv.high:+.1f}], "
-            f"p = {d.p_value:.3f} ({args.samples} paired resamples of {doc['images']} images)"
+            f"{side}      {name}  AP {_fmt(doc[side]['AP'])}  AP50 {_fmt(doc[side]['AP50'])}{_at_budget(runs[0] if len(runs) == 1 else doc[side])}"
+        )
+    if "negatives" in doc:
+        neg = doc["negatives"]
+        print(f"alarms {neg['images']} images without fire ({neg['data']}): each model read at the threshold where it "
+              f"raises at most {neg['budget']:g} alarms per 100 of them")  # fmt: skip
+    for key, d in deltas.items():
+        iv, images = d.interval, f"{doc['images']} images"
+        name = key if key != RECALL_AT_ALARMS else f"recall at {args.alarm_budget:g} alarms/100"
+        images += f" and {doc['negatives']['images']} without fire" if key == RECALL_AT_ALARMS else ""
+        print(
+            f"B - A  {name} {100 * iv.point:+.1f} points, 95% CI [{100 * iv.low:+.1f}, {100 * iv.high:+.1f}], "
+            f"p = {d.p_value:.3f} ({args.samples} paired resamples of {images})"
         )
     return 0
+
+
+def _at_budget(side: dict) -> str:
+    """``"  recall 0.306 at threshold 0.442"`` of a compare side's run read at the alarm budget (a side of several
+    runs: their mean recall); empty without ``--negatives``."""
+    if RECALL_AT_ALARMS not in side:
+        return ""
+    return f"  recall {side[RECALL_AT_ALARMS]:.3f}" + (
+        f" at threshold {side['threshold']:.3f}" if "threshold" in side else ""
+    )
+
+
+def _operating_data(args: argparse.Namespace, results: list[list]) -> list[list]:
+    """Per side, per model: its (:class:`eval.operating.FoundScores` on the test set, :class:`eval.operating.Alarms`
+    on ``--negatives``), each model scored there now. Raises ValueError when that set has boxes."""
+    from eval.operating import alarms_of, found_scores
+    from eval.score import ALL_SPLITS, load_test_set
+
+    negatives = load_test_set(args.negatives, "auto", ALL_SPLITS)
+    if negatives.dataset.annotations:
+        raise ValueError(f"{args.negatives}: --negatives takes images without fire; it has "
+                         f"{len(negatives.dataset.annotations)} boxes")  # fmt: skip
+    image_ids = [img.id for img in negatives.dataset.images]
+    out = []
+    for models, side in zip((args.model_a, args.model_b), results):
+        raised = [_score_model(m, args, negatives.dataset, negatives.problems) for m in models]
+        out.append([(found_scores(r.dataset, r.records, r.evaluation.params.catIds), alarms_of(n.records, image_ids))
+                    for r, n in zip(side, raised)])  # fmt: skip
+    return out
+
+
+def _add_operating(doc: dict, points: list[list], args: argparse.Namespace):  # -> eval.stats.PairedDelta
+    """Read every run at ``--alarm-budget`` into ``doc`` (each run's recall and threshold, each side's mean recall,
+    ``negatives``: the set and its size) and return the paired bootstrap of the recall difference B - A."""
+    import numpy as np
+
+    from eval.operating import operating_point, paired_recall_bootstrap
+
+    for key, side in zip(("A", "B"), points):
+        for run, (found, alarms) in zip(doc[key]["runs"], side):
+            point = operating_point(found, alarms, args.alarm_budget)
+            run.update({RECALL_AT_ALARMS: point.recall, "threshold": point.threshold})
+        doc[key][RECALL_AT_ALARMS] = float(np.mean([run[RECALL_AT_ALARMS] for run in doc[key]["runs"]]))
+    images = points[0][0][1].images
+    doc["negatives"] = {"data": str(args.negatives), "images": images, "budget": args.alarm_budget}
+    delta = paired_recall_bootstrap(
+        points[0], points[1], np.random.default_rng(args.seed), args.samples, args.alarm_budget
+    )
+    doc["delta"][RECALL_AT_ALARMS] = delta.to_dict()
+    return delta
 
 
 def _intervals(result, samples: int, seed: int) -> dict[str, dict[str, float]]:
@@ -306,12 +372,29 @@ def register(sub: argparse._SubParsersAction) -> None:
         "example:\n  fuzzyfire compare runs/R1000_S0/seed0/best.onnx runs/R750_S250/seed0/best.onnx \\\n"
         "      --data ../shared/data/fire-smoke-608 --split test --drop-class default\n"
         "  fuzzyfire compare a/seed0/best.onnx,a/seed1/best.onnx b/seed0/best.onnx,b/seed1/best.onnx \\\n"
-        "      --data out/study/data/curated-6407ecb64193 --split test",
+        "      --data out/study/data/curated-6407ecb64193 --split test\n"
+        "  fuzzyfire compare a.onnx b.onnx --data out/study/data/curated-6407ecb64193 --split test \\\n"
+        "      --negatives ../shared/data/fire-free   # + recall at 10 false alarms per 100 fire-free photos",
     )
     p.add_argument("model_a", type=_models, help="baseline detector .onnx (A), or several: A0.onnx,A1.onnx,...")
     p.add_argument("model_b", type=_models, help="detector compared with it (B), or several: B0.onnx,B1.onnx,...")
     _add_scoring_args(p)
     p.add_argument("--samples", type=int, default=1000, help="bootstrap resamples (default 1000)")
+    p.add_argument(
+        "--negatives",
+        type=Path,
+        metavar="DATA",
+        help="images without fire (a folder of photos, or any set without boxes; every image): each model is "
+        "also scored there and read at the threshold where it raises at most --alarm-budget alarms per 100 of "
+        "them; adds the recall of the test set's boxes there and its paired difference (both sets resampled)",
+    )
+    p.add_argument(
+        "--alarm-budget",
+        type=float,
+        default=ALARM_BUDGET,
+        metavar="N",
+        help=f"false alarms per 100 images without fire for --negatives (default {ALARM_BUDGET:g})",
+    )
     p.add_argument(
         "--json",
         action="store_true",

@@ -170,6 +170,47 @@ def test_compare_averages_several_runs_per_side(work, capsys):
     assert f"B      {shifted}  AP " in text and "B      mean of 2 runs  AP " in text
 
 
+def test_compare_reads_both_models_at_the_alarm_budget_of_a_set_without_fire(work, tmp_path, capsys):
+    import numpy as np
+    from PIL import Image
+
+    good = oracle_model(work["root"] / "good3.onnx")
+    shifted = oracle_model(work["root"] / "shift3.onnx", rows=rows_for(shift=3.0, duplicates=True))
+    for k, grey in enumerate((240, 240, 7, 7)):  # the oracles fire on the first two as on "large" (one box, 0.70)
+        path = tmp_path / "photos" / f"p{k}.png"
+        path.parent.mkdir(exist_ok=True)
+        Image.fromarray(np.full((50, 60, 3), grey, dtype=np.uint8)).save(path)
+    data = [
+        "--data",
+        str(work["test"]),
+        "--samples",
+        "100",
+        "--format",
+        "yolov5",
+        "--negatives",
+        str(tmp_path / "photos"),
+    ]
+    assert main(["compare", str(good), f"{good},{shifted}", *data, "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    # 4 images without fire at 10 per 100: no alarm allowed, so the threshold lies just above 0.70 and the "large"
+    # box (found at 0.70) is lost: 5 of the 6 boxes
+    assert doc["negatives"]["images"] == 4 and doc["negatives"]["budget"] == 10.0
+    run = doc["A"]["runs"][0]
+    assert run["recall_at_10_alarms"] == pytest.approx(5 / 6) and 0.70 < run["threshold"] < 0.701
+    assert doc["A"]["recall_at_10_alarms"] == pytest.approx(5 / 6)
+    shifted_recall = doc["B"]["runs"][1]["recall_at_10_alarms"]
+    assert doc["B"]["recall_at_10_alarms"] == pytest.approx((5 / 6 + shifted_recall) / 2)
+    delta = doc["delta"]["recall_at_10_alarms"]
+    assert delta["value"] == pytest.approx(doc["B"]["recall_at_10_alarms"] - 5 / 6) and delta["low"] <= delta["value"]
+    assert main(["compare", str(good), str(good), *data, "--alarm-budget", "50"]) == 0  # two alarms allowed: all found
+    text = capsys.readouterr().out
+    assert "recall 1.000 at threshold 0.000" in text and "raises at most 50 alarms per 100 of them" in text
+    assert "B - A  recall at 50 alarms/100 +0.0 points, 95% CI [+0.0, +0.0], p = 1.000" in text
+    assert "of 6 images and 4 without fire" in text
+    assert main(["compare", str(good), str(good), *data[:-1], str(work["test"])]) == 2  # a set with boxes
+    assert "--negatives takes images without fire; it has 6 boxes" in capsys.readouterr().err
+
+
 def test_compare_refuses_an_empty_side(work, capsys):
     with pytest.raises(SystemExit):
         main(["compare", ",", str(work["root"] / "x.onnx"), "--data", str(work["test"])])
