@@ -60,7 +60,10 @@ Lines: ``synth_use_<variant>_<test>_<metric>_delta: +d AP points (95% CI lo..hi,
 test set with fire, ``synth_use_<variant>_vs_copies_<test>_<metric>_delta`` the same against the variant's control
 (R200_S200 on flame-free copies of its real images: ``grid.control``, on in shared-data.yaml; trained once,
 shared by the variants that differ only in their places, flames or frames: fuzzyfire/controls.py KEPT), ``synth_use_<variant>_R200_S200_<test>_AP50: mean % (seeds: ...), std`` and, on a
-negatives-only set, ``..._alarms_per_100``. Skips cleanly without ../shared/data.
+negatives-only set, ``..._alarms_per_100``; with a negatives-only set, also
+``synth_use_<variant>_<test>_recall_at_10_alarms_delta``: the paired difference of the share of boxes found where
+each model raises at most 10 alarms per 100 of those images (eval/operating.py). Skips cleanly without
+../shared/data.
 
 .venv/bin/python bench/bench_synth_usefulness.py [--out out/bench-synth-usefulness] [--seeds 0,1,2] [--only look,own_frames]  (the default pair)
 """
@@ -75,6 +78,7 @@ from pathlib import Path
 
 import numpy as np
 
+from eval.operating import RECALL_AT_ALARMS
 from fuzzyfire.controls import control_label
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -294,10 +298,13 @@ def _print_deltas(name: str, table: Path) -> None:
     """The R200_S200 - R200_S0 lines of a study's ``tables/comparisons.csv``, then the R200_S200 - its control
     lines (``vs_copies``: the same mixture on flame-free copies of its real images, ``grid.control``)."""
     with table.open(encoding="utf-8") as f:
-        rows = [r for r in csv.DictReader(f) if r["mixture"] == MIXTURE and r["metric"] in ("AP50", "AP")]
+        rows = [
+            r for r in csv.DictReader(f) if r["mixture"] == MIXTURE and r["metric"] in ("AP50", "AP", RECALL_AT_ALARMS)
+        ]
     for baseline, what in ((BASELINE, ""), (control_label(MIXTURE), "vs_copies_")):
         for row in (r for r in rows if r["baseline"] == baseline):
-            print(f"synth_use_{name}_{what}{row['test_set']}_{row['metric']}_delta: {float(row['delta']):+.1f} AP "
+            unit = "recall" if row["metric"] == RECALL_AT_ALARMS else "AP"
+            print(f"synth_use_{name}_{what}{row['test_set']}_{row['metric']}_delta: {float(row['delta']):+.1f} {unit} "
                   f"points (95% CI {float(row['low']):+.1f}..{float(row['high']):+.1f}, p {row['p_value']})")  # fmt: skip
 
 
