@@ -235,20 +235,16 @@ def _at_budget(side: dict) -> str:
 def _operating_data(args: argparse.Namespace, results: list[list]) -> list[list]:
     """Per side, per model: its (:class:`eval.operating.FoundScores` on the test set, :class:`eval.operating.Alarms`
     on ``--negatives``), each model scored there now. Raises ValueError when that set has boxes."""
-    from eval.operating import alarms_of, found_scores
-    from eval.score import ALL_SPLITS, load_test_set
+    from eval.score import ALL_SPLITS, load_test_set, score_operating
 
     negatives = load_test_set(args.negatives, "auto", ALL_SPLITS)
     if negatives.dataset.annotations:
         raise ValueError(f"{args.negatives}: --negatives takes images without fire; it has "
                          f"{len(negatives.dataset.annotations)} boxes")  # fmt: skip
-    image_ids = [img.id for img in negatives.dataset.images]
-    out = []
-    for models, side in zip((args.model_a, args.model_b), results):
-        raised = [_score_model(m, args, negatives.dataset, negatives.problems) for m in models]
-        out.append([(found_scores(r.dataset, r.records, r.evaluation.params.catIds), alarms_of(n.records, image_ids))
-                    for r, n in zip(side, raised)])  # fmt: skip
-    return out
+    return [
+        [score_operating(r, _score_model(m, args, negatives.dataset, negatives.problems)) for m, r in zip(models, side)]
+        for models, side in zip((args.model_a, args.model_b), results)
+    ]
 
 
 def _add_operating(doc: dict, points: list[list], args: argparse.Namespace):  # -> eval.stats.PairedDelta

@@ -20,6 +20,7 @@ from eval.error_pictures import WORST, write_error_pictures
 from eval.errors import ALARM_CONF, ErrorBreakdown, error_breakdown
 from eval.found import BoxesFound, boxes_found
 from eval.onnx_model import ModelSpec, OnnxDetector
+from eval.operating import Alarms, FoundScores, alarms_of, found_scores
 from eval.plots import plot_pr_curves, pr_curves_from_eval
 from eval.predict import PredictOptions, predict_dataset
 from eval.stats import MatchTable
@@ -156,6 +157,15 @@ def score_found(result: ScoreResult, conf: float = ALARM_CONF) -> BoxesFound:
     classes it was scored on."""
     scored, cat_ids = _scored(result)
     return boxes_found(scored, result.records, cat_ids, conf)
+
+
+def score_operating(fire: ScoreResult, negatives: ScoreResult) -> tuple[FoundScores, Alarms]:
+    """A model's operating data (:mod:`eval.operating`) from its scoring of a set with fire and of a set without:
+    the boxes it found and the alarms it raised, over the images (those that could be read) and classes each
+    was scored on."""
+    scored, cat_ids = _scored(fire)
+    free, _ = _scored(negatives)
+    return found_scores(scored, fire.records, cat_ids), alarms_of(negatives.records, [img.id for img in free.images])
 
 
 def error_pictures(result: ScoreResult, out: Path, count: int = WORST) -> tuple[Path, list[Problem]]:

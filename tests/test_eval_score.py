@@ -59,3 +59,21 @@ def test_unreadable_image_is_left_out_and_reported(work, tmp_path):
     assert [p.level for p in result.problems] == ["error"] and "wide.png" in result.problems[0].path
     files = write_outputs(result, tmp_path / "out")
     assert all(p.is_file() for p in files.values())
+
+
+def test_operating_data_cover_the_images_and_classes_scored(work, tmp_path):
+    import numpy as np
+    from PIL import Image
+
+    from eval.score import score_operating
+
+    _, test, det = work
+    fire = score(det, load_test_set(test).dataset)
+    for k, grey in enumerate((240, 7, 7)):  # the oracle fires on grey 240 as on "large": one box at 0.70
+        Image.fromarray(np.full((40, 40, 3), grey, dtype=np.uint8)).save(tmp_path / f"p{k}.png")
+    (tmp_path / "p3.png").write_bytes(b"not a picture")  # unreadable: not an image without fire that was scored
+    photos = load_test_set(tmp_path).dataset
+    negatives = score(det, photos.with_categories(["fire", "smoke"]))
+    found, alarms = score_operating(fire, negatives)
+    assert found.boxes == 6 and found.recall(0.0) == pytest.approx(1.0)  # the oracle finds every box
+    assert alarms.images == 3 and alarms.scores.tolist() == pytest.approx([0.70], abs=1e-6)
