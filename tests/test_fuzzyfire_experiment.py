@@ -96,7 +96,8 @@ def test_report_files_exist_and_say_stand_in(full_run: tuple[Path, str, Counter]
         assert (out / "tables" / name).stat().st_size > 0
         assert "(stand-in)" in (out / "tables" / name).read_text()
     figures = {p.name for p in (out / "figures").iterdir()}
-    assert figures == {"figure5_AP.png", "figure5_AP50.png", "figure5_alarms_per_100.png"}
+    at_budget = {"figure5_recall_at_10_alarms.png", "operating_common__stand_in.png"}  # the rare stand-in has no box
+    assert figures == {"figure5_AP.png", "figure5_AP50.png", "figure5_alarms_per_100.png", *at_budget}
     page = (out / "report.html").read_text()
     assert "STAND-IN DATA" in page and "Paired comparisons" in page and "R6_S6" in page
     gaps = json.loads((out / "tables" / "gap.json").read_text())["gaps"]
@@ -115,6 +116,9 @@ def test_report_files_exist_and_say_stand_in(full_run: tuple[Path, str, Counter]
     assert len(rows) == 12 and {r["test_set"] for r in rows} == sets
     free = [r for r in rows if r["test_set"] == "fire-free (stand-in)"]
     assert len(free) == 4 and all(r["AP"] is None and r[ALARMS] >= 0 for r in free)
+    common = [r for r in rows if r["test_set"] == "common (stand-in)"]  # read at 10 alarms per 100 fire-free images
+    assert len(common) == 4 and all(0 <= r["recall_at_10_alarms"] <= 1 and "operating" not in r for r in common)
+    assert "common (stand-in) recall@10 alarms/100" in page and "Fire found against false alarms" in page
     for run in (out / "runs").glob("*/*/results.json"):  # a set without boxes has its breakdown's alarm rate
         tests = json.loads(run.read_text())["tests"]
         for scored in tests.values():  # (the toy's rare stand-in has no box big enough to label either)
