@@ -25,12 +25,18 @@ def plot_pr_curves(
         ax.plot(recall, prec, label=label)
     ax.set_xlim(0, 1)
     ax.set_ylim(0, 1.02)
-    ax.set_xlabel("recall")
-    ax.set_ylabel("precision")
+    return _save_lines(fig, ax, path, ("recall", "precision"), title, "lower left" if precision else None)
+
+
+def _save_lines(fig, ax, path: Path, labels: tuple[str, str], title: str, legend: str | None) -> Path:
+    """Finish a line plot: axis ``labels`` (x, y), a light grid, ``title``, the legend at ``legend`` (None: no
+    legend); write ``fig`` to ``path`` (its folder made)."""
+    ax.set_xlabel(labels[0])
+    ax.set_ylabel(labels[1])
     ax.grid(alpha=0.3)
     ax.set_title(title)
-    if precision:
-        ax.legend(loc="lower left", fontsize=8)
+    if legend is not None:
+        ax.legend(loc=legend, fontsize=8)
     fig.tight_layout()
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path)
@@ -126,13 +132,5 @@ def plot_operating_curves(
         ax.axvline(budget, color="0.4", linestyle=":", linewidth=1)
     ax.set_xlim(float(rates[0]), float(rates[-1]))
     ax.set_ylim(bottom=0)
-    ax.set_xlabel("false alarms per 100 images without fire")
-    ax.set_ylabel("fire boxes found at IoU 0.5 (%)")
-    ax.grid(alpha=0.3)
-    ax.set_title(title)
-    if curves:
-        ax.legend(loc="lower right", fontsize=8)
-    fig.tight_layout()
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path)
-    return path
+    labels = ("false alarms per 100 images without fire", "fire boxes found at IoU 0.5 (%)")
+    return _save_lines(fig, ax, path, labels, title, "lower right" if curves else None)
