@@ -124,10 +124,8 @@ def run_alarms(datasets: Datasets, spec: RunSpec, run: dict) -> Alarms | None:
     sets = [(t, run["tests"][t.name]) for t in spec.test_sets if run["tests"].get(t.name, {}).get(ALARMS) is not None]
     if not sets:
         return None
-    found = [
-        alarms_of(_predictions(spec.out / m["scores"]), [i.id for i in datasets.get(t.data).images]) for t, m in sets
-    ]
-    return pooled(found)
+    return pooled([alarms_of(_predictions(spec.out / m["scores"]), [i.id for i in datasets.get(t.data).images])
+                   for t, m in sets])  # fmt: skip
 
 
 def _predictions(folder: Path) -> list[dict]:
