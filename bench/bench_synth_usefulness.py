@@ -10,6 +10,7 @@ Variants (on shared-data.yaml: panoramas, the flames' new look, 2 images per vie
 - ``flat``: the flames' earlier flat look (no streaks, edges may darken a wall);
 - ``look``: the default (``flames.texture: 0.5``, ``never_darken``);
 - ``finetune``: ``look`` with ``train.real_finetune: 10`` (the last 10 epochs on the real images only);
+  ``own_frames_cutouts_half_photo_negatives_photo_distractors_auto_exposure_finetune`` the same on ASAE;
 - ``cutouts``: each mixture's own real flames cut out and pasted (``flames.source: cutouts``);
 - ``own_frames``: simulated flames composited on each mixture's own real training images, which keep their
   boxes (``own_frames: 1``);
@@ -232,6 +233,10 @@ VARIANTS = {
     "own_frames_cutouts_half_photo_negatives_photo_distractors_auto_exposure_camera_cctv": [
         *ASAE,
         "synth.method2.camera.cctv=0.5",
+    ],
+    "own_frames_cutouts_half_photo_negatives_photo_distractors_auto_exposure_finetune": [
+        *ASAE,
+        "train.real_finetune=10",
     ],
     "own_frames_cutouts_half_photo_negatives_auto_exposure": ASAE_WITHOUT_DISTRACTORS,
     "own_frames_cutouts_half_photo_negatives_photo_lights_distractors_auto_exposure": [  # lights, in every image
