@@ -25,7 +25,7 @@ from numpy.typing import NDArray
 
 from curate.core.cocoeval import run_cocoeval
 from curate.core.dataset import Dataset
-from eval.stats import PairedDelta, paired_delta, resample_weights
+from eval.stats import PairedDelta, class_matches, paired_delta, resample_weights
 
 ALARM_BUDGET = 10.0  # false alarms per 100 images without fire at which Table 2 reads the recall (issue 23)
 RECALL_AT_ALARMS = "recall_at_10_alarms"  # result key of the recall of fire boxes at ALARM_BUDGET (0..1)
@@ -94,30 +94,22 @@ class OperatingPoint:
     alarms_per_100: float
     recall: float
 
-    def to_dict(self) -> dict[str, float]:
-        return {"threshold": self.threshold, "alarms_per_100": self.alarms_per_100, "recall": self.recall}
-
 
 def found_scores(dataset: Dataset, records: Sequence[dict[str, Any]], cat_ids: Sequence[int]) -> FoundScores:
     """The :class:`FoundScores` of COCO result ``records`` ({image_id, category_id, bbox xywh px, score}) on
     ``dataset`` over the categories ``cat_ids``, by pycocotools' matching at IoU 0.5 (module docstring)."""
     ev = run_cocoeval(dataset, records, cat_ids, iou_thresholds=[FOUND_IOU])
-    num_areas, num_images = len(ev.params.areaRng), len(ev.params.imgIds)
-    max_det = ev.params.maxDets[-1]
-    image_boxes = np.zeros(num_images, dtype=np.int64)
-    scores, image = [np.zeros(0)], [np.zeros(0, dtype=np.int64)]
-    for k in range(len(ev.params.catIds)):
-        first = k * num_areas * num_images  # area "all" of class k
-        for i, e in enumerate(ev.evalImgs[first : first + num_images]):
-            if e is None:
-                continue
-            image_boxes[i] += int(np.count_nonzero(np.asarray(e["gtIgnore"]) == 0))
-            found = (np.asarray(e["dtMatches"])[0, :max_det] != 0) & ~np.asarray(e["dtIgnore"], dtype=bool)[0, :max_det]
-            scores.append(np.asarray(e["dtScores"][:max_det], dtype=np.float64)[found])
-            image.append(np.full(int(found.sum()), i, dtype=np.int64))
-    all_scores = np.concatenate(scores)
-    order = np.argsort(-all_scores, kind="stable")
-    return FoundScores(all_scores[order], np.concatenate(image)[order], image_boxes)
+    classes = [class_matches(ev, k, ev.params.maxDets[-1]) for k in range(len(ev.params.catIds))]
+    scores = np.concatenate([np.zeros(0), *(cm.score[cm.tp[0]] for cm in classes)])  # type: ignore[index]
+    image = np.concatenate([np.zeros(0, dtype=np.int64), *(cm.image[cm.tp[0]] for cm in classes)])
+    image_boxes = np.sum([cm.npig for cm in classes], axis=0, dtype=np.int64) if classes else np.zeros(0, np.int64)
+    return FoundScores(*_best_first(scores, image), image_boxes)
+
+
+def _best_first(scores: NDArray[np.float64], image: NDArray[np.int64]) -> tuple[NDArray, NDArray]:
+    """``scores`` (N,) and their ``image`` indices (N,) sorted by score, best first (ties in their order)."""
+    order = np.argsort(-scores, kind="stable")
+    return scores[order], image[order]
 
 
 def alarms_of(records: Sequence[dict[str, Any]], image_ids: Sequence[int]) -> Alarms:
@@ -129,8 +121,7 @@ def alarms_of(records: Sequence[dict[str, Any]], image_ids: Sequence[int]) -> Al
     except KeyError as exc:
         raise ValueError(f"a detection on image {exc.args[0]}, which is not among the images without fire") from None
     scores = np.asarray([r["score"] for r in records], dtype=np.float64)
-    order = np.argsort(-scores, kind="stable")
-    return Alarms(scores[order], image[order], len(index))
+    return Alarms(*_best_first(scores, image), len(index))
 
 
 def pooled(sets: Sequence[Alarms]) -> Alarms:
@@ -140,8 +131,7 @@ def pooled(sets: Sequence[Alarms]) -> Alarms:
     offsets = np.cumsum([0, *(a.images for a in sets)])[:-1]
     scores = np.concatenate([a.scores for a in sets])
     image = np.concatenate([a.image + o for a, o in zip(sets, offsets)])
-    order = np.argsort(-scores, kind="stable")
-    return Alarms(scores[order], image[order], int(sum(a.images for a in sets)))
+    return Alarms(*_best_first(scores, image), int(sum(a.images for a in sets)))
 
 
 def operating_point(found: FoundScores, alarms: Alarms, budget: float = ALARM_BUDGET) -> OperatingPoint:

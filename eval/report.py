@@ -298,16 +298,16 @@ def operating_figures(results: Sequence[Mapping[str, Any]], folder: Path) -> lis
     its seeds' mean and range), up to 100 alarms per 100 images."""
     from eval.plots import plot_operating_curves
 
-    paths = []
-    for test in dict.fromkeys(r["test_set"] for r in results if r.get(OPERATING) is not None):
-        curves: dict[str, list] = {}
-        for r in (r for r in results if r["test_set"] == test and r.get(OPERATING) is not None):
-            curves.setdefault(r["mixture"], []).append(recall_at_rates(*r[OPERATING], OPERATING_RATES))
-        title = f"{test}: fire found against false alarms"
-        path = folder / f"operating_{_slug(test)}.png"
-        paths.append(plot_operating_curves({m: np.stack(c) for m, c in curves.items()}, OPERATING_RATES, path,
-                                           ALARM_BUDGET, title))  # fmt: skip
-    return paths
+    by_test: dict[str, dict[str, list]] = {}
+    for r in (r for r in results if r.get(OPERATING) is not None):
+        recall = recall_at_rates(*r[OPERATING], OPERATING_RATES)
+        by_test.setdefault(r["test_set"], {}).setdefault(r["mixture"], []).append(recall)
+    return [
+        plot_operating_curves({m: np.stack(c) for m, c in curves.items()}, OPERATING_RATES,
+                              folder / f"operating_{_slug(test)}.png", ALARM_BUDGET,
+                              f"{test}: fire found against false alarms")
+        for test, curves in by_test.items()
+    ]  # fmt: skip
 
 
 def table_metrics(results: Sequence[Mapping[str, Any]]) -> tuple[str, ...]:

@@ -43,17 +43,21 @@ def mean_std(values: Sequence[float]) -> MeanStd:
 
 
 @dataclass(frozen=True)
-class _ClassMatches:
+class ClassMatches:
     """One class, detections sorted best first: image index (D,), TP and FP flags (T, D); ignored
-    detections are neither. ``npig``: (I,) non-ignored ground-truth boxes per image."""
+    detections are neither. ``npig``: (I,) non-ignored ground-truth boxes per image. ``score`` (D,): the
+    detections' scores (None when loaded from a saved :class:`MatchTable`, which does not keep them)."""
 
     image: NDArray[np.int64]
     tp: NDArray[np.bool_]
     fp: NDArray[np.bool_]
     npig: NDArray[np.int64]
+    score: NDArray[np.float64] | None = None
 
 
-def _class_matches(ev: COCOeval, k: int, max_det: int) -> _ClassMatches:
+def class_matches(ev: COCOeval, k: int, max_det: int) -> ClassMatches:
+    """Class ``k``'s matches of an evaluated ``COCOeval`` (area "all", at most ``max_det`` detections per image),
+    in pycocotools' order."""
     num_images, num_areas = len(ev.params.imgIds), len(ev.params.areaRng)
     npig = np.zeros(num_images, dtype=np.int64)
     scores, images, matched, ignored = [], [], [], []
@@ -70,11 +74,12 @@ def _class_matches(ev: COCOeval, k: int, max_det: int) -> _ClassMatches:
     num_t = len(ev.params.iouThrs)
     if not scores:
         empty = np.zeros((num_t, 0), dtype=bool)
-        return _ClassMatches(np.zeros(0, dtype=np.int64), empty, empty, npig)
-    order = np.argsort(-np.concatenate(scores), kind="mergesort")  # pycocotools' order
+        return ClassMatches(np.zeros(0, dtype=np.int64), empty, empty, npig, np.zeros(0))
+    all_scores = np.concatenate(scores)
+    order = np.argsort(-all_scores, kind="mergesort")  # pycocotools' order
     dtm = np.concatenate(matched, axis=1)[:, order] != 0
     dtig = np.concatenate(ignored, axis=1)[:, order].astype(bool)
-    return _ClassMatches(np.concatenate(images)[order], dtm & ~dtig, ~dtm & ~dtig, npig)
+    return ClassMatches(np.concatenate(images)[order], dtm & ~dtig, ~dtm & ~dtig, npig, all_scores[order])
 
 
 class MatchTable:
@@ -88,7 +93,7 @@ class MatchTable:
         self.image_ids = np.asarray(ev.params.imgIds, dtype=np.int64)
         self.cat_ids = list(ev.params.catIds)
         self.rec_thrs = np.asarray(ev.params.recThrs, dtype=np.float64)
-        self.classes = [_class_matches(ev, k, max_det) for k in range(len(self.cat_ids))]
+        self.classes = [class_matches(ev, k, max_det) for k in range(len(self.cat_ids))]
 
     def precision(self, weights: NDArray | None = None) -> NDArray[np.float64]:
         """(T, R, K) interpolated precision for image ``weights`` (I,) (default: each image once); -1 for a
@@ -130,8 +135,7 @@ class MatchTable:
             table = cls.__new__(cls)
             table.image_ids, table.cat_ids, table.rec_thrs = z["image_ids"], z["cat_ids"].tolist(), z["rec_thrs"]
             table.classes = [
-                _ClassMatches(z[f"image{k}"], z[f"tp{k}"], z[f"fp{k}"], z[f"npig{k}"])
-                for k in range(len(table.cat_ids))
+                ClassMatches(z[f"image{k}"], z[f"tp{k}"], z[f"fp{k}"], z[f"npig{k}"]) for k in range(len(table.cat_ids))
             ]
         return table
 
