@@ -5,6 +5,14 @@ The bootstrap re-uses one ``COCOeval.evaluate()``: the per-image matches are gat
 :class:`MatchTable`, and each resample only re-accumulates them with integer image weights (an image drawn
 k times counts k times), following pycocotools' accumulate (sort by score, cumulative TP/FP, precision made
 monotone, read at 101 recall thresholds). With all weights 1 this reproduces pycocotools exactly.
+
+The re-accumulation touches every detection once per resample and each IoU threshold's true positives, not
+every (threshold, detection) pair: the first position where recall reaches a threshold is a true positive, and
+the monotone precision there is the largest precision at a true positive from there on (a false positive, an
+ignored or a weight-0 detection never raises precision over the position before it), so precision is only
+needed at the true positives — counted detections up to each from one cumulative sum of the weights, shared
+by the thresholds without ignored detections. The weights are integers, so every sum is exact and the result
+identical to accumulating all pairs.
 """
 
 from __future__ import annotations
@@ -12,6 +20,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from functools import cached_property
 from pathlib import Path
 
 import numpy as np
@@ -82,6 +91,42 @@ def class_matches(ev: COCOeval, k: int, max_det: int) -> ClassMatches:
     return ClassMatches(np.concatenate(images)[order], dtm & ~dtig, ~dtm & ~dtig, npig, all_scores[order])
 
 
+@dataclass(frozen=True)
+class Hits:
+    """One class's matches arranged for weighted re-accumulation (module docstring): ``image`` (D,) as in
+    :class:`ClassMatches`; per IoU threshold t, ``tp_at[t]`` the positions of its true positives (best first) and
+    ``counted[t]`` (D,) bool, the detections that are TP or FP, or None when every detection is one."""
+
+    image: NDArray[np.int64]
+    tp_at: tuple[NDArray[np.int64], ...]
+    counted: tuple[NDArray[np.bool_] | None, ...]
+
+    @classmethod
+    def of(cls, cm: ClassMatches) -> Hits:
+        counted = cm.tp | cm.fp
+        return cls(
+            cm.image,
+            tuple(np.flatnonzero(row) for row in cm.tp),
+            tuple(None if row.all() else row for row in counted),
+        )
+
+    def precision(self, w: NDArray[np.float64], npig: float, rec_thrs: NDArray[np.float64]) -> NDArray[np.float64]:
+        """(T, R) interpolated precision at ``rec_thrs`` (R,) for image weights ``w`` (I,), ``npig`` > 0 the
+        weighted ground-truth count; equal to pycocotools' accumulate on the resampled images."""
+        wd = w[self.image]
+        all_counted = np.cumsum(wd)
+        out = np.zeros((len(self.tp_at), len(rec_thrs)))
+        for t, (at, counted) in enumerate(zip(self.tp_at, self.counted)):
+            if at.size == 0:
+                continue
+            tp = np.cumsum(wd[at])
+            n = all_counted[at] if counted is None else np.cumsum(wd * counted)[at]
+            pr = np.maximum.accumulate((tp / (n + np.spacing(1)))[::-1])[::-1]
+            idx = np.searchsorted(tp / npig, rec_thrs, side="left")
+            out[t] = np.where(idx < at.size, pr[np.minimum(idx, at.size - 1)], 0.0)
+        return out
+
+
 class MatchTable:
     """Per-image matches of one evaluated ``COCOeval`` (area "all", the last ``maxDets``), re-accumulated
     for any image weighting. ``image_ids`` (I,) is the image order weights refer to."""
@@ -101,19 +146,15 @@ class MatchTable:
         w = np.ones(len(self.image_ids)) if weights is None else np.asarray(weights, dtype=np.float64)
         num_t = self.classes[0].tp.shape[0] if self.classes else 0
         out = -np.ones((num_t, len(self.rec_thrs), len(self.classes)))
-        for k, cm in enumerate(self.classes):
+        for k, (cm, hits) in enumerate(zip(self.classes, self._hits)):
             npig = float(w @ cm.npig)
-            if npig == 0:
-                continue
-            wd = w[cm.image]
-            tp = np.cumsum(cm.tp * wd, axis=1)
-            fp = np.cumsum(cm.fp * wd, axis=1)
-            rc = tp / npig
-            pr = np.maximum.accumulate((tp / (tp + fp + np.spacing(1)))[:, ::-1], axis=1)[:, ::-1]
-            for t in range(num_t):
-                idx = np.searchsorted(rc[t], self.rec_thrs, side="left")
-                out[t, :, k] = np.where(idx < len(wd), pr[t, np.minimum(idx, max(len(wd) - 1, 0))], 0.0)
+            if npig > 0:
+                out[:, :, k] = hits.precision(w, npig, self.rec_thrs)
         return out
+
+    @cached_property
+    def _hits(self) -> list[Hits]:
+        return [Hits.of(cm) for cm in self.classes]
 
     def ap(self, weights: NDArray | None = None) -> dict[str, float]:
         """``{"AP", "AP50"}`` over classes with ground truth (NaN when none has any)."""

@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import time
-
 import numpy as np
 import pytest
 
@@ -36,6 +34,9 @@ def make_case(tmp_path, seed: int, images: int = 40, copies: np.ndarray | None =
                 dets.append((cls, xy + rng.normal(0, 3, 2), wh * rng.uniform(0.8, 1.2, 2), rng.random()))
         for _ in range(rng.integers(0, 3)):  # false positives
             dets.append((rng.integers(0, 2), rng.uniform(0, 60, 2), rng.uniform(8, 40, 2), rng.random() * 0.7))
+        if len(scenes) == 3:  # a crowd box with a detection on it: ignored, neither TP nor FP
+            boxes.append((0, np.array([50.0, 50.0]), np.array([30.0, 30.0])))
+            dets.append((0, np.array([52.0, 51.0]), np.array([28.0, 29.0]), 0.6))
         scenes.append((boxes, dets))
     b = DatasetBuilder(tmp_path, ["fire", "smoke"])
     records = []
@@ -43,7 +44,7 @@ def make_case(tmp_path, seed: int, images: int = 40, copies: np.ndarray | None =
         for _ in range(copies[i]):
             image_id = b.add_image(f"{i}.jpg", 100, 100)
             for j, (cls, xy, wh) in enumerate(boxes):
-                b.add_box(image_id, ("fire", "smoke")[cls], (*xy, *wh), iscrowd=int(i == 3 and j == 0))
+                b.add_box(image_id, ("fire", "smoke")[cls], (*xy, *wh), iscrowd=int(i == 3 and j == len(boxes) - 1))
             for cls, xy, wh, score in dets:
                 records.append({"image_id": image_id, "category_id": int(cls) + 1, "bbox": [*xy, *wh], "score": score})
     return b.build(), records
@@ -58,6 +59,36 @@ def test_unit_weights_reproduce_pycocotools_exactly(tmp_path, seed):
     assert table.ap() == {"AP": ev.stats[0], "AP50": ev.stats[1]}
 
 
+def accumulate_every_pair(table: MatchTable, w: np.ndarray) -> np.ndarray:
+    """(T, R, K) precision the way pycocotools accumulates it: cumulative TP/FP over every (threshold,
+    detection) pair, precision made monotone from the right, read at the recall thresholds."""
+    out = -np.ones((table.classes[0].tp.shape[0], len(table.rec_thrs), len(table.classes)))
+    for k, cm in enumerate(table.classes):
+        npig = float(w @ cm.npig)
+        if npig == 0:
+            continue
+        wd = w[cm.image]
+        tp, fp = np.cumsum(cm.tp * wd, axis=1), np.cumsum(cm.fp * wd, axis=1)
+        pr = np.maximum.accumulate((tp / (tp + fp + np.spacing(1)))[:, ::-1], axis=1)[:, ::-1]
+        for t in range(tp.shape[0]):
+            idx = np.searchsorted(tp[t] / npig, table.rec_thrs, side="left")
+            out[t, :, k] = np.where(idx < len(wd), pr[t, np.minimum(idx, max(len(wd) - 1, 0))], 0.0)
+    return out
+
+
+@pytest.mark.parametrize("seed", [0, 5])
+def test_true_positive_accumulation_equals_every_pair(tmp_path, seed):
+    """The re-accumulation that reads precision at true positives only is exactly the all-pairs one, for weights
+    with zeros and repeats, ignored detections (the crowd box) and classes left without ground truth."""
+    ds, records = make_case(tmp_path, seed=seed, images=60)
+    table = MatchTable(run_cocoeval(ds, records, [1, 2]))
+    assert any((cm.tp | cm.fp).sum() < cm.tp.size for cm in table.classes)  # some detections are ignored
+    rng = np.random.default_rng(seed)
+    weights = [*resample_weights(60, 30, rng), np.zeros(60), (np.arange(60) < 3).astype(float)]
+    for w in weights:
+        np.testing.assert_array_equal(table.precision(w), accumulate_every_pair(table, np.asarray(w, float)))
+
+
 def test_weights_equal_pycocotools_on_the_resampled_set(tmp_path):
     copies = resample_weights(40, 1, np.random.default_rng(7))[0]
     assert copies.max() >= 2 and copies.min() == 0
@@ -69,12 +100,10 @@ def test_weights_equal_pycocotools_on_the_resampled_set(tmp_path):
     assert got["AP"] == pytest.approx(ev2.stats[0], abs=1e-12) and got["AP50"] == pytest.approx(ev2.stats[1], abs=1e-12)
 
 
-def test_bootstrap_is_deterministic_contains_the_point_and_is_fast(tmp_path):
+def test_bootstrap_is_deterministic_and_contains_the_point(tmp_path):
     ds, records = make_case(tmp_path, seed=5, images=200)
     table = MatchTable(run_cocoeval(ds, records, [1, 2]))
-    start = time.perf_counter()
     ci = bootstrap_ap(table, np.random.default_rng(0), num_samples=1000)
-    elapsed = time.perf_counter() - start
     again = bootstrap_ap(table, np.random.default_rng(0), num_samples=1000)
     other = bootstrap_ap(table, np.random.default_rng(1), num_samples=1000)
     for key in ("AP", "AP50"):
@@ -82,7 +111,6 @@ def test_bootstrap_is_deterministic_contains_the_point_and_is_fast(tmp_path):
         np.testing.assert_array_equal(ci[key].samples, again[key].samples)
         assert not np.array_equal(ci[key].samples, other[key].samples)
     assert ci["AP"].high - ci["AP"].low > 0.01
-    assert elapsed < 20.0  # ~1-3 s on an idle core; generous for a shared CI box
 
 
 def test_paired_bootstrap_of_a_model_with_itself_is_zero(tmp_path):
