@@ -18,13 +18,15 @@ def _fmt(value: float | None) -> str:
     return "  -  " if value is None else f"{value:.3f}"
 
 
-def _split_label(test) -> str:  # test: eval.score.TestSet
-    """How the scored split is named in the output: as the dataset names it."""
+def _split_label(test, holdout: float = 0.0) -> str:  # test: eval.score.TestSet
+    """How the scored split is named in the output: as the dataset names it, and the held-out share if any."""
     from eval.score import ALL_SPLITS
 
     if test.split != ALL_SPLITS:
-        return f"split {test.split}"
-    return "all splits" if any(test.splits) else "every image (no splits)"
+        label = f"split {test.split}"
+    else:
+        label = "all splits" if any(test.splits) else "every image (no splits)"
+    return f"{label}, held out at {holdout:g}" if holdout else label
 
 
 def _print_text(result, intervals: dict, split: str) -> None:  # result: eval.score.ScoreResult
@@ -61,7 +63,7 @@ def _load(args: argparse.Namespace):  # -> eval.score.TestSet
     """The test set of ``--data`` / ``--split``; says on stderr which split is scored when none was named."""
     from eval.score import ALL_SPLITS, load_test_set
 
-    test = load_test_set(args.data, args.data_format, args.split, _aliases(args.alias), args.drop_class)
+    test = load_test_set(args.data, args.data_format, args.split, _aliases(args.alias), args.drop_class, args.holdout)
     for note in (p for p in test.problems if p.code == "negatives-only"):
         print(
             f"{note.path}: {note.reason} (AP has no boxes to find: --errors counts its false alarms)", file=sys.stderr
@@ -98,10 +100,11 @@ def cmd_score(args: argparse.Namespace) -> int:
         return 2
     _report_problems(result)
     intervals = _intervals(result, args.ci, args.seed) if args.ci else {}
+    held = {"holdout": args.holdout} if args.holdout else {}
     errors = score_errors(result, args.alarm_conf) if args.errors else None
     found = score_found(result, args.alarm_conf) if args.errors else None
     if args.out:
-        files = write_outputs(result, args.out, intervals)
+        files = write_outputs(result, args.out, {**intervals, **held})
         if errors is not None and found is not None:
             files["errors"] = errors.write(args.out, {"boxes_found": found.to_dict()})
             files["error_pictures"], not_drawn = error_pictures(result, args.out)
@@ -110,9 +113,9 @@ def cmd_score(args: argparse.Namespace) -> int:
         print(f"wrote {', '.join(str(p) for p in files.values())}", file=sys.stderr)
     if args.json:
         extra = {"errors": errors.to_dict(), "boxes_found": found.to_dict()} if errors and found else {}
-        print(json.dumps({**result.metrics.to_dict(), **intervals, **extra}, indent=1))
+        print(json.dumps({**result.metrics.to_dict(), **held, **intervals, **extra}, indent=1))
     else:
-        _print_text(result, intervals, _split_label(test))
+        _print_text(result, intervals, _split_label(test, args.holdout))
         if errors is not None and found is not None:
             _print_errors(errors)
             _print_found(found)
@@ -209,7 +212,8 @@ def cmd_compare(args: argparse.Namespace) -> int:
         )
     if "negatives" in doc:
         neg = doc["negatives"]
-        print(f"alarms {neg['images']} images without fire ({neg['data']}): each model read at the threshold where it "
+        held = f", held out at {neg['holdout']:g}" if "holdout" in neg else ""
+        print(f"alarms {neg['images']} images without fire ({neg['data']}{held}): each model read at the threshold where it "
               f"raises at most {neg['budget']:g} alarms per 100 of them")  # fmt: skip
     for key, d in deltas.items():
         iv, images = d.interval, f"{doc['images']} images"
@@ -237,7 +241,7 @@ def _operating_data(args: argparse.Namespace, results: list[list]) -> list[list]
     on ``--negatives``), each model scored there now. Raises ValueError when that set has boxes."""
     from eval.score import ALL_SPLITS, load_test_set, score_operating
 
-    negatives = load_test_set(args.negatives, "auto", ALL_SPLITS)
+    negatives = load_test_set(args.negatives, "auto", ALL_SPLITS, holdout=args.negatives_holdout)
     if negatives.dataset.annotations:
         raise ValueError(f"{args.negatives}: --negatives takes images without fire; it has "
                          f"{len(negatives.dataset.annotations)} boxes")  # fmt: skip
@@ -261,6 +265,8 @@ def _add_operating(doc: dict, points: list[list], args: argparse.Namespace):  # 
         doc[key][RECALL_AT_ALARMS] = float(np.mean([run[RECALL_AT_ALARMS] for run in doc[key]["runs"]]))
     images = points[0][0][1].images
     doc["negatives"] = {"data": str(args.negatives), "images": images, "budget": args.alarm_budget}
+    if args.negatives_holdout:
+        doc["negatives"]["holdout"] = args.negatives_holdout
     delta = paired_recall_bootstrap(
         points[0], points[1], np.random.default_rng(args.seed), args.samples, args.alarm_budget
     )
@@ -311,6 +317,14 @@ def _add_scoring_args(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--drop-class", action="append", default=[], metavar="NAME", help="ignore a test-set class (repeatable or a,b)"
     )
+    p.add_argument(
+        "--holdout",
+        type=float,
+        default=0.0,
+        metavar="SHARE",
+        help="score only the images held out by content at this share (0..1), the photos a Method 2 pool with "
+        "background_holdout SHARE never composites on (default 0: every image)",
+    )
     add_model_args(p)
     p.add_argument("--seed", type=int, default=0, help="bootstrap seed (default 0)")
 
@@ -327,7 +341,9 @@ def register(sub: argparse._SubParsersAction) -> None:
         "example:\n  fuzzyfire score runs/R500_S500/seed0/best.onnx --data ../shared/data/fire-smoke-608 --split test\n"
         "  fuzzyfire score yolov8n.onnx --data out/test --format yolov8 --names fire --json --out out/score\n"
         "  fuzzyfire score best.onnx --data ds/data.yaml --split val --resize linear --errors\n"
-        "  fuzzyfire score best.onnx --data ds --errors --out out/score   # + out/score/errors/*.png",
+        "  fuzzyfire score best.onnx --data ds --errors --out out/score   # + out/score/errors/*.png\n"
+        "  fuzzyfire score best.onnx --data ../shared/data/fire-free --holdout 0.25 --errors   # false alarms on\n"
+        "      the fire-free photos that pools with background_holdout 0.25 never composited on",
     )
     p.add_argument("model", type=Path, help="detector .onnx file")
     _add_scoring_args(p)
@@ -370,7 +386,9 @@ def register(sub: argparse._SubParsersAction) -> None:
         "  fuzzyfire compare a/seed0/best.onnx,a/seed1/best.onnx b/seed0/best.onnx,b/seed1/best.onnx \\\n"
         "      --data out/study/data/curated-6407ecb64193 --split test\n"
         "  fuzzyfire compare a.onnx b.onnx --data out/study/data/curated-6407ecb64193 --split test \\\n"
-        "      --negatives ../shared/data/fire-free   # + recall at 10 false alarms per 100 fire-free photos",
+        "      --negatives ../shared/data/fire-free   # + recall at 10 false alarms per 100 fire-free photos\n"
+        "  fuzzyfire compare a.onnx b.onnx --data out/study/data/curated-6407ecb64193 --split test \\\n"
+        "      --negatives ../shared/data/fire-free --negatives-holdout 0.25   # the photos no pool composited on",
     )
     p.add_argument("model_a", type=_models, help="baseline detector .onnx (A), or several: A0.onnx,A1.onnx,...")
     p.add_argument("model_b", type=_models, help="detector compared with it (B), or several: B0.onnx,B1.onnx,...")
@@ -390,6 +408,14 @@ def register(sub: argparse._SubParsersAction) -> None:
         default=ALARM_BUDGET,
         metavar="N",
         help=f"false alarms per 100 images without fire for --negatives (default {ALARM_BUDGET:g})",
+    )
+    p.add_argument(
+        "--negatives-holdout",
+        type=float,
+        default=0.0,
+        metavar="SHARE",
+        help="--negatives: only the photos held out by content at this share, those a pool with "
+        "background_holdout SHARE never composited on (default 0: every image)",
     )
     p.add_argument(
         "--json",

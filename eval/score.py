@@ -14,6 +14,7 @@ from curate.core.cocoeval import CocoMetrics, evaluate_predictions
 from curate.core.dataset import Dataset
 from curate.core.detections import CONF_THRESHOLD, IOU_THRESHOLD, MAX_DETECTIONS, Predictions
 from curate.core.formats.registry import read_dataset
+from curate.core.holdout import held_out_images
 from curate.core.load import SplitError, pick_split
 from curate.core.problems import Problem
 from eval.error_pictures import WORST, write_error_pictures
@@ -91,11 +92,13 @@ def load_test_set(
     split: str | None = None,
     aliases: Mapping[str, str] | None = None,
     drop: Sequence[str] = (),
+    holdout: float = 0.0,
 ) -> TestSet:
     """Read any dataset :func:`curate.core.formats.registry.read_dataset` reads (a folder, a COCO .json, a
     ``data.yaml``), one split of it (``val`` and ``valid`` are one name; None = :func:`default_split`;
     :data:`ALL_SPLITS` = every image), with class ``aliases`` (source name -> class) and the boxes of classes
-    ``drop`` removed."""
+    ``drop`` removed; with ``holdout`` > 0 only the images held out by content at that share
+    (:func:`curate.core.holdout.held_out`: the photos a Method 2 pool with ``background_holdout`` never shows)."""
     result = read_dataset(path, fmt, aliases=aliases).drop_classes(drop)
     ds = result.dataset
     splits = ds.splits
@@ -105,6 +108,13 @@ def load_test_set(
             ds, split = pick_split(ds, split, path), ds.resolve_split(split) or split
         except SplitError as exc:
             raise ScoreError(f"{exc}; --split all for every image") from None
+    if not 0.0 <= holdout <= 1.0:
+        raise ScoreError(f"a held-out share is in 0..1, got {holdout:g}")
+    if holdout and ds.images:
+        try:
+            ds = held_out_images(ds, holdout, path)
+        except ValueError as exc:
+            raise ScoreError(str(exc)) from None
     if not ds.images:
         raise ScoreError(f"{path}: no images to score")
     return TestSet(ds, list(result.problems), split, splits)

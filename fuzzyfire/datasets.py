@@ -11,6 +11,7 @@ from typing import Any
 
 from curate.core.dataset import Dataset
 from curate.core.formats.registry import read_dataset
+from curate.core.holdout import held_out_images
 from curate.core.load import load_split, prepare
 
 
@@ -18,7 +19,7 @@ from curate.core.load import load_split, prepare
 class DataRef:
     """A labelled dataset a run reads: ``path`` (folder or COCO .json) in ``format``, one ``split`` of it (None =
     every image), classes renamed by ``aliases`` and ``drop`` removed, and with ``holdout`` > 0 only the images
-    :func:`synth.photos.held_out` picks at that share (:func:`held_out_images`). ``identity``: what made it
+    :func:`curate.core.holdout.held_out` picks at that share. ``identity``: what made it
     (hashable JSON; no absolute output paths, so two experiment folders give the same run identities)."""
 
     path: Path
@@ -74,15 +75,3 @@ def load_data(ref: DataRef, classes: Sequence[str]) -> Dataset:
     """``ref``'s split with exactly ``classes``, read from disk now (a run outside an experiment)."""
     ds = load_split(ref.path, ref.format, ref.split, classes, dict(ref.aliases), ref.drop)
     return held_out_images(ds, ref.holdout, ref.path) if ref.holdout else ds
-
-
-def held_out_images(ds: Dataset, share: float, where: Path | str = "") -> Dataset:
-    """The images of ``ds`` that :func:`synth.photos.held_out` keeps out of every pool at ``share`` (0..1, by
-    content hash): the test set of photos that a Method 2 pool with ``background_holdout: share`` never shows.
-    Raises ValueError when none is held out."""
-    from synth.photos import held_out
-
-    kept = ds.filter_images(lambda img: held_out(ds.image_path(img), share))
-    if not kept.images:
-        raise ValueError(f"{where or ds.root}: none of its {len(ds.images)} images is held out at share {share:g}")
-    return kept

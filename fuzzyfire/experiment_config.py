@@ -72,7 +72,7 @@ class RealConfig:
 class EvalSetConfig:
     """A test set: a dataset folder (``path``, optionally one ``split``) or a generated stand-in (``standin``).
     A folder of images without labels is a negatives-only set (no AP: its false alarms per 100 images are
-    reported). ``holdout`` keeps only the images :func:`synth.photos.held_out` picks at that share: the photos a
+    reported). ``holdout`` keeps only the images :func:`curate.core.holdout.held_out` picks at that share: the photos a
     Method 2 pool with the same ``background_holdout`` never composites on."""
 
     path: Optional[Path] = None

@@ -3,7 +3,7 @@
 A Method 2 pool with ``backgrounds`` composites flames on photographs; a test set holding one of those photos
 (the same bytes, by sha256) would score a detector on a picture it trained on. Every test set of an experiment
 (common, rare and the named ones) is checked against the background photos of every pool the grid uses; the
-shares a pool holds out (``background_holdout``, :func:`synth.photos.held_out`) are no part of it, so a test set
+shares a pool holds out (``background_holdout``, :func:`curate.core.holdout.held_out`) are no part of it, so a test set
 with the same ``holdout`` share is disjoint by construction.
 """
 

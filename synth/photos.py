@@ -16,6 +16,7 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
+from curate.core.holdout import held_out
 from curate.core.imageio import ImageError, read_image
 from curate.scan import list_image_files
 from synth.frames import Box, crop_boxes
@@ -29,15 +30,6 @@ def list_photos(paths: Iterable[Path | str]) -> list[Path]:
     if not photos:
         raise ValueError(f"no images in {', '.join(map(str, paths))}")
     return photos
-
-
-def held_out(photo: Path, share: float) -> bool:
-    """Whether ``photo`` is among the ``share`` of photos kept out of every pool, chosen by its content (the
-    first 8 hex digits of its sha256 as a fraction of 16^8 >= 1 - share): the same photos on every machine and
-    for every seed, e.g. a false-alarm test set that no pool composites on."""
-    from curate.core.manifest import file_sha256
-
-    return share > 0 and int(file_sha256(photo)[:8], 16) / 16**8 >= 1.0 - share
 
 
 def pool_photos(paths: Iterable[Path | str], holdout: float = 0.0) -> list[Path]:

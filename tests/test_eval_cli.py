@@ -11,6 +11,8 @@ from detector_factories import IMAGES, NAMES, oracle_model, rows_for, write_test
 from pycocotools.coco import COCO
 from pycocotools.cocoeval import COCOeval
 
+from curate.core.holdout import held_out
+from curate.core.manifest import file_sha256
 from fuzzyfire.cli import main
 
 
@@ -209,6 +211,12 @@ def test_compare_reads_both_models_at_the_alarm_budget_of_a_set_without_fire(wor
     assert "of 6 images and 4 without fire" in text
     assert main(["compare", str(good), str(good), *data[:-1], str(work["test"])]) == 2  # a set with boxes
     assert "--negatives takes images without fire; it has 6 boxes" in capsys.readouterr().err
+    # held out by content: the two grey levels hash apart, so a share between them keeps one pair of photos
+    fracs = sorted({int(file_sha256(p)[:8], 16) / 16**8 for p in (tmp_path / "photos").iterdir()})
+    share = 1.0 - (fracs[0] + fracs[1]) / 2
+    assert main(["compare", str(good), str(good), *data, "--negatives-holdout", f"{share}", "--json"]) == 0
+    held = json.loads(capsys.readouterr().out)["negatives"]
+    assert held["images"] == 2 and held["holdout"] == pytest.approx(share)
 
 
 def test_compare_refuses_an_empty_side(work, capsys):
@@ -248,6 +256,27 @@ def test_the_scored_split_is_named_as_the_dataset_names_it(work, tmp_path, capsy
     assert "\ndata   split test: 6 images" in capsys.readouterr().out
     assert main(["score", str(model), "--data", str(tmp_path / "ds"), "--split", "all"]) == 0
     assert "\ndata   all splits: 4 images" in capsys.readouterr().out
+
+
+def test_holdout_scores_only_the_photos_held_out_by_content(work, tmp_path, capsys):
+    from factories import write_image
+
+    model = oracle_model(work["root"] / "held.onnx")
+    photos = [write_image(tmp_path / "photos" / f"p{k}.jpg", 64, 48, seed=k) for k in range(10)]
+    kept = sum(held_out(p, 0.5) for p in photos)
+    assert 0 < kept < 10
+    args = ["score", str(model), "--data", str(tmp_path / "photos"), "--errors"]
+    assert main([*args, "--holdout", "0.5"]) == 0
+    assert (
+        f"data   every image (no splits), held out at 0.5: {kept} images ({kept} negatives)" in capsys.readouterr().out
+    )
+    assert main([*args, "--holdout", "0.5", "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["images"] == kept and doc["holdout"] == 0.5
+    assert main([*args, "--holdout", "1e-9"]) == 2
+    assert "none of its 10 images is held out at share 1e-09" in capsys.readouterr().err
+    assert main([*args, "--holdout", "2"]) == 2
+    assert "a held-out share is in 0..1, got 2" in capsys.readouterr().err
 
 
 def test_a_folder_of_images_without_labels_is_scored_as_negatives(work, tmp_path, capsys):

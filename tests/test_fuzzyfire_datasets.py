@@ -61,8 +61,7 @@ def test_a_dataset_read_under_other_aliases_is_another_read(split_folder: Path, 
 def test_a_holdout_share_keeps_exactly_the_held_out_photos(tmp_path: Path) -> None:
     from factories_experiment import fire_free_photos
 
-    from fuzzyfire.datasets import held_out_images
-    from synth.photos import held_out
+    from curate.core.holdout import held_out, held_out_images
 
     folder = fire_free_photos(tmp_path / "photos", 10)
     ref = folder_ref(folder, tmp_path, "auto", {}, (), None, 0.5)

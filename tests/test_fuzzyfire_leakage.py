@@ -12,13 +12,13 @@ import yaml
 from factories_experiment import fire_free_photos, toy_dict
 
 import curate.core.manifest as manifest
+from curate.core.holdout import held_out
 from fuzzyfire.cli import main
 from fuzzyfire.datasets import Datasets
 from fuzzyfire.experiment_config import SynthConfig
 from fuzzyfire.leakage import LeakageError, check_leakage, pool_photos
 from fuzzyfire.stages import folder_ref
 from synth.method2 import Method2Config
-from synth.photos import held_out
 
 
 def _photos_test_set(folder: Path, holdout: float = 0.0):

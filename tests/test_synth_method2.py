@@ -463,7 +463,7 @@ def test_photo_distractors_are_cut_from_the_pools_fire_free_photos_and_get_no_bo
         photo = np.full((150, 200, 3), 60 + 20 * k, np.uint8)
         cv2.circle(photo, (60 + 30 * k, 50), 18, (30, 90, 230), -1)  # BGR: an orange disc, a lamp shade
         cv2.imwrite(str(tmp_path / "photos" / f"p{k}.png"), photo)
-    from synth.photos import held_out
+    from curate.core.holdout import held_out
 
     distractors = DistractorConfig(share=1.0, max=2, kinds=("photo",))
     cfg = replace(CFG, n=8, images_per_view=2, scenes=0, backgrounds=(tmp_path / "photos",), distractors=distractors,

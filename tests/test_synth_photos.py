@@ -94,7 +94,8 @@ def test_photo_fingerprints_cover_site_sidecars(tmp_path: Path) -> None:
 
 
 def test_a_held_out_share_of_photos_is_chosen_by_content(tmp_path: Path) -> None:
-    from synth.photos import held_out, photo_fingerprints, pool_photos
+    from curate.core.holdout import held_out
+    from synth.photos import photo_fingerprints, pool_photos
 
     for i in range(40):
         write_image(tmp_path / "a" / f"p{i:02d}.png", 8, 8, seed=i)
