@@ -79,25 +79,24 @@ def result_rows(
 
 
 LOOSE_FILE = "ap25.json"  # AP25 of a run scored before AP25 existed, computed once from its predictions
+FOUND_FILE = "found_scores.json"  # the scores of the detections that found a box, kept beside the predictions
 
 
 def run_ap25(datasets: Datasets, folder: Path, test: DataRef, scored: dict) -> float | None:
     """AP25 of a run on a test set: from its results (``scored``), else from ``folder/predictions.json``
-    against the test set (:func:`curate.core.cocoeval.loose_ap`), kept in ``folder/ap25.json``."""
+    against the test set (:func:`curate.core.cocoeval.loose_ap`), kept in ``folder/ap25.json`` with the digest
+    of the predictions it was read from (a set scored again is read again)."""
     from curate.core.cocoeval import loose_ap
 
     if scored.get("AP25") is not None:
         return scored["AP25"]
-    path = folder / LOOSE_FILE
-    if path.is_file():
-        return json.loads(path.read_text(encoding="utf-8"))["AP25"]
+    predictions = (folder / "predictions.json").read_bytes()
+    if (kept := _kept(folder / LOOSE_FILE, predictions)) is not None:
+        return kept["AP25"]
     ds = datasets.get(test)
-    value = loose_ap(ds, _predictions(folder), [c.id for c in ds.categories])
-    path.write_text(json.dumps({"AP25": value}) + "\n", encoding="utf-8")
+    value = loose_ap(ds, json.loads(predictions), [c.id for c in ds.categories])
+    _keep(folder / LOOSE_FILE, predictions, {"AP25": value})
     return value
-
-
-FOUND_FILE = "found_scores.json"  # the scores of the detections that found a box, kept beside the predictions
 
 
 def run_found(datasets: Datasets, folder: Path, test: DataRef) -> FoundScores:
@@ -105,17 +104,31 @@ def run_found(datasets: Datasets, folder: Path, test: DataRef) -> FoundScores:
     ``folder/predictions.json``; kept in ``folder/found_scores.json`` with the digest of the predictions it was
     read from (a set scored again is read again)."""
     predictions = (folder / "predictions.json").read_bytes()
-    key = hashlib.sha256(predictions).hexdigest()[:16]
-    path = folder / FOUND_FILE
-    if path.is_file() and (kept := json.loads(path.read_text(encoding="utf-8"))).get("predictions") == key:
+    if (kept := _kept(folder / FOUND_FILE, predictions)) is not None:
         arrays = {k: np.asarray(kept[k], dtype=np.int64) for k in ("image", "image_boxes")}
         return FoundScores(np.asarray(kept["scores"], dtype=np.float64), **arrays)
     ds = datasets.get(test)
     found = found_scores(ds, json.loads(predictions), [c.id for c in ds.categories])
-    doc = {"predictions": key, "scores": found.scores.tolist(), "image": found.image.tolist(),
-           "image_boxes": found.image_boxes.tolist()}  # fmt: skip
-    path.write_text(json.dumps(doc) + "\n", encoding="utf-8")
+    doc = {"scores": found.scores.tolist(), "image": found.image.tolist(), "image_boxes": found.image_boxes.tolist()}
+    _keep(folder / FOUND_FILE, predictions, doc)
     return found
+
+
+def _digest(predictions: bytes) -> str:
+    return hashlib.sha256(predictions).hexdigest()[:16]
+
+
+def _kept(path: Path, predictions: bytes) -> dict | None:
+    """The figures kept in ``path`` when they were read from these ``predictions`` (the file's bytes), else None."""
+    if not path.is_file():
+        return None
+    kept = json.loads(path.read_text(encoding="utf-8"))
+    return kept if kept.get("predictions") == _digest(predictions) else None
+
+
+def _keep(path: Path, predictions: bytes, doc: dict) -> None:
+    """Keep ``doc``, figures read from ``predictions`` (the file's bytes), in ``path`` with their digest."""
+    path.write_text(json.dumps({"predictions": _digest(predictions), **doc}) + "\n", encoding="utf-8")
 
 
 def run_alarms(datasets: Datasets, spec: RunSpec, run: dict) -> Alarms | None:

@@ -200,3 +200,34 @@ def test_report_shows_the_pools_the_mixtures_trained_on() -> None:
         "method2 simulated flames (R0 mixtures)": shared,
         "method2 flames.source=cutouts R6_S6 seed 1": own[("R6_S6", "method2", 1)],
     }
+
+
+def test_ap25_of_a_run_scored_before_it_is_kept_with_the_digest_of_its_predictions(tmp_path: Path) -> None:
+    import json
+
+    from factories import planted_dataset
+
+    from fuzzyfire.aggregate import LOOSE_FILE, run_ap25
+
+    common = planted_dataset(tmp_path / "data", [[(1, (10, 10, 20, 20))], [(1, (50, 50, 20, 20))]])
+
+    class Loader:  # Datasets.get, counting reads
+        reads = 0
+
+        def get(self, ref: DataRef):
+            Loader.reads += 1
+            return common
+
+    folder, ref = tmp_path / "scores" / "common", DataRef(Path("/common"), {"kind": "common"})
+    folder.mkdir(parents=True)
+    found_one = [{"image_id": 1, "category_id": 1, "bbox": [14, 14, 20, 20], "score": 0.9}]  # IoU 0.47 with its box
+    (folder / "predictions.json").write_text(json.dumps(found_one), encoding="utf-8")
+    assert run_ap25(Loader(), folder, ref, {"AP25": 0.25}) == 0.25 and Loader.reads == 0  # the run's own figure
+    first = run_ap25(Loader(), folder, ref, {})  # type: ignore[arg-type]
+    assert first == pytest.approx(0.5, abs=0.01) and Loader.reads == 1
+    assert run_ap25(Loader(), folder, ref, {}) == first and Loader.reads == 1  # type: ignore[arg-type]
+    both = found_one + [{"image_id": 2, "category_id": 1, "bbox": [50, 50, 20, 20], "score": 0.8}]
+    (folder / "predictions.json").write_text(json.dumps(both), encoding="utf-8")  # scored again: read again
+    assert run_ap25(Loader(), folder, ref, {}) == pytest.approx(1.0) and Loader.reads == 2  # type: ignore[arg-type]
+    (folder / LOOSE_FILE).write_text(json.dumps({"AP25": 0.1}), encoding="utf-8")  # kept before the digest
+    assert run_ap25(Loader(), folder, ref, {}) == pytest.approx(1.0) and Loader.reads == 3  # type: ignore[arg-type]
