@@ -24,6 +24,7 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
+from curate.core.imageio import unit_to_u8
 from synth.harmonise import Look, sample_look
 from synth.schema import check_range
 
@@ -115,7 +116,7 @@ def poisson(img: NDArray[np.float32], rgb: NDArray[np.float32], alpha: NDArray[n
     x, y, bw, bh = cv2.boundingRect(mask)
     back = img.reshape(-1, 3).mean(axis=0)
     src = back * (1.0 - alpha[..., None]) + rgb * alpha[..., None]
-    as_u8 = [np.round(np.clip(v, 0.0, 1.0) * 255.0).astype(np.uint8) for v in (src, img)]
+    as_u8 = [unit_to_u8(v) for v in (src, img)]
     out = cv2.seamlessClone(as_u8[0], as_u8[1], mask * 255, (x + bw // 2, y + bh // 2), cv2.NORMAL_CLONE)
     return np.where(mask[..., None] > 0, out.astype(np.float32) / 255.0, img)
 

@@ -22,6 +22,7 @@ from dataclasses import replace
 import numpy as np
 from numpy.typing import NDArray
 
+from curate.core.imageio import unit_to_u8
 from synth.composite import scaled_layers
 from synth.sprites import Sprite, SpriteSequence, flame_rect
 
@@ -70,7 +71,7 @@ def _over(top: NDArray[np.float32], below: NDArray[np.float32]) -> NDArray[np.fl
 
 
 def _bytes(layer: NDArray[np.float32]) -> NDArray[np.uint8]:
-    return np.round(np.clip(layer, 0.0, 1.0) * 255.0).astype(np.uint8)
+    return unit_to_u8(layer)
 
 
 def clustered_sequence(seq: SpriteSequence, max_flames: int, rng: np.random.Generator) -> SpriteSequence:

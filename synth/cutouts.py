@@ -30,7 +30,7 @@ from numpy.typing import NDArray
 
 from curate.core.classes import canonical_class
 from curate.core.dataset import Dataset
-from curate.core.imageio import ImageError, read_image
+from curate.core.imageio import ImageError, read_image, unit_to_u8
 from curate.core.names import check_names
 from curate.core.problems import Problem
 from curate.core.progress import progress
@@ -122,7 +122,7 @@ def cut(
     if float(flame.mean()) > max_fill:
         return None
     alpha = cv2.GaussianBlur(flame.astype(np.float32), (0, 0), 1.0)
-    return np.dstack([crop, np.round(np.clip(alpha, 0.0, 1.0) * 255.0).astype(np.uint8)]), cover
+    return np.dstack([crop, unit_to_u8(alpha)]), cover
 
 
 def pixel_box(bbox: tuple[float, float, float, float], width: int, height: int) -> tuple[int, int, int, int]:

@@ -27,6 +27,7 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
+from curate.core.imageio import unit_to_u8
 from synth.colour import blackbody_rgb, srgb_encode
 from synth.photo_regions import RULES, Region
 from synth.sites import sky_like
@@ -436,7 +437,7 @@ def _cropped(kind: str, layers: Layers, x: int, y: int, photo: str = "") -> Dist
         return None
     cut = (slice(rows[0], rows[-1] + 1), slice(cols[0], cols[-1] + 1))
     over = np.concatenate([rgb[cut], alpha[cut][..., None]], axis=-1)
-    as_u8 = [np.round(np.clip(v, 0, 1) * 255).astype(np.uint8) for v in (over, light[cut])]
+    as_u8 = [unit_to_u8(v) for v in (over, light[cut])]
     sprite = Sprite(as_u8[0], as_u8[1], np.zeros(alpha[cut].shape, bool))
     return Distractor(kind, sprite, x + int(cols[0]), y + int(rows[0]), photo)
 

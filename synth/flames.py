@@ -34,6 +34,7 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
+from curate.core.imageio import unit_to_u8
 from synth.colour import exposed_palette, flame_palette
 from synth.ramps import smoothstep
 from synth.sprites import Sprite, SpriteSequence, crop_to_content
@@ -377,7 +378,7 @@ def render_fields(
     alpha = (1.0 - np.exp(-p.smoke * dens)) * (1.0 - emission.max(axis=-1)) * window
     over = np.empty(t.shape + (4,), np.uint8)
     over[..., :3] = np.uint8(round(p.smoke_grey * 255))
-    over[..., 3] = np.round(np.clip(alpha, 0, 1) * 255).astype(np.uint8)
+    over[..., 3] = unit_to_u8(alpha)
     return Sprite(over, np.round(emission * 255).astype(np.uint8), mask)
 
 

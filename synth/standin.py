@@ -32,7 +32,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from curate.core.formats.common import list_images
-from curate.core.imageio import ImageError, read_image
+from curate.core.imageio import ImageError, read_image, unit_to_u8
 from curate.core.progress import progress
 from curate.core.writer import WriteResult, plan_image_names, write_dataset
 from synth.composite import BLEND_MODES, Placement, composite
@@ -144,7 +144,7 @@ def jittered_crop(picture: NDArray[np.uint8], cfg: StandInConfig, rng: np.random
     rgb = rgb * rng.uniform(0.35, 1.1)
     if rng.random() < 0.15:
         rgb = np.repeat(rgb.mean(axis=-1, keepdims=True), 3, axis=-1)
-    return np.round(np.clip(rgb, 0, 1) * 255).astype(np.uint8)
+    return unit_to_u8(rgb)
 
 
 def standin_library(cfg: StandInConfig) -> list[SpriteSequence]:

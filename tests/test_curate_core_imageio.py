@@ -161,3 +161,16 @@ def test_images_over_the_pixel_budget_are_refused(tmp_path, monkeypatch):
     assert read_image(jpg, min_side=150).shape == (150, 200, 3)  # decoded at 1/4: 30,000 pixels, within
     with pytest.raises(ImageError, match="decoding budget"):
         read_image(jpg)
+
+
+def test_unit_to_u8_rounds_to_nearest_and_clips() -> None:
+    import numpy as np
+
+    from curate.core.imageio import unit_to_u8
+
+    values = np.array([[-0.5, 0.0, 0.5 / 255, 1.5 / 255], [0.499, 0.5, 1.0, 7.0]], dtype=np.float32)
+    out = unit_to_u8(values)
+    assert out.dtype == np.uint8 and out.shape == values.shape
+    assert out.tolist() == [[0, 0, 0, 2], [127, 128, 255, 255]]  # halves to even, as np.round
+    grid = np.linspace(0.0, 1.0, 1001)
+    assert np.abs(unit_to_u8(grid).astype(float) - grid * 255.0).max() <= 0.5

@@ -202,6 +202,12 @@ def _decode_with_pillow(data: bytes, path: Path | str) -> NDArray[np.uint8]:
     return _to_rgb8(_to_uint8(arr), bgr=False)
 
 
+def unit_to_u8(values: NDArray[np.floating]) -> NDArray[np.uint8]:
+    """Values in [0, 1] (any shape; outside it clipped) as uint8 0..255, rounded to the nearest (half to even):
+    the one float -> 8-bit step of every synthesised image and alpha layer."""
+    return np.round(np.clip(values, 0.0, 1.0) * 255.0).astype(np.uint8)
+
+
 def _to_uint8(img: NDArray) -> NDArray[np.uint8]:
     if img.dtype == np.uint8:
         return img
