@@ -108,8 +108,6 @@ def load_test_set(
             ds, split = pick_split(ds, split, path), ds.resolve_split(split) or split
         except SplitError as exc:
             raise ScoreError(f"{exc}; --split all for every image") from None
-    if not 0.0 <= holdout <= 1.0:
-        raise ScoreError(f"a held-out share is in 0..1, got {holdout:g}")
     if holdout and ds.images:
         try:
             ds = held_out_images(ds, holdout, path)

@@ -11,8 +11,7 @@ from detector_factories import IMAGES, NAMES, oracle_model, rows_for, write_test
 from pycocotools.coco import COCO
 from pycocotools.cocoeval import COCOeval
 
-from curate.core.holdout import held_out
-from curate.core.manifest import file_sha256
+from curate.core.holdout import content_fraction, held_out
 from fuzzyfire.cli import main
 
 
@@ -212,7 +211,7 @@ def test_compare_reads_both_models_at_the_alarm_budget_of_a_set_without_fire(wor
     assert main(["compare", str(good), str(good), *data[:-1], str(work["test"])]) == 2  # a set with boxes
     assert "--negatives takes images without fire; it has 6 boxes" in capsys.readouterr().err
     # held out by content: the two grey levels hash apart, so a share between them keeps one pair of photos
-    fracs = sorted({int(file_sha256(p)[:8], 16) / 16**8 for p in (tmp_path / "photos").iterdir()})
+    fracs = sorted({content_fraction(p) for p in (tmp_path / "photos").iterdir()})
     share = 1.0 - (fracs[0] + fracs[1]) / 2
     assert main(["compare", str(good), str(good), *data, "--negatives-holdout", f"{share}", "--json"]) == 0
     held = json.loads(capsys.readouterr().out)["negatives"]
