@@ -222,6 +222,10 @@ VARIANTS = {
         *ASAE,
         "synth.method2.separate_flames=true",
     ],
+    "own_frames_cutouts_half_photo_negatives_photo_distractors_auto_exposure_swap": [
+        *ASAE,
+        "synth.method2.frame_swap=0.5",
+    ],
     "own_frames_cutouts_half_photo_negatives_photo_distractors_auto_exposure_feather": [
         *ASAE,
         "synth.method2.flames.cutout_feather=0.2",

@@ -51,7 +51,8 @@ PoolKey = tuple[str, str, int]
 def simulated(cfg: Method2Config) -> Method2Config:
     """``cfg`` with simulated flames on its own places only: the experiment's shared pool (the same identity as a
     config without ``flames.source`` and its cut-out keys, ``own_frames``, ``cutout_box`` and
-    ``cutout_max_upscale``), which R0 mixtures and the report's samples and gap use."""
+    ``cutout_max_upscale``, and without ``frame_swap`` unless the config brings ``frames`` of its own), which R0
+    mixtures and the report's samples and gap use."""
     default = type(cfg.flames)()
     flames = replace(
         cfg.flames,
@@ -68,6 +69,7 @@ def simulated(cfg: Method2Config) -> Method2Config:
         own_frames=0.0,
         cutout_box=default_cfg.cutout_box,
         cutout_max_upscale=default_cfg.cutout_max_upscale,
+        frame_swap=cfg.frame_swap if cfg.frames else default_cfg.frame_swap,
     )
 
 

@@ -209,12 +209,15 @@ def cmd_method2(args: argparse.Namespace) -> int:
         raise ValueError("--photo-share is the share of views on --backgrounds/--frames, which are not given")
     if args.photo_negatives is not None and not args.backgrounds:
         raise ValueError("--photo-negatives is the share of --backgrounds photos left without flames, none are given")
+    if args.frame_swap and not args.frames:
+        raise ValueError("--frame-swap is the share of --frames images whose fires are swapped, none are given")
     share = 0.5 if args.photo_share is None else args.photo_share
     photos = {
         "backgrounds": tuple(args.backgrounds or ()),
         "frames": tuple(args.frames or ()),
         "photo_share": share,
         "photo_negatives": args.photo_negatives,
+        "frame_swap": args.frame_swap,
     }
     cfg = Method2Config(**_dataset_config(args), **photos, **_blend_config(args))
     result = run_method2(cfg, build_library(cfg.flames), args.out, overwrite=args.overwrite, workers=_workers(args))
@@ -594,6 +597,14 @@ def _register_method2(sub: argparse._SubParsersAction) -> None:
         metavar="DATASET",
         help="labelled datasets (any format, e.g. your cameras' frames with their fire boxes): composited on like "
         "photos; each keeps its own fire boxes as labels and no flame is placed over them",
+    )
+    p.add_argument(
+        "--frame-swap",
+        type=float,
+        default=0.0,
+        metavar="SHARE",
+        help="share (0..1) of the --frames images whose own fires are erased and other flames drawn in their boxes "
+        "(synth/swap.py): your fires' places, light and smoke with new flames (default 0: frames keep their fires)",
     )
     p.add_argument(
         "--photo-share",

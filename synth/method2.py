@@ -37,6 +37,7 @@ from synth.photo_regions import Region
 from synth.schema import check_range, check_streets
 from synth.sprites import Sprite, SpriteSequence, flame_rect, mask_span
 from synth.staging import boxes_from_masks
+from synth.swap import best_fit, erased, spanning
 from synth.views import ViewCache
 from synth.visibility import delta_e, measure
 
@@ -72,6 +73,8 @@ class Method2Config:
     photo_negatives: float | None = None  # fraction of the images on a fire-free photo (``backgrounds``) without
     # flames: hard negatives of the user's own kind; None = ``negatives`` (frames and other places keep that)
     flame_height_m: tuple[float, float] = (0.3, 2.5)  # flame height in the scene, metres
+    frame_swap: float = 0.0  # share of the images on a labelled frame (frames, own_frames) whose own fires are
+    # erased and other flames of the library drawn in their boxes (synth.swap); 0 = frames keep their fires
     separate_flames: bool = False  # on a site (photo, frame, panorama) each flame keeps clear of the flames placed
     # before it: no two flames' mask boxes overlap, one that would is not drawn (5 % of fire-cctv-416's train box
     # pairs in an image overlap, 20 % of a cut-out pool's flame pairs did); off = pools made before this key
@@ -112,6 +115,8 @@ class Method2Config:
             )
         if not 0.0 <= self.own_frames <= 1.0:
             raise ValueError(f"own_frames must be in 0..1, got {self.own_frames}")
+        if not 0.0 <= self.frame_swap <= 1.0:
+            raise ValueError(f"frame_swap must be in 0..1, got {self.frame_swap}")
         check_streets(self.streets, self.kits)
         if not 0.0 <= self.background_holdout < 1.0:
             raise ValueError(f"background_holdout must be in 0..1 (exclusive), got {self.background_holdout}")
@@ -373,6 +378,36 @@ def varied(planned: list[tuple[Placement, str]], rng: np.random.Generator) -> li
     return out
 
 
+def swapped_boxes(cfg: Method2Config, view_meta: dict, rng: np.random.Generator) -> list:
+    """The fire boxes [x, y, w, h] px of a labelled frame's view that this image swaps (:mod:`synth.swap`): all of
+    them with probability ``cfg.frame_swap`` (one ``rng.random`` draw, only on a frame with fires), else none."""
+    boxes = view_meta.get("frame_boxes") or []
+    if not cfg.frame_swap or not boxes or rng.random() >= cfg.frame_swap:
+        return []
+    return [list(b) for b in boxes]
+
+
+def swap_flames(
+    cfg: Method2Config, library: Sequence[SpriteSequence], boxes: Sequence, rng: np.random.Generator
+) -> list[tuple[Placement, str]]:
+    """One flame per box [x, y, w, h] px: the library frame shaped most like it (:func:`synth.swap.best_fit`), its
+    flame mask's box stretched onto the box (:func:`synth.swap.spanning`), blend, glow and opacity drawn as
+    :func:`plan_flames` draws them; all from ``rng``."""
+    out = []
+    for box in boxes:
+        seq, frame = best_fit(library, cfg.flames, max(box[2], 1e-3) / max(box[3], 1e-3), rng)
+        sprite = seq.sprites[frame]
+        x, y, width, height = spanning(sprite, box)
+        blend = str(rng.choice(cfg.blend.modes))
+        glow, opacity = float(rng.uniform(*cfg.flame_glow)), float(rng.uniform(*cfg.flame_opacity))
+        place = Placement(
+            sprite, x, y, width, height, blend, glow, opacity, cfg.light,
+            never_darken=cfg.never_darken, opaque_body=cfg.opaque_body,
+        )  # fmt: skip
+        out.append((place, f"{seq.name}/{frame}"))
+    return out
+
+
 def negative_share(cfg: Method2Config, view_meta: dict) -> float:
     """The probability that an image on the view of ``view_meta`` gets no flame: ``cfg.photo_negatives`` on a
     fire-free photo (a ``backgrounds`` photo, not a labelled frame) when set, else ``cfg.negatives``."""
@@ -412,10 +447,16 @@ def make_image(cfg: Method2Config, i: int, library: Sequence[SpriteSequence], vi
     (:func:`visible_composite`); a kept flame's mask and box are its seen part. Distractors and decoys are part of
     the scene (and of the plate the flames' visibility is measured against); they get no box."""
     background, depth, view_meta = views.background(i // cfg.images_per_view)
+    swap_rng = np.random.default_rng([cfg.seed, 2, i, 4])
+    swapped = swapped_boxes(cfg, view_meta, swap_rng)
+    if swapped:  # the frame's fires erased; the flames drawn in their boxes are boxed by what is seen of them
+        background = erased(background, swapped)
+        view_meta = {**view_meta, "frame_boxes": [], "swapped": len(swapped)}
     rng = np.random.default_rng([cfg.seed, 2, i])
-    avoid = kept_clear(view_meta) if view_meta.get("site") else None
+    avoid = [*kept_clear(view_meta), *swapped] if view_meta.get("site") else None
     yfov = view_meta["camera"]["yfov"]
     planned = plan_flames(cfg, library, depth, yfov, rng, avoid, negative_share(cfg, view_meta))
+    planned = [*swap_flames(cfg, library, swapped, swap_rng), *planned]
     effects = sample_effects(rng, cfg.camera)
     if cfg.flame_jitter:
         planned = varied(planned, np.random.default_rng([cfg.seed, 2, i, 3]))

@@ -8,6 +8,7 @@ import contextlib
 import hashlib
 import io
 import json
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -217,6 +218,8 @@ def test_own_frames_composite_on_the_mixtures_own_training_images_only(tmp_path:
     data, own, refs, printed = _prepare(cfg, tmp_path)
     assert sorted(own) == sorted((m, "method2", s) for s in SEEDS for m in ("R6_S6", "R6_S3"))
     assert simulated(cfg.synth.method2) == _config(None).synth.method2
+    swapped = replace(cfg.synth.method2, frame_swap=0.5)  # without frames of the config, swaps act on own frames
+    assert swapped.frame_swap == 0.5 and simulated(swapped) == _config(None).synth.method2
     real = read_coco(data.real.path).dataset
     boxes = real.annotations_by_image()
     real_boxes = {real.image_path(i).resolve().as_posix(): len(boxes[i.id]) for i in real.images}

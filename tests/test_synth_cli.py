@@ -215,6 +215,10 @@ def test_what_can_be_checked_fails_in_one_line_before_rendering(tmp_path, capsys
         (["--overwrite", "--cutout-groups"], "holds no cutouts.json, so not real cut-outs (flames.cutout_groups"),
         (["--overwrite", "--cluster", "0"], "flames.cluster must be 1..8 flames per fire"),
         (["--overwrite", "--photo-negatives", "1"], "--photo-negatives is the share of --backgrounds photos left"),
+        (
+            ["--overwrite", "--frame-swap", "0.5"],
+            "--frame-swap is the share of --frames images whose fires are swapped",
+        ),
         (["--overwrite", "--streets", "2"], "--streets needs --kits DIR"),
         (["--overwrite", "--kits", str(tmp_path)], "--kits are the building kits of --streets N"),
         (["--overwrite", "--streets", "2", "--kits", str(tmp_path / "nokits")], "nokits: no such kit folder"),

@@ -330,6 +330,34 @@ def test_labelled_frames_keep_their_fire_boxes_and_flames_stand_beside_them(tmp_
     assert _files(tmp_path / "a") == _files(tmp_path / "b")
 
 
+def test_swapped_frames_lose_their_own_fires_and_box_the_flames_drawn_in_their_place(tmp_path, library):
+    """``frame_swap`` 1: every frame's fires are erased (no frame box is carried) and a flame is drawn over each
+    box (``swapped`` counts them), boxed exactly by what is seen of it; the views and camera effects are the same
+    as without the key (its own rng), and the same seed gives the same bytes."""
+    from dataclasses import replace
+
+    from factories import write_frames
+
+    frames = write_frames(tmp_path)
+    cfg = replace(CFG, n=6, scenes=0, frames=(frames,), width=128, height=96, images_per_view=1, max_flames=1)
+    M.run_method2(cfg, library, tmp_path / "kept")
+    M.run_method2(replace(cfg, frame_swap=1.0), library, tmp_path / "a")
+    kept = json.loads((tmp_path / "kept" / "manifest.json").read_text())["args"]["per_image"]
+    swapped = json.loads((tmp_path / "a" / "manifest.json").read_text())["args"]["per_image"]
+    assert [m["photo"] for m in swapped] == [m["photo"] for m in kept]
+    assert [m["effects"] for m in swapped] == [m["effects"] for m in kept]
+    for before, after in zip(kept, swapped, strict=True):
+        assert after["frame_boxes"] == [] and after["swapped"] == len(before["frame_boxes"]) > 0
+        assert len(after["flames"]) + after["erased"] >= after["swapped"]
+    report = audit_dataset(tmp_path / "a")
+    assert report.get("frame_boxes", 0) == 0 and report["boxes"] == sum(len(m["flames"]) for m in swapped) > 0
+    assert report["mean_iou"] == 1.0 and report["min_iou"] == 1.0
+    M.run_method2(replace(cfg, frame_swap=1.0), library, tmp_path / "b")
+    assert _files(tmp_path / "a") == _files(tmp_path / "b")
+    with pytest.raises(ValueError, match="frame_swap"):
+        replace(cfg, frame_swap=1.5)
+
+
 def test_photo_negatives_leave_every_fire_free_photo_without_flames_and_the_rest_as_before(tmp_path, library):
     """``photo_negatives`` 1: every image on a backgrounds photo has no flame and no box; the renders keep flames
     (``negatives`` 0); unset, the same pool has flames on photos too; a labelled frame keeps ``negatives``."""
