@@ -35,7 +35,7 @@ from synth.library import FlameLibraryConfig, is_cutout, pick_sequence
 from synth.metering import draw_radiance, flame_share, mean_linear_luma, metered_gain
 from synth.photo_regions import Region
 from synth.schema import check_range, check_streets
-from synth.sprites import Sprite, SpriteSequence, flame_rect, mask_span
+from synth.sprites import Sprite, SpriteSequence, flame_extent, flame_rect, mask_span
 from synth.staging import boxes_from_masks
 from synth.swap import best_fit, erased, spanning
 from synth.views import ViewCache
@@ -196,12 +196,7 @@ def plan_flames(
             hpx = int(np.clip(fy * flame_height(cfg, rng) / d, 12, 0.9 * cfg.height))
         hpx = capped_height(cfg, seq, sprite, hpx)
         wpx, spx = sprite_pixels(sprite, hpx)
-        blend = str(rng.choice(cfg.blend.modes))  # (screen, add) by default: the draws of pools made before
-        glow, opacity = float(rng.uniform(*cfg.flame_glow)), float(rng.uniform(*cfg.flame_opacity))
-        place = Placement(
-            sprite, bx - wpx // 2, by - spx, wpx, spx, blend, glow, opacity, cfg.light,
-            never_darken=cfg.never_darken, opaque_body=cfg.opaque_body,
-        )  # fmt: skip
+        place = drawn_placement(cfg, sprite, (bx - wpx // 2, by - spx, wpx, spx), rng)
         if cfg.separate_flames and keep_clear is not None:
             box = mask_box(place)
             if overlaps(box, taken):  # site_spot's box is centred on the base; a sprite's flame may not be
@@ -214,6 +209,19 @@ def plan_flames(
             first, *rest = grouped(place, f"{seq.name}/{frame}", groups, cfg.width, cfg.height)
             out += [first, *(m for m in rest if not overlaps(mask_box(m[0]), avoid or ()))]
     return out
+
+
+def drawn_placement(
+    cfg: Method2Config, sprite: Sprite, rect: tuple[int, int, int, int], rng: np.random.Generator
+) -> Placement:
+    """``sprite`` placed at ``rect`` (x, y, width, height) image pixels with its blend, glow and opacity drawn from
+    ``rng`` in that order (one ``choice`` of ``cfg.blend.modes``, then two ``uniform`` draws: the draws of pools
+    made before), and ``cfg``'s light, never-darken and opaque-body settings."""
+    blend = str(rng.choice(cfg.blend.modes))  # (screen, add) by default
+    glow, opacity = float(rng.uniform(*cfg.flame_glow)), float(rng.uniform(*cfg.flame_opacity))
+    return Placement(
+        sprite, *rect, blend, glow, opacity, cfg.light, never_darken=cfg.never_darken, opaque_body=cfg.opaque_body
+    )
 
 
 def flame_height(cfg: Method2Config, rng: np.random.Generator) -> float:
@@ -231,13 +239,6 @@ def capped_height(cfg: Method2Config, seq: SpriteSequence, sprite: Sprite, flame
     if cfg.cutout_max_upscale is None or not is_cutout(seq):
         return flame_px
     return max(min(flame_px, int(cfg.cutout_max_upscale * flame_extent(sprite)[1])), 2)
-
-
-def flame_extent(sprite: Sprite) -> tuple[int, int]:
-    """(width, height) in sprite pixels of the box of the sprite's flame mask (the sprite's size when the mask is
-    empty): what a flame's size in the scene refers to (smoke above it is not the flame)."""
-    c0, r0, c1, r1 = flame_rect(sprite)
-    return c1 - c0 + 1, r1 - r0 + 1
 
 
 def sprite_pixels(sprite: Sprite, flame_px: int) -> tuple[int, int]:
@@ -391,20 +392,13 @@ def swap_flames(
     cfg: Method2Config, library: Sequence[SpriteSequence], boxes: Sequence, rng: np.random.Generator
 ) -> list[tuple[Placement, str]]:
     """One flame per box [x, y, w, h] px: the library frame shaped most like it (:func:`synth.swap.best_fit`), its
-    flame mask's box stretched onto the box (:func:`synth.swap.spanning`), blend, glow and opacity drawn as
-    :func:`plan_flames` draws them; all from ``rng``."""
+    flame mask's box stretched onto the box (:func:`synth.swap.spanning`), its look drawn by
+    :func:`drawn_placement`; all from ``rng``."""
     out = []
     for box in boxes:
         seq, frame = best_fit(library, cfg.flames, max(box[2], 1e-3) / max(box[3], 1e-3), rng)
         sprite = seq.sprites[frame]
-        x, y, width, height = spanning(sprite, box)
-        blend = str(rng.choice(cfg.blend.modes))
-        glow, opacity = float(rng.uniform(*cfg.flame_glow)), float(rng.uniform(*cfg.flame_opacity))
-        place = Placement(
-            sprite, x, y, width, height, blend, glow, opacity, cfg.light,
-            never_darken=cfg.never_darken, opaque_body=cfg.opaque_body,
-        )  # fmt: skip
-        out.append((place, f"{seq.name}/{frame}"))
+        out.append((drawn_placement(cfg, sprite, spanning(sprite, box), rng), f"{seq.name}/{frame}"))
     return out
 
 

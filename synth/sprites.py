@@ -85,6 +85,13 @@ def flame_rect(sprite: Sprite) -> tuple[int, int, int, int]:
     return mask_span(sprite) or (0, 0, sprite.size[0] - 1, sprite.size[1] - 1)
 
 
+def flame_extent(sprite: Sprite) -> tuple[int, int]:
+    """(width, height) in sprite pixels of the box of the sprite's flame mask (the sprite's size when the mask is
+    empty): what a flame's size in the scene refers to (smoke above it is not the flame)."""
+    c0, r0, c1, r1 = flame_rect(sprite)
+    return c1 - c0 + 1, r1 - r0 + 1
+
+
 def content_rect(sprite: Sprite, threshold: int = 2, pad: int = 1) -> tuple[int, int, int, int] | None:
     """(x0, y0, x1, y1), sprite pixels, end exclusive: the pixels that show anything (alpha, emission or mask above
     ``threshold``) with ``pad`` pixels margin, inside the sprite; None when it shows nothing."""

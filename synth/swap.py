@@ -4,7 +4,7 @@ A labelled frame (:mod:`synth.frames`: a user's CCTV frame, or a mixture's own r
 fire where fires happen, lit and smoked as the camera saw it, and boxed as its annotator boxes fires. A swap keeps
 all of that and changes the flame: the fire pixels of each of its boxes are erased (:func:`erased`: the
 fire-coloured pixels of the box and a margin around it, grown a little and filled in from their surroundings by
-``cv2.inpaint``, Telea's method) and a flame of the library is drawn over the box (:func:`swap_placement`: of
+``cv2.inpaint``, Telea's method) and a flame of the library is drawn over the box (:func:`best_fit`, :func:`spanning`: of
 :data:`CANDIDATES` random library frames, the one whose flame is shaped most like the box, its flame mask's box
 stretched onto the frame's box; a cut-out whose mask holds more than flame — a sign, a car, a wall the fire lit
 — is passed over while a candidate with at least :data:`MIN_FIRE_SHARE` fire-coloured mask pixels is there). The
@@ -23,7 +23,7 @@ from numpy.typing import NDArray
 
 from synth.cutouts import filled, fire_mask
 from synth.library import FlameLibraryConfig, pick_sequence
-from synth.sprites import Sprite, SpriteSequence, flame_rect
+from synth.sprites import Sprite, SpriteSequence, flame_extent, flame_rect
 
 #: Library frames drawn for each swapped box; the one shaped most like the box is drawn.
 CANDIDATES = 8
@@ -95,8 +95,8 @@ def best_fit(
         seq = pick_sequence(library, cfg, rng)
         frame = int(rng.integers(len(seq.sprites)))
         sprite = seq.sprites[frame]
-        c0, r0, c1, r1 = flame_rect(sprite)
-        miss = float(abs(np.log((c1 - c0 + 1) / (r1 - r0 + 1)) - np.log(aspect)))
+        fw, fh = flame_extent(sprite)
+        miss = float(abs(np.log(fw / fh) - np.log(aspect)))
         key = (fire_share(sprite) < MIN_FIRE_SHARE, miss)
         if best is None or key < best[0]:
             best = (key, seq, frame)
@@ -107,8 +107,8 @@ def best_fit(
 def spanning(sprite: Sprite, box: Sequence[float]) -> tuple[int, int, int, int]:
     """(x, y, width, height) pixels of the placement that stretches ``sprite``'s flame mask box onto ``box``
     [x, y, w, h] px (the canvas around the mask scaled with it; width and height at least 1)."""
-    c0, r0, c1, r1 = flame_rect(sprite)
-    sw, sh = sprite.size
-    sx, sy = box[2] / (c1 - c0 + 1), box[3] / (r1 - r0 + 1)
+    c0, r0, _, _ = flame_rect(sprite)
+    (sw, sh), (fw, fh) = sprite.size, flame_extent(sprite)
+    sx, sy = box[2] / fw, box[3] / fh
     width, height = max(int(round(sw * sx)), 1), max(int(round(sh * sy)), 1)
     return int(round(box[0] - c0 * sx)), int(round(box[1] - r0 * sy)), width, height
