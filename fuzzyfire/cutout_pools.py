@@ -51,7 +51,7 @@ PoolKey = tuple[str, str, int]
 def simulated(cfg: Method2Config) -> Method2Config:
     """``cfg`` with simulated flames on its own places only: the experiment's shared pool (the same identity as a
     config without ``flames.source`` and its cut-out keys, ``own_frames``, ``cutout_box`` and
-    ``cutout_max_upscale``, and without ``frame_swap`` unless the config brings ``frames`` of its own), which R0
+    ``cutout_max_upscale``, and without ``frame_swap`` or ``frame_anchored`` unless the config brings ``frames`` of its own), which R0
     mixtures and the report's samples and gap use."""
     default = type(cfg.flames)()
     flames = replace(
@@ -70,6 +70,7 @@ def simulated(cfg: Method2Config) -> Method2Config:
         cutout_box=default_cfg.cutout_box,
         cutout_max_upscale=default_cfg.cutout_max_upscale,
         frame_swap=cfg.frame_swap if cfg.frames else default_cfg.frame_swap,
+        frame_anchored=cfg.frame_anchored if cfg.frames else default_cfg.frame_anchored,
     )
 
 

@@ -173,7 +173,7 @@ LATER_KEYS = (
     "environments", "flame_opacity", "closeup", "closeup_height", "background_holdout", "panorama_share", "streets",
     "kits", "blend", "distractors", "never_darken", "frames", "own_frames", "photo_negatives", "opaque_body",
     "cutout_box", "cutout_max_upscale", "flame_glow", "auto_exposure", "flame_heights", "flame_jitter", "separate_flames",
-    "frame_swap",
+    "frame_swap", "frame_anchored",
 )  # fmt: skip
 
 #: Keys of a pool's ``flames`` added after pools were made; left out of its identity while at their default.

@@ -75,6 +75,9 @@ class Method2Config:
     flame_height_m: tuple[float, float] = (0.3, 2.5)  # flame height in the scene, metres
     frame_swap: float = 0.0  # share of the images on a labelled frame (frames, own_frames) whose own fires are
     # erased and other flames of the library drawn in their boxes (synth.swap); 0 = frames keep their fires
+    frame_anchored: bool = False  # on a labelled frame with fires, each flame stands where one of the frame's fires
+    # stands (its foot within 6 % of the image height of that fire's foot) and is sized like it (0.6-1.5x its
+    # height): :func:`anchored_spot`; off = placed by the frame's estimated ground like a photo's (pools made before)
     separate_flames: bool = False  # on a site (photo, frame, panorama) each flame keeps clear of the flames placed
     # before it: no two flames' mask boxes overlap, one that would is not drawn (5 % of fire-cctv-416's train box
     # pairs in an image overlap, 20 % of a cut-out pool's flame pairs did); off = pools made before this key
@@ -158,6 +161,7 @@ def plan_flames(
     rng: np.random.Generator,
     avoid: Sequence[Sequence[int]] | None = None,
     negatives: float | None = None,
+    anchors: Sequence[Sequence[float]] = (),
 ) -> list[tuple[Placement, str]]:
     """Random flames standing at random pixels, sized by the scene depth there (world height in metres of the flame
     itself, its mask: the sprite, smoke included, is scaled to match); on a
@@ -165,6 +169,8 @@ def plan_flames(
     and never over the ``avoid`` boxes [x, y, w, h] (:func:`kept_clear`); or,
     for a ``cfg.closeup`` share of the fire images, one flame filling ``cfg.closeup_height`` of the frame with
     its base near the bottom edge (a fire seen from close by; the part outside the frame is cut off). On a site with
+    ``cfg.frame_anchored`` and a labelled frame's fire boxes as ``anchors`` ([x, y, w, h] px) a flame stands where
+    one of them stands, sized like it (:func:`anchored_spot`; by the ground as on a photo when none fits). With
     ``cfg.separate_flames`` each flame also keeps clear of the flames before it (:func:`mask_box`). With
     ``cfg.flames.cutout_groups`` a real cut-out brings the other cut-outs of its image (:func:`synth.groups.grouped`;
     beyond ``max_flames``, none over ``avoid``). No flame (an empty list) with probability ``negatives`` (default
@@ -186,7 +192,8 @@ def plan_flames(
             bx, by = int(rng.integers(cfg.width // 4, 3 * cfg.width // 4 + 1)), int(cfg.height * rng.uniform(0.85, 1.1))
             hpx = int(round(cfg.height * rng.uniform(*cfg.closeup_height)))
         elif avoid is not None:
-            spot = site_spot(depth, fy, flame_size, cfg, keep_clear, rng)
+            spot = anchored_spot(anchors, flame_size, cfg, keep_clear, rng) if cfg.frame_anchored and anchors else None
+            spot = spot or site_spot(depth, fy, flame_size, cfg, keep_clear, rng)
             if spot is None:
                 continue
             bx, by, hpx = spot
@@ -269,6 +276,35 @@ def site_spot(
         hpx = max(int(fy * flame_height(cfg, rng) / float(depth[by, bx])), 12)
         box = flame_box(bx, by, hpx, flame_size)
         if hpx <= SITE_MAX_HEIGHT * cfg.height and not overlaps(box, avoid):
+            return bx, by, hpx
+    return None
+
+
+ANCHOR_FOOT = 0.06  # a frame-anchored flame's foot: within this fraction of the image height of its fire's foot
+ANCHOR_SCALE = (0.6, 1.5)  # its height: this range (log-uniform) times its fire's box height
+
+
+def anchored_spot(
+    anchors: Sequence[Sequence[float]],
+    flame_size: tuple[int, int],
+    cfg: Method2Config,
+    avoid: Sequence[Sequence[int]],
+    rng: np.random.Generator,
+    tries: int = 10,
+) -> tuple[int, int, int] | None:
+    """(base x, base y, height px) of a flame standing beside one of a labelled frame's fires ``anchors`` ([x, y, w,
+    h] px): the frame shows where fire stands in its view and how large it looks there. Its foot row is that fire's
+    bottom edge moved by up to :data:`ANCHOR_FOOT` of the image height, its height the fire's box height times
+    :data:`ANCHOR_SCALE` (log-uniform, capped at :data:`SITE_MAX_HEIGHT` of the image), its column anywhere in the
+    image; overlapping none of ``avoid``. None when ``tries`` draws find no such spot."""
+    lo, hi = np.log(ANCHOR_SCALE[0]), np.log(ANCHOR_SCALE[1])
+    for _ in range(tries):
+        x, y, w, h = anchors[int(rng.integers(len(anchors)))]
+        foot = y + h + rng.uniform(-ANCHOR_FOOT, ANCHOR_FOOT) * cfg.height
+        by = int(np.clip(round(foot), 1, cfg.height))
+        hpx = int(np.clip(round(h * np.exp(rng.uniform(lo, hi))), 12, SITE_MAX_HEIGHT * cfg.height))
+        bx = int(rng.integers(0, cfg.width))
+        if not overlaps(flame_box(bx, by, hpx, flame_size), avoid):
             return bx, by, hpx
     return None
 
@@ -449,7 +485,8 @@ def make_image(cfg: Method2Config, i: int, library: Sequence[SpriteSequence], vi
     rng = np.random.default_rng([cfg.seed, 2, i])
     avoid = [*kept_clear(view_meta), *swapped] if view_meta.get("site") else None
     yfov = view_meta["camera"]["yfov"]
-    planned = plan_flames(cfg, library, depth, yfov, rng, avoid, negative_share(cfg, view_meta))
+    anchors = view_meta.get("frame_boxes") or ()
+    planned = plan_flames(cfg, library, depth, yfov, rng, avoid, negative_share(cfg, view_meta), anchors)
     planned = [*swap_flames(cfg, library, swapped, swap_rng), *planned]
     effects = sample_effects(rng, cfg.camera)
     if cfg.flame_jitter:
