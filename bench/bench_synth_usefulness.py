@@ -226,6 +226,10 @@ VARIANTS = {
         *ASAE,
         "synth.method2.frame_swap=0.5",
     ],
+    "own_frames_cutouts_half_photo_negatives_photo_distractors_auto_exposure_anchored": [
+        *ASAE,
+        "synth.method2.frame_anchored=true",
+    ],
     "own_frames_cutouts_half_photo_negatives_photo_distractors_auto_exposure_feather": [
         *ASAE,
         "synth.method2.flames.cutout_feather=0.2",

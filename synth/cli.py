@@ -211,6 +211,8 @@ def cmd_method2(args: argparse.Namespace) -> int:
         raise ValueError("--photo-negatives is the share of --backgrounds photos left without flames, none are given")
     if args.frame_swap and not args.frames:
         raise ValueError("--frame-swap is the share of --frames images whose fires are swapped, none are given")
+    if args.frame_anchored and not args.frames:
+        raise ValueError("--frame-anchored places flames beside the fires of --frames images, none are given")
     share = 0.5 if args.photo_share is None else args.photo_share
     photos = {
         "backgrounds": tuple(args.backgrounds or ()),
@@ -218,6 +220,7 @@ def cmd_method2(args: argparse.Namespace) -> int:
         "photo_share": share,
         "photo_negatives": args.photo_negatives,
         "frame_swap": args.frame_swap,
+        "frame_anchored": args.frame_anchored,
     }
     cfg = Method2Config(**_dataset_config(args), **photos, **_blend_config(args))
     result = run_method2(cfg, build_library(cfg.flames), args.out, overwrite=args.overwrite, workers=_workers(args))
@@ -605,6 +608,12 @@ def _register_method2(sub: argparse._SubParsersAction) -> None:
         metavar="SHARE",
         help="share (0..1) of the --frames images whose own fires are erased and other flames drawn in their boxes "
         "(synth/swap.py): your fires' places, light and smoke with new flames (default 0: frames keep their fires)",
+    )
+    p.add_argument(
+        "--frame-anchored",
+        action="store_true",
+        help="on a --frames image with fires, each new flame stands beside one of them (its foot near that fire's "
+        "foot, 0.6-1.5x its height) instead of on the image's estimated ground",
     )
     p.add_argument(
         "--photo-share",

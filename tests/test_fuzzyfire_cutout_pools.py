@@ -220,6 +220,8 @@ def test_own_frames_composite_on_the_mixtures_own_training_images_only(tmp_path:
     assert simulated(cfg.synth.method2) == _config(None).synth.method2
     swapped = replace(cfg.synth.method2, frame_swap=0.5)  # without frames of the config, swaps act on own frames
     assert swapped.frame_swap == 0.5 and simulated(swapped) == _config(None).synth.method2
+    anchored = replace(cfg.synth.method2, frame_anchored=True)  # likewise: it acts on own frames only
+    assert simulated(anchored) == _config(None).synth.method2
     real = read_coco(data.real.path).dataset
     boxes = real.annotations_by_image()
     real_boxes = {real.image_path(i).resolve().as_posix(): len(boxes[i.id]) for i in real.images}

@@ -219,6 +219,7 @@ def test_what_can_be_checked_fails_in_one_line_before_rendering(tmp_path, capsys
             ["--overwrite", "--frame-swap", "0.5"],
             "--frame-swap is the share of --frames images whose fires are swapped",
         ),
+        (["--overwrite", "--frame-anchored"], "--frame-anchored places flames beside the fires of --frames images"),
         (["--overwrite", "--streets", "2"], "--streets needs --kits DIR"),
         (["--overwrite", "--kits", str(tmp_path)], "--kits are the building kits of --streets N"),
         (["--overwrite", "--streets", "2", "--kits", str(tmp_path / "nokits")], "nokits: no such kit folder"),

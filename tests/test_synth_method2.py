@@ -161,6 +161,35 @@ def test_separate_flames_never_overlap_on_a_site_and_the_default_draws_as_before
     assert overlapping > 0  # without the key, flames do overlap on this crowded site
 
 
+def test_frame_anchored_flames_stand_at_a_fires_foot_sized_like_it_and_the_default_draws_as_before(library) -> None:
+    """``frame_anchored``: every flame on a frame with fires has its foot within ANCHOR_FOOT of a fire's foot and its
+    height in ANCHOR_SCALE x that fire's height, clear of the fires; off, the anchors change nothing."""
+    from dataclasses import replace
+
+    cfg = replace(CFG, width=160, height=120, max_flames=3, negatives=0.0)
+    depth = np.full((cfg.height, cfg.width), 3.0, np.float32)  # every pixel ground, 3 m away
+    fires = [[10.0, 20.0, 20.0, 30.0], [120.0, 70.0, 16.0, 20.0]]  # feet at rows 50 and 90
+    lo, hi = M.ANCHOR_SCALE
+    feet = []
+    for i in range(30):
+        plain = M.plan_flames(cfg, library, depth, 1.0, np.random.default_rng(i), avoid=fires)
+        assert plain == M.plan_flames(cfg, library, depth, 1.0, np.random.default_rng(i), fires, anchors=fires)
+        spot = M.anchored_spot(fires, (1, 2), cfg, fires, np.random.default_rng(i))
+        assert spot is not None
+        bx, by, hpx = spot
+        near = [f for f in fires if abs(by - (f[1] + f[3])) <= M.ANCHOR_FOOT * cfg.height + 1]
+        assert near and any(lo * f[3] - 1 <= hpx <= hi * f[3] + 1 or hpx == 12 for f in near), (spot, near)
+        assert not overlaps(M.flame_box(bx, by, hpx, (1, 2)), fires)
+        on = replace(cfg, frame_anchored=True)
+        anchored = M.plan_flames(on, library, depth, 1.0, np.random.default_rng(i), fires, anchors=fires)
+        feet += [p.y + p.height for p, _ in anchored]  # where the sprite stands (its base row)
+    reach = M.ANCHOR_FOOT * cfg.height + 1
+    assert feet and all(any(abs(foot - (f[1] + f[3])) <= reach for f in fires) for foot in feet), feet
+    assert (
+        M.anchored_spot([[0.0, 0.0, 160.0, 120.0]], (1, 2), cfg, [[0, 0, 160, 120]], np.random.default_rng(0)) is None
+    )
+
+
 def test_a_config_with_no_place_is_refused_unless_the_experiment_adds_its_own_frames() -> None:
     with pytest.raises(ValueError, match="nothing to composite on"):
         M.Method2Config(scenes=0)
@@ -327,6 +356,25 @@ def test_labelled_frames_keep_their_fire_boxes_and_flames_stand_beside_them(tmp_
     assert flames >= 4 and report["boxes"] == flames and report["mean_iou"] == 1.0
     assert report["frame_boxes"] == sum(len(m["frame_boxes"]) for m in per_image)
     M.run_method2(cfg, library, tmp_path / "b")
+    assert _files(tmp_path / "a") == _files(tmp_path / "b")
+
+
+def test_frame_anchored_pools_keep_exact_boxes_and_their_bytes(tmp_path, library):
+    """``frame_anchored`` end to end on labelled frames: every flame box exact (audit IoU 1.000), the frames' own
+    fire boxes carried, the same seed the same bytes."""
+    from dataclasses import replace
+
+    from factories import write_frames
+
+    frames = write_frames(tmp_path)
+    cfg = replace(CFG, n=8, scenes=0, frames=(frames,), width=128, height=96, images_per_view=1, max_flames=2)
+    on = replace(cfg, frame_anchored=True)
+    M.run_method2(on, library, tmp_path / "a")
+    per_image = json.loads((tmp_path / "a" / "manifest.json").read_text())["args"]["per_image"]
+    report = audit_dataset(tmp_path / "a")
+    assert report["boxes"] == sum(len(m["flames"]) for m in per_image) > 0 and report["mean_iou"] == 1.0
+    assert report["frame_boxes"] == sum(len(m["frame_boxes"]) for m in per_image) > 0
+    M.run_method2(on, library, tmp_path / "b")
     assert _files(tmp_path / "a") == _files(tmp_path / "b")
 
 
