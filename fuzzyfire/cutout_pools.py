@@ -51,8 +51,8 @@ PoolKey = tuple[str, str, int]
 def simulated(cfg: Method2Config) -> Method2Config:
     """``cfg`` with simulated flames on its own places only: the experiment's shared pool (the same identity as a
     config without ``flames.source`` and its cut-out keys, ``own_frames``, ``cutout_box`` and
-    ``cutout_max_upscale``, and without ``frame_swap`` or ``frame_anchored`` unless the config brings ``frames`` of its own), which R0
-    mixtures and the report's samples and gap use."""
+    ``cutout_max_upscale``, and without ``frame_swap`` or ``frame_anchored`` unless the config brings ``frames``
+    of its own), which R0 mixtures and the report's samples and gap use."""
     default = type(cfg.flames)()
     flames = replace(
         cfg.flames,

@@ -42,6 +42,8 @@ from synth.views import ViewCache
 from synth.visibility import delta_e, measure
 
 SITE_MAX_HEIGHT = 0.6  # tallest flame on a photo or panorama site, fraction of the image height
+ANCHOR_FOOT = 0.06  # a frame-anchored flame's foot: within this fraction of the image height of its fire's foot
+ANCHOR_SCALE = (0.6, 1.5)  # its height: this range (log-uniform) times its fire's box height
 
 
 @dataclass(frozen=True)
@@ -280,10 +282,6 @@ def site_spot(
     return None
 
 
-ANCHOR_FOOT = 0.06  # a frame-anchored flame's foot: within this fraction of the image height of its fire's foot
-ANCHOR_SCALE = (0.6, 1.5)  # its height: this range (log-uniform) times its fire's box height
-
-
 def anchored_spot(
     anchors: Sequence[Sequence[float]],
     flame_size: tuple[int, int],
@@ -299,7 +297,7 @@ def anchored_spot(
     image; overlapping none of ``avoid``. None when ``tries`` draws find no such spot."""
     lo, hi = np.log(ANCHOR_SCALE[0]), np.log(ANCHOR_SCALE[1])
     for _ in range(tries):
-        x, y, w, h = anchors[int(rng.integers(len(anchors)))]
+        _, y, _, h = anchors[int(rng.integers(len(anchors)))]
         foot = y + h + rng.uniform(-ANCHOR_FOOT, ANCHOR_FOOT) * cfg.height
         by = int(np.clip(round(foot), 1, cfg.height))
         hpx = int(np.clip(round(h * np.exp(rng.uniform(lo, hi))), 12, SITE_MAX_HEIGHT * cfg.height))
