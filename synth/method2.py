@@ -273,12 +273,28 @@ def site_spot(
     ground = np.flatnonzero(depth > 0)
     if not len(ground):
         return None
-    for _ in range(tries):
+
+    def draw() -> tuple[int, int, int] | None:
         by, bx = divmod(int(ground[rng.integers(len(ground))]), cfg.width)
         hpx = max(int(fy * flame_height(cfg, rng) / float(depth[by, bx])), 12)
-        box = flame_box(bx, by, hpx, flame_size)
-        if hpx <= SITE_MAX_HEIGHT * cfg.height and not overlaps(box, avoid):
-            return bx, by, hpx
+        return (bx, by, hpx) if hpx <= SITE_MAX_HEIGHT * cfg.height else None
+
+    return clear_spot(draw, flame_size, avoid, tries)
+
+
+def clear_spot(
+    draw: Callable[[], tuple[int, int, int] | None],
+    flame_size: tuple[int, int],
+    avoid: Sequence[Sequence[int]],
+    tries: int,
+) -> tuple[int, int, int] | None:
+    """The first of ``tries`` spots (base x, base y, height px) from ``draw`` (None: a spot it rejects) whose flame
+    box (:func:`flame_box`, shaped like ``flame_size``) overlaps none of ``avoid`` ([x, y, w, h] px); None when no
+    draw gives one."""
+    for _ in range(tries):
+        spot = draw()
+        if spot is not None and not overlaps(flame_box(*spot, flame_size), avoid):
+            return spot
     return None
 
 
@@ -296,15 +312,15 @@ def anchored_spot(
     :data:`ANCHOR_SCALE` (log-uniform, capped at :data:`SITE_MAX_HEIGHT` of the image), its column anywhere in the
     image; overlapping none of ``avoid``. None when ``tries`` draws find no such spot."""
     lo, hi = np.log(ANCHOR_SCALE[0]), np.log(ANCHOR_SCALE[1])
-    for _ in range(tries):
+
+    def draw() -> tuple[int, int, int]:
         _, y, _, h = anchors[int(rng.integers(len(anchors)))]
         foot = y + h + rng.uniform(-ANCHOR_FOOT, ANCHOR_FOOT) * cfg.height
         by = int(np.clip(round(foot), 1, cfg.height))
         hpx = int(np.clip(round(h * np.exp(rng.uniform(lo, hi))), 12, SITE_MAX_HEIGHT * cfg.height))
-        bx = int(rng.integers(0, cfg.width))
-        if not overlaps(flame_box(bx, by, hpx, flame_size), avoid):
-            return bx, by, hpx
-    return None
+        return int(rng.integers(0, cfg.width)), by, hpx
+
+    return clear_spot(draw, flame_size, avoid, tries)
 
 
 def mask_box(p: Placement) -> list[int]:
