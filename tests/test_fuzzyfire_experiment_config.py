@@ -43,6 +43,16 @@ def test_own_flames_is_shared_data_with_the_best_pools_keys() -> None:
     assert _load("own-flames.yaml", "grid.seeds=[0]").grid.seeds == (0,)
 
 
+def test_own_flames_negatives_is_own_flames_with_every_photo_a_negative() -> None:
+    """configs/own-flames-negatives.yaml extends own-flames.yaml: the study of the README's "Every fire-free photo
+    as it is" (ASAE's command with its two --set keys; the distractors keep their kinds, so the pools are the ones
+    measured)."""
+    keys = ("synth.method2.photo_negatives=1.0", "synth.method2.distractors.share=0")
+    cfg = _load("own-flames-negatives.yaml")
+    assert cfg == _load("own-flames.yaml", *keys) == _load("shared-data.yaml", *ASAE, *keys)
+    assert cfg.synth.method2.photo_negatives == 1.0 and not cfg.synth.method2.distractors.photo
+
+
 def test_every_key_of_the_shipped_configs_is_commented() -> None:
     for path in CONFIGS.glob("*.yaml"):
         if path.name not in ("demo.yaml", "paper.yaml", "paper-ultralytics.yaml", "shared-data.yaml"):
