@@ -58,8 +58,8 @@ Variants (on shared-data.yaml: panoramas, the flames' new look, 2 images per vie
   other half left as they are (``photo_negatives: 0.5``: about a quarter of the views hard negatives).
 - ``own_frames_cutouts_photo_negatives_photo_distractors_auto_exposure``: ASAE with every fire-free photo left as
   it is (``photo_negatives: 1``: about half the views hard negatives, the flames only on the own frames);
-  ``own_frames_cutouts_photo_negatives_auto_exposure`` the same without the photo distractors (the pool of
-  configs/own-flames.yaml since stop 47), ``..._anchored`` that one with ``frame_anchored``.
+  ``own_frames_cutouts_photo_negatives_auto_exposure`` the same without the photo distractors (the pools and runs
+  of configs/own-flames-negatives.yaml), ``..._anchored`` that one with ``frame_anchored``.
 
 Lines: ``synth_use_<variant>_<test>_<metric>_delta: +d AP points (95% CI lo..hi, p)`` for AP50 and AP on every
 test set with fire, ``synth_use_<variant>_vs_copies_<test>_<metric>_delta`` the same against the variant's control
@@ -116,10 +116,10 @@ ASAE = [
 ASAE_WITHOUT_DISTRACTORS = [k for k in ASAE if k not in PHOTO_DISTRACTORS]
 
 #: ASAE with every fire-free photo left as it is (the flames only on the own frames), with and without its
-#: photo distractors.
-ALL_PHOTOS_NEGATIVE = ["synth.method2.photo_negatives=1.0" if k.startswith("synth.method2.photo_negatives=") else k
-                       for k in ASAE]  # fmt: skip
-ALL_PHOTOS_NEGATIVE_WITHOUT_DISTRACTORS = [k for k in ALL_PHOTOS_NEGATIVE if k not in PHOTO_DISTRACTORS]
+#: photo distractors; the second is configs/own-flames-negatives.yaml (its distractors keep their kinds at share 0,
+#: so the pools are the same and so named).
+ALL_PHOTOS_NEGATIVE = [*ASAE, "synth.method2.photo_negatives=1.0"]
+ALL_PHOTOS_NEGATIVE_WITHOUT_DISTRACTORS = [*ALL_PHOTOS_NEGATIVE, "synth.method2.distractors.share=0"]
 
 VARIANTS = {
     "flat": ["synth.method2.never_darken=false", "synth.method2.flames.texture=0"],
