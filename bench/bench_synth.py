@@ -14,21 +14,13 @@
 With ``--environments PATH`` (e.g. ``configs/scenes``) the Method runs use those 3D files instead of the 48
 procedural environments (the issue's file-scene targets: Method 2 <= 3 min, Method 1 <= 6 min, RSS flat).
 
-``--only streets``: Method 2 on ``--streets`` (8) procedural kit streets from ``--kits`` (default
-``../shared/data/kits`` beside the repository), 640x480 (issue 22's target: 1,000 images in <= 3 min, RSS flat;
-each street is built for its block of views and released after it, so RSS should not grow across streets).
-
 ``--only cutouts``: Method 2 with real flame cut-outs (``--cutouts DIR``, a ``fuzzyfire synth cutouts`` output;
 default: cut here from the train split of ``../shared/data/fire-cctv-416``) composited on ``--photos`` at 416x416,
 the study's own-cut-out pools: an RGBA cut-out emits no light, so its glow is no blur (the same bytes; a cut-out
 drawn thousands of pixels large used to stall a worker for minutes).
 
-``--only photo_regions``: the fire-like regions the ``photo`` distractors are cut from
-(:mod:`synth.photo_regions`), found in ``--photos`` (default ``../shared/data/fire-free`` beside the repository, its
-held-out quarter left out as the study does): photos/s and regions found.
-
-Usage: ``python bench/bench_synth.py [--n 1000] [--only flames,composite,method2,method1,streets,photo_regions,cutouts]
-[--environments P] [--kits DIR] [--streets 8] [--photos DIR] [--cutouts DIR] [--workers 0]``.
+Usage: ``python bench/bench_synth.py [--n 200] [--only flames,composite,method2,method1,cutouts]
+[--environments P] [--photos DIR] [--cutouts DIR] [--workers 0]``.
 Figures depend on the machine and on other load: take them on an otherwise idle machine.
 """
 
@@ -133,19 +125,6 @@ def bench_run(name: str, run: Callable[[Path], object], n: int, size: str = "640
     print(f"{name}_rss_peak: {max(mb for _, mb in rss.samples):.0f} MB")
 
 
-def bench_photo_regions(folder: Path) -> None:
-    from synth.photo_regions import photo_regions
-    from synth.photos import pool_photos
-
-    photos = pool_photos([folder], 0.25)
-    t = time.perf_counter()
-    regions = photo_regions(photos)
-    dt = time.perf_counter() - t
-    print(f"photo_regions_photos_per_s: {len(photos) / dt:.1f} photos/s")
-    print(f"photo_regions_found: {len(regions)} regions")
-    print(f"photo_regions_photos_with_one: {len({r.photo for r in regions})} photos")
-
-
 def bench_cutouts(n: int, cutouts: Path | None, real: Path, photos: Path, workers: int) -> None:
     from fuzzyfire.cli import main as cli
     from synth.library import cutout_library
@@ -165,14 +144,12 @@ def bench_cutouts(n: int, cutouts: Path | None, real: Path, photos: Path, worker
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--n", type=int, default=1000, help="images per Method run")
+    ap.add_argument("--n", type=int, default=200, help="images per Method run (1000 for the full-size figures)")
     ap.add_argument("--only", default="flames,composite,method2,method1")
     ap.add_argument("--environments", type=Path, help="3D files / folders / sidecars instead of procedural scenes")
-    kits = Path(__file__).resolve().parents[2] / "shared" / "data" / "kits"
-    ap.add_argument("--kits", type=Path, default=kits, help=f"building kits for --only streets (default {kits})")
-    ap.add_argument("--streets", type=int, default=8, help="kit streets for --only streets (default 8)")
-    photos = kits.parent / "fire-free"
-    ap.add_argument("--photos", type=Path, default=photos, help=f"--only photo_regions: photos (default {photos})")
+    data = Path(__file__).resolve().parents[2] / "shared" / "data"
+    photos = data / "fire-free"
+    ap.add_argument("--photos", type=Path, default=photos, help=f"--only cutouts: photos (default {photos})")
     ap.add_argument("--cutouts", type=Path, help="--only cutouts: a synth cutouts folder (default: cut them here)")
     ap.add_argument(
         "--workers", type=int, default=0, help="image processes of the Method runs (default 0 = one per core)"
@@ -185,11 +162,9 @@ def main() -> None:
     only = set(args.only.split(","))
     if "flames" in only:
         bench_flames()
-    if "photo_regions" in only:
-        bench_photo_regions(args.photos)
     if "cutouts" in only:
-        bench_cutouts(args.n, args.cutouts, kits.parent / "fire-cctv-416", args.photos, workers)
-    if not only & {"composite", "method2", "method1", "streets"}:
+        bench_cutouts(args.n, args.cutouts, data / "fire-cctv-416", args.photos, workers)
+    if not only & {"composite", "method2", "method1"}:
         return
     t = time.perf_counter()
     library = build_library(FlameLibraryConfig())
@@ -202,10 +177,6 @@ def main() -> None:
     if "method1" in only:
         cfg1 = Method1Config(n=args.n, width=640, height=480, **scenes)
         bench_run(f"method1{tag}", lambda out: run_method1(cfg1, library, out, workers=workers), args.n)
-    if "streets" in only:
-        streets = {"scenes": 0, "streets": args.streets, "kits": (args.kits,)}
-        cfg3 = Method2Config(n=args.n, width=640, height=480, **streets)
-        bench_run("method2_streets", lambda out: run_method2(cfg3, library, out, workers=workers), args.n)
 
 
 if __name__ == "__main__":

@@ -5,8 +5,8 @@ A mixture R<m>_S<n> trains on more images, more steps and more augmented views t
 gains over R<m>_S0 has nothing to do with the flames (README, "Own frames, and the control every synthetic pool
 needs": on the shared data 200 such copies gain +2.6 AP50 over R200_S0). The control run R<m>_S<n> ``copies``
 draws its n synthetic images from a Method 2 pool made of the mixture's own m real training images for that seed
-(:func:`fuzzyfire.cutout_pools.own_pool`: the same crops, camera effects, blend decoys and distractors as the
-study's Method 2 pool, each image keeping its own fire boxes) with no flame added (``negatives`` 1) and no other
+(:func:`fuzzyfire.cutout_pools.own_pool`: the same crops and camera effects as the study's Method 2 pool, each
+image keeping its own fire boxes) with no flame added (``negatives`` 1) and no other
 background (``own_frames`` 1, no photos or frames of the config). The report compares each mixture with its
 control (paired bootstrap, the same images and seeds): what the synthetic *flames* add.
 
@@ -16,12 +16,11 @@ Only Table 2 mixtures with real and synthetic images have a control; R0 mixtures
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 from curate.mix import parse_mixture, real_subset
-from fuzzyfire.cutout_pools import PoolKey, own_pool, simulated
+from fuzzyfire.cutout_pools import PoolKey, own_pool
 from fuzzyfire.datasets import DataRef, Datasets
 
 if TYPE_CHECKING:
@@ -47,24 +46,16 @@ def control_label(mixture: str) -> str:
 
 
 #: The Method 2 keys a control keeps from its pool's config: what acts on an image that gets no flame (its size,
-#: count and seed, the crops and camera, blend decoys, distractors); and it keeps the flame library, whose masks
-#: shape the blend decoys, but not the library's smoke (``rising_smoke``), which nothing draws, nor its colours
-#: (``exposed``) unless decoys take the masks those colours light up.
-KEPT: tuple[str, ...] = ("n", "seed", "width", "height", "images_per_view", "smoke_class", "camera", "blend",
-                         "distractors")  # fmt: skip
+#: count and seed, the crops and camera).
+KEPT: tuple[str, ...] = ("n", "seed", "width", "height", "images_per_view", "smoke_class", "camera")
 
 
 def control_config(cfg: Method2Config) -> Method2Config:
     """The Method 2 config of a control pool: no flame (every image a negative) on the mixture's own frames only
-    (the experiment adds them as frames), with :data:`KEPT` and the simulated flame library of ``cfg``; the places
-    (environments, streets, photos, frames) and the flames' placement and look are the defaults, so the variants
-    of a study that differ only in those share one control (and its runs)."""
-    kept = {key: getattr(cfg, key) for key in KEPT}
-    defaults = type(cfg.flames)
-    flames = replace(simulated(cfg).flames, rising_smoke=defaults.rising_smoke)  # no decoy draws smoke
-    if not cfg.blend.decoys:  # nothing of a flame shows in a control without decoys
-        flames = replace(flames, exposed=defaults.exposed, cluster=defaults.cluster)
-    return type(cfg)(**kept, flames=flames, scenes=0, own_frames=1.0, negatives=1.0)
+    (the experiment adds them as frames), with :data:`KEPT` of ``cfg``; the places (environments, photos, frames),
+    the flame library and the flames' placement and look are the defaults, so the variants of a study that differ
+    only in those share one control (and its runs)."""
+    return type(cfg)(**{key: getattr(cfg, key) for key in KEPT}, scenes=0, own_frames=1.0, negatives=1.0)
 
 
 def control_pools(

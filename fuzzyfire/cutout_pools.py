@@ -1,10 +1,9 @@
-"""Method 2 pools whose flames are each mixture's own real flames (``synth.method2.flames.source``: cutouts | both).
+"""Method 2 pools whose flames are each mixture's own real flames (``synth.method2.flames.source: cutouts``).
 
 For a mixture R<m>_S<n> with m > 0 and a seed, the real training subset is the m real images the mixture trains
 on (:func:`curate.mix.real_subset`, drawn from ``real.train_split`` only). Its fire boxes are cut out
 (:mod:`synth.cutouts`, the ``grabcut`` mask rule) into a stage ``cutouts-<hash>``, and a Method 2 pool
-``method2-cutouts-<hash>`` is composited with those flames (alone, or beside the simulated ones with ``both``);
-the mixture's n synthetic images are drawn from that pool. Both stages live in ``OUT/data`` and are identified
+``method2-cutouts-<hash>`` is composited with those flames; the mixture's n synthetic images are drawn from that pool. Both stages live in ``OUT/data`` and are identified
 by the subset's content (:func:`curate.core.fingerprint.fingerprint`: image bytes, split and boxes), the mask
 rule's parameters and the pool's config, so mixtures and seeds that draw the same subset share them, and a
 change of the mask rule makes new cut-outs and pools. Validation and test images never reach a pool.
@@ -49,29 +48,9 @@ PoolKey = tuple[str, str, int]
 
 
 def simulated(cfg: Method2Config) -> Method2Config:
-    """``cfg`` with simulated flames on its own places only: the experiment's shared pool (the same identity as a
-    config without ``flames.source`` and its cut-out keys, ``own_frames``, ``cutout_box`` and
-    ``cutout_max_upscale``, and without ``frame_swap`` or ``frame_anchored`` unless the config brings ``frames``
-    of its own), which R0 mixtures and the report's samples and gap use."""
-    default = type(cfg.flames)()
-    flames = replace(
-        cfg.flames,
-        source="simulated",
-        cutout_share=default.cutout_share,
-        cutout_max_fill=default.cutout_max_fill,
-        cutout_feather=default.cutout_feather,
-        cutout_groups=default.cutout_groups,
-    )
-    default_cfg = type(cfg)
-    return replace(
-        cfg,
-        flames=flames,
-        own_frames=0.0,
-        cutout_box=default_cfg.cutout_box,
-        cutout_max_upscale=default_cfg.cutout_max_upscale,
-        frame_swap=cfg.frame_swap if cfg.frames else default_cfg.frame_swap,
-        frame_anchored=cfg.frame_anchored if cfg.frames else default_cfg.frame_anchored,
-    )
+    """``cfg`` with simulated flames on its own places only (``flames.source: simulated``, no ``own_frames``): the
+    experiment's shared pool, which R0 mixtures and the report's samples and gap use."""
+    return replace(cfg, flames=replace(cfg.flames, source="simulated"), own_frames=0.0)
 
 
 def is_own(cfg: Method2Config | None) -> bool:
@@ -101,10 +80,9 @@ def mask_identity() -> dict[str, Any]:
     }
 
 
-def cutout_stage(root: Path, subset: Dataset, max_fill: float = 1.0) -> Stage:
+def cutout_stage(root: Path, subset: Dataset) -> Stage:
     """The cut-outs of ``subset``'s fire boxes (``fuzzyfire synth cutouts`` layout, ``cutouts.json`` naming each
-    one's image), none whose mask fills more than ``max_fill`` of its box (``flames.cutout_max_fill``), as a
-    cached stage; ValueError when no box gives one."""
+    one's image), as a cached stage; ValueError when no box gives one."""
     import json
 
     from curate.core.fingerprint import fingerprint
@@ -117,11 +95,10 @@ def cutout_stage(root: Path, subset: Dataset, max_fill: float = 1.0) -> Stage:
         "min_side": MIN_SIDE,
         "min_cover": MIN_COVER,
         "mask": mask_identity(),
-        **({"max_fill": max_fill} if max_fill < 1.0 else {}),  # stages cut before the key keep their identity
     }
 
     def cut(out: Path) -> int:
-        return write_cutouts(cutouts(subset, FIRE, MIN_SIDE, MIN_COVER, max_fill=max_fill), out)
+        return write_cutouts(cutouts(subset, FIRE, MIN_SIDE, MIN_COVER), out)
 
     stage = cached_stage(root, "cutouts", identity, cut)
     if not json.loads((stage.folder / "cutouts.json").read_text(encoding="utf-8")):
@@ -134,8 +111,8 @@ def cutout_stage(root: Path, subset: Dataset, max_fill: float = 1.0) -> Stage:
 
 def own_pool(root: Path, cfg: Method2Config, subset: Dataset, base: Path) -> tuple[Stage | None, Stage, DataRef]:
     """(cut-out stage or None, pool stage, pool reference) of the Method 2 pool of the real ``subset``: its flames
-    (``flames.source`` cutouts | both) and/or its images as frames (``own_frames``)."""
-    cut = cutout_stage(root, subset, cfg.flames.cutout_max_fill) if cfg.flames.source != "simulated" else None
+    (``flames.source: cutouts``) and/or its images as frames (``own_frames``)."""
+    cut = cutout_stage(root, subset) if cfg.flames.source == "cutouts" else None
     if cfg.own_frames > 0:
         frames = frames_stage(root, subset).folder
         cfg = replace(cfg, frames=(frames,), photo_share=cfg.own_frames, panorama_share=1.0 - cfg.own_frames)
@@ -151,7 +128,7 @@ def cutout_pools(
     cfg: ExperimentConfig, mixtures: Sequence[str], real_train: DataRef, datasets: Datasets, base: Path, out: Path
 ) -> dict[PoolKey, DataRef]:
     """The own Method 2 pool of each (mixture, ``method2``, seed) of the Method 2 ``mixtures`` with real images, when
-    ``synth.method2.flames.source`` is cutouts or both or ``own_frames`` > 0 (else none: every mixture keeps the
+    ``synth.method2.flames.source`` is cutouts or ``own_frames`` > 0 (else none: every mixture keeps the
     shared pool);
     ``real_train``: the real training split, the only images cut. Prints one line per pool and a note naming
     the R0 mixtures, which keep simulated flames (module docstring)."""

@@ -25,7 +25,6 @@ from eval.errors import ALARMS
 from fuzzyfire.datasets import DataRef, load_data
 from fuzzyfire.engine import CommandJob, command_train
 from fuzzyfire.stages import digest
-from train.config import trained_by
 
 if TYPE_CHECKING:
     from curate.core.cocoeval import CocoMetrics
@@ -44,10 +43,9 @@ class RunError(RuntimeError):
 
 
 def train_identity(train: TrainConfig) -> dict[str, Any]:
-    """``train`` as a run's identity holds it: keys added later left out while they hold the value runs trained
-    before them used (``select: best``, ``real_finetune: 0``; :func:`train.config.trained_by`), so those runs
-    keep their hash."""
-    return trained_by(to_dict(train))
+    """``train`` as a run's identity holds it: every key (the identity's version, :data:`fuzzyfire.stages.IDENTITY`,
+    is bumped when a key's meaning changes)."""
+    return to_dict(train)
 
 
 @dataclass(frozen=True)

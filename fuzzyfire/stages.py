@@ -17,22 +17,25 @@ import shutil
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 from curate.core.config import to_dict
 from fuzzyfire import __version__
 from fuzzyfire.datasets import DataRef
 
-if TYPE_CHECKING:
-    from synth.places import Places
-
 STAGE_FILE = "stage.json"
 STANDIN_LABEL = " (stand-in)"
 
 
+#: The version of what stages and runs mean, in every identity :func:`digest` hashes. Bump it when a config key
+#: is removed or changes meaning (every stage and run then rebuilds), instead of keeping old keys for old hashes.
+#: 2: the options measured not to help were deleted (docs/findings.md, "Retired designs").
+IDENTITY = 2
+
+
 def digest(identity: Mapping[str, Any]) -> str:
-    """12 hex digits of the SHA-256 of ``identity`` as canonical JSON."""
-    text = json.dumps(identity, sort_keys=True, separators=(",", ":"), default=str)
+    """12 hex digits of the SHA-256 of ``identity`` and :data:`IDENTITY` as canonical JSON."""
+    text = json.dumps({"identity": identity, "version": IDENTITY}, sort_keys=True, separators=(",", ":"), default=str)
     return hashlib.sha256(text.encode("utf-8")).hexdigest()[:12]
 
 
@@ -71,19 +74,12 @@ def cached_stage(
     name: str,
     identity: Mapping[str, Any],
     build: Callable[[Path], Any],
-    legacy: Mapping[str, Any] | None = None,
     verify: bool = False,
 ) -> Stage:
     """Run ``build(folder)`` unless ``root/<name>-<hash>/stage.json`` exists; write ``stage.json`` last, with
     the :func:`contents` of what was built and the :func:`environment` that built it.
-    ``legacy``: the identity an earlier version gave the same stage; a finished stage under it is reused as is
-    (its folder and hash, so what was made from it keeps its identity too).
     ``verify`` (for cheap stages, e.g. a curation whose embeddings are cached): a reused stage is rebuilt aside
     and compared by contents; other contents raise :class:`StageMismatch` instead of mixing two datasets."""
-    if legacy is not None:
-        old = digest({**legacy, "fuzzyfire": __version__})
-        if (Path(root) / f"{name}-{old}" / STAGE_FILE).is_file():
-            return Stage(Path(root) / f"{name}-{old}", old, True)
     identity = {**identity, "fuzzyfire": __version__}
     h = digest(identity)
     folder = Path(root) / f"{name}-{h}"
@@ -168,137 +164,56 @@ def standin_stage(root: Path, name: str, cfg: Any) -> tuple[Stage, DataRef]:
     return stage, DataRef(stage.folder, {"kind": "standin", "hash": stage.hash}, "coco", standin=True)
 
 
-#: Synth config keys added after pools were made; left out of a pool's identity while at their default.
-LATER_KEYS = (
-    "environments", "flame_opacity", "closeup", "closeup_height", "background_holdout", "panorama_share", "streets",
-    "kits", "blend", "distractors", "never_darken", "frames", "own_frames", "photo_negatives", "opaque_body",
-    "cutout_box", "cutout_max_upscale", "flame_glow", "auto_exposure", "flame_heights", "flame_jitter", "separate_flames",
-    "frame_swap", "frame_anchored",
-)  # fmt: skip
-
-#: Keys of a pool's ``flames`` added after pools were made; left out of its identity while at their default.
-LATER_FLAME_KEYS = (
-    "source",
-    "cutout_share",
-    "texture",
-    "cutout_max_fill",
-    "rising_smoke",
-    "exposed",
-    "cutout_feather",
-    "cluster",
-    "cutout_groups",
-)
-
-
 def synth_stage(root: Path, method: str, cfg: Any, base: Path, cutouts: Stage | None = None) -> tuple[Stage, DataRef]:
-    """A Method 1 or Method 2 pool, its flame library built from ``cfg.flames``; ``cfg.environments``, ``cfg.kits``
-    (and Method 2's ``backgrounds``) resolve against ``base``. They enter the pool's identity by content
-    (:func:`synth.envfile.fingerprint`, :func:`synth.photos.photo_fingerprints`), not by path, so a study
-    moved to another folder or machine finds its pools (and runs) again. ``cutouts``: a stage of real flame
-    cut-outs (:mod:`fuzzyfire.cutout_pools`) for a ``flames.source`` cutouts | both pool, named
-    ``<method>-cutouts-<hash>``; its hash enters the pool's identity. The pool is made in one process per core."""
-    from synth.library import build_library
+    """A Method 1 or Method 2 pool, its flame library built from ``cfg.flames``; ``cfg.environments`` (and Method 2's
+    ``backgrounds`` and ``frames``) resolve against ``base``. They enter the pool's identity by content
+    (:func:`content_identity`), not by path, so a study moved to another folder or machine finds its pools (and
+    runs) again. ``cutouts``: a stage of real flame cut-outs (:mod:`fuzzyfire.cutout_pools`) for a ``flames.source:
+    cutouts`` pool, named ``<method>-cutouts-<hash>``; its hash enters the pool's identity. The pool is made in one
+    process per core."""
+    from synth.library import build_library, cutout_library
     from synth.method1 import run_method1
     from synth.method2 import run_method2
 
     runner = {"method1": run_method1, "method2": run_method2}[method]
     cfg = replace(cfg, environments=tuple(_absolute(Path(p), base) for p in cfg.environments))
-    cfg = replace(cfg, kits=tuple(_absolute(Path(p), base) for p in cfg.kits))
-    by_path = _later_keys_dropped(to_dict(cfg), to_dict(type(cfg)()))  # the identity before content hashing
-    by_path["flame_look"] = FLAME_LOOK  # pools of earlier flames and compositing are other data
     if getattr(cfg, "backgrounds", ()):
         cfg = replace(cfg, backgrounds=tuple(_absolute(Path(p), base) for p in cfg.backgrounds))
     if getattr(cfg, "frames", ()):
         cfg = replace(cfg, frames=tuple(_absolute(Path(p), base) for p in cfg.frames))
-    places = _places(cfg, None)  # one scan of the places for both uses below
-    if getattr(cfg, "stand", "anywhere") == "surfaces" and _renders_rooms(cfg, places):
-        by_path["standing"] = STANDING  # rooms' flames on up-facing surfaces: pools made before were other data
-    files = content_identity(cfg, places)  # replaces the environments and backgrounds of by_path when set
+    config = {k: v for k, v in to_dict(cfg).items() if k not in ("environments", "backgrounds", "frames")}
+    files = content_identity(cfg)
     flames = {"cutouts": cutouts.hash} if cutouts is not None else {}
     stage = cached_stage(
         root,
         f"{method}-cutouts" if cutouts is not None else f"{method}-frames" if getattr(cfg, "frames", ()) else method,
-        {"kind": method, "config": {**by_path, **files, **flames}},
+        {"kind": method, "config": {**config, **files, **flames}},
         lambda out: runner(
             cfg,
-            build_library(cfg.flames, _cutout_library(cfg, cutouts) if cutouts else ()),
+            build_library(cfg.flames, cutout_library(cutouts.folder) if cutouts else ()),
             out,
             workers=os.cpu_count() or 1,  # the same bytes from any number of processes
-        ),  # fmt: skip
-        legacy={"kind": method, "config": by_path} if files and not flames else None,  # pools made by path before
+        ),
     )
     return stage, DataRef(stage.folder, {"kind": method, "hash": stage.hash}, "coco")
 
 
-def _cutout_library(cfg: Any, cutouts: Stage) -> list:
-    """The pool's real flames: the cut-outs of stage ``cutouts``, on their canvas with ``cutout_box: source``, faded
-    at the box sides their flames touch by ``flames.cutout_feather``."""
-    from synth.library import cutout_library
-
-    return cutout_library(cutouts.folder, _canvas(cfg), cfg.flames.cutout_feather)
-
-
-def _canvas(cfg: Any) -> bool:
-    """Whether a pool's cut-outs keep the box they were cut from (Method 2's ``cutout_box: source``)."""
-    return getattr(cfg, "cutout_box", "mask") == "source"
-
-
-def _renders_rooms(cfg: Any, places: Places | None = None) -> bool:
-    """Whether a pool renders rooms (procedural ``scenes`` or mesh files; ``places``: ``cfg``'s places split
-    already, else split here), whose flames ``stand`` places; panoramas, photos and kit streets have their own
-    ground."""
-    return bool(cfg.scenes) or bool(_places(cfg, places).meshes)
-
-
-def _places(cfg: Any, places: Places | None) -> Places:
-    from synth.places import split_places
-
-    return places if places is not None else split_places(cfg.environments, getattr(cfg, "backgrounds", ()))
-
-
-def _later_keys_dropped(config: dict[str, Any], default: dict[str, Any]) -> dict[str, Any]:
-    """``config`` without the :data:`LATER_KEYS` (and ``flames``' :data:`LATER_FLAME_KEYS`) that hold their
-    default (pools made before they existed keep their identity)."""
-    out = {k: v for k, v in config.items() if not (k in LATER_KEYS and v == default[k])}
-    if isinstance(out.get("flames"), dict):
-        flames, was = out["flames"], default["flames"]
-        out["flames"] = {k: v for k, v in flames.items() if not (k in LATER_FLAME_KEYS and v == was[k])}
-    return out
-
-
-#: The version of how flames are simulated, composited and boxed (synth.flames, synth.composite,
-#: synth.visibility), in the identity of every Method 1 and Method 2 pool: 2 = issue 23 (opaque bright bodies,
-#: real aspect ratios, boxes only on flames a person can see).
-FLAME_LOOK = 2
-
-#: The version of where Method 2 flames stand in rendered views (``stand: surfaces``, :mod:`synth.standing`), in
-#: the identity of every Method 2 pool with renders: 1 = the rule applied (pools made before it said "surfaces"
-#: in their config but were composited anywhere in the lower 2/3 of the view).
-STANDING = 1
-
-#: The version of the photo-site rules (:mod:`synth.sites`) in the identity of every pool with photos.
-PHOTO_SITES = 1
-
-
-def content_identity(cfg: Any, places: Places | None = None) -> dict[str, Any]:
-    """The environment files, panoramas, building kits and background photos of ``cfg`` by content (only the keys
-    that are set; ``places``: ``cfg``'s environments and backgrounds split already, else split here)."""
+def content_identity(cfg: Any) -> dict[str, Any]:
+    """The environment files, panoramas, background photos and labelled frames of ``cfg`` by content (only the
+    keys that are set)."""
     from synth.envfile import find_environment_files, fingerprint
-    from synth.kits import find_kits, kit_fingerprint
     from synth.panorama import panorama_fingerprints
     from synth.photos import photo_fingerprints
+    from synth.places import split_places
 
     out: dict[str, Any] = {}
-    places = _places(cfg, places)
+    places = split_places(cfg.environments, getattr(cfg, "backgrounds", ()))
     if places.meshes:
         out["environments"] = [fingerprint(spec) for spec in find_environment_files(places.meshes)]
     if places.panoramas:
         out["panoramas"] = panorama_fingerprints(places.panoramas)
-    if cfg.kits:
-        out["kits"] = [kit_fingerprint(folder) for folder in find_kits(cfg.kits)]
     if getattr(cfg, "backgrounds", ()):
         out["backgrounds"] = photo_fingerprints(cfg.backgrounds, cfg.background_holdout)
-        out["photo_sites"] = PHOTO_SITES  # photos became sites: pools made before that are other data
     if getattr(cfg, "frames", ()):
         from synth.frames import frame_fingerprints
 

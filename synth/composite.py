@@ -5,18 +5,13 @@ its luminous coverage (``opacity`` x :func:`coverage` of the emission brightness
 :data:`CLEAR_BRIGHTNESS`, full from :data:`OPAQUE_BRIGHTNESS` up, so a flame's bright body hides what is behind it, as a camera exposed for the
 fire sees it, while its dim edge lets the background through; over a bright background a half-covering dim edge
 still darkens it into an outline, unless ``never_darken`` caps the coverage where covering and lighting keeps the luma
-behind the flame: :func:`_keeping_cover`, up to clipping; with ``opaque_body`` only at the dim edge, the bright
-body covering as without it: :func:`body_weight`), then the emission
+behind the flame: :func:`_keeping_cover`, up to clipping), then the emission
 is added (``add``) or screened (``screen``), plus a soft glow
 (blurred emission) and a warm cast: the surroundings lit in the flame's mean colour with a Gaussian falloff
 around its base (light on the floor and walls; never part of the flame's mask or box). A flame pixel stays visible unless a later sprite is
 opaque there (its smoke alpha >= 0.5 or its own flame mask); a smoke pixel (see ``synth.sprites.SMOKE_ALPHA``)
 likewise, and also where a later sprite has smoke (so smoke masks stay disjoint). Boxes come from these final
 masks.
-
-Placements may also be pasted (``alpha``, ``blur``, ``poisson``: :mod:`synth.blend`) instead of added as light, and
-given a :class:`synth.harmonise.Look` (tint, blur, grain matched to the background); with the defaults
-(``screen`` / ``add``, a neutral look) the composite is the one of pools made before these existed.
 """
 
 from __future__ import annotations
@@ -28,13 +23,12 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from synth.blend import ALL_MODES, EMISSIVE_MODES, PASTE_MODES, margin, paste
-from synth.harmonise import Look, apply_look
 from synth.light import luma
 from synth.ramps import smoothstep
 from synth.sprites import Sprite
 
-BLEND_MODES: tuple[str, ...] = EMISSIVE_MODES  # the modes flames were drawn from before synth.blend
+#: How a flame's light meets the background: added, or screened (1 - (1 - a)(1 - b)); drawn per flame.
+BLEND_MODES: tuple[str, ...] = ("screen", "add")
 #: Emission brightness (brightest channel, 0..1) from which a flame covers the background fully (x opacity) ...
 OPAQUE_BRIGHTNESS = 0.6
 #: ... and below which it covers nothing (only adds its light).
@@ -46,18 +40,6 @@ def coverage(brightness: NDArray[np.float32]) -> NDArray[np.float32]:
     :data:`CLEAR_BRIGHTNESS` to 1 at :data:`OPAQUE_BRIGHTNESS`. The dim edge only adds light (a bright wall
     behind it is reddened, never outlined in a darker colour); the bright body is opaque."""
     return smoothstep(brightness, CLEAR_BRIGHTNESS, OPAQUE_BRIGHTNESS).astype(np.float32)
-
-
-#: Emission luma (0..1) over which an ``opaque_body`` flame goes from its dim edge (the ``never_darken`` cap) to its
-#: body (covering what is behind it as far as ``opacity`` and :func:`coverage` say).
-BODY_LUMA = (0.45, 0.75)
-
-
-def body_weight(luma: NDArray[np.float32]) -> NDArray[np.float32]:
-    """Weight in [0, 1] of a flame pixel's body by its emission ``luma`` (any shape): a smoothstep over
-    :data:`BODY_LUMA`. A luminous, sooty flame hides a bright wall behind it (the wall does not shine through its
-    body as through a pale film); only its dim edge adds light without covering."""
-    return smoothstep(luma, *BODY_LUMA).astype(np.float32)
 
 
 @dataclass(frozen=True)
@@ -73,14 +55,11 @@ class Placement:
     glow: float = 0.3
     opacity: float = 0.8  # luminous coverage: the background behind the flame dims by opacity x coverage()
     cast: bool = True  # light the surroundings warm (with ``glow`` > 0)
-    edge: float = 0.0  # paste modes: feather width (alpha) or edge blur sigma (blur), pixels
-    look: Look = Look()  # tint, blur and grain matched to the background (neutral: none)
-    never_darken: bool = False  # light modes: the flame's coverage is capped so it never darkens the luma behind it
-    opaque_body: bool = False  # with never_darken: the cap holds for the dim edge only; the bright body covers
+    never_darken: bool = False  # the flame's coverage is capped so it never darkens the luma behind it
 
     def __post_init__(self) -> None:
-        if self.blend not in ALL_MODES:
-            raise ValueError(f"unknown blend mode {self.blend!r}; choose one of {', '.join(ALL_MODES)}")
+        if self.blend not in BLEND_MODES:
+            raise ValueError(f"unknown blend mode {self.blend!r}; choose one of {', '.join(BLEND_MODES)}")
         if self.width < 1 or self.height < 1:
             raise ValueError("placement size must be at least 1 x 1")
 
@@ -97,36 +76,6 @@ def scaled_layers(
     masks = np.stack([sprite.mask, sprite.smoke_mask()], axis=-1).astype(np.float32)
     masks = cv2.resize(masks, (width, height), interpolation=cv2.INTER_LINEAR).reshape(height, width, 2) >= 0.5
     return over.reshape(height, width, 4), emission.reshape(height, width, 3), masks[..., 0], masks[..., 1]
-
-
-def padded_layers(p: Placement) -> tuple[Placement, tuple]:
-    """The placement grown by the margin its paste mode and look need (blur spill, Poisson boundary, softening)
-    and its :func:`scaled_layers` padded to match (zeros, masks False), its look applied; unchanged (and no
-    look applied) for an emissive placement with a neutral look."""
-    layers = scaled_layers(p.sprite, p.width, p.height)
-    if p.blend in EMISSIVE_MODES and p.look.neutral:
-        return p, layers
-    m = max(margin(p.blend, p.edge), int(np.ceil(3.0 * p.look.soften)))
-    over, emission, mask, smoke_mask = (np.pad(a, [(m, m), (m, m)] + [(0, 0)] * (a.ndim - 2)) for a in layers)
-    if not p.look.neutral:
-        alpha = over[..., 3]
-        over = np.concatenate([apply_look(over[..., :3], alpha, p.look), alpha[..., None]], axis=-1)
-        emission = apply_look(emission, coverage(emission.max(axis=-1)), p.look)
-    grown = replace(p, x=p.x - m, y=p.y - m, width=p.width + 2 * m, height=p.height + 2 * m)
-    return grown, (over, emission, mask, smoke_mask)
-
-
-def flattened(
-    over: NDArray[np.float32], emission: NDArray[np.float32], opacity: float
-) -> tuple[NDArray[np.float32], NDArray[np.float32]]:
-    """(h, w, 3) colour and (h, w) straight alpha of a sprite's layers as one RGBA paste: the emission counts as
-    coverage ``e = opacity x`` its brightest channel, ``a = 1 - (1 - a_smoke)(1 - e)``, colour
-    ``(smoke a_smoke (1 - e) + opacity emission) / a`` (:func:`synth.sprites.flatten_rgba` at opacity 1)."""
-    e = opacity * emission.max(axis=-1, keepdims=True)
-    a_smoke = over[..., 3:4]
-    alpha = 1.0 - (1.0 - a_smoke) * (1.0 - e)
-    rgb = (over[..., :3] * a_smoke * (1.0 - e) + opacity * emission) / np.maximum(alpha, 1e-6)
-    return np.clip(rgb, 0.0, 1.0).astype(np.float32), alpha[..., 0].astype(np.float32)
 
 
 def _clip(p: Placement, w: int, h: int) -> tuple[slice, slice, slice, slice] | None:
@@ -204,30 +153,23 @@ def composite(background: NDArray[np.uint8], placements: Sequence[Placement]) ->
     img = background.astype(np.float32) / 255.0
     flames: list[NDArray[np.bool_]] = []
     smoke: list[NDArray[np.bool_]] = []
-    for placed in placements:
-        p, (over, emission, mask, smoke_mask) = padded_layers(placed)
+    for p in placements:
+        over, emission, mask, smoke_mask = scaled_layers(p.sprite, p.width, p.height)
         full, full_smoke = np.zeros((h, w), bool), np.zeros((h, w), bool)
         c = _clip(p, w, h)
         if c is not None:
             ys, xs, sy, sx = c
-            if p.blend in PASTE_MODES:
-                rgb, alpha = flattened(over[sy, sx], emission[sy, sx], p.opacity)
-                img[ys, xs] = paste(img[ys, xs], rgb, alpha, p.blend, p.edge)
-            else:
-                a = over[sy, sx, 3:4]
-                light = emission[sy, sx]
-                flame = (1.0 - a) * p.opacity * coverage(light.max(axis=-1, keepdims=True))
-                if p.never_darken:
-                    cap = _keeping_cover(luma(img[ys, xs]), luma(light), p.blend)
-                    if p.opaque_body:
-                        cap = cap + np.clip(1.0 - cap, 0.0, 1.0) * body_weight(luma(light))
-                    flame = np.minimum(flame, cap)
-                cover = a + flame
-                img[ys, xs] = img[ys, xs] * (1.0 - cover) + over[sy, sx, :3] * a
-                img[ys, xs] = _add_light(img[ys, xs], light, p.blend)
+            a = over[sy, sx, 3:4]
+            light = emission[sy, sx]
+            flame = (1.0 - a) * p.opacity * coverage(light.max(axis=-1, keepdims=True))
+            if p.never_darken:
+                flame = np.minimum(flame, _keeping_cover(luma(img[ys, xs]), luma(light), p.blend))
+            cover = a + flame
+            img[ys, xs] = img[ys, xs] * (1.0 - cover) + over[sy, sx, :3] * a
+            img[ys, xs] = _add_light(img[ys, xs], light, p.blend)
             if p.glow > 0:
                 if p.cast:
-                    _cast(img, emission, mask, placed)
+                    _cast(img, emission, mask, p)
                 _glow(img, emission, p, c)
             full[ys, xs], full_smoke[ys, xs] = mask[sy, sx], smoke_mask[sy, sx]
             opaque = (over[sy, sx, 3] >= 0.5) | mask[sy, sx]

@@ -105,11 +105,9 @@ def cut(
     box: tuple[int, int, int, int],
     min_cover: float,
     mask: str = "grabcut",
-    max_fill: float = 1.0,
 ) -> tuple[NDArray[np.uint8], float] | None:
     """The RGBA cut-out (h, w, 4) of integer box (x, y, w, h) of ``rgb`` and its fire share (colour rule), or
-    None when less than ``min_cover`` of the box is fire-coloured or the flame mask fills more than ``max_fill``
-    of the box (a fire-lit rectangle, not a flame's shape). ``mask``: one of :data:`MASK_RULES`."""
+    None when less than ``min_cover`` of the box is fire-coloured. ``mask``: one of :data:`MASK_RULES`."""
     if mask not in MASK_RULES:
         raise ValueError(f"unknown cut-out mask rule {mask!r}; choose one of {', '.join(MASK_RULES)}")
     x, y, w, h = box
@@ -119,8 +117,6 @@ def cut(
     if cover < min_cover:
         return None
     flame = filled(raw) if mask == "colour" else grabcut_mask(rgb, box, filled(raw))
-    if float(flame.mean()) > max_fill:
-        return None
     alpha = cv2.GaussianBlur(flame.astype(np.float32), (0, 0), 1.0)
     return np.dstack([crop, unit_to_u8(alpha)]), cover
 
@@ -141,11 +137,10 @@ def cutouts(
     min_cover: float = 0.08,
     problems: list[Problem] | None = None,
     mask: str = "grabcut",
-    max_fill: float = 1.0,
 ) -> Iterator[Cutout]:
     """Cut-outs of every ``category`` box of ``ds`` at least ``min_side`` pixels on both sides, image by image
-    in the dataset's order (each image read once), with the ``mask`` rule (:data:`MASK_RULES`), none whose mask
-    fills more than ``max_fill`` of its box (:func:`cut`). Unreadable images are appended to ``problems``."""
+    in the dataset's order (each image read once), with the ``mask`` rule (:data:`MASK_RULES`) (:func:`cut`).
+    Unreadable images are appended to ``problems``."""
     category = canonical_class(category)
     check_names("class", [category], ds.category_names, str(ds.root), "classes", "--class")
     cat_ids = {c.id for c in ds.categories if c.name == category}
@@ -165,7 +160,7 @@ def cutouts(
         height, width = rgb.shape[:2]
         for bbox in boxes[img.id]:
             box = pixel_box(bbox, width, height)
-            got = cut(rgb, box, min_cover, mask, max_fill) if min(box[2], box[3]) >= min_side else None
+            got = cut(rgb, box, min_cover, mask) if min(box[2], box[3]) >= min_side else None
             if got is not None:
                 yield Cutout(got[0], str(img.file_name), box, got[1])
 

@@ -92,8 +92,6 @@ class FlameParams:
     detail: float = 1.0  # edge turbulence: the rendered flame is warped by noise of this amplitude, grid cells
     aspect: float = 0.0  # width / height of the flame box the sequence is stretched to (0: as simulated)
     texture: float = 0.0  # inner streaks: the temperature dips by up to this fraction in rising streaks (0: none)
-    rising_smoke: bool = False  # smoke only from the flame's middle up, thinning out in a round puff (False: wherever
-    # the soot drifts, low beside the base too, where it reads as a dark stain, and up to the domain's box)
     frames: int = 1024
     keep_every: int = 12
     warmup: int = 100  # steps before the first kept frame (the first plume's mushroom cap leaves the grid)
@@ -284,15 +282,6 @@ def _border_window(shape: tuple[int, int], fraction: float = 0.25) -> F32:
     return (smoothstep(ramp_y)[:, None] * smoothstep(ramp_x)[None, :]).astype(np.float32)
 
 
-def _oval_window(shape: tuple[int, int]) -> F32:
-    """(h, w) factor fading smoke to 0 towards an ellipse inscribed in the sprite (1 inside half its radii, a
-    smoothstep to 0 at the ellipse): a plume that thins out in a round puff, not in the box of the domain."""
-    h, w = shape
-    y = (np.arange(h, dtype=np.float32) + 0.5) / h * 2.0 - 1.0
-    x = (np.arange(w, dtype=np.float32) + 0.5) / w * 2.0 - 1.0
-    return smoothstep((1.0 - np.hypot(y[:, None], x[None, :])) / 0.5).astype(np.float32)
-
-
 def tint_weight(p: FlameParams, bottom: int) -> F32 | None:
     """(rows, cols) weight in [0, 1] of the chemical palette against the black-body one (:data:`TINTS`), by
     height above row ``bottom``; None for a black-body flame."""
@@ -374,33 +363,12 @@ def render_fields(
         emission = (1.0 - w) * emission + w * tint[0][idx]
     mask = emission.max(axis=-1) > mask_level
     dens = np.clip(cv2.resize(soot, size, interpolation=cv2.INTER_LINEAR), 0.0, None)
-    window = rising(mask) * _oval_window(t.shape) if p.rising_smoke else _border_window(t.shape)
+    window = _border_window(t.shape)
     alpha = (1.0 - np.exp(-p.smoke * dens)) * (1.0 - emission.max(axis=-1)) * window
     over = np.empty(t.shape + (4,), np.uint8)
     over[..., :3] = np.uint8(round(p.smoke_grey * 255))
     over[..., 3] = unit_to_u8(alpha)
     return Sprite(over, np.round(emission * 255).astype(np.uint8), mask)
-
-
-def rising(mask: NDArray[np.bool_]) -> F32:
-    """(rows, cols) weight in [0, 1] of a sprite's smoke: 0 below the flame's middle, 1 a quarter of the flame's
-    height above it, the line between following the flame's top column by column (the flame's middle row where
-    a column has no flame), thinning from the flame's top to 0 at the sprite's top row (no cap where the plume
-    meets the domain's top), blurred by a tenth of the flame's height: smoke rises off the flame's tips and wraps
-    its upper part but never lies beside or below its base, with no straight edge; all 1 for an empty ``mask``
-    (rows, cols)."""
-    rows = np.nonzero(mask.any(axis=1))[0]
-    if not len(rows):
-        return np.ones(mask.shape, np.float32)
-    top, bottom = float(rows[0]), float(rows[-1])
-    height = max(bottom - top, 2.0)
-    first = np.where(mask.any(axis=0), mask.argmax(axis=0), bottom).astype(np.float32)  # each column's flame top
-    line = 0.5 * (np.minimum(first, 0.5 * (top + bottom)) + 0.5 * (top + bottom))  # between its top and the middle
-    up = (line[None, :] - np.arange(mask.shape[0], dtype=np.float32)[:, None]) / (0.25 * height)
-    weight = smoothstep(up)
-    thinning = np.clip(np.arange(mask.shape[0], dtype=np.float32) / max(top, 1.0), 0.0, 1.0) ** 0.7  # 0 at row 0
-    weight = (weight * thinning[:, None]).astype(np.float32)
-    return cv2.GaussianBlur(weight, (0, 0), sigmaX=0.1 * height).astype(np.float32)
 
 
 def _frame_warp(warp: tuple[F32, ...], rows: int, step: int) -> tuple[F32, ...]:

@@ -1,7 +1,7 @@
 """Labelled frames as Method 2 backgrounds: the images of a labelled dataset (e.g. a user's own CCTV frames with
 their fire boxes, or the real training images of a mixture) are composited on like photos (:mod:`synth.photos`:
 sites, random crops), and each keeps its own fire boxes: they are carried through the crop into the composite's
-labels, and no flame or distractor is placed over them. A frame is a site whose ground is estimated (or read
+labels, and no flame is placed over them. A frame is a site whose ground is estimated (or read
 from a sidecar) like a photo's.
 
 A frame's box survives a crop when at least :data:`MIN_KEPT` of its area and :data:`MIN_SIDE_PX` pixels of each

@@ -18,7 +18,6 @@ from curate.core.writer import WriteResult, check_output_target
 from synth import render
 from synth.envfile import EnvironmentFile, find_environment_files
 from synth.frames import Box, load_frames
-from synth.kits import credits, find_kits, licence_files, load_kit
 from synth.panorama import PanoramaBackgrounds
 from synth.photos import PhotoBackgrounds, keep_in_pool
 from synth.places import split_places
@@ -29,7 +28,7 @@ from synth.views import ViewCache, environment_index
 
 MakeImage = Callable[[Any, int, Sequence[SpriteSequence], ViewCache], tuple]
 
-#: Views per block of a run without mesh files or kit streets (a process makes whole blocks).
+#: Views per block of a run without mesh files (a process makes whole blocks).
 BLOCK_VIEWS = 8
 #: Images to make per extra process at least (starting one costs ~2 s): fewer run in this process.
 MIN_IMAGES_PER_WORKER = 16
@@ -47,7 +46,6 @@ class Job:
     out: Path
     platform: str | None
     files: tuple[EnvironmentFile, ...]
-    kit_folders: tuple[Path, ...]
     photo_files: tuple[Path, ...]
     panoramas: tuple[Path, ...]
     frames: dict[Path, tuple[Box, ...]] = field(default_factory=dict)  # labelled frames' fire boxes, by photo
@@ -76,9 +74,7 @@ def opened_views(job: Job) -> Iterator[tuple[ViewCache, list[dict[str, str]]]]:
             count,
             panoramas,
             getattr(cfg, "panorama_share", 0.5),
-            surfaces=getattr(cfg, "stand", "anywhere") == "surfaces",  # Method 2's rule; Method 1 has its own
-            kits=[load_kit(folder) for folder in job.kit_folders],
-            streets_count=getattr(cfg, "streets", 0),
+            surfaces=job.method == "method2",  # Method 2's flames stand on surfaces; Method 1 has its own rule
         )
         yield views, [source.problems for source in (photos, panoramas) if source is not None]
 
@@ -93,14 +89,13 @@ def _make_images(job: Job, todo: Sequence[int]) -> dict[str, str]:
 
 
 def blocks(job: Job, todo: Sequence[int]) -> list[list[int]]:
-    """``todo`` (ascending image indices) cut into blocks a process makes alone: the images of one mesh file's or
-    kit street's views (each environment is loaded by one process), else of :data:`BLOCK_VIEWS` views."""
+    """``todo`` (ascending image indices) cut into blocks a process makes alone: the images of one mesh file's
+    views (each environment is loaded by one process), else of :data:`BLOCK_VIEWS` views."""
     cfg = job.cfg
     per_view = cfg.images_per_view
-    streets = getattr(cfg, "streets", 0)
-    if job.files or streets:
+    if job.files:
         views = -(-cfg.n // per_view)
-        key = [environment_index(i // per_view, len(job.files), streets, cfg.scenes, views) for i in todo]
+        key = [environment_index(i // per_view, len(job.files), cfg.scenes, views) for i in todo]
     else:
         key = [i // per_view // BLOCK_VIEWS for i in todo]
     out: dict[int, list[int]] = {}
@@ -162,9 +157,8 @@ def generate(
     """Generate (or resume) ``cfg.n`` images with ``make_image(cfg, i, library, views)`` and write ``out``.
 
     ``method`` names the source tag (``synth:<method>``) and the command in the manifest; ``cfg`` is a
-    Method1Config or Method2Config (``n``, ``seed``, ``scenes``, ``environments``, ``streets``, ``kits``, ``width``,
-    ``height``, ``smoke_class``). With kit streets the manifest credits the kits (``args.kit_credits``) and lists
-    their licence files among its ``sources``. The output folder, the environment files, the kits and the
+    Method1Config or Method2Config (``n``, ``seed``, ``scenes``, ``environments``, ``width``, ``height``,
+    ``smoke_class``). The output folder, the environment files and the
     background photos are checked before anything is rendered (:class:`~curate.core.writer.OutputError`,
     FileNotFoundError, ValueError). A run that fails or is interrupted
     keeps the images it finished in the staging folder and says so (the same command resumes from them); one
@@ -179,26 +173,20 @@ def generate(
     if places.panoramas and method != "method2":
         raise ValueError(f"{places.panoramas[0]}: a panorama is a Method 2 place (Method 1 needs 3D meshes)")
     files = find_environment_files(places.meshes) if places.meshes else []
-    kit_folders = find_kits(cfg.kits) if getattr(cfg, "streets", 0) else []  # Method 1 and 2 configs have them
     photo_files = keep_in_pool(places.photos, getattr(cfg, "background_holdout", 0.0))
     frames = load_frames(getattr(cfg, "frames", ()))  # labelled frames: photos that keep their fire boxes
     known = set(photo_files)
     photo_files += [p for p in frames if p not in known]
     args = {**to_json(cfg), "flame_sequences": [s.name for s in library]}
-    if kit_folders:
-        args["kit_credits"] = credits(kit_folders)
     staging = Staging(out, args)
-    job = Job(method, cfg, make_image, tuple(library), out, platform, tuple(files), tuple(kit_folders),
-              tuple(photo_files), tuple(places.panoramas), frames)  # fmt: skip
+    job = Job(method, cfg, make_image, tuple(library), out, platform, tuple(files), tuple(photo_files), tuple(places.panoramas), frames)  # fmt: skip
     try:
         todo = [i for i in range(cfg.n) if not staging.done(i)]
         workers = min(workers, len(todo) // MIN_IMAGES_PER_WORKER)
         problems = _in_workers(job, todo, workers) if workers > 1 else _make_images(job, todo)
         for path, reason in problems.items():
             print(f"{path}: skipped background ({reason})", file=sys.stderr)
-        sources = [path for folder in kit_folders for path in licence_files(folder)]
-        return finish(staging, out, cfg.n, f"synth:{method}", f"synth {method}", args, cfg.smoke_class, overwrite,
-                      sources)  # fmt: skip
+        return finish(staging, out, cfg.n, f"synth:{method}", f"synth {method}", args, cfg.smoke_class, overwrite)
     except BaseException:
         staging.abandon(cfg.n)
         raise

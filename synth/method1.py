@@ -14,11 +14,6 @@ Boxes (all in pixels, row 0 at the top):
   ∧ the sprite's flame mask warped by the plane's homography ∧ not behind an opaque part (alpha >= 0.5 or
   flame) of a nearer plane (per-pixel depths from the segmentation passes).
 
-Distractors (:mod:`synth.distractors`, ``distractors.share`` > 0): fire-like things drawn on the render after it
-(reflective ones before the low-light exposure, light sources after it), outside every plane's projected box,
-never boxed; objects that stand do so on the surfaces a flame may stand on, sized by the render's depth. They
-draw from a second rng, ``default_rng([seed, 3, i, 1])``: turning them on keeps every plane, box and effect.
-
 Image ``i`` uses view ``i // images_per_view`` (:mod:`synth.views`) and ``default_rng([seed, 3, i])``, so any
 image can be (re)made alone: runs resume and are byte-reproducible.
 """
@@ -36,15 +31,13 @@ from numpy.typing import NDArray
 
 from curate.core.boxes import clip_xyxy, mask_to_xywh, points_to_xyxy, xyxy_to_xywh
 from synth import render
-from synth.distractors import DistractorConfig, draw_distractors, plan_distractors
 from synth.effects import CameraConfig, Effects, apply_effects, expose, sample_effects
 from synth.generate import generate
 from synth.library import FlameLibraryConfig
-from synth.scenes import translate
-from synth.schema import check_range, check_streets
+from synth.scenes import DEFAULT_SCENES, translate
+from synth.schema import check_range
 from synth.sprites import Sprite, SpriteSequence, flatten_rgba
 from synth.staging import boxes_from_masks
-from synth.standing import standing_mask
 from synth.views import View, ViewCache
 
 BOX_MODES: tuple[str, ...] = ("paper", "visible")
@@ -56,47 +49,38 @@ class Method1Config:
     a command builds with :func:`synth.library.build_library`; the manifest records the sequences used."""
 
     n: int = 100  # images
-    seed: int = 0
-    width: int = 640
-    height: int = 480
-    scenes: int = 48  # procedural environments (0 = only the files of ``environments``)
+    seed: int = 0  # same seed -> byte-identical dataset
+    width: int = 640  # image width, pixels, >= 16
+    height: int = 480  # image height, pixels, >= 16
+    scenes: int | None = None  # procedural environments (7 families), >= 0; null = 48 unless environments are given
     environments: tuple[Path, ...] = ()  # mesh files / folders / sidecars (synth.envfile), rendered first; with
     # files the views go to the environments in consecutive blocks (synth.views)
-    streets: int = 0  # procedural streets laid out from building kits (synth.streets), after the files; 0 = none
-    kits: tuple[Path, ...] = ()  # kit folders (synth.kits), or folders of them, for the streets
     images_per_view: int = 1  # images (different planes) per camera view
     max_flames: int = 3  # planes per image: uniform in 1..max_flames
     negatives: float = 0.1  # fraction of images without flames
-    flame_height_m: tuple[float, float] = (0.3, 2.5)
+    flame_height_m: tuple[float, float] = (0.3, 2.5)  # flame plane height, metres [lo, hi]
     distance_m: tuple[float, float] = (1.0, 25.0)  # plane distance from the camera
     clearance_m: tuple[float, float] = (0.05, 0.5)  # plane stands this far in front of the surface it is on
     yaw_jitter_deg: float = 25.0  # plane rotation about the vertical away from facing the camera
     box_mode: Literal["visible", "paper"] = "visible"  # written annotation: accurate, or projected corners
     min_box_px: int = 4  # boxes smaller than this (either side) are not annotated
     effects: bool = True  # camera effects (white balance, blur, noise, JPEG) as in Method 2
-    smoke_class: bool = False
+    smoke_class: bool = False  # also annotate smoke (class 'smoke')
     light: bool = True  # flames light their surroundings (a point light per flame)
     camera: CameraConfig = field(default_factory=CameraConfig)  # probabilities of the stronger camera effects
-    flames: FlameLibraryConfig = field(default_factory=FlameLibraryConfig)
-    distractors: DistractorConfig = field(default_factory=DistractorConfig)  # fire-like things, no box
+    flames: FlameLibraryConfig = field(default_factory=FlameLibraryConfig)  # the flame library
 
     def __post_init__(self) -> None:
+        if self.scenes is None:
+            object.__setattr__(self, "scenes", 0 if self.environments else DEFAULT_SCENES)
         if self.box_mode not in BOX_MODES:
             raise ValueError(f"unknown box mode {self.box_mode!r}; choose one of {', '.join(BOX_MODES)}")
         if self.flames.source != "simulated":
             raise ValueError(f"flames.source {self.flames.source}: cut-out flames are for Method 2 pools only")
-        if self.flames.cutout_groups:
-            raise ValueError("flames.cutout_groups places the cut-outs of one image together: Method 2 pools only")
-        if self.distractors.photo:
-            raise ValueError(
-                f"distractors of kind {', '.join(self.distractors.photo_kinds)} are cut from a Method 2 pool's "
-                "fire-free photos (backgrounds)"
-            )
         if self.n < 1 or self.scenes < 0 or self.images_per_view < 1 or self.width < 16 or self.height < 16:
             raise ValueError(f"invalid Method 1 config: {self}")
-        if self.scenes == 0 and not self.environments and not self.streets:
-            raise ValueError("scenes is 0 and no environments or streets are given: nothing to render")
-        check_streets(self.streets, self.kits)
+        if self.scenes == 0 and not self.environments:
+            raise ValueError("scenes is 0 and no environments are given: nothing to render")
         if self.max_flames < 1 or not 0.0 <= self.negatives <= 1.0 or self.min_box_px < 1:
             raise ValueError(f"invalid Method 1 config: {self}")
         check_range("flame_height_m", self.flame_height_m, 0.01)
@@ -131,17 +115,9 @@ FLAME_LIGHT = 6.0  # point-light intensity per metre of flame height at full bri
 
 
 def _stand(cfg: Method1Config, view: View, k: NDArray[np.float64], rng: np.random.Generator):
-    """A random base point on the surface seen in the lower two thirds of the view (in a kit street: on the
-    up-facing ground of its fire zones, ``view.ground``), moved ``clearance_m`` towards the camera; None when the
-    pixel shows sky or lies outside ``distance_m``."""
-    if view.ground is not None:
-        rows, cols = np.nonzero(view.ground)
-        if not len(rows):
-            return None
-        pick = int(rng.integers(len(rows)))
-        u, v = cols[pick] + rng.uniform(0, 1), rows[pick] + rng.uniform(0, 1)
-    else:
-        u, v = rng.uniform(0, cfg.width), rng.uniform(cfg.height / 3, cfg.height)
+    """A random base point on the surface seen in the lower two thirds of the view, moved ``clearance_m`` towards
+    the camera; None when the pixel shows sky or lies outside ``distance_m``."""
+    u, v = rng.uniform(0, cfg.width), rng.uniform(cfg.height / 3, cfg.height)
     d = float(view.depth[min(int(v), cfg.height - 1), min(int(u), cfg.width - 1)])
     if d <= 0:
         return None
@@ -287,26 +263,6 @@ def annotate(cfg: Method1Config, planes: Sequence[Plane], paper: Sequence, masks
     return [masks[i] for i in seen], {"boxes": boxes, "box_modes": modes, "flames": flames}
 
 
-def dressed_render(
-    cfg: Method1Config, rgb: NDArray[np.uint8], view: View, paper: Sequence, effects: Effects,
-    flames_drawn: NDArray[np.bool_] | None, rng: np.random.Generator,
-) -> tuple[NDArray[np.uint8], dict]:  # fmt: skip
-    """The (H, W, 3) uint8 render ``rgb`` exposed (``flames_drawn`` kept at full), with this image's distractors
-    when ``cfg.distractors.share`` > 0: none overlapping a plane's projected box (``paper``, xywh pixels); those
-    that stand do so where a flame may (``view.ground``, else the up-facing surfaces), sized by the view's depth.
-    Also the metadata they add (``distractors``: kind and box [x, y, w, h]; only when on)."""
-    if not cfg.distractors.share:
-        return expose(rgb, effects, flames_drawn), {}
-    pose, yfov = view.camera.pose, view.camera.yfov
-    ground = view.ground if view.ground is not None else standing_mask(view.depth, pose, yfov)
-    depth = np.where(ground, view.depth, np.float32(0))
-    fy = float(render.intrinsics(yfov, cfg.width, cfg.height)[1, 1])
-    avoid = [[float(v) for v in box] for box in paper]
-    items = plan_distractors(cfg.distractors, rgb, depth, view.meta(), fy, avoid, rng)
-    scene = draw_distractors(expose(draw_distractors(rgb, items, False), effects, flames_drawn), items, True)
-    return scene, {"distractors": [d.to_json() for d in items]}
-
-
 def make_image(cfg: Method1Config, i: int, library: Sequence[SpriteSequence], views: ViewCache):
     """Image ``i``: ((H, W, 3) uint8, kept fire masks, record dict (boxes xywh, both box modes, metadata), kept
     smoke masks or None when smoke is not a class)."""
@@ -323,11 +279,8 @@ def make_image(cfg: Method1Config, i: int, library: Sequence[SpriteSequence], vi
     effects = sample_effects(rng, cfg.camera) if cfg.effects else Effects()
     drawn = [cover & layer[..., 1] for (cover, _), layer in zip(passes, layers)]  # visible opaque flame parts
     flames_drawn = np.logical_or.reduce(drawn) if drawn else None
-    scene, added = dressed_render(
-        cfg, rgb, view, paper, effects, flames_drawn, np.random.default_rng([cfg.seed, 3, i, 1])
-    )
-    image = apply_effects(scene, effects)
-    meta: dict[str, Any] = {**view.meta(), "flames": fields["flames"], "box_mode": cfg.box_mode, **added}
+    image = apply_effects(expose(rgb, effects, flames_drawn), effects)
+    meta: dict[str, Any] = {**view.meta(), "flames": fields["flames"], "box_mode": cfg.box_mode}
     meta["effects"] = effects.to_json()
     record = {"width": cfg.width, "height": cfg.height, "boxes": fields["boxes"], "box_modes": fields["box_modes"]}
     record["meta"] = meta

@@ -20,7 +20,6 @@ from curate.core.holdout import held_out
 from curate.core.imageio import ImageError, read_image
 from curate.scan import list_image_files
 from synth.frames import Box, crop_boxes
-from synth.photo_regions import Region, photo_regions
 from synth.sites import Site, estimate_site, read_site_sidecar, sidecar_files
 
 
@@ -96,15 +95,6 @@ class PhotoBackgrounds:
         self.labels = dict(labels or {})
         self.order = np.random.default_rng([seed, 8]).permutation(len(self.photos))
         self.problems: dict[str, str] = {}
-        self._regions: dict[tuple[str, ...], tuple[Region, ...]] = {}
-
-    def regions(self, rules: Sequence[str] = ("photo",)) -> tuple[Region, ...]:
-        """The regions the ``rules`` find (:mod:`synth.photo_regions`) in the fire-free photos, not in the
-        labelled frames: the photo distractors' library, found on first use."""
-        key = tuple(rules)
-        if key not in self._regions:
-            self._regions[key] = photo_regions([p for p in self.photos if p not in self.labels], key)
-        return self._regions[key]
 
     def photo(self, view_index: int) -> Path:
         return self.photos[int(self.order[view_index % len(self.photos)])]

@@ -30,6 +30,10 @@ from synth.textures import make_texture
 Pose = NDArray[np.float64]
 
 
+
+#: Procedural environments of a run that brings no places of its own (the paper's 48).
+DEFAULT_SCENES = 48
+
 @dataclass(frozen=True)
 class Solid:
     mesh: trimesh.Trimesh
@@ -65,8 +69,6 @@ class Environment:
     panels: list[Panel] = field(default_factory=list)
     lights: list[Light] = field(default_factory=list)
     meshes: list[tuple[trimesh.Trimesh, Pose]] = field(default_factory=list)  # file meshes, visuals as loaded
-    zones: list[tuple[float, float, float, float]] = field(default_factory=list)  # (x0, x1, z0, z1) metres of
-    # the ground where flames stand (synth.standing.zone_mask); empty: no zones (flames stand as the method says)
     ambient: float = 0.15
     sky: tuple[float, float, float] = (0.0, 0.0, 0.0)
     seed: int = 0

@@ -15,16 +15,6 @@ def check_range(name: str, value: tuple[float, ...], low: float | None = None) -
         raise ValueError(f"{name} must be [lo, hi] with lo <= hi{bound}, got {list(value)}")
 
 
-def check_streets(streets: int, kits: tuple[Path, ...]) -> None:
-    """Raise ValueError unless ``streets`` >= 0 comes with ``kits`` exactly when it is > 0."""
-    if streets < 0:
-        raise ValueError(f"streets must be >= 0, got {streets}")
-    if streets and not kits:
-        raise ValueError(f"streets is {streets} but no kits are given: kit streets are laid out from building kits")
-    if kits and not streets:
-        raise ValueError("kits are given but streets is 0: set streets to the number of kit streets to lay out")
-
-
 def to_json(value: Any) -> Any:
     """Plain JSON data of a config: dataclasses -> dicts, tuples -> lists, paths -> POSIX strings."""
     if dataclasses.is_dataclass(value) and not isinstance(value, type):

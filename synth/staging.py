@@ -186,14 +186,12 @@ def finish(
     args: Mapping[str, Any],
     smoke: bool,
     overwrite: bool,
-    sources: Sequence[Path] = (),
 ) -> WriteResult:
-    """Write the dataset, its masks (``masks/<image stem>.png``) and a contact sheet; remove the staging.
-    ``sources``: input files the manifest lists with their hashes (e.g. the licences of building kits)."""
+    """Write the dataset, its masks (``masks/<image stem>.png``) and a contact sheet; remove the staging."""
     ds, records = build_dataset(staging, n, source, smoke)
     per_image = [rec["meta"] for rec in records]
     result = write_dataset(
-        ds, out, ("coco", "yolo"), "copy", command, {**args, "per_image": per_image}, sources, overwrite, generated=True
+        ds, out, ("coco", "yolo"), "copy", command, {**args, "per_image": per_image}, (), overwrite, generated=True
     )
     plan = plan_image_names(ds)
     extra = {}

@@ -10,8 +10,6 @@ mix two surfaces.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
-
 import cv2
 import numpy as np
 from numpy.typing import NDArray
@@ -56,28 +54,3 @@ def standing_mask(
         jump |= np.pad(step, pad)
     mask = up & (depth > 0) & ~jump & (length > 0)
     return cv2.erode(mask.astype(np.uint8), np.ones((3, 3), np.uint8)).astype(bool)
-
-
-ZONE_TOP_M = 2.0  # highest a flame's foot stands in a fire zone, metres above the ground (a bin's lid, no balcony)
-
-
-def zone_mask(
-    points: NDArray[np.float64], zones: Sequence[tuple[float, float, float, float]], top: float = ZONE_TOP_M
-) -> NDArray[np.bool_]:
-    """(H, W) bool: the (H, W, 3) world ``points`` inside any of the ``zones`` ((x0, x1, z0, z1) metres of the
-    ground plane) and at most ``top`` metres up."""
-    x, y, z = points[..., 0], points[..., 1], points[..., 2]
-    inside = np.zeros(points.shape[:2], bool)
-    for x0, x1, z0, z1 in zones:
-        inside |= (x >= x0) & (x <= x1) & (z >= z0) & (z <= z1)
-    return inside & (y <= top)
-
-
-def zone_standing_mask(
-    depth: NDArray[np.float32],
-    pose: NDArray[np.float64],
-    yfov: float,
-    zones: Sequence[tuple[float, float, float, float]],
-) -> NDArray[np.bool_]:
-    """(H, W) bool: :func:`standing_mask` pixels whose surface lies in a fire zone (:func:`zone_mask`)."""
-    return standing_mask(depth, pose, yfov) & zone_mask(world_points(depth, pose, yfov), zones)

@@ -3,10 +3,8 @@
 View ``v`` of a run seeded ``seed`` looks at environment ``v % scenes`` when all environments are procedural.
 With mesh files (first, then the procedural environments) the ``views`` views of a run go to the environments in
 equal consecutive blocks (``v * environments // views``), so each file scene is loaded, searched and kept in
-memory once, then released. Procedural kit streets (:mod:`synth.streets`) come after the files and are shared out
-the same way (each built once, released after its block); their views show some of their fire zones, flames
-stand only on the up-facing ground of those zones, and their images are of kind ``street``. The camera is drawn by the environment's camera rules with ``default_rng([seed, 1, v])`` (blocked views rejected), so a view can be
-(re)made alone: runs resume and are byte-reproducible.
+memory once, then released. The camera is drawn by the environment's camera rules with ``default_rng([seed, 1,
+v])`` (blocked views rejected), so a view can be (re)made alone: runs resume and are byte-reproducible.
 """
 
 from __future__ import annotations
@@ -18,17 +16,14 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from synth import camera, render, scenes, streets
+from synth import camera, render, scenes
 from synth.envfile import EnvironmentFile
-from synth.kits import Kit
 from synth.panorama import PanoramaBackgrounds
 from synth.photos import PhotoBackgrounds
 from synth.places import kind_of_view, kind_weights
-from synth.standing import standing_mask, zone_standing_mask
+from synth.standing import standing_mask
 
-MIN_ZONE_SHARE = (
-    0.01  # a street (or, with surfaces, a room) view shows at least this share of pixels a flame may stand on
-)
+MIN_ZONE_SHARE = 0.01  # with surfaces, a room view shows at least this share of pixels a flame may stand on
 
 
 @dataclass(frozen=True)
@@ -40,21 +35,17 @@ class View:
     scene: Any
     camera: camera.CameraView
     depth: NDArray[np.float32]
-    ground: NDArray[np.bool_] | None = None  # (H, W) where a flame may stand (a kit street's fire zones); None:
-    # the method's own rule
-    kind: str | None = None  # "street" or "render" in a run with kit streets (None: not recorded)
 
     def meta(self) -> dict:
-        out = {"environment": self.env.name, "family": self.env.family, "camera": self.camera.to_json()}
-        return out if self.kind is None else {**out, "kind": self.kind}
+        return {"environment": self.env.name, "family": self.env.family, "camera": self.camera.to_json()}
 
 
-def environment_index(view_index: int, files: int, streets: int, scenes: int, views: int) -> int:
+def environment_index(view_index: int, files: int, scenes: int, views: int) -> int:
     """The environment view ``view_index`` of a run with ``views`` views looks at (module docstring): with mesh
-    ``files`` or kit ``streets``, equal consecutive blocks over files, streets and procedural ``scenes``; else
-    ``view_index`` modulo the scenes."""
-    total = files + streets + scenes
-    if not files and not streets:
+    ``files``, equal consecutive blocks over the files and procedural ``scenes``; else ``view_index`` modulo the
+    scenes."""
+    total = files + scenes
+    if not files:
         return view_index % total
     return min(view_index * total // views, total - 1)
 
@@ -74,23 +65,18 @@ class ViewCache:
         panoramas: PanoramaBackgrounds | None = None,
         panorama_share: float = 0.5,
         surfaces: bool = False,
-        kits: Sequence[Kit] = (),
-        streets_count: int = 0,
     ) -> None:
-        if scenes_count + len(files) + streets_count < 1 and photos is None and panoramas is None:
+        if scenes_count + len(files) < 1 and photos is None and panoramas is None:
             raise ValueError("at least one environment is needed")
-        if streets_count and not kits:
-            raise ValueError("kit streets need kits (synth.kits)")
         self.seed, self.scenes, self.renderer, self.files = seed, scenes_count, renderer, tuple(files)
         self.photos, self.panoramas, self.surfaces = photos, panoramas, surfaces
-        self.kits, self.streets = tuple(kits), streets_count
-        renders = scenes_count + len(files) + streets_count
+        renders = scenes_count + len(files)
         available = [k for k, there in (("photo", photos), ("panorama", panoramas), ("render", renders)) if there]
         self.weights = kind_weights(
             available, {"photo": photo_share, "panorama": panorama_share, "render": 1 - photo_share}
         )
-        if (self.files or self.streets) and views < 1:
-            raise ValueError("with mesh files or kit streets the number of views of the run is needed (views >= 1)")
+        if self.files and views < 1:
+            raise ValueError("with mesh files the number of views of the run is needed (views >= 1)")
         self.views = views
         self._scenes: dict[int, tuple[scenes.Environment, Any]] = {}
         self._view: View | None = None
@@ -99,23 +85,18 @@ class ViewCache:
 
     def environment_index(self, view_index: int) -> int:
         """The environment view ``view_index`` looks at (module docstring)."""
-        return environment_index(view_index, len(self.files), self.streets, self.scenes, self.views)
+        return environment_index(view_index, len(self.files), self.scenes, self.views)
 
     def environment(self, env_index: int) -> tuple[scenes.Environment, Any]:
-        """Environment ``env_index`` and its pyrender scene; a file scene or a street replaces the previous one
-        in memory."""
+        """Environment ``env_index`` and its pyrender scene; a file scene replaces the previous one in memory."""
         if env_index not in self._scenes:
-            loaded = len(self.files) + self.streets  # files, then streets: one in memory at a time
+            loaded = len(self.files)  # one file scene in memory at a time
             if env_index < loaded:
                 for old in [k for k in self._scenes if k < loaded]:
                     del self._scenes[old]
-            if env_index < len(self.files):
                 self._scenes[env_index] = scenes.file_environment(self.files[env_index], self.renderer)
             else:
-                if env_index < loaded:
-                    env = streets.build_street(self.kits, env_index - len(self.files), self.seed)
-                else:
-                    env = scenes.build_environment(env_index - loaded, self.seed)
+                env = scenes.build_environment(env_index - loaded, self.seed)
                 self._scenes[env_index] = (env, scenes.to_pyrender(env, self.renderer.pyrender))
         return self._scenes[env_index]
 
@@ -136,21 +117,15 @@ class ViewCache:
             return stand is None or float(stand.mean()) >= MIN_ZONE_SHARE
 
         cam = camera.find_view(env.camera, rng, depth_of, accept=shows_ground)
-        if env.zones:
-            ground = self._stand_mask(env, cam.pose, cam.yfov, depths[-1])
-            self._view = View(env, scene, cam, depths[-1], ground, "street")
-        else:
-            self._view = View(env, scene, cam, depths[-1], kind=None if not self.streets else "render")
+        self._view = View(env, scene, cam, depths[-1])
         self._view_index = view_index
         return self._view
 
     def _stand_mask(
         self, env: scenes.Environment, pose: NDArray[np.float64], yfov: float, depth: NDArray[np.float32]
     ) -> NDArray[np.bool_] | None:
-        """(H, W) bool where a flame may stand in a render of ``env`` seen from ``pose``: a kit street's fire-zone
-        ground, or a room's up-facing surfaces with ``surfaces``; None: anywhere (the method's own rule)."""
-        if env.zones:
-            return zone_standing_mask(depth, pose, yfov, env.zones)
+        """(H, W) bool where a flame may stand in a render of ``env`` seen from ``pose``: a room's up-facing
+        surfaces with ``surfaces``; None: anywhere (the method's own rule)."""
         return standing_mask(depth, pose, yfov) if self.surfaces else None
 
     def background(self, view_index: int) -> tuple[NDArray[np.uint8], NDArray[np.float32], dict]:
@@ -158,7 +133,7 @@ class ViewCache:
         ``kind``), cached for reuse. Its kind is drawn by :func:`synth.places.kind_of_view` with the weights of the
         kinds there are: photos ``photo_share`` (:mod:`synth.photos`), panoramas ``panorama_share``
         (:mod:`synth.panorama`), renders ``1 - photo_share`` (with photos and renders only: a photo with
-        probability ``photo_share``); a render of a kit street is of kind ``street``."""
+        probability ``photo_share``)."""
         if self._background and self._background[0] == view_index:
             return self._background[1]
         kind = kind_of_view(self.seed, view_index, self.weights)
@@ -173,7 +148,7 @@ class ViewCache:
             stand = self._stand_mask(v.env, v.camera.pose, v.camera.yfov, depth)
             if stand is not None:  # flames stand only there (a site, like a photo's ground)
                 made = (rgb, np.where(stand, depth, np.float32(0)), {**made[2], "site": "surfaces", "people": []})
-        if len(self.weights) > 1 and "kind" not in made[2]:  # with streets a render names its own kind
+        if len(self.weights) > 1:
             made[2]["kind"] = kind
         self._background = (view_index, made)
         return made

@@ -123,3 +123,13 @@ def test_xyxy_to_cxcywh_inverts_cxcywh_to_xyxy():
     b = np.array([[8.0, 17.0, 12.0, 23.0], [0.0, 0.0, 1.0, 3.0]])
     np.testing.assert_allclose(boxes.xyxy_to_cxcywh(b), [[10, 20, 4, 6], [0.5, 1.5, 1, 3]])
     np.testing.assert_allclose(boxes.cxcywh_to_xyxy(boxes.xyxy_to_cxcywh(b)), b)
+
+
+def test_xywh_overlaps_any_agrees_with_a_positive_iou():
+    b = _random_xywh(60, seed=3)
+    for i in range(len(b)):
+        others = np.delete(b, i, axis=0)
+        iou = boxes.box_iou_xyxy(boxes.xywh_to_xyxy(b[i]), boxes.xywh_to_xyxy(others))
+        assert boxes.xywh_overlaps_any(b[i], others) == bool((iou > 0).any())
+    assert not boxes.xywh_overlaps_any([0, 0, 10, 10], [[10, 0, 5, 5]])  # touching edges share no area
+    assert not boxes.xywh_overlaps_any([0, 0, 10, 10], [])

@@ -259,11 +259,12 @@ def test_blends_and_distractors_stay_out_of_existing_pool_identities() -> None:
     distractors existed (digests computed by the code before them); turning either on makes another pool."""
     from dataclasses import replace
 
+    from synth.blend import BlendConfig
+    from synth.distractors import DistractorConfig
+
     from curate.core.config import load_config, to_dict
     from fuzzyfire.experiment_config import ExperimentConfig
     from fuzzyfire.stages import _later_keys_dropped
-    from synth.blend import BlendConfig
-    from synth.distractors import DistractorConfig
     from synth.method2 import Method2Config
 
     root = Path(__file__).resolve().parents[1]

@@ -105,34 +105,6 @@ def test_a_bright_flame_body_hides_what_is_behind_it_and_a_dim_edge_does_not_dar
     assert lit[5, 5, 0] >= 230 and lit[5, 5].astype(int).mean() >= 200  # reddened, not a dark outline
 
 
-def test_flattened_is_flatten_rgba_at_full_opacity():
-    from synth.composite import flattened, scaled_layers
-    from synth.sprites import flatten_rgba
-
-    sprite = _smoky()
-    over, emission, _, _ = scaled_layers(sprite, 10, 20)
-    rgb, alpha = flattened(over, emission, 1.0)
-    reference = flatten_rgba(sprite).astype(np.float32) / 255.0
-    assert np.abs(alpha - reference[..., 3]).max() <= 1 / 255
-    shown = alpha > 0.05
-    assert np.abs(rgb[shown] - reference[..., :3][shown]).max() <= 2 / 255
-
-
-def test_paste_placements_grow_by_their_margin_and_emissive_ones_do_not():
-    from synth.composite import padded_layers
-    from synth.harmonise import Look
-
-    light = Placement(_flame(), 5, 6, 10, 10)
-    assert padded_layers(light)[0] == light
-    blurred, layers = padded_layers(Placement(_flame(), 5, 6, 10, 10, blend="blur", edge=2.0))
-    assert (blurred.x, blurred.y, blurred.width, blurred.height) == (-1, 0, 22, 22)
-    assert all(a.shape[:2] == (22, 22) for a in layers) and layers[2][6:16, 6:16].all() and not layers[2][:6].any()
-    softened, _ = padded_layers(Placement(_flame(), 5, 6, 10, 10, look=Look(soften=1.0)))
-    assert softened.width == 16
-    out = composite(np.zeros((30, 30, 3), np.uint8), [Placement(_flame(), 5, 6, 10, 10, blend="poisson", glow=0.0)])
-    assert mask_to_xywh(out.flames[0]).tolist() == [5, 6, 10, 10]
-
-
 @pytest.mark.parametrize("blend", ["add", "screen"])
 def test_never_darken_keeps_the_luma_behind_a_mid_bright_edge(blend: str) -> None:
     """An orange edge of brightness ~0.45 half-covers a pale wall and outlines it darker; capped, it reddens it."""
@@ -152,28 +124,6 @@ def test_never_darken_keeps_the_luma_behind_a_mid_bright_edge(blend: str) -> Non
     for never_darken in (False, True):  # a bright core still hides the wall behind it
         out = composite(pale, [Placement(core, 0, 0, 10, 10, blend, 0.0, 1.0, never_darken=never_darken)]).image
         assert np.abs(out.astype(int) - (255, 240, 150)).max() <= 1
-
-
-@pytest.mark.parametrize("blend", ["add", "screen"])
-def test_an_opaque_body_hides_a_bright_wall_and_its_dim_edge_still_never_darkens(blend: str) -> None:
-    """A saturated orange-yellow body (luma ~0.76, darker than a 235 wall) is a pale film under never_darken alone
-    and its own colour with opaque_body; the dim orange edge never darkens the wall either way."""
-    from synth.composite import body_weight
-    from synth.light import luma as rec709
-
-    body = _flame(value=0)
-    body.emission[:] = (255, 190, 60)
-    pale = np.full((10, 10, 3), 235, np.uint8)
-    film = composite(pale, [Placement(body, 0, 0, 10, 10, blend, 0.0, 1.0, never_darken=True)]).image
-    solid = composite(pale, [Placement(body, 0, 0, 10, 10, blend, 0.0, 1.0, never_darken=True, opaque_body=True)]).image
-    assert np.abs(solid.astype(int) - (255, 190, 60)).max() <= 1  # the flame's own colour
-    assert int(film[5, 5, 2]) > int(solid[5, 5, 2]) + 30  # the wall's blue shines through the film
-    edge = _flame(value=0)
-    edge.emission[:] = (115, 55, 10)
-    luma = lambda img: float(rec709(img.astype(np.float32) / 255.0).mean())  # noqa: E731
-    kept = composite(pale, [Placement(edge, 0, 0, 10, 10, blend, 0.0, 1.0, never_darken=True, opaque_body=True)])
-    assert luma(kept.image) >= luma(pale) - 0.03
-    assert body_weight(np.float32([0.0, 0.45, 0.6, 0.75, 1.0])).tolist() == pytest.approx([0, 0, 0.5, 1, 1])
 
 
 def test_a_sprite_that_emits_nothing_keeps_the_bytes_of_a_blurred_zero_glow(monkeypatch) -> None:

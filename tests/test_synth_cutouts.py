@@ -84,15 +84,6 @@ def test_grabcut_cuts_the_flame_out_of_a_fire_lit_wall_the_colour_rule_takes_who
         cut(img, box, 0.08, mask="snake")
 
 
-def test_max_fill_drops_fire_lit_rectangles_and_keeps_flame_shapes() -> None:
-    img, _ = _flame_on_a_lit_wall()
-    box = (50, 30, 60, 60)
-    assert cut(img, box, 0.08, mask="colour", max_fill=0.85) is None  # the colour rule's filled rectangle
-    assert cut(img, box, 0.08, mask="colour") is not None  # kept by default
-    disc = cut(img, box, 0.08, mask="grabcut", max_fill=0.85)  # the disc fills ~42 % of its box
-    assert disc is not None and np.array_equal(disc[0], cut(img, box, 0.08, mask="grabcut")[0])
-
-
 def test_grabcut_masks_are_deterministic_and_independent_of_earlier_cuts() -> None:
     img, _ = _flame_on_a_lit_wall()
     other = _image_with_disc(centre=(100, 70), r=25)

@@ -161,27 +161,6 @@ def test_texture_streaks_the_body_and_texture_0_changes_nothing():
         F.FlameParams(texture=1.0)
 
 
-def test_rising_smoke_keeps_the_flame_and_lifts_its_smoke_above_the_flames_middle():
-    """With rising_smoke a sprite's flame (emission, mask) is the same, byte for byte; its smoke lies above the
-    flame's middle row (next to none below it, where the soot of the same fields lies without the key), and thins
-    out towards the sprite's top and sides (no straight edge of the domain)."""
-    for k in range(3):
-        seqs = {}
-        for rise in (False, True):
-            rng = np.random.default_rng([11, k])
-            p = F.sample_params(rng, frames=120, keep_every=40, rising_smoke=rise, smoke=2.0)
-            seqs[rise] = F.render_fields(*_fields(p), p, F.palettes(p)[0])
-        low, high = seqs[False], seqs[True]
-        assert np.array_equal(low.emission, high.emission) and np.array_equal(low.mask, high.mask)
-        rows = np.nonzero(high.mask.any(axis=1))[0]
-        middle = (rows[0] + rows[-1]) // 2
-        below = [s.over[middle:, :, 3].astype(float).sum() / s.over[..., 3].astype(float).sum() for s in (low, high)]
-        assert below[1] < 0.02 < below[0]
-        assert high.over[: rows[0], :, 3].max() > 0  # it does rise above the flame
-        assert high.over[0, :, 3].max() == 0 and high.over[:, 0, 3].max() == 0  # no edge at the top or the side
-    assert np.array_equal(F.rising(np.zeros((5, 3), bool)), np.ones((5, 3), np.float32))  # no flame: as it is
-
-
 def _fields(p: F.FlameParams) -> tuple[np.ndarray, np.ndarray]:
     """(temperature, soot) fields of ``p``'s grid: a hot tongue in the lower middle, soot everywhere."""
     y, x = np.mgrid[0 : p.rows, 0 : p.cols].astype(np.float32)

@@ -208,40 +208,9 @@ def test_placement_follows_the_rules(renderer, library):
         assert cfg.flame_height_m[0] <= plane.height <= cfg.flame_height_m[1]
 
 
-def test_distractors_keep_every_plane_and_box_and_never_touch_one(written, library, tmp_path):
-    """The extra rng: distractors keep every plane, box and camera effect of the default run; none overlaps a
-    plane's projected box; audit IoU stays 1.000."""
-    from dataclasses import replace
-
-    from synth.distractors import DistractorConfig, overlaps
-
-    out = tmp_path / "hard"
-    M.run_method1(replace(CFG, distractors=DistractorConfig(share=1.0, max=3)), library, out)
-    assert (out / "annotations.json").read_bytes() == (written / "annotations.json").read_bytes()
-    plain = json.loads((written / "manifest.json").read_text())["args"]["per_image"]
-    dressed = json.loads((out / "manifest.json").read_text())["args"]["per_image"]
-    assert sum(len(m["distractors"]) for m in dressed) > 0 and not any("distractors" in m for m in plain)
-    assert [m["flames"] for m in plain] == [m["flames"] for m in dressed]
-    assert [m["effects"] for m in plain] == [m["effects"] for m in dressed]
-    for meta in dressed:
-        planes = [f["paper_box"] for f in meta["flames"] if f["paper_box"]]
-        assert all(not overlaps(d["box"], planes) for d in meta["distractors"])
-    report = audit_dataset(out)
-    assert report["min_iou"] == 1.0 and report["boxes"] == audit_dataset(written)["boxes"]
-    changed = [a != b for a, b in zip(_files(written).values(), _files(out).values())]
-    assert any(changed)
-
-
 def test_config_rejects_unknown_box_mode():
     with pytest.raises(ValueError, match="box mode"):
         M.Method1Config(box_mode="tight")
-
-
-def test_config_refuses_photo_distractors_that_only_a_method2_pool_has_photos_for():
-    from synth.distractors import DistractorConfig
-
-    with pytest.raises(ValueError, match="kind photo"):
-        M.Method1Config(distractors=DistractorConfig(share=0.5, kinds=("photo",)))
 
 
 def test_smoke_class_boxes_come_from_the_visible_smoke(tmp_path):

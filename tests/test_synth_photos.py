@@ -131,16 +131,3 @@ def test_a_labelled_photo_carries_its_boxes_through_the_crop(tmp_path: Path) -> 
             assert meta["frame_boxes"] == crop_boxes(boxes, meta["crop"], 64, 48)
         else:
             assert "frame_boxes" not in meta  # an unlabelled photo's metadata is as before
-
-
-def test_regions_come_from_the_fire_free_photos_once_never_from_labelled_frames(tmp_path: Path) -> None:
-    import cv2
-
-    warm = np.full((120, 160, 3), 90, np.uint8)
-    cv2.circle(warm, (60, 60), 20, (230, 90, 30), -1)  # a fire-like thing (synth.photo_regions)
-    free, frame = tmp_path / "free.png", tmp_path / "frame.png"
-    for path in (free, frame):
-        cv2.imwrite(str(path), warm[..., ::-1])
-    photos = PhotoBackgrounds([free, frame], 64, 48, seed=0, labels={frame: [(40.0, 40.0, 40.0, 40.0)]})
-    regions = photos.regions()
-    assert [r.photo for r in regions] == ["free.png"] and photos.regions() is regions

@@ -22,13 +22,3 @@ def test_to_json_is_plain_data():
     import json
 
     assert json.loads(json.dumps(data)) == data
-
-
-def test_check_streets_wants_kits_exactly_when_there_are_streets():
-    from synth.schema import check_streets
-
-    check_streets(0, ())
-    check_streets(2, (Path("kits"),))
-    for streets, kits, message in [(-1, (), ">= 0"), (2, (), "no kits"), (0, (Path("kits"),), "streets is 0")]:
-        with pytest.raises(ValueError, match=message):
-            check_streets(streets, kits)

@@ -43,20 +43,3 @@ def test_world_points_project_back_to_their_pixels() -> None:
     u, v = np.meshgrid(np.arange(w) + 0.5, np.arange(h) + 0.5)
     assert np.allclose(uvd[:, 0], u.ravel(), atol=1e-6) and np.allclose(uvd[:, 1], v.ravel(), atol=1e-6)
     assert np.allclose(uvd[:, 2], depth.ravel(), rtol=1e-6)
-
-
-def test_zones_keep_the_floor_inside_them_and_low_enough() -> None:
-    from synth.standing import ZONE_TOP_M, zone_mask, zone_standing_mask
-
-    pose = pose_from_angles(np.array([0.0, 1.6, 0.0]), 0.0, np.deg2rad(-25))
-    yfov, w, h = np.deg2rad(60), 96, 72
-    depth = _room_depth(pose, yfov, w, h, wall_z=-4.0)
-    points = world_points(depth, pose, yfov)
-    zone = (-1.0, 1.0, -3.0, -1.5)  # a 2 x 1.5 m patch of floor in front of the camera
-    inside = zone_mask(points, [zone])
-    x, y, z = points[..., 0], points[..., 1], points[..., 2]
-    assert inside.any() and np.all((x[inside] >= -1) & (x[inside] <= 1) & (z[inside] >= -3) & (z[inside] <= -1.5))
-    assert not zone_mask(points, [(-9, 9, -4.1, -3.9)], top=ZONE_TOP_M)[y > ZONE_TOP_M].any()  # wall above 2 m
-    assert not zone_mask(points, []).any()
-    standing = zone_standing_mask(depth, pose, yfov, [zone])
-    assert standing.any() and np.all(inside[standing]) and np.all(standing_mask(depth, pose, yfov)[standing])

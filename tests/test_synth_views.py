@@ -61,27 +61,6 @@ def test_file_environments_come_first_in_blocks_then_procedural(renderer, tmp_pa
         ViewCache(0, 0, renderer, [spec])
 
 
-def test_kit_streets_come_after_the_files_in_blocks_and_name_their_kind(renderer, tmp_path):
-    from factories import write_tiny_kits
-
-    from synth.kits import find_kits, load_kit
-
-    kits = [load_kit(folder) for folder in find_kits([write_tiny_kits(tmp_path)])]
-    views = ViewCache(0, 1, renderer, views=6, kits=kits, streets_count=2)  # 3 environments, 2 views each
-    assert [views.environment_index(v) for v in range(6)] == [0, 0, 1, 1, 2, 2]
-    assert [views.view(v).env.name for v in (0, 2, 4)] == [
-        "street-000",
-        "street-001",
-        ViewCache(0, 1, renderer).view(0).env.name,
-    ]
-    assert 0 not in views._scenes  # the first street was released when the second was built
-    assert views.view(0).meta()["kind"] == "street" and views.view(0).ground is not None
-    assert views.view(4).meta()["kind"] == "render" and views.view(4).ground is None  # rooms beside streets
-    assert "kind" not in ViewCache(0, 1, renderer).view(0).meta()  # runs without streets record no kind
-    with pytest.raises(ValueError, match="kit streets need kits"):
-        ViewCache(0, 0, renderer, views=2, streets_count=2)
-
-
 def test_surfaces_keep_only_up_facing_ground_and_views_that_show_some(renderer):
     from synth.standing import standing_mask
     from synth.views import MIN_ZONE_SHARE

@@ -53,8 +53,7 @@ class EfficientLite0Backbone(nn.Module):
         self.set_freeze(freeze)
 
     def set_freeze(self, freeze: int, trainable: bool = True) -> None:
-        """Freeze stages 1..``freeze`` (and the stem); the others get gradients when ``trainable``. Used at the
-        start and when a run unfreezes late stages (``TrainConfig.unfreeze``)."""
+        """Freeze stages 1..``freeze`` (and the stem); the others get gradients when ``trainable``."""
         if not 0 <= freeze <= len(LITE0_STAGE_ENDS):
             raise ValueError(f"freeze must be 0..{len(LITE0_STAGE_ENDS)} stages, got {freeze}")
         self.freeze = freeze
@@ -106,8 +105,7 @@ class EfficientLite0Backbone(nn.Module):
 
     def trainable_forward(self, frozen: Sequence[Tensor]) -> tuple[Tensor, Tensor, Tensor]:
         """The frozen features -> (P3, P4, P5). When the split ends a feature level (``freeze`` 3, 5 or 7), the
-        frozen features of a deeper split are accepted too (its first entries are this split's): a run that
-        unfreezes late stages keeps training on the features it cached."""
+        frozen features of a deeper split are accepted too (its first entries are this split's)."""
         n = self.frozen_outputs
         if len(frozen) > n:
             if not self.freeze or self.split - 1 not in _LITE0_TAPS:

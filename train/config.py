@@ -16,7 +16,7 @@ lr0: 0.01, momentum: 0.937, warmup_epochs: 3, nominal_batch: 64}``, ``augment: {
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any, Literal, Optional
+from typing import Literal, Optional
 
 #: Depth and width multiples of the YOLOv5 family (published values).
 MODEL_SIZES: dict[str, tuple[float, float]] = {"n": (0.33, 0.25), "s": (0.33, 0.50), "m": (0.67, 0.75)}
@@ -32,15 +32,14 @@ DEFAULT_ANCHORS: tuple[tuple[tuple[float, float], ...], ...] = (
 @dataclass(frozen=True)
 class ModelConfig:
     size: Literal["n", "s", "m"] = "n"  # depth/width multiples from MODEL_SIZES
-    # anchors per level, (w, h) input pixels; None = DEFAULT_ANCHORS, re-fitted by k-means when they fit badly
-    anchors: Optional[tuple[tuple[tuple[float, float], ...], ...]] = None
+    anchors: Optional[tuple[tuple[tuple[float, float], ...], ...]] = None  # anchors per level, (w, h) input
+    # pixels; null = DEFAULT_ANCHORS, re-fitted by k-means when they fit badly
     autoanchor: bool = True  # run the best-possible-recall check and k-means when recall < 0.98
-    # "cspdarknet" (YOLOv5, from scratch) or "efficientnet-lite0" (ImageNet weights); see train/backbones.py
-    backbone: Literal["cspdarknet", "efficientnet-lite0"] = "efficientnet-lite0"
+    backbone: Literal["cspdarknet", "efficientnet-lite0"] = "efficientnet-lite0"  # cspdarknet (YOLOv5, from
+    # scratch) or efficientnet-lite0 (ImageNet weights); see train/backbones.py
     pretrained: bool = True  # efficientnet-lite0: start from the ImageNet weights of the installed package
-    # efficientnet-lite0: stages 1..freeze (and the stem) keep their ImageNet weights, 0..7; null = the backbone's
-    # default (7 for pretrained efficientnet-lite0, 0 for cspdarknet)
-    freeze: Optional[int] = None
+    freeze: Optional[int] = None  # efficientnet-lite0: stages 1..freeze (and the stem) keep their ImageNet
+    # weights, 0..7; null = the backbone's default (7 for pretrained efficientnet-lite0, 0 for cspdarknet)
 
 
 @dataclass(frozen=True)
@@ -51,7 +50,7 @@ class OptimConfig:
     momentum: float = 0.9  # AdamW beta1 or SGD momentum (YOLOv5's SGD: 0.937)
     weight_decay: float = 5e-4  # at the nominal batch; not applied to BatchNorm weights or biases
     warmup_epochs: float = 1.0  # linear warm-up length in epochs (at least warmup_min_iters iterations)
-    warmup_min_iters: int = 50
+    warmup_min_iters: int = 50  # warm-up lasts at least this many iterations
     warmup_momentum: float = 0.8  # momentum at the start of warm-up
     warmup_bias_lr: float = 0.1  # bias learning rate at the start of warm-up
     nominal_batch: int = 16  # gradients accumulate until this many images before a step (YOLOv5: 64)
@@ -80,54 +79,32 @@ class AugmentConfig:
 
 
 @dataclass(frozen=True)
-class UnfreezeConfig:
-    epochs: int = 0  # the last N epochs also train the stages after `freeze` (0 = never); see train/unfreeze.py
-    freeze: int = 3  # stages kept frozen then: 3 or 5 (a split ending a feature level, so cached features serve)
-    lr_scale: float = 0.1  # their learning rate, as a fraction of the scheduled one
-
-
-@dataclass(frozen=True)
 class TrainConfig:
-    epochs: int = 40
+    epochs: int = 40  # training epochs, >= 1
     imgsz: int = 416  # square training and validation size (multiple of 32)
     batch: int = 16  # images per forward/backward pass
-    seed: int = 0
-    # EMA decay, ramped as decay * (1 - exp(-updates / ema_tau)); 0.99 averages ~100 steps, which smooths the
-    # epoch-to-epoch swings of short runs (YOLOv5: 0.9999 and 2000, made for 100k-step COCO runs)
-    ema_decay: float = 0.99
-    ema_tau: float = 100.0
+    seed: int = 0  # weights, augmentations and batch order
+    ema_decay: float = 0.99  # EMA decay, ramped as decay * (1 - exp(-updates / ema_tau)); 0.99 averages ~100 steps
+    # (YOLOv5: 0.9999, made for 100k-step COCO runs)
+    ema_tau: float = 100.0  # EMA ramp length, optimizer steps (YOLOv5: 2000)
     val_conf: float = 0.001  # validation: score threshold before NMS
     val_iou: float = 0.6  # validation: NMS IoU threshold
     max_det: int = 300  # validation: detections kept per image
-    # exported weights: the EMA of the epoch with the best validation fitness (YOLOv5's best.pt), or of the last
-    # epoch (steadier when the validation set is small: best-of-N on a few dozen images picks noise)
-    select: Literal["best", "last"] = "best"
-    # the last N epochs train only on the real images (a mixture's images whose source is not ``synth:``), and a
-    # real image's mosaic partners are real in every epoch: synthetic data as a warm start, real data last; 0 = never
-    real_finetune: int = 0
+    select: Literal["best", "last"] = "best"  # exported weights: the EMA of the epoch with the best validation
+    # fitness (YOLOv5's best.pt), or of the last epoch (steadier when the validation set is small)
+    real_finetune: int = 0  # the last N epochs train only on the real images (not ``synth:``), and a real image's
+    # mosaic partners are real in every epoch: synthetic data as a warm start; 0 = never
     threads: int = 0  # torch threads; 0 = leave torch's default (all cores)
     device: str = "auto"  # auto | cpu | cuda | cuda:N; auto = the first CUDA GPU when there is one, else the CPU
     workers: Optional[int] = None  # data-loading processes; null = none on the CPU (a thread), 8 on a GPU
-    # frozen features (model.freeze > 0): augmented views per image whose features are computed once and reused
-    # (epoch e trains on view e mod views); 0 = a fresh view every epoch. See train/features.py
-    feature_views: int = 20
+    feature_views: int = 20  # frozen features (model.freeze > 0): augmented views per image whose features are
+    # computed once and reused (epoch e trains on view e mod views); 0 = a fresh view every epoch (train/features.py)
     feature_cache_gb: float = 4.0  # RAM for cached views; fewer views are kept when they would not fit
-    model: ModelConfig = field(default_factory=ModelConfig)
-    optim: OptimConfig = field(default_factory=OptimConfig)
-    loss: LossConfig = field(default_factory=LossConfig)
-    augment: AugmentConfig = field(default_factory=AugmentConfig)
-    unfreeze: UnfreezeConfig = field(default_factory=UnfreezeConfig)
+    model: ModelConfig = field(default_factory=ModelConfig)  # the detector
+    optim: OptimConfig = field(default_factory=OptimConfig)  # optimizer and schedule
+    loss: LossConfig = field(default_factory=LossConfig)  # loss gains
+    augment: AugmentConfig = field(default_factory=AugmentConfig)  # augmentations
 
     def __post_init__(self) -> None:
         if not 0 <= self.real_finetune <= self.epochs:
             raise ValueError(f"train.real_finetune must be in 0..epochs ({self.epochs}), got {self.real_finetune}")
-
-
-#: Keys added after runs were trained, with the value those runs trained with: a run's identity and a resumed
-#: run's config check leave a key out while it holds that value, so older runs keep their hash and resume.
-LATER_TRAIN_KEYS: dict[str, object] = {"select": "best", "real_finetune": 0}
-
-
-def trained_by(config: dict[str, Any]) -> dict[str, Any]:
-    """A train config (as a dict) without the :data:`LATER_TRAIN_KEYS` at their old values."""
-    return {k: v for k, v in config.items() if not (k in LATER_TRAIN_KEYS and v == LATER_TRAIN_KEYS[k])}

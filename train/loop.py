@@ -24,7 +24,7 @@ from curate.core.lock import lock_status
 from curate.core.manifest import git_commit, versions
 from curate.core.progress import progress
 from train.anchors import check_anchors, label_sizes
-from train.config import DEFAULT_ANCHORS, ModelConfig, TrainConfig, trained_by
+from train.config import DEFAULT_ANCHORS, ModelConfig, TrainConfig
 from train.data import CachedImage, TrainBatches, cache_images, letterboxed_images, real_indices
 from train.device import resolve_device, uses_amp
 from train.ema import ModelEMA
@@ -34,7 +34,6 @@ from train.loss import DetectionLoss
 from train.model import STRIDES, Detector, build_model
 from train.optim import Schedule, build_optimizer
 from train.plots import plot_curves, read_metrics
-from train.unfreeze import check_unfreeze, enter_unfreeze, unfreeze_epoch
 from train.validate import evaluate
 
 #: Data-loading worker processes on a GPU when ``workers`` is not set.
@@ -125,7 +124,6 @@ def build_trainer(cfg: TrainConfig, train_ds: Dataset) -> Trainer:
     names = train_ds.category_names
     # channels-last: torch's CPU (oneDNN) and GPU convolutions run 1.2-2x faster on it (bench_train_throughput)
     model = build_model(len(names), model_cfg, cfg.imgsz).to(device, memory_format=torch.channels_last)
-    check_unfreeze(cfg, model)
     workers = cfg.workers if cfg.workers is not None else (GPU_WORKERS if device.type == "cuda" else 0)
     samples = TrainBatches(cache, cfg.imgsz, cfg.batch, cfg.augment, cfg.seed, workers, real_from(cfg, cache))
     runner = FrozenRunner(model, cfg.imgsz, device, cfg.threads)
@@ -187,9 +185,8 @@ def _checkpoint(t: Trainer, epoch: int, best: dict[str, Any]) -> dict[str, Any]:
 
 def _trained_by(config: dict[str, Any]) -> dict[str, Any]:
     """A config without what only chooses the exported weights (``select``: a finished run resumed with another
-    ``select`` exports those weights without training again) and without later keys at their old values
-    (:func:`train.config.trained_by`: a run saved before them resumes)."""
-    return {k: v for k, v in trained_by(config).items() if k != "select"}
+    ``select`` exports those weights without training again)."""
+    return {k: v for k, v in config.items() if k != "select"}
 
 
 def _resume(t: Trainer, out: Path) -> tuple[int, dict[str, Any]]:
@@ -201,9 +198,6 @@ def _resume(t: Trainer, out: Path) -> tuple[int, dict[str, Any]]:
     state = torch.load(last, map_location=t.device, weights_only=False)
     if _trained_by(state["config"]) != _trained_by(asdict(t.cfg)) or state["class_names"] != t.class_names:
         raise ResumeError(f"{last}: the run there used another config or classes; choose another --out")
-    start = unfreeze_epoch(t.cfg)
-    if start is not None and int(state["epoch"]) >= start:  # saved after unfreezing: same groups and split
-        enter_unfreeze(t.cfg, t.model, t.ema.ema, t.optimizer)
     t.model.load_state_dict(state["model"])
     t.ema.load_state_dict(state["ema"])
     t.optimizer.load_state_dict(state["optimizer"])
@@ -254,8 +248,6 @@ def fit(cfg: TrainConfig, train_ds: Dataset, val_ds: Dataset, out: Path | str) -
     first, best = _resume(t, out)
     _truncate_metrics(out, first)
     for epoch in range(first, cfg.epochs):
-        if epoch == unfreeze_epoch(cfg):
-            enter_unfreeze(cfg, t.model, t.ema.ema, t.optimizer)
         record = {"epoch": epoch + 1, **train_one_epoch(t, epoch)}  # outputs count epochs from 1
         start = time.perf_counter()
         args = (t.class_names, cfg.imgsz, cfg.val_conf, cfg.val_iou, cfg.max_det)

@@ -29,15 +29,12 @@ def accumulation(batch: int, nominal: int) -> int:
     return max(round(nominal / batch), 1)
 
 
-def parameter_groups(
-    model: nn.Module, only: set[int] | None = None
-) -> tuple[list[nn.Parameter], list[nn.Parameter], list[nn.Parameter]]:
-    """``(weights with decay, BatchNorm weights, biases)`` of the trainable parameters (frozen ones left out;
-    with ``only``, just the parameters whose ``id`` is in it)."""
+def parameter_groups(model: nn.Module) -> tuple[list[nn.Parameter], list[nn.Parameter], list[nn.Parameter]]:
+    """``(weights with decay, BatchNorm weights, biases)`` of the trainable parameters (frozen ones left out)."""
     decay, bn, bias = [], [], []
     for module in model.modules():
         for name, p in module.named_parameters(recurse=False):
-            if not p.requires_grad or (only is not None and id(p) not in only):
+            if not p.requires_grad:
                 continue
             if name == "bias":
                 bias.append(p)
@@ -48,23 +45,13 @@ def parameter_groups(
     return decay, bn, bias
 
 
-def _groups(decay: list, bn: list, bias: list, cfg: OptimConfig, batch: int, lr_scale: float = 1.0) -> list[dict]:
+def _groups(decay: list, bn: list, bias: list, cfg: OptimConfig, batch: int) -> list[dict]:
     wd = cfg.weight_decay * batch * accumulation(batch, cfg.nominal_batch) / cfg.nominal_batch
     return [
-        {"params": decay, "weight_decay": wd, "lr_scale": lr_scale},
-        {"params": bn, "weight_decay": 0.0, "lr_scale": lr_scale},
-        {"params": bias, "weight_decay": 0.0, "lr_scale": lr_scale},
+        {"params": decay, "weight_decay": wd},
+        {"params": bn, "weight_decay": 0.0},
+        {"params": bias, "weight_decay": 0.0},
     ]
-
-
-def add_param_groups(
-    optimizer: torch.optim.Optimizer, model: nn.Module, only: set[int], cfg: OptimConfig, batch: int, lr_scale: float
-) -> None:
-    """Add the parameters of ``model`` whose ``id`` is in ``only`` as three more groups (decay, BatchNorm, bias)
-    whose learning rate is ``lr_scale`` times the schedule's."""
-    for group in _groups(*parameter_groups(model, only), cfg, batch, lr_scale):
-        if group["params"]:
-            optimizer.add_param_group({**group, "lr": optimizer.param_groups[0]["lr"] * lr_scale})
 
 
 def build_optimizer(model: nn.Module, cfg: OptimConfig, batch: int) -> torch.optim.Optimizer:
@@ -111,7 +98,7 @@ class Schedule:
         warm = iteration < self.warmup_iters
         span = [0, self.warmup_iters]
         for j, group in enumerate(optimizer.param_groups):
-            target = self.cfg.lr0 * self.lr_factor(epoch) * group.get("lr_scale", 1.0)
+            target = self.cfg.lr0 * self.lr_factor(epoch)
             if warm:
                 start = self.cfg.warmup_bias_lr if j == BIAS_GROUP else 0.0
                 group["lr"] = float(np.interp(iteration, span, [start, target]))

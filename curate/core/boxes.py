@@ -86,6 +86,14 @@ def inside_xywh(boxes: ArrayLike, width: float, height: float, tol: float = 1e-6
     return (b[..., 0] >= -tol) & (b[..., 1] >= -tol) & (b[..., 2] <= width + tol) & (b[..., 3] <= height + tol)
 
 
+def xywh_overlaps_any(box: ArrayLike, others: ArrayLike) -> bool:
+    """Whether the [x, y, w, h] ``box`` intersects (positive area) any of the (N, 4) xywh ``others``."""
+    x, y, w, h = (float(v) for v in box)
+    o = np.asarray(others, dtype=np.float64).reshape(-1, 4)
+    hit = (x < o[:, 0] + o[:, 2]) & (o[:, 0] < x + w) & (y < o[:, 1] + o[:, 3]) & (o[:, 1] < y + h)
+    return bool(hit.any())
+
+
 def box_iou_xyxy(a: ArrayLike, b: ArrayLike) -> NDArray[np.float64]:
     """IoU matrix (N, M) between (N, 4) and (M, 4) xyxy boxes; 0 where the union is empty."""
     a2 = np.atleast_2d(_as_boxes(a))

@@ -1,0 +1,126 @@
+"""One way to configure a command: an optional ``CONFIG.yaml`` of its dataclass, ``--set key=value`` overrides and
+a few short flags, each an alias of one or more keys with the keys' own defaults.
+
+A command declares its :class:`Alias` list; :func:`add_config_options` adds the positional ``config``, ``--set``,
+``--print-config`` and the aliases (their help shows the dataclass default, so the help and the code cannot
+disagree); :func:`config_from_args` builds the dataclass from the file, then the flags given, then ``--set``
+(later wins), validating every value before any work (:mod:`curate.core.config`).
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import sys
+import typing
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, TypeVar
+
+import yaml
+
+from curate.core.config import ConfigError, apply_overrides, build_config, read_yaml, to_dict
+
+T = TypeVar("T")
+
+
+@dataclass(frozen=True)
+class Alias:
+    """A flag standing for config ``keys`` (dotted): ``flag`` ("--n"), ``help`` (one line, no default: it is added
+    from the dataclass), ``keys`` set from the flag's value by ``to_keys`` (default: the one key, the value as
+    parsed); argparse keywords in ``kwargs`` (type, nargs, action, metavar, choices)."""
+
+    flag: str
+    keys: tuple[str, ...]
+    help: str
+    kwargs: Mapping[str, Any] = field(default_factory=dict)
+    to_keys: Callable[[Any], dict[str, Any]] | None = None
+
+    @property
+    def dest(self) -> str:
+        return "alias_" + self.flag.lstrip("-").replace("-", "_")
+
+    def values(self, value: Any) -> dict[str, Any]:
+        """{dotted key: plain YAML value} that the flag's parsed ``value`` sets."""
+        if self.to_keys is not None:
+            return self.to_keys(value)
+        return {self.keys[0]: _plain(value)}
+
+
+def _plain(value: Any) -> Any:
+    if isinstance(value, Path):
+        return value.as_posix()
+    if isinstance(value, (list, tuple)):
+        return [_plain(v) for v in value]
+    return value
+
+
+def key_default(schema: type, key: str) -> Any:
+    """The default of the dotted ``key`` of dataclass ``schema`` (nested dataclasses followed), as plain data."""
+    node: Any = schema
+    value: Any = None
+    for part in key.split("."):
+        fields = {f.name: f for f in dataclasses.fields(node)}
+        if part not in fields:
+            raise KeyError(f"{key}: no key {part!r} in {node.__name__}")
+        f = fields[part]
+        value = f.default if f.default is not dataclasses.MISSING else f.default_factory()  # type: ignore[misc]
+        node = typing.get_type_hints(node)[part]
+    return to_dict(value)
+
+
+def show_default(value: Any) -> str:
+    """A default as the help shows it: YAML flow style (``null``, ``[]``, ``0.5``, ``[0.3, 2.5]``)."""
+    return yaml.safe_dump(value, default_flow_style=True, width=1000).strip().removesuffix("...").strip()
+
+
+def add_config_options(
+    p: argparse.ArgumentParser, schema: type, aliases: Sequence[Alias], reference: str, required: bool = False
+) -> None:
+    """The positional ``config`` (YAML of ``schema``; optional unless ``required``), ``--set KEY=VALUE``
+    (repeatable), ``--print-config``, and the ``aliases`` in a group of their own, each help ending with its keys'
+    defaults from ``schema``. ``reference``: where every key is documented (e.g. ``docs/config.md#synth-method2``)."""
+    p.add_argument(
+        "config",
+        type=Path,
+        nargs=None if required else "?",
+        metavar="CONFIG.yaml",
+        help=f"settings file ({schema.__name__}; every key: {reference})"
+        + ("" if required else "; default: the defaults shown here"),
+    )
+    p.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="set any config key (dotted, value in YAML), after CONFIG.yaml and the options; repeatable, e.g. "
+        "--set flames.exposed=true",
+    )
+    p.add_argument("--print-config", action="store_true", help="print the resolved settings as YAML and stop")
+    group = p.add_argument_group("settings (each an alias of a config key; defaults are the keys')")
+    for a in aliases:
+        shown = ", ".join(f"{k}={show_default(key_default(schema, k))}" for k in a.keys)
+        kwargs = dict(a.kwargs)
+        if kwargs.get("action") is None:
+            kwargs.setdefault("metavar", a.flag.lstrip("-").upper().replace("-", "_"))
+        group.add_argument(a.flag, dest=a.dest, default=None, help=f"{a.help} [{shown}]", **kwargs)
+
+
+def config_from_args(args: argparse.Namespace, schema: type[T], aliases: Sequence[Alias]) -> T:
+    """``schema`` built from ``args.config`` (if any), then the aliases given, then ``args.set``; a
+    :class:`~curate.core.config.ConfigError` or ValueError names the file or key at fault."""
+    raw: dict[str, Any] = read_yaml(args.config) if args.config is not None else {}
+    given = [f"{k}={yaml.safe_dump(v, default_flow_style=True, width=10000).strip().removesuffix('...').strip()}"
+             for a in aliases if getattr(args, a.dest, None) not in (None, False)
+             for k, v in a.values(getattr(args, a.dest)).items()]  # fmt: skip
+    where = f"{args.config}: " if args.config is not None else ""
+    try:
+        return build_config(apply_overrides(raw, [*given, *args.set]), schema)
+    except (ConfigError, ValueError) as exc:
+        raise ConfigError(f"{where}{exc}") from None
+
+
+def print_config(cfg: Any, stream: Any = None) -> None:
+    """``cfg`` as YAML (what ``--print-config`` shows): a file :func:`config_from_args` reads back unchanged."""
+    yaml.safe_dump(to_dict(cfg), stream or sys.stdout, sort_keys=False, default_flow_style=None, width=100)

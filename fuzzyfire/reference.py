@@ -1,0 +1,83 @@
+"""Write the files generated from the config dataclasses: ``docs/config.md`` (every key of every command's
+settings: type, default, meaning) and ``configs/synth-method1.yaml`` / ``configs/synth-method2.yaml`` (the
+defaults, commented). ``python -m fuzzyfire.reference [ROOT]`` (``make reference``) rewrites them;
+``tests/test_fuzzyfire_reference.py`` fails when a file differs from what the code generates."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+
+def sections() -> list[tuple[str, str, type]]:
+    """(heading, one paragraph, dataclass) of each settings section, in the order docs/config.md lists them."""
+    from curate.curation import CurateConfig
+    from curate.sources import MergeConfig
+    from fuzzyfire.experiment_config import ExperimentConfig
+    from synth.library import FlameLibraryConfig
+    from synth.method1 import Method1Config
+    from synth.method2 import Method2Config
+    from train.config import TrainConfig
+
+    return [
+        ("experiment", "`fuzzyfire experiment CONFIG.yaml [--set KEY=VALUE]` and `make experiment CONFIG=... "
+         "SET=\"KEY=VALUE ...\"`. Its `synth.method1`, `synth.method2` and `train` sections are the tables below.",
+         ExperimentConfig),
+        ("synth method2", "`fuzzyfire synth method2 [CONFIG.yaml] [--set KEY=VALUE]` and an experiment's "
+         "`synth.method2` (configs/synth-method2.yaml lists every key at its default).", Method2Config),
+        ("synth method1", "`fuzzyfire synth method1 [CONFIG.yaml] [--set KEY=VALUE]` and an experiment's "
+         "`synth.method1` (configs/synth-method1.yaml).", Method1Config),
+        ("flame library", "`fuzzyfire synth flames [CONFIG.yaml]` and the `flames` section of Method 1 and 2.",
+         FlameLibraryConfig),
+        ("train", "`fuzzyfire train DATASET --val VAL [CONFIG.yaml] [--set KEY=VALUE]` and an experiment's `train`.",
+         TrainConfig),
+        ("curate", "`fuzzyfire curate CONFIG.yaml [--set KEY=VALUE]` and an experiment's `real.curate`.",
+         CurateConfig),
+        ("merge", "`fuzzyfire merge CONFIG.yaml [--set KEY=VALUE]`.", MergeConfig),
+    ]  # fmt: skip
+
+
+INTRO = """Generated from the config dataclasses by `python -m fuzzyfire.reference` (`make reference`); a test fails
+when this page and the code differ. Every command that builds something takes a YAML file of its section and
+`--set KEY=VALUE` (dotted keys, values in YAML: `--set flames.exposed=true`, `--set 'flame_height_m=[0.5, 2]'`);
+its flags are short aliases of the keys below, with the same defaults. Unknown keys, wrong types and values out
+of range are refused before any work, naming the key and the file."""
+
+METHOD_HEADERS = {
+    "synth-method1.yaml": """Method 1 (the paper's first method): flame planes placed in the 3D scenes and rendered with them;
+boxes from the visible flame (or the paper's projected plane corners). Every key at its default, generated from
+synth.method1.Method1Config (python -m fuzzyfire.reference); docs/config.md has the same table.
+  fuzzyfire synth method1 configs/synth-method1.yaml --set n=200 --out out/m1
+  fuzzyfire synth audit out/m1""",
+    "synth-method2.yaml": """Method 2 (the paper's second method): render each camera view once, composite flame sprites onto it;
+boxes from each flame's final visible mask (audit mean IoU = 1.0). Every key at its default, generated from
+synth.method2.Method2Config (python -m fuzzyfire.reference); docs/config.md has the same table.
+  fuzzyfire synth method2 configs/synth-method2.yaml --set n=200 --set 'backgrounds=[my/photos]' --out out/m2
+  fuzzyfire synth audit out/m2""",
+}
+
+
+def generated() -> dict[str, str]:
+    """{path relative to the repository: text} of every generated file."""
+    from curate.core.reference import commented_yaml, markdown
+    from synth.method1 import Method1Config
+    from synth.method2 import Method2Config
+
+    schemas = {"synth-method1.yaml": Method1Config, "synth-method2.yaml": Method2Config}
+    out = {"docs/config.md": markdown("Configuration reference", INTRO, sections())}
+    for name, header in METHOD_HEADERS.items():
+        out[f"configs/{name}"] = commented_yaml(schemas[name], header)
+    return out
+
+
+def main(argv: list[str] | None = None) -> int:
+    root = Path((argv if argv is not None else sys.argv[1:])[0] if (argv or sys.argv[1:]) else ".")
+    for rel, text in generated().items():
+        (root / rel).parent.mkdir(parents=True, exist_ok=True)
+        (root / rel).write_text(text, encoding="utf-8")
+        print(f"wrote {root / rel}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,35 @@
+"""The generated configuration reference and the commented Method YAMLs equal what the code generates now."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from fuzzyfire.reference import generated, sections
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+@pytest.mark.parametrize("rel", sorted(generated()))
+def test_generated_files_match_the_dataclasses(rel: str) -> None:
+    """A changed key, default or comment must be regenerated: python -m fuzzyfire.reference (make reference)."""
+    assert (ROOT / rel).read_text(encoding="utf-8") == generated()[rel], f"{rel}: run make reference"
+
+
+def test_every_key_of_the_command_sections_is_documented() -> None:
+    from curate.core.reference import rows
+
+    for heading, _, cls in sections():
+        if heading in ("synth method2", "synth method1", "flame library", "train"):
+            missing = [r.key for r in rows(cls) if not r.doc]
+            assert not missing, f"{heading}: keys without a comment in {cls.__name__}: {missing}"
+
+
+def test_the_method_yamls_load_as_their_defaults() -> None:
+    from curate.core.config import load_config
+    from synth.method1 import Method1Config
+    from synth.method2 import Method2Config
+
+    for name, schema in (("synth-method1.yaml", Method1Config), ("synth-method2.yaml", Method2Config)):
+        assert load_config(ROOT / "configs" / name, schema) == schema()
