@@ -97,6 +97,10 @@ FLAME_ALIASES: tuple[Alias, ...] = (
     Alias("--n", ("sequences",), "procedural flame sequences to simulate", {"type": int, "metavar": "N"}),
     Alias("--seed", ("seed",), "library seed", {"type": int}),
     Alias("--frames", ("frames",), "simulation steps per sequence (the paper: 1024)", {"type": int}),
+    Alias("--keep-every", ("keep_every",), "keep one frame every K steps", {"type": int, "metavar": "K"}),
+    Alias("--generator", ("generator",), "flame simulation", {"choices": ("fluid", "noise")}),
+    Alias("--rare", ("rare",), "probability per sequence of a chemical-colour flame", {"type": float}),
+    Alias("--texture", ("texture",), "inner streaks and soft edge, [0, 1); 0 = flat body", {"type": float}),
     Alias("--exposed", ("exposed",), "coloured as a camera records fire: white cores, red edges", {"action": "store_true"}),
 )  # fmt: skip
 

@@ -116,73 +116,10 @@ def test_method2_on_photographs(tmp_path, capsys):
     assert json.loads(capsys.readouterr().out)["mean_iou"] == 1.0
 
 
-def test_method2_feathers_a_users_cutouts_on_photographs(tmp_path, capsys):
-    """--cutout-feather with a synth cutouts folder: pasted flames fade where their box cut them, boxes stay exact."""
-    import numpy as np
-    from factories import write_image
-
-    from synth.cutouts import Cutout, write_cutouts
-
-    for k in range(2):
-        write_image(tmp_path / "photos" / f"p{k}.jpg", 200, 150, seed=k)
-    rgba = np.zeros((40, 24, 4), np.uint8)
-    rgba[..., :3], rgba[..., 3] = (255, 180, 60), 255  # a fire-lit rectangle filling its box
-    write_cutouts(iter([Cutout(rgba, "a.jpg", (0, 0, 24, 40), 1.0)] * 3), tmp_path / "cut")
-    out = tmp_path / "m2"
-    args = ["synth", "method2", "--n", "4", "--out", str(out), "--size", "96x64", "--backgrounds"]
-    assert main([*args, str(tmp_path / "photos"), "--flames", str(tmp_path / "cut"), "--cutout-feather", "0.2"]) == 0
-    manifest = json.loads((out / "manifest.json").read_text())
-    assert manifest["args"]["flames"]["cutout_feather"] == 0.2
-    capsys.readouterr()
-    assert main(["synth", "audit", str(out), "--json"]) == 0
-    assert json.loads(capsys.readouterr().out)["mean_iou"] == 1.0
-
-
-def test_method2_pastes_a_users_cutouts_with_their_image_mates(tmp_path, capsys):
-    """--cutout-groups with a synth cutouts folder: both boxes of one image come together, each boxed exactly."""
-    import numpy as np
-    from factories import write_image
-
-    from synth.cutouts import Cutout, write_cutouts
-
-    for k in range(2):
-        write_image(tmp_path / "photos" / f"p{k}.jpg", 200, 150, seed=k)
-    rgba = np.zeros((20, 12, 4), np.uint8)
-    rgba[2:18, 2:10] = (255, 180, 60, 255)
-    write_cutouts(iter([Cutout(rgba, "a.jpg", (0, 0, 12, 20), 1.0), Cutout(rgba, "a.jpg", (30, 4, 12, 20), 1.0)]),
-                  tmp_path / "cut")  # fmt: skip
-    args = ["synth", "method2", "--n", "4", "--size", "96x64", "--backgrounds", str(tmp_path / "photos"), "--flames"]
-    runs = {}
-    for name, extra in (("plain", []), ("groups", ["--cutout-groups"])):
-        assert main([*args, str(tmp_path / "cut"), "--out", str(tmp_path / name), *extra]) == 0
-        manifest = json.loads((tmp_path / name / "manifest.json").read_text())
-        runs[name] = sum(len(img["flames"]) for img in manifest["args"]["per_image"])
-        assert manifest["args"]["flames"]["cutout_groups"] is (name == "groups")
-        capsys.readouterr()
-        assert main(["synth", "audit", str(tmp_path / name), "--json"]) == 0
-        assert json.loads(capsys.readouterr().out)["mean_iou"] == 1.0
-    assert runs["groups"] > runs["plain"]
-
-
-def test_method2_clusters_procedural_flames_into_fires(tmp_path, capsys):
-    out = tmp_path / "m2"
-    args = ["synth", "method2", "--n", "3", "--out", str(out), "--size", "64x48", "--scenes", "1", "--library", "1"]
-    assert main([*args, "--cluster", "3"]) == 0
-    assert json.loads((out / "manifest.json").read_text())["args"]["flames"]["cluster"] == 3
-    capsys.readouterr()
-    assert main(["synth", "audit", str(out), "--json"]) == 0
-    assert json.loads(capsys.readouterr().out)["mean_iou"] == 1.0
-
-
 def _flames(tmp_path: Path, *extra: str) -> Path:
     flames = ["synth", "flames", "--out", str(tmp_path / "fl"), "--n", "1", "--frames", "60", "--keep-every", "30"]
     assert main([*flames, *extra]) == 0
     return tmp_path / "fl"
-
-
-def test_flames_with_rising_smoke_are_written_with_the_key(tmp_path):
-    params = json.loads((_flames(tmp_path, "--rising-smoke") / "fluid-0-000" / "sequence.json").read_text())["params"]
-    assert params["rising_smoke"] is True
 
 
 def test_exposed_flames_are_written_with_their_gain(tmp_path):
@@ -204,26 +141,10 @@ def test_what_can_be_checked_fails_in_one_line_before_rendering(tmp_path, capsys
         ([], "a fuzzyfire dataset is already there; pass --overwrite to replace it"),
         (["--overwrite", "--environments", str(tmp_path / "nowhere")], "nowhere: no such environment file or folder"),
         (["--overwrite", "--backgrounds", str(tmp_path / "nophotos")], "nophotos: no such file or folder"),
-        (["--overwrite", "--photo-share", "0.3"], "--photo-share is the share of views on --backgrounds/--frames"),
-        (["--overwrite", "--library", "3"], "--library makes procedural flames, which --flames replaces"),
-        (["--overwrite", "--rising-smoke"], "--rising-smoke shapes procedural flames, which --flames replaces"),
-        (["--overwrite", "--exposed"], "--exposed colours procedural flames, which --flames replaces"),
-        (
-            ["--overwrite", "--cutout-feather", "0.2"],
-            "holds no cutouts.json, so not real cut-outs (flames.cutout_feather",
-        ),
-        (["--overwrite", "--cutout-groups"], "holds no cutouts.json, so not real cut-outs (flames.cutout_groups"),
-        (["--overwrite", "--cluster", "0"], "flames.cluster must be 1..8 flames per fire"),
-        (["--overwrite", "--photo-negatives", "1"], "--photo-negatives is the share of --backgrounds photos left"),
-        (
-            ["--overwrite", "--frame-swap", "0.5"],
-            "--frame-swap is the share of --frames images whose fires are swapped",
-        ),
-        (["--overwrite", "--frame-anchored"], "--frame-anchored places flames beside the fires of --frames images"),
-        (["--overwrite", "--streets", "2"], "--streets needs --kits DIR"),
-        (["--overwrite", "--kits", str(tmp_path)], "--kits are the building kits of --streets N"),
-        (["--overwrite", "--streets", "2", "--kits", str(tmp_path / "nokits")], "nokits: no such kit folder"),
-        (["--overwrite", "--streets", "2", "--kits", str(fl)], "not a building kit this street layout knows"),
+        (["--overwrite", "--photo-negatives", "1"], "photo_negatives is the share of the backgrounds photos"),
+        (["--overwrite", "--photo-share", "1.5"], "photo_share must be in 0..1, got 1.5"),
+        (["--overwrite", "--set", "flames.rare=2"], "flames.rare must be in 0..1, got 2"),
+        (["--overwrite", "--set", "flame_jitter=true"], "flame_jitter: unknown key"),
     ]
     for extra, message in cases:
         assert main([*args, *extra]) == 2
@@ -279,9 +200,9 @@ def test_method2_on_a_fixed_camera_puts_every_flame_on_its_floor(tmp_path, capsy
     )
     out = tmp_path / "m2"
     flat = _flames(tmp_path, "--texture", "0")  # the flat look, where a flame's seen box is its whole flame (a
-    # softened edge and never_darken can leave a dim foot unseen: the box's bottom is then above the foot)
+    # softened edge can leave a dim foot unseen: the box's bottom is then above the foot)
     args = ["synth", "method2", "--n", "16", "--out", str(out), "--size", "96x72", "--flames", str(flat)]
-    assert main([*args, "--backgrounds", str(tmp_path / "cam"), "--no-never-darken"]) == 0
+    assert main([*args, "--backgrounds", str(tmp_path / "cam")]) == 0
     manifest = json.loads((out / "manifest.json").read_text())
     coco = json.loads((out / "annotations.json").read_text())
     metas = {img["id"]: meta for img, meta in zip(coco["images"], manifest["args"]["per_image"])}
@@ -293,39 +214,10 @@ def test_method2_on_a_fixed_camera_puts_every_flame_on_its_floor(tmp_path, capsy
         if by + bh >= 71.5 or bx <= 0.5 or bx + bw >= 95.5:
             continue  # cut by the frame: its foot is not the box's bottom centre
         foot = (x + (bx + bw / 2) * w / 96, y + (by + bh) * h / 72)  # in photo pixels
-        assert foot[0] >= 80 - 2 * w / 96 and foot[1] >= 36 - 2 * h / 72, (ann, meta)
+        assert foot[0] >= 80 - (2 + bw / 2) * w / 96 and foot[1] >= 36 - 2 * h / 72, (ann, meta)  # a seen part
         feet += 1
     assert feet >= 5 and all(meta["site"] == "sidecar" for meta in metas.values())
     assert np.mean([bool(meta["flames"]) for meta in metas.values()]) > 0.5
-
-
-def test_method2_on_kit_streets_from_the_command_line(tmp_path, capsys):
-    from factories import write_tiny_kits
-
-    kits = write_tiny_kits(tmp_path / "kits")
-    out = tmp_path / "m2"
-    args = ["synth", "method2", "--n", "2", "--out", str(out), "--size", "64x48", "--flames", str(_flames(tmp_path))]
-    assert main([*args, "--streets", "1", "--kits", str(kits)]) == 0
-    manifest = json.loads((out / "manifest.json").read_text())
-    assert manifest["args"]["scenes"] == 0 and manifest["args"]["streets"] == 1  # kit streets alone by default
-    assert {m["kind"] for m in manifest["args"]["per_image"]} == {"street"}
-
-
-def test_method2_distractors_and_blends_from_the_command_line(tmp_path, capsys):
-    out, fl = tmp_path / "hard", tmp_path / "fl"
-    assert main(["synth", "flames", "--out", str(fl), "--n", "1", "--frames", "60", "--keep-every", "30"]) == 0
-    args = ["synth", "method2", "--n", "2", "--out", str(out), "--size", "64x48", "--scenes", "1", "--flames", str(fl)]
-    extra = ["--distractors", "1", "--blend", "alpha,poisson", "--harmonise", "--match-noise", "--decoys", "0.5"]
-    assert main([*args, *extra]) == 0
-    manifest = json.loads((out / "manifest.json").read_text())["args"]
-    assert manifest["blend"]["modes"] == ["alpha", "poisson"] and manifest["distractors"]["share"] == 1.0
-    assert all("distractors" in m and "decoys" in m for m in manifest["per_image"])
-    assert main(["synth", "method2", "--out", str(tmp_path / "x"), "--scenes", "1", "--blend", "glue"]) == 2
-    assert "blend.modes" in capsys.readouterr().err
-    assert main([*args, "--distractors", "1", "--distractor-kinds", "photo", "--out", str(tmp_path / "p")]) == 2
-    assert "backgrounds" in capsys.readouterr().err  # photo regions come from --backgrounds
-    assert main([*args, "--distractors", "1", "--distractor-kinds", "lamp, dragon", "--out", str(tmp_path / "d")]) == 2
-    assert "distractors.kinds" in capsys.readouterr().err
 
 
 def test_method2_auto_exposure_from_the_command_line(tmp_path):
@@ -343,30 +235,3 @@ def test_method2_auto_exposure_from_the_command_line(tmp_path):
     assert any(m["flames"] for m in per_image)
 
 
-def test_method2_flame_jitter_and_heights_from_the_command_line(tmp_path):
-    """--flame-jitter, --separate-flames and --flame-heights reach the pool's config (its manifest args); a wrong choice is refused."""
-    from factories import write_image
-
-    for k in range(2):
-        write_image(tmp_path / "photos" / f"p{k}.jpg", 160, 120, seed=k)
-    flames = _flames(tmp_path)
-    args = [
-        "synth",
-        "method2",
-        "--n",
-        "2",
-        "--size",
-        "96x72",
-        "--flames",
-        str(flames),
-        "--backgrounds",
-        str(tmp_path / "photos"),
-    ]
-    assert (
-        main([*args, "--out", str(tmp_path / "m2"), "--flame-jitter", "--separate-flames", "--flame-heights", "log"])
-        == 0
-    )
-    got = json.loads((tmp_path / "m2" / "manifest.json").read_text())["args"]
-    assert got["flame_jitter"] is True and got["separate_flames"] is True and got["flame_heights"] == "log"
-    with pytest.raises(SystemExit):
-        main([*args, "--out", str(tmp_path / "bad"), "--flame-heights", "normal"])

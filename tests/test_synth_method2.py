@@ -183,10 +183,13 @@ def test_photo_negatives_leave_every_fire_free_photo_without_flames_and_the_rest
     assert {flames for photo, flames in kinds[1.0] if photo} == {False}
     assert any(flames for photo, flames in kinds[None] if photo) and all(f for p, f in kinds[1.0] if not p)
     frame = {"photo": "f.jpg", "frame_boxes": []}
-    assert M.negative_share(replace(CFG, photo_negatives=1.0), frame) == CFG.negatives == 0.0
-    assert M.negative_share(replace(CFG, photo_negatives=0.7), {"photo": "p.jpg"}) == 0.7
+    photos = (tmp_path / "photos",)
+    assert M.negative_share(replace(CFG, photo_negatives=1.0, backgrounds=photos), frame) == CFG.negatives == 0.0
+    assert M.negative_share(replace(CFG, photo_negatives=0.7, backgrounds=photos), {"photo": "p.jpg"}) == 0.7
     with pytest.raises(ValueError, match="photo_negatives"):
         M.Method2Config(photo_negatives=1.5)
+    with pytest.raises(ValueError, match="photo_negatives is the share of the backgrounds photos"):
+        M.Method2Config(photo_negatives=0.5)
 
 
 def test_every_flame_is_screened_or_added_and_never_darkens_its_background(library):
