@@ -100,7 +100,9 @@ class Method2Config:
         if self.photo_negatives is not None and not 0.0 <= self.photo_negatives <= 1.0:
             raise ValueError(f"photo_negatives must be in 0..1 or null, got {self.photo_negatives}")
         if self.photo_negatives is not None and not self.backgrounds and not self.own_frames:
-            raise ValueError("photo_negatives is the share of the backgrounds photos left without flames: give backgrounds")
+            raise ValueError(
+                "photo_negatives is the share of the backgrounds photos left without flames: give backgrounds"
+            )
         check_range("flame_height_m", self.flame_height_m, 0.01)
         check_range("flame_glow", self.flame_glow, 0.0)
         if not 0.0 <= self.flame_opacity[0] <= self.flame_opacity[1] <= 1.0:

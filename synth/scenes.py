@@ -30,9 +30,9 @@ from synth.textures import make_texture
 Pose = NDArray[np.float64]
 
 
-
 #: Procedural environments of a run that brings no places of its own (the paper's 48).
 DEFAULT_SCENES = 48
+
 
 @dataclass(frozen=True)
 class Solid:

@@ -65,27 +65,17 @@ def test_a_control_needs_method2() -> None:
 
 
 def test_the_control_pool_has_no_flame_and_keeps_the_rest_of_the_method2_config() -> None:
-    m2 = _config(max_flames=2, distractors={"share": 0.3}).synth.method2
+    m2 = _config(max_flames=2).synth.method2
     control = control_config(m2)
     assert (control.negatives, control.own_frames, control.backgrounds, control.frames) == (1.0, 1.0, (), ())
-    assert control.flames.source == "simulated" and control.distractors == m2.distractors
-    assert all(getattr(control, key) == getattr(m2, key) for key in KEPT) and control.flames == m2.flames
-    own = replace(m2, own_frames=0.5, flames=replace(m2.flames, source="both", cutout_share=0.3, cutout_max_fill=0.8))
+    assert control.flames.source == "simulated"
+    assert all(getattr(control, key) == getattr(m2, key) for key in KEPT)
+    own = replace(m2, own_frames=0.5, flames=replace(m2.flames, source="cutouts"))
     assert control_config(own) == control  # the variants of a study share their control
     places = replace(m2, environments=(Path("panoramas"),), backgrounds=(Path("photos"),), background_holdout=0.25)
-    looks = replace(m2, never_darken=True, max_flames=1, closeup=0.5, flame_opacity=(0.5, 0.6), light=False)
-    looks = replace(looks, flames=replace(looks.flames, rising_smoke=True))  # smoke: no decoy draws it
+    looks = replace(m2, max_flames=1, flame_opacity=(0.5, 0.6), flames=replace(m2.flames, exposed=True))
     assert control_config(places) == control_config(looks) == control  # places and flame looks: one control
     assert control_config(replace(m2, camera=replace(m2.camera, defocus=0.9))) != control  # what acts on copies counts
-
-
-def test_exposed_flames_share_the_control_unless_decoys_take_their_masks() -> None:
-    m2 = _config().synth.method2
-    exposed = replace(m2, flames=replace(m2.flames, exposed=True))
-    assert control_config(exposed) == control_config(m2)  # no flame, no decoy: the colours show nowhere
-    decoys = replace(m2, blend=replace(m2.blend, decoys=0.3))
-    with_decoys = replace(decoys, flames=replace(decoys.flames, exposed=True))
-    assert control_config(with_decoys) != control_config(decoys) and control_config(with_decoys).flames.exposed
 
 
 def test_a_pool_on_photos_only_has_a_control() -> None:

@@ -8,7 +8,6 @@ import contextlib
 import hashlib
 import io
 import json
-from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -17,7 +16,7 @@ from factories import tiny_pool
 from factories_experiment import toy_dict
 
 import fuzzyfire.stages as stages
-from curate.core.config import build_config, load_config
+from curate.core.config import build_config
 from curate.core.formats.coco import read_coco
 from fuzzyfire.cutout_pools import cutout_pools, cutout_stage, simulated
 from fuzzyfire.datasets import Datasets
@@ -152,31 +151,6 @@ def _identity_digest(cfg: Any, method: str, base: Path, monkeypatch: pytest.Monk
     return str(got.value)
 
 
-@pytest.mark.parametrize(
-    ("config", "pinned"),
-    [
-        ("demo.yaml", {"method1": "1533ad5335d6", "method2": "bfaa2ab0301a"}),
-        ("paper.yaml", {"method1": "929127593223", "method2": "c3952e06e701"}),
-    ],
-)  # fmt: skip  (Method 2 digests since stages.STANDING: their procedural rooms' flames stand on surfaces now)
-def test_shipped_configs_keep_the_pool_identities_they_had_before_flames_source(
-    config: str, pinned: dict, monkeypatch: pytest.MonkeyPatch
-) -> None:
-    """The digests are those the version before ``flames.source`` gave these configs' pools."""
-    cfg = load_config(CONFIGS / config, ExperimentConfig)
-    got = {m: _identity_digest(getattr(cfg.synth, m), m, CONFIGS, monkeypatch) for m in pinned}
-    assert got == pinned
-    cut_keys = [
-        "synth.method2.flames.source=both",
-        "synth.method2.cutout_box=source",
-        "synth.method2.cutout_max_upscale=2",
-    ]
-    cut = load_config(CONFIGS / config, ExperimentConfig, cut_keys)
-    shared = simulated(cut.synth.method2)  # the experiment's shared pool of a cut-out config is the same pool
-    assert _identity_digest(shared, "method2", CONFIGS, monkeypatch) == pinned["method2"]
-    assert _identity_digest(cut.synth.method2, "method2", CONFIGS, monkeypatch) != pinned["method2"]
-
-
 def _hashes(folder: Path) -> dict[str, str]:
     return {
         p.relative_to(folder).as_posix(): hashlib.sha256(p.read_bytes()).hexdigest()
@@ -218,10 +192,6 @@ def test_own_frames_composite_on_the_mixtures_own_training_images_only(tmp_path:
     data, own, refs, printed = _prepare(cfg, tmp_path)
     assert sorted(own) == sorted((m, "method2", s) for s in SEEDS for m in ("R6_S6", "R6_S3"))
     assert simulated(cfg.synth.method2) == _config(None).synth.method2
-    swapped = replace(cfg.synth.method2, frame_swap=0.5)  # without frames of the config, swaps act on own frames
-    assert swapped.frame_swap == 0.5 and simulated(swapped) == _config(None).synth.method2
-    anchored = replace(cfg.synth.method2, frame_anchored=True)  # likewise: it acts on own frames only
-    assert simulated(anchored) == _config(None).synth.method2
     real = read_coco(data.real.path).dataset
     boxes = real.annotations_by_image()
     real_boxes = {real.image_path(i).resolve().as_posix(): len(boxes[i.id]) for i in real.images}
@@ -236,34 +206,3 @@ def test_own_frames_composite_on_the_mixtures_own_training_images_only(tmp_path:
         assert sum(len(m["frame_boxes"]) for m in per_image) > 0
     for seed in SEEDS:
         assert refs[("R0_S6", "method2", seed)].identity["synth"] == data.pools["method2"].with_split(None).key()
-
-
-def test_max_fill_cuts_a_stage_of_its_own_and_keeps_the_default_ones(built, tmp_path: Path) -> None:
-    """``flames.cutout_max_fill`` < 1: another cut-out stage (fewer or as many cut-outs); at 1 the stage is the one
-    cut before the key existed."""
-    from curate.core.load import load_split
-
-    out, data, *_ = built
-    train = load_split(data.real.path, "coco", "train", ["fire"])
-    full, strict = cutout_stage(out / "data", train), cutout_stage(out / "data", train, max_fill=0.3)
-    assert full.hash != strict.hash
-    assert cutout_stage(out / "data", train, max_fill=1.0).hash == full.hash
-    count = [len(json.loads((s.folder / "cutouts.json").read_text())) for s in (full, strict)]
-    assert 0 < count[1] < count[0]
-
-
-def test_source_boxes_are_pools_of_their_own_from_the_same_cutouts(built) -> None:
-    """``cutout_box: source``: other own pools (the key is in their identity) cut from the same cut-out stages,
-    whose flame boxes are larger than their masks' (the annotators' margins); the shared pool is the same stage."""
-    from dataclasses import replace
-
-    from synth.audit import audit_dataset
-
-    out, data, own, _, _ = built
-    cfg = _config("cutouts")
-    cfg = replace(cfg, synth=replace(cfg.synth, method2=replace(cfg.synth.method2, cutout_box="source")))
-    boxed_data, boxed, _, _ = _prepare(cfg, out)
-    assert boxed_data.pools == data.pools and sorted(boxed) == sorted(own)
-    for key, pool in boxed.items():
-        assert pool != own[key] and _cut_stage(out, pool.path) == _cut_stage(out, own[key].path)
-        assert audit_dataset(pool.path)["mean_iou"] < audit_dataset(own[key].path)["mean_iou"] == 1.0

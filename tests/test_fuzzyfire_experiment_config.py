@@ -28,29 +28,19 @@ def test_shipped_configs_load(name: str) -> None:
     assert all(parse_mixture(m).total for m in (*cfg.grid.mixtures, *cfg.grid.table1))
 
 
-#: The keys that make shared-data.yaml's study the README's best pool (ASAE), as every study of it was run.
-ASAE = ("grid.table1=[]", "synth.method1=null", "report.gap_draws=0", "report.baseline=R200_S0", "grid.control=false",
-        "synth.method2.backgrounds=[../../shared/data/fire-free]", "synth.method2.background_holdout=0.25",
-        "synth.method2.own_frames=1.0", "synth.method2.photo_negatives=0.5", "synth.method2.distractors.share=0.5",
-        "synth.method2.distractors.kinds=[photo]", "synth.method2.flames.source=cutouts",
-        "synth.method2.auto_exposure=true", "grid.mixtures=[R200_S0,R200_S200]")  # fmt: skip
+#: The keys that make shared-data.yaml's study the recommended pool (docs/findings.md, "Own cut-out flames").
+OWN_FLAMES = ("grid.table1=[]", "synth.method1=null", "report.gap_draws=0", "report.baseline=R200_S0",
+              "grid.control=false", "synth.method2.backgrounds=[../../shared/data/fire-free]",
+              "synth.method2.background_holdout=0.25", "synth.method2.own_frames=1.0",
+              "synth.method2.photo_negatives=1.0", "synth.method2.flames.source=cutouts",
+              "synth.method2.auto_exposure=true", "grid.mixtures=[R200_S0,R200_S200]")  # fmt: skip
 
 
 def test_own_flames_is_shared_data_with_the_best_pools_keys() -> None:
-    """configs/own-flames.yaml extends shared-data.yaml: the same study (and so the same pools and runs) as the
-    README's command with its --set keys."""
-    assert _load("own-flames.yaml") == _load("shared-data.yaml", *ASAE)
+    """configs/own-flames.yaml extends shared-data.yaml: the same study (and so the same pools and runs) as
+    shared-data.yaml with the documented --set keys."""
+    assert _load("own-flames.yaml") == _load("shared-data.yaml", *OWN_FLAMES)
     assert _load("own-flames.yaml", "grid.seeds=[0]").grid.seeds == (0,)
-
-
-def test_own_flames_negatives_is_own_flames_with_every_photo_a_negative() -> None:
-    """configs/own-flames-negatives.yaml extends own-flames.yaml: the study of the README's "Every fire-free photo
-    as it is" (ASAE's command with its two --set keys; the distractors keep their kinds, so the pools are the ones
-    measured)."""
-    keys = ("synth.method2.photo_negatives=1.0", "synth.method2.distractors.share=0")
-    cfg = _load("own-flames-negatives.yaml")
-    assert cfg == _load("own-flames.yaml", *keys) == _load("shared-data.yaml", *ASAE, *keys)
-    assert cfg.synth.method2.photo_negatives == 1.0 and not cfg.synth.method2.distractors.photo
 
 
 def test_every_key_of_the_shipped_configs_is_commented() -> None:

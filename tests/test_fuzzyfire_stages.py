@@ -54,12 +54,12 @@ def test_folder_ref_resolves_against_the_config_folder(split_folder: Path) -> No
     assert isinstance(ref.with_split("test"), DataRef) and ref.with_split("test").split == "test"
 
 
-def test_synth_stage_resolves_environments_and_keeps_old_identities(tmp_path: Path) -> None:
+def test_synth_stage_resolves_environments_by_content_and_every_key_counts(tmp_path: Path) -> None:
     from dataclasses import replace
 
     from factories import write_textured_room
 
-    from fuzzyfire.stages import FLAME_LOOK, STANDING, synth_stage
+    from fuzzyfire.stages import synth_stage
     from synth.library import FlameLibraryConfig
     from synth.method2 import Method2Config
 
@@ -67,13 +67,8 @@ def test_synth_stage_resolves_environments_and_keeps_old_identities(tmp_path: Pa
     cfg = Method2Config(n=2, width=64, height=48, scenes=1, images_per_view=2, flames=flames)
     stage, _ = synth_stage(tmp_path / "data", "method2", cfg, tmp_path)
     identity = json.loads((stage.folder / "stage.json").read_text())["identity"]
-    assert "environments" not in identity["config"]  # pools made before environments existed are still found
-    assert "flame_opacity" not in identity["config"]  # nor flame_opacity, while it holds its default
-    assert "streets" not in identity["config"] and "kits" not in identity["config"]  # nor kit streets while off
-    assert identity["config"]["flame_look"] == FLAME_LOOK  # pools of older flames are not reused
-    assert identity["config"]["standing"] == STANDING  # renders' flames on up-facing surfaces: new pools
-    anywhere, _ = synth_stage(tmp_path / "data", "method2", replace(cfg, stand="anywhere"), tmp_path)
-    assert "standing" not in json.loads((anywhere.folder / "stage.json").read_text())["identity"]["config"]
+    assert "environments" not in identity["config"]  # no files: nothing to fingerprint
+    assert identity["config"]["flame_opacity"] == [0.85, 1.0]  # every key, at its default too
     opaque, _ = synth_stage(tmp_path / "data", "method2", replace(cfg, flame_opacity=(0.9, 1.0)), tmp_path)
     assert opaque.hash != stage.hash
     write_textured_room(tmp_path / "scenes" / "den.glb")
@@ -117,43 +112,6 @@ def test_pools_are_identified_by_the_content_of_their_environments_and_photos(tm
     assert (
         changed["environments"][0]["scale"] == 0.5 and len(changed["backgrounds"]) == len(identity["backgrounds"]) + 1
     )
-
-
-def test_pools_made_by_path_before_content_identities_are_still_found(tmp_path: Path) -> None:
-    """A pool an earlier version identified by its absolute environment path is reused, with its hash."""
-    from dataclasses import replace
-
-    from factories import write_textured_room
-
-    from curate.core.config import to_dict
-    from fuzzyfire.stages import FLAME_LOOK, _later_keys_dropped, cached_stage, synth_stage
-    from synth.library import FlameLibraryConfig
-    from synth.method2 import Method2Config
-
-    write_textured_room(tmp_path / "scenes" / "den.glb")
-    flames = FlameLibraryConfig(sequences=1, frames=60, keep_every=30)
-    cfg = Method2Config(
-        n=2,
-        width=64,
-        height=48,
-        scenes=0,
-        images_per_view=2,
-        flames=flames,
-        environments=(Path("scenes"),),
-        stand="anywhere",
-    )  # fmt: skip  (the rule of those pools)
-    absolute = replace(cfg, environments=((tmp_path / "scenes").resolve(),))
-    by_path = _later_keys_dropped(to_dict(absolute), to_dict(Method2Config()))
-    older_flames = cached_stage(
-        tmp_path / "older", "method2", {"kind": "method2", "config": by_path}, lambda f: f.mkdir(parents=True)
-    )
-    by_path["flame_look"] = FLAME_LOOK
-    old = cached_stage(
-        tmp_path / "data", "method2", {"kind": "method2", "config": by_path}, lambda f: f.mkdir(parents=True)
-    )
-    found, ref = synth_stage(tmp_path / "data", "method2", cfg, tmp_path)
-    assert found.cached and found.folder == old.folder and ref.identity == {"kind": "method2", "hash": old.hash}
-    assert older_flames.hash != old.hash  # a pool of the flames before FLAME_LOOK is other data
 
 
 def _dataset_builder(n: int, seeds: list[int]):
@@ -211,81 +169,3 @@ def test_a_stage_built_with_other_versions_says_so(tmp_path: Path) -> None:
     again = cached_stage(tmp_path, "data", {"n": 2}, _dataset_builder(2, []))
     assert again.cached and again.note is not None
     assert again.note.startswith("built with onnxruntime 0.0.1 (now ") and again.note.endswith("a rebuild may differ")
-
-
-def test_kit_streets_enter_a_pool_identity_by_the_kits_content(tmp_path: Path) -> None:
-    import shutil
-    from dataclasses import replace
-
-    from factories import write_tiny_kits
-
-    from fuzzyfire.stages import LATER_KEYS, _later_keys_dropped, content_identity
-    from synth.method2 import Method2Config
-    from synth.schema import to_json
-
-    cfg = Method2Config(n=2, width=64, height=48, scenes=1)
-    assert {"streets", "kits"} <= set(LATER_KEYS)
-    plain = _later_keys_dropped(to_json(cfg), to_json(Method2Config()))
-    assert "streets" not in plain and "kits" not in plain and content_identity(cfg) == {}  # identities as before
-    kits = write_tiny_kits(tmp_path / "a")
-    streets = replace(cfg, streets=2, kits=(kits,))
-    assert _later_keys_dropped(to_json(streets), to_json(Method2Config()))["streets"] == 2
-    first = content_identity(streets)["kits"]
-    assert [k["kit"] for k in first] == ["kenney_city_kit_suburban", "kenney_retro_urban"]
-    moved = shutil.copytree(kits, tmp_path / "b")
-    assert content_identity(replace(streets, kits=(moved,)))["kits"] == first  # by content, not by path
-
-
-def test_standing_enters_only_pools_that_render_rooms(tmp_path: Path) -> None:
-    """A panorama-only pool keeps the identity it had before the standing rule was applied; a room pool does not."""
-    import cv2
-    import numpy as np
-    from factories import write_textured_room
-
-    from fuzzyfire.stages import _renders_rooms
-    from synth.method2 import Method2Config
-
-    pano = tmp_path / "panos" / "place.jpg"
-    pano.parent.mkdir()
-    cv2.imwrite(str(pano), np.random.default_rng(0).integers(0, 255, (64, 128, 3), dtype=np.uint8))
-    write_textured_room(tmp_path / "rooms" / "den.glb")
-    assert not _renders_rooms(Method2Config(scenes=0, environments=(pano.parent,)))
-    assert _renders_rooms(Method2Config(scenes=0, environments=(tmp_path / "rooms",)))
-    assert _renders_rooms(Method2Config(scenes=2, environments=(pano.parent,)))
-
-
-def test_blends_and_distractors_stay_out_of_existing_pool_identities() -> None:
-    """configs/shared-data.yaml's Method 2 pool and the default pool keep the identities they had before blend and
-    distractors existed (digests computed by the code before them); turning either on makes another pool."""
-    from dataclasses import replace
-
-    from synth.blend import BlendConfig
-    from synth.distractors import DistractorConfig
-
-    from curate.core.config import load_config, to_dict
-    from fuzzyfire.experiment_config import ExperimentConfig
-    from fuzzyfire.stages import _later_keys_dropped
-    from synth.method2 import Method2Config
-
-    root = Path(__file__).resolve().parents[1]
-    study = load_config(root / "configs" / "shared-data.yaml", ExperimentConfig).synth.method2
-    default = to_dict(Method2Config())
-
-    def identity(cfg: Method2Config) -> str:
-        return digest(_later_keys_dropped(to_dict(cfg), default))
-
-    assert identity(Method2Config()) == "3dd22ec5abe5"
-    assert study.never_darken and study.flames.texture == 0.5  # the study's look since issue 23's last session
-    study = replace(study, never_darken=False, flames=replace(study.flames, texture=0.0))  # the earlier look
-    assert identity(study) == "9a138ab4d9da"
-    assert identity(replace(study, blend=BlendConfig(), distractors=DistractorConfig())) == "9a138ab4d9da"
-    assert identity(replace(study, distractors=DistractorConfig(share=0.5))) != "9a138ab4d9da"
-    assert identity(replace(study, blend=BlendConfig(modes=("alpha",)))) != "9a138ab4d9da"
-    textured = replace(study, flames=replace(study.flames, texture=0.5))
-    assert identity(replace(study, flames=replace(study.flames, texture=0.0))) == "9a138ab4d9da"
-    assert identity(textured) != "9a138ab4d9da"
-    assert identity(replace(study, never_darken=False)) == "9a138ab4d9da"
-    assert identity(replace(study, never_darken=True)) != "9a138ab4d9da"
-    assert identity(replace(study, flames=replace(study.flames, rising_smoke=True))) != "9a138ab4d9da"
-    assert identity(replace(study, flames=replace(study.flames, exposed=False))) == "9a138ab4d9da"
-    assert identity(replace(study, flames=replace(study.flames, exposed=True))) != "9a138ab4d9da"

@@ -41,7 +41,6 @@ def test_flames_write_a_preview_and_no_empty_layer(tmp_path, capsys):
 
 
 def test_bad_size_is_rejected(capsys):
-    import pytest
 
     with pytest.raises(SystemExit):
         main(["synth", "method2", "--out", "x", "--size", "big"])
@@ -128,7 +127,6 @@ def test_exposed_flames_are_written_with_their_gain(tmp_path):
 
 
 def test_what_can_be_checked_fails_in_one_line_before_rendering(tmp_path, capsys):
-    import pytest
 
     from synth.staging import staging_dir
 
@@ -156,7 +154,6 @@ def test_what_can_be_checked_fails_in_one_line_before_rendering(tmp_path, capsys
 
 
 def test_a_failed_run_keeps_its_finished_images_and_says_so_or_leaves_nothing(tmp_path, capsys, monkeypatch):
-    import pytest
 
     import synth.method2 as method2
     from synth.staging import staging_dir
@@ -233,5 +230,3 @@ def test_method2_auto_exposure_from_the_command_line(tmp_path):
     per_image = json.loads((out / "manifest.json").read_text())["args"]["per_image"]
     assert all(0.25 <= m["exposure_gain"] <= 1.0 for m in per_image if m["flames"])
     assert any(m["flames"] for m in per_image)
-
-
