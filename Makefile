@@ -6,7 +6,7 @@ BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 LOCK := requirements.lock
 
-.PHONY: install test test-fast lint bench clean experiment lock
+.PHONY: install test test-fast lint bench clean experiment lock reference
 
 install: $(STAMP)
 
@@ -42,12 +42,24 @@ lint: $(STAMP)
 bench: $(STAMP)
 	@for script in bench/*.py; do echo "# $$script"; $(BIN)/python $$script || exit 1; done
 
-# The study: make experiment [CONFIG=configs/paper.yaml] [REAL=labelled/folder] [RARE=folder] [OUT=folder]
-CONFIG ?= configs/demo.yaml
+# The study: make experiment [CONFIG=...] [REAL=labelled/folder] [RARE=folder] [NEGATIVES=fire-free/photos]
+#   [OUT=folder] [SET="key=value key=value"]. Without REAL: configs/demo.yaml (stand-in data, offline); with REAL:
+#   configs/own-data.yaml (the recommended study of your data). NEGATIVES are your fire-free photos: the false-alarm
+#   test set (a quarter held out by content hash) and, the rest, backgrounds and hard negatives of the pools.
+CONFIG ?= $(if $(REAL),configs/own-data.yaml,configs/demo.yaml)
+comma := ,
 experiment: $(STAMP)
 	$(BIN)/fuzzyfire experiment $(CONFIG) $(if $(OUT),--out $(OUT)) \
 	  $(if $(REAL),--set real.path=$(abspath $(REAL)) --set real.standin=null) \
-	  $(if $(RARE),--set rare.path=$(abspath $(RARE)) --set rare.standin=null)
+	  $(if $(RARE),--set 'rare={path: $(abspath $(RARE))$(comma) name: rare}') \
+	  $(if $(NEGATIVES),--set 'tests={fire-free: {path: $(abspath $(NEGATIVES))$(comma) holdout: 0.25}}' \
+	    --set 'synth.method2.backgrounds=[$(abspath $(NEGATIVES))]' --set synth.method2.background_holdout=0.25 \
+	    --set synth.method2.photo_negatives=1.0) \
+	  $(foreach s,$(SET),--set '$(s)')
+
+# Regenerate docs/config.md and configs/synth-method*.yaml from the config dataclasses (a test checks them).
+reference: $(STAMP)
+	$(BIN)/python -m fuzzyfire.reference
 
 clean:
 	rm -rf $(VENV) .pytest_cache build *.egg-info

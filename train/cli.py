@@ -4,11 +4,11 @@ from __future__ import annotations
 
 import argparse
 import sys
-from dataclasses import replace
 from pathlib import Path
 
 from curate.core.commands import add_command
 from curate.core.formats.registry import FORMATS
+from curate.core.options import Alias
 
 _EXAMPLE = """example:
   fuzzyfire train --train out/mixtures/seed0/R500_S500 --val ../shared/data/fire-cctv-416 \\
@@ -63,37 +63,54 @@ def _datasets(args: argparse.Namespace):  # -> (train, val) curate.core.dataset.
     return train_ds, val_ds
 
 
+#: Flags of ``fuzzyfire train``: aliases of TrainConfig keys (their defaults are the keys').
+ALIASES: tuple[Alias, ...] = (
+    Alias("--epochs", ("epochs",), "training epochs", {"type": int}),
+    Alias("--imgsz", ("imgsz",), "square input size, multiple of 32", {"type": int}),
+    Alias("--batch", ("batch",), "images per forward/backward pass", {"type": int}),
+    Alias("--seed", ("seed",), "seed of weights, shuffles and augmentations", {"type": int}),
+    Alias("--size", ("model.size",), "neck/head width and depth", {"choices": ("n", "s", "m")}),
+    Alias("--backbone", ("model.backbone",), "ImageNet Lite0, or YOLOv5's CSPDarknet from scratch",
+          {"choices": ("cspdarknet", "efficientnet-lite0")}),
+    Alias("--freeze", ("model.freeze",), "Lite0 stages kept at their ImageNet weights, 0..7", {"type": int}),
+    Alias("--views", ("feature_views",), "augmented views per image of the frozen features", {"type": int}),
+    Alias("--optimizer", ("optim.optimizer",), "optimizer", {"choices": ("sgd", "adamw")}),
+    Alias("--lr0", ("optim.lr0",), "initial learning rate", {"type": float}),
+    Alias("--device", ("device",), "auto | cpu | cuda | cuda:N", {}),
+    Alias("--workers", ("workers",), "data-loading processes", {"type": int}),
+    Alias("--threads", ("threads",), "torch threads; 0 = torch's choice", {"type": int}),
+    Alias("--select", ("select",), "exported weights: best validation fitness, or the last epoch",
+          {"choices": ("best", "last")}),
+    Alias("--real-finetune", ("real_finetune",), "the last N epochs train on a mixture's real images only",
+          {"type": int, "metavar": "N"}),
+    Alias("--no-autoanchor", ("model.autoanchor",), "keep the default anchors even when they fit badly",
+          {"action": "store_true"}, lambda _: {"model.autoanchor": False}),
+)  # fmt: skip
+
+
 def build_config(args: argparse.Namespace):
-    """The run's TrainConfig: the defaults (the study's detector) with the flags given on the command line."""
+    """The run's TrainConfig: CONFIG.yaml (or the defaults: the study's detector), the flags given, ``--set``."""
+    from curate.core.options import config_from_args
     from train.config import TrainConfig
     from train.device import resolve_device
 
-    cfg = TrainConfig()
-    given = {
-        k: getattr(args, k)
-        for k in ("epochs", "imgsz", "batch", "seed", "threads", "device", "workers", "select", "real_finetune")
-    }
-    cfg = replace(cfg, **{k: v for k, v in given.items() if v is not None})
-    if args.views is not None:
-        cfg = replace(cfg, feature_views=args.views)
-    model = {k: getattr(args, k) for k in ("size", "backbone", "freeze")}
-    model = {k: v for k, v in model.items() if v is not None}
-    if args.no_autoanchor:
-        model["autoanchor"] = False
-    cfg = replace(cfg, model=replace(cfg.model, **model))
-    if args.optimizer is not None or args.lr0 is not None:
-        optim = {"optimizer": args.optimizer, "lr0": args.lr0}
-        cfg = replace(cfg, optim=replace(cfg.optim, **{k: v for k, v in optim.items() if v is not None}))
+    cfg = config_from_args(args, TrainConfig, ALIASES)
     if cfg.imgsz % 32:
-        raise ValueError(f"--imgsz must be a multiple of 32, got {cfg.imgsz}")
+        raise ValueError(f"imgsz must be a multiple of 32, got {cfg.imgsz}")
     resolve_device(cfg.device)  # a device this machine lacks fails here, before any data is read
     return cfg
 
 
 def cmd_train(args: argparse.Namespace) -> int:
+    from curate.core.options import print_config
     from train.loop import ResumeError, fit
 
     cfg = build_config(args)
+    if args.print_config:
+        print_config(cfg)
+        return 0
+    if args.train is None or args.val is None or args.out is None:
+        raise ValueError("--train, --val and --out are required (unless --print-config)")
     train_ds, val_ds = _datasets(args)
     same = Path(args.train).resolve() == Path(args.val).resolve()
     if same and {i.split for i in train_ds.images} & {i.split for i in val_ds.images}:
@@ -112,65 +129,22 @@ def cmd_train(args: argparse.Namespace) -> int:
     return 0
 
 
-def _defaults():
-    from train.config import TrainConfig
-
-    return TrainConfig()
-
-
 def register(sub: argparse._SubParsersAction) -> None:
     """Add ``train`` to the ``fuzzyfire`` parser."""
+    from curate.core.options import add_config_options
+    from train.config import TrainConfig
+
     p = add_command(
         sub,
         "train",
         help="train the YOLOv5-style detector (CPU-first), validate each epoch, export best.onnx",
-        description="Train a detector with the YOLOv5 recipe (mosaic, affine, HSV, flip; SGD; EMA; best epoch by\n"
-        "fitness on the validation set).\n\n" + _EXAMPLE,
+        description="Train the study's detector (ImageNet EfficientNet-Lite0 + a YOLOv5-style head; mosaic, affine,\n"
+        "HSV, flip; AdamW; EMA; best epoch by fitness on the validation set). Settings: CONFIG.yaml (a train\n"
+        "section: docs/config.md#train), the options below, then --set KEY=VALUE.\n\n" + _EXAMPLE,
     )
-    p.add_argument("--train", required=True, help="training dataset folder or COCO .json")
-    p.add_argument("--val", required=True, help="validation dataset folder or COCO .json")
-    p.add_argument("--out", required=True, type=Path, help="run folder (an existing run there is resumed)")
-    defaults = _defaults()
-    p.add_argument("--epochs", type=int, help=f"epochs (default {defaults.epochs})")
-    p.add_argument("--imgsz", type=int, help=f"square input size, multiple of 32 (default {defaults.imgsz})")
-    p.add_argument("--batch", type=int, help=f"images per forward/backward pass (default {defaults.batch})")
-    p.add_argument("--seed", type=int, help="seed of weights, shuffles and augmentations (default 0)")
-    p.add_argument("--size", choices=("n", "s", "m"), help=f"neck/head width and depth (default {defaults.model.size})")
-    p.add_argument(
-        "--backbone",
-        choices=("cspdarknet", "efficientnet-lite0"),
-        help="efficientnet-lite0 (ImageNet weights from the installed package) or cspdarknet (YOLOv5, from "
-        f"scratch); default {defaults.model.backbone}",
-    )
-    p.add_argument(
-        "--freeze",
-        type=int,
-        help="efficientnet-lite0 stages kept at their ImageNet weights, 0..7 (default: all 7)",
-    )
-    p.add_argument(
-        "--views",
-        type=int,
-        help="augmented views per image whose frozen features are computed once (default "
-        f"{defaults.feature_views}; 0 = fresh augmentation every epoch)",
-    )
-    p.add_argument("--optimizer", choices=("sgd", "adamw"), help=f"default {defaults.optim.optimizer}")
-    p.add_argument("--lr0", type=float, help=f"initial learning rate (default {defaults.optim.lr0:g})")
-    p.add_argument("--device", help="auto | cpu | cuda | cuda:N (default auto: the first GPU, else the CPU)")
-    p.add_argument("--workers", type=int, help="data-loading processes (default: none on the CPU, 8 on a GPU)")
-    p.add_argument("--threads", type=int, help="torch threads (default: torch's choice)")
-    p.add_argument(
-        "--select",
-        choices=("best", "last"),
-        help="weights exported: best (validation fitness, YOLOv5's rule; the default) or last (the last epoch's "
-        "EMA: steadier when the validation set has only a few dozen images)",
-    )
-    p.add_argument(
-        "--real-finetune",
-        type=int,
-        metavar="N",
-        help="the last N epochs train only on the real images of a fuzzyfire mixture (sources not synth:); a "
-        "real image's mosaic partners are real in every epoch (default 0: never)",
-    )
+    p.add_argument("--train", help="training dataset folder or COCO .json")
+    p.add_argument("--val", help="validation dataset folder or COCO .json")
+    p.add_argument("--out", type=Path, help="run folder (an existing run there is resumed)")
     p.add_argument("--train-split", help="split of --train to use (default: train when present, else all)")
     p.add_argument("--val-split", help="split of --val to use (default: valid/val when present, else all)")
     formats = ("auto", *FORMATS)
@@ -184,5 +158,5 @@ def register(sub: argparse._SubParsersAction) -> None:
         metavar="NAME",
         help="drop a class in both sets (repeatable or a,b)",
     )
-    p.add_argument("--no-autoanchor", action="store_true", help="keep the default anchors even when they fit badly")
+    add_config_options(p, TrainConfig, ALIASES, "docs/config.md#train")
     p.set_defaults(func=cmd_train)

@@ -94,8 +94,7 @@ def add_config_options(
         action="append",
         default=[],
         metavar="KEY=VALUE",
-        help="set any config key (dotted, value in YAML), after CONFIG.yaml and the options; repeatable, e.g. "
-        "--set flames.exposed=true",
+        help="set any config key (dotted, the value in YAML), after CONFIG.yaml and the options; repeatable",
     )
     p.add_argument("--print-config", action="store_true", help="print the resolved settings as YAML and stop")
     group = p.add_argument_group("settings (each an alias of a config key; defaults are the keys')")
