@@ -29,7 +29,7 @@ def sections() -> list[tuple[str, str, type]]:
          "`synth.method1` (configs/synth-method1.yaml).", Method1Config),
         ("flame library", "`fuzzyfire synth flames [CONFIG.yaml]` and the `flames` section of Method 1 and 2.",
          FlameLibraryConfig),
-        ("train", "`fuzzyfire train DATASET --val VAL [CONFIG.yaml] [--set KEY=VALUE]` and an experiment's `train`.",
+        ("train", "`fuzzyfire train [CONFIG.yaml] --train DATASET --val VAL [--set KEY=VALUE]` and an experiment's `train`.",
          TrainConfig),
         ("curate", "`fuzzyfire curate CONFIG.yaml [--set KEY=VALUE]` and an experiment's `real.curate`.",
          CurateConfig),

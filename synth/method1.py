@@ -78,11 +78,19 @@ class Method1Config:
         if self.flames.source != "simulated":
             raise ValueError(f"flames.source {self.flames.source}: cut-out flames are for Method 2 pools only")
         if self.n < 1 or self.scenes < 0 or self.images_per_view < 1 or self.width < 16 or self.height < 16:
-            raise ValueError(f"invalid Method 1 config: {self}")
+            raise ValueError(
+                f"n, images_per_view must be >= 1, scenes >= 0, width and height >= 16; got n {self.n}, "
+                f"images_per_view {self.images_per_view}, scenes {self.scenes}, size {self.width}x{self.height}"
+            )
         if self.scenes == 0 and not self.environments:
             raise ValueError("scenes is 0 and no environments are given: nothing to render")
         if self.max_flames < 1 or not 0.0 <= self.negatives <= 1.0 or self.min_box_px < 1:
-            raise ValueError(f"invalid Method 1 config: {self}")
+            raise ValueError(
+                f"max_flames and min_box_px must be >= 1 and negatives in 0..1; got {self.max_flames}, "
+                f"{self.min_box_px}, {self.negatives}"
+            )
+        if self.yaw_jitter_deg < 0:
+            raise ValueError(f"yaw_jitter_deg must be >= 0, got {self.yaw_jitter_deg}")
         check_range("flame_height_m", self.flame_height_m, 0.01)
         check_range("distance_m", self.distance_m, 0.2)
         check_range("clearance_m", self.clearance_m, 0.0)

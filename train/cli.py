@@ -95,8 +95,6 @@ def build_config(args: argparse.Namespace):
     from train.device import resolve_device
 
     cfg = config_from_args(args, TrainConfig, ALIASES)
-    if cfg.imgsz % 32:
-        raise ValueError(f"imgsz must be a multiple of 32, got {cfg.imgsz}")
     resolve_device(cfg.device)  # a device this machine lacks fails here, before any data is read
     return cfg
 

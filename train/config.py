@@ -106,5 +106,20 @@ class TrainConfig:
     augment: AugmentConfig = field(default_factory=AugmentConfig)  # augmentations
 
     def __post_init__(self) -> None:
+        for name in ("epochs", "batch", "max_det"):
+            if getattr(self, name) < 1:
+                raise ValueError(f"train.{name} must be >= 1, got {getattr(self, name)}")
+        if self.imgsz < 32 or self.imgsz % 32:
+            raise ValueError(f"train.imgsz must be a positive multiple of 32, got {self.imgsz}")
+        if not 0.0 <= self.ema_decay < 1.0 or self.ema_tau <= 0:
+            raise ValueError(f"train.ema_decay must be in [0, 1) and ema_tau > 0, got {self.ema_decay}, {self.ema_tau}")
+        if not 0.0 <= self.val_conf < 1.0 or not 0.0 < self.val_iou <= 1.0:
+            raise ValueError(
+                f"train.val_conf must be in [0, 1) and val_iou in (0, 1], got {self.val_conf}, {self.val_iou}"
+            )
+        if self.threads < 0 or self.feature_views < 0 or (self.workers is not None and self.workers < 0):
+            raise ValueError("train.threads, feature_views and workers must be >= 0")
+        if self.feature_cache_gb < 0:
+            raise ValueError(f"train.feature_cache_gb must be >= 0, got {self.feature_cache_gb}")
         if not 0 <= self.real_finetune <= self.epochs:
             raise ValueError(f"train.real_finetune must be in 0..epochs ({self.epochs}), got {self.real_finetune}")

@@ -1,0 +1,119 @@
+"""One config path per command: CONFIG.yaml, the flags (aliases of keys, with the keys' defaults), then --set."""
+
+from __future__ import annotations
+
+import argparse
+import io
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import pytest
+import yaml
+
+from curate.core.config import ConfigError
+from curate.core.options import Alias, add_config_options, config_from_args, key_default, print_config
+
+
+@dataclass(frozen=True)
+class Inner:
+    depth: float = 0.5  # how deep
+
+
+@dataclass(frozen=True)
+class Settings:
+    n: int = 3  # count
+    name: str = "a"  # label
+    paths: tuple[Path, ...] = ()  # folders
+    inner: Inner = field(default_factory=Inner)  # nested
+
+    def __post_init__(self) -> None:
+        if self.n < 1:
+            raise ValueError(f"n must be >= 1, got {self.n}")
+
+
+ALIASES = (
+    Alias("--n", ("n",), "count", {"type": int}),
+    Alias("--paths", ("paths",), "folders", {"type": Path, "nargs": "+"}),
+    Alias("--deep", ("inner.depth",), "go deep", {"action": "store_true"}, lambda _: {"inner.depth": 1.0}),
+)
+
+
+def _parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser()
+    add_config_options(p, Settings, ALIASES, "docs/config.md#settings")
+    return p
+
+
+def _build(*argv: str) -> Settings:
+    return config_from_args(_parser().parse_args(list(argv)), Settings, ALIASES)
+
+
+def test_no_file_no_flags_gives_the_dataclass_defaults() -> None:
+    assert _build() == Settings()
+
+
+def test_file_then_flags_then_set_later_wins(tmp_path: Path) -> None:
+    cfg = tmp_path / "s.yaml"
+    cfg.write_text("n: 5\nname: b\ninner: {depth: 0.1}\n")
+    assert _build(str(cfg)) == Settings(n=5, name="b", inner=Inner(0.1))
+    assert _build(str(cfg), "--n", "7").n == 7
+    assert _build(str(cfg), "--n", "7", "--set", "n=9").n == 9
+    assert _build(str(cfg), "--deep").inner.depth == 1.0
+    assert _build("--paths", "a", "b/c").paths == (Path("a"), Path("b/c"))
+
+
+def test_errors_name_the_file_and_the_key(tmp_path: Path) -> None:
+    cfg = tmp_path / "s.yaml"
+    cfg.write_text("n: 0\n")
+    with pytest.raises(ConfigError, match=r"s\.yaml: n must be >= 1, got 0"):
+        _build(str(cfg))
+    with pytest.raises(ConfigError, match="nope: unknown key"):
+        _build("--set", "nope=1")
+    with pytest.raises(ConfigError, match="inner.depth: expected a number"):
+        _build("--set", "inner.depth=deep")
+
+
+def test_help_shows_each_flags_key_and_its_dataclass_default() -> None:
+    text = _parser().format_help()
+    assert "[n=3]" in text and "[paths=[]]" in text and "[inner.depth=0.5]" in text
+    assert key_default(Settings, "inner.depth") == 0.5
+    with pytest.raises(KeyError, match="no key 'deep'"):
+        key_default(Settings, "inner.deep")
+
+
+def test_printed_config_reads_back_as_the_same_settings(tmp_path: Path) -> None:
+    cfg = _build("--n", "4", "--paths", "x", "--set", "inner.depth=0.25")
+    out = io.StringIO()
+    print_config(cfg, out)
+    (tmp_path / "back.yaml").write_text(out.getvalue())
+    assert yaml.safe_load(out.getvalue())["inner"] == {"depth": 0.25}
+    assert _build(str(tmp_path / "back.yaml")) == cfg
+
+
+def _commands():
+    from synth.cli import FLAME_ALIASES, METHOD1_ALIASES, METHOD2_ALIASES
+    from synth.library import FlameLibraryConfig
+    from synth.method1 import Method1Config
+    from synth.method2 import Method2Config
+    from train.cli import ALIASES as TRAIN_ALIASES
+    from train.config import TrainConfig
+
+    return [
+        (FlameLibraryConfig, FLAME_ALIASES),
+        (Method1Config, METHOD1_ALIASES),
+        (Method2Config, METHOD2_ALIASES),
+        (TrainConfig, TRAIN_ALIASES),
+    ]
+
+
+def test_every_flag_of_every_command_is_a_key_of_its_config_with_that_default() -> None:
+    """Each shipped command's flags name real keys; with no flag given the command builds its dataclass' defaults
+    (the flags hold no defaults of their own)."""
+    for schema, aliases in _commands():
+        p = argparse.ArgumentParser()
+        add_config_options(p, schema, aliases, "docs/config.md")
+        for a in aliases:
+            for key in a.keys:
+                key_default(schema, key)  # raises for a key the dataclass does not have
+            assert p.get_default(a.dest) is None, a.flag
+        assert config_from_args(p.parse_args([]), schema, aliases) == schema(), schema.__name__
