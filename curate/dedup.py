@@ -34,7 +34,7 @@ from numpy.typing import NDArray
 from curate.scan import ScannedImage
 from curate.search import Pairs, duplicate_pairs, grid_cells
 
-#: Default near-duplicate radius on unit EfficientNet-Lite0 embeddings (see ``bench/bench_dedup_quality.py``).
+#: Default near-duplicate radius on unit EfficientNet-Lite0 embeddings (see ``experiments/dedup_quality.py``).
 DEFAULT_THRESHOLD = 0.45
 
 

@@ -5,7 +5,7 @@ Architecture (Tan & Le 2019, "lite" variant): no squeeze-excite, ReLU6, TF-style
 BatchNorm eps 1e-3. Input: (N, 3, S, S) float RGB scaled as ``(x - 127) / 128`` (ImageNet-trained at S = 224).
 Outputs: the embedding (N, 320), the mean-pooled output of the last inverted-residual block (it separates
 crops, noise and JPEG copies from distinct fire scenes better than the 1280-d head: see
-``bench/bench_dedup_quality.py``), and the ImageNet logits (N, 1000).
+``experiments/dedup_quality.py``), and the ImageNet logits (N, 1000).
 
 Only :mod:`curate.embed` builds this net (to export it to ONNX once); nothing here runs at import.
 """

@@ -10,7 +10,7 @@ channel, pixel in 0..255. The embedding is the output named ``output`` (default:
 
 Every image is embedded in two views: the whole image and its central 80 % (:data:`CROP_VIEW`), so that a
 cropped copy matches the centre view of its original (see :func:`curate.search.duplicate_pairs`).
-The built-in model runs at S = 160 with blur 1.5: on ``bench/bench_dedup_quality.py`` this two-view setup
+The built-in model runs at S = 160 with blur 1.5: on ``experiments/dedup_quality.py`` this two-view setup
 reaches pair F1 0.98, against 0.82 for one 224-pixel view of the 1280-d head, at the same compute.
 """
 

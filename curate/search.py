@@ -24,7 +24,7 @@ from numpy.typing import NDArray
 AUTO_EXACT_MAX = 200_000
 #: Orderings of distances and scores (which kept duplicate is nearest, the diversity ranking) compare them on this
 #: grid, ties broken by content, so float noise far below it (2e-6 between builds, CPUs and thread counts:
-#: ``bench/bench_embedding_noise.py``) reorders nothing. Thresholds keep their exact meaning (``d < t``).
+#: ``experiments/embedding_noise.py``) reorders nothing. Thresholds keep their exact meaning (``d < t``).
 DISTANCE_GRID = 1e-4
 _BLOCK_CELLS = 1 << 24  # query rows x base rows per similarity block (64 MB of float32)
 

@@ -123,9 +123,12 @@ def cmd_score(args: argparse.Namespace) -> int:
 
 
 def _print_errors(errors) -> None:  # errors: eval.errors.ErrorBreakdown
-    print("errors (TIDE): AP50 gained when each kind is fixed alone, in points")
-    for kind, delta in errors.delta_ap50.items():
-        print(f"       {kind:<15} {100 * delta:>5.1f}  ({errors.counts[kind]})")
+    if errors.ap50 is None:
+        print("errors (TIDE): no box to find on these images (AP50 undefined); false alarms only")
+    else:
+        print("errors (TIDE): AP50 gained when each kind is fixed alone, in points")
+        for kind, delta in errors.delta_ap50.items():
+            print(f"       {kind:<15} {100 * delta:>5.1f}  ({errors.counts[kind]})")
     if errors.false_alarms_per_100 is not None:
         print(
             f"alarms {errors.false_alarms_per_100:.1f} detections >= {errors.alarm_conf:g} per 100 images without "

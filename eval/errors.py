@@ -49,15 +49,17 @@ ERRORS_FILE = "errors.json"  # where a breakdown is kept beside a scoring's othe
 class ErrorBreakdown:
     """AP50 (0..1), each error type's count and dAP50 when fixed (0..1 points of AP50), and false alarms at
     ``alarm_conf`` on the ``negatives`` images without ground truth: detections per 100 such images and the
-    share (0..1) of them with at least one."""
+    share (0..1) of them with at least one. ``boxes``: the ground-truth boxes scored; with none (a set of fire-free
+    images) AP50 and its deltas are undefined and ``ap50`` is None."""
 
-    ap50: float
+    ap50: float | None
     counts: dict[str, int]
     delta_ap50: dict[str, float]
     negatives: int
     alarm_conf: float
     false_alarms_per_100: float | None
     alarm_image_share: float | None
+    boxes: int = 0
 
     def write(self, folder: Path, extra: dict[str, Any] | None = None) -> Path:
         """Write :meth:`to_dict` (and ``extra`` keys) as ``folder/errors.json`` (:data:`ERRORS_FILE`); returns its
@@ -75,6 +77,7 @@ class ErrorBreakdown:
             "alarm_conf": self.alarm_conf,
             "false_alarms_per_100_negatives": self.false_alarms_per_100,
             "negatives_with_alarm": self.alarm_image_share,
+            "boxes": self.boxes,
         }
 
 
@@ -125,7 +128,8 @@ def error_breakdown(
             )
         delta[kind] = fixed_ap - base
     negatives, per_100, share = _false_alarms(dataset, records, cats, alarm_conf)
-    return ErrorBreakdown(base, counts, delta, negatives, alarm_conf, per_100, share)
+    boxes = sum(a.category_id in cats for a in dataset.annotations)
+    return ErrorBreakdown(base if boxes else None, counts, delta, negatives, alarm_conf, per_100, share, boxes)
 
 
 def worst_errors(

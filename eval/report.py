@@ -26,6 +26,10 @@ td:first-child,th:first-child{text-align:left}tr.group td{font-style:italic;back
 figure{display:inline-block;margin:.5em}figcaption{font-size:.85em;color:#555}img{max-width:100%}"""
 
 
+#: What a table's marked cells mean (:func:`eval.tables.marks`), printed under every table that marks any.
+MARKS_LEGEND = "<b>bold</b>: the best mean of its column; <i>italic</i>: the second (alarm columns: the fewest)."
+
+
 def table_html(table: Table, scale: float = 100.0, digits: int = 1) -> str:
     """An HTML table of ``table``: best cells bold, second italic, a shaded row per group."""
     mk = marks(table, scale, digits)
@@ -41,7 +45,8 @@ def table_html(table: Table, scale: float = 100.0, digits: int = 1) -> str:
                 tag = {"best": "b", "second": "i"}.get(mk.get((row, "/".join(col)), ""))
                 cells.append(f"<td><{tag}>{text}</{tag}></td>" if tag else f"<td>{text}</td>")
             rows.append(f"<tr><td>{html.escape(table.label(row))}</td>{''.join(cells)}</tr>")
-    return "<table>" + "".join(rows) + "</table>"
+    legend = f'<p class="legend">{MARKS_LEGEND}</p>' if mk else ""
+    return "<table>" + "".join(rows) + "</table>" + legend
 
 
 def figure_html(path: Path, base: Path, caption: str = "") -> str:
@@ -152,13 +157,16 @@ def errors_html(rows: Sequence[Mapping[str, Any]]) -> str:
     head += "<th>false alarms / 100 negatives (of N)</th><th>seeds</th></tr>"
     body = []
     for (test, name), docs in groups.items():
-        mean = {k: 100 * float(np.mean([d["delta_AP50"][k] for d in docs])) for k in ERROR_TYPES}
         alarms = [d["false_alarms_per_100_negatives"] for d in docs if d["false_alarms_per_100_negatives"] is not None]
-        cells = "".join(f"<td>{mean[k]:.1f}</td>" for k in ERROR_TYPES)
         alarm = f"{np.mean(alarms):.1f} (of {docs[0]['negatives']})" if alarms else "–"
-        ap50 = 100 * float(np.mean([d["AP50"] for d in docs]))
+        if any(d["AP50"] is None for d in docs):  # no box to find (a fire-free set): AP50 is undefined
+            ap50, cells = "–", "<td>–</td>" * len(ERROR_TYPES)
+        else:
+            mean = {k: 100 * float(np.mean([d["delta_AP50"][k] for d in docs])) for k in ERROR_TYPES}
+            cells = "".join(f"<td>{mean[k]:.1f}</td>" for k in ERROR_TYPES)
+            ap50 = f"{100 * float(np.mean([d['AP50'] for d in docs])):.1f}"
         body.append(
-            f"<tr><td>{html.escape(test)}</td><td>{html.escape(name)}</td><td>{ap50:.1f}</td>{cells}"
+            f"<tr><td>{html.escape(test)}</td><td>{html.escape(name)}</td><td>{ap50}</td>{cells}"
             f"<td>{alarm}</td><td>{len(docs)}</td></tr>"
         )
     caption = (
@@ -249,7 +257,8 @@ def write_study_report(
         shown = ("AP", "AP50", *alarms, *(m for m in metrics if m == RECALL_AT_ALARMS))
         figures = [plot_figure5(results, out / "figures" / f"figure5_{m}.png", m) for m in shown]
         sections.append(("Table 2 — training mixtures", table_html(t2)))
-        sections.append(("Figure 5", "".join(figure_html(f, out, f.stem) for f in figures)))
+        captions = [_figure5_caption(m) for m in shown]
+        sections.append(("Figure 5", "".join(figure_html(f, out, c) for f, c in zip(figures, captions))))
         if curves := operating_figures(results, out / "figures"):
             caption = f"the dotted line: {ALARM_BUDGET:g} alarms per 100, where Table 2 reads the recall"
             sections.append(("Fire found against false alarms", "".join(figure_html(f, out, caption) for f in curves)))
@@ -266,12 +275,32 @@ def write_study_report(
         sections.append(("Where AP50 goes (error breakdown)", errors_html(errors)))
     for label, ds in (samples or {}).items():
         sections.append((f"Samples: {label}", samples_html(ds, out / "samples" / _slug(label), out, rng)))
-    if results or controls:
-        sections.append(("Runs", runs_html([*results, *controls], run_columns)))
+    if results or method_results or controls:
+        sections.append(("Runs", runs_html(_every_run(results, method_results, controls), run_columns)))
     page = out / "report.html"
     out.mkdir(parents=True, exist_ok=True)
     page.write_text(render_page(title, sections, notice), encoding="utf-8")
     return page
+
+
+def _figure5_caption(metric: str) -> str:
+    """What a Figure 5 panel shows, in words."""
+    what = METRIC_LABELS.get(metric, metric)
+    return f"Figure 5 — {what} per training mixture, one bar per test set: mean ± sd over the seeds"
+
+
+def _every_run(*groups: Sequence[Mapping[str, Any]]) -> list[Mapping[str, Any]]:
+    """The rows of every table once (a run in Table 1 and Table 2 is one run), in table order; a row is one
+    (run, test set)."""
+    seen: set[tuple[Any, Any]] = set()
+    out = []
+    for rows in groups:
+        for r in rows:
+            key = (r.get("run"), r.get("test_set"))
+            if key[0] is None or key not in seen:
+                seen.add(key)
+                out.append(r)
+    return out
 
 
 #: The files of ``out/tables`` a study report writes (and removes when this report has none of them).

@@ -12,7 +12,7 @@ rectangle. ``grabcut`` (the default): that mask only starts ``cv2.grabCut`` (its
 box's other pixels probable background, a ring of :data:`CONTEXT` x the box's longer side around the box
 background), which learns the image's own flame and background colours and cuts along their edges; when it
 keeps under :data:`MIN_KEPT` of the box (or the box has no background pixel to learn from) the colour mask is
-kept. ``bench/bench_cutout_masks.py`` measures both against true masks. Either mask is softened into the alpha
+kept. ``experiments/cutout_masks.py`` measures both against true masks. Either mask is softened into the alpha
 channel; boxes whose colour-rule share is below ``min_cover`` are skipped.
 """
 

@@ -87,7 +87,7 @@ def test_top_n_protect_and_determinism(sources: Path, embedder: OnnxEmbedder) ->
 #: configs/shared-data.yaml's curation of fire-cctv-416 in the locked environment, as the README states it.
 SHARED_CURATION = "629 images (test 126, train 440, valid 63), fingerprint d54583468d5768dd"
 #: Largest change of a two-view distance between onnxruntime settings, torch and AVX2 kernels
-#: (``bench/bench_embedding_noise.py``).
+#: (``experiments/embedding_noise.py``).
 CROSS_BUILD_NOISE = 3.4e-6
 
 

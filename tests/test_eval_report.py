@@ -201,3 +201,35 @@ def test_rows_with_their_operating_data_draw_the_recall_against_false_alarms(tmp
     plain = tmp_path / "plain"
     write_study_report(plain, [{k: v for k, v in r.items() if k != OPERATING} for r in rows], np.random.default_rng(0))
     assert not (plain / "figures" / "operating_common.png").exists()
+
+
+def test_a_set_without_fire_shows_no_ap50_in_the_error_breakdown() -> None:
+    from eval.report import errors_html
+
+    delta = dict.fromkeys(("classification", "localisation", "both", "duplicate", "background", "missed"), 0.0)
+    doc = {"AP50": None, "delta_AP50": delta, "negatives": 68, "false_alarms_per_100_negatives": 9.3, "boxes": 0}
+    page = errors_html([{"test_set": "fire-free", "label": "R200_S0", "seed": 0, "errors": doc}])
+    assert "<td>fire-free</td><td>R200_S0</td><td>–</td>" in page and "0.0" not in page
+    assert "<td>9.3 (of 68)</td>" in page
+
+
+def test_the_page_lists_every_run_once_explains_its_marks_and_captions_figures_in_words(tmp_path):
+    results = [
+        {"mixture": m, "method": "method2", "seed": s, "test_set": "common", "AP": 0.3 + 0.1 * i, "AP50": 0.6,
+         "run": f"{m}-{s}"}
+        for i, m in enumerate(["R100_S0", "R0_S100"]) for s in (0, 1)
+    ]  # fmt: skip
+    method1 = [dict(r, method="method1", run=f"m1-{r['seed']}") for r in results if r["mixture"] == "R0_S100"]
+    method2 = [r for r in results if r["mixture"] == "R0_S100"]  # the same runs as Table 2's
+    columns = ("mixture", "method", "seed", "test_set", "AP", "run")
+    page = write_study_report(
+        tmp_path, results, np.random.default_rng(0), method_results=[*method1, *method2], samples={},
+        run_columns=columns,
+    ).read_text()  # fmt: skip
+    runs = page.split("<h2>Runs</h2>")[1]
+    assert runs.count("<tr><td>") == 6  # 4 Table 2 runs + the 2 Method 1 runs; Table 1's Method 2 rows are theirs
+    assert runs.count("<td>method1</td>") == 2
+    assert "<b>bold</b>: the best mean of its column" in page
+    assert (
+        "<figcaption>Figure 5 — AP per training mixture" in page and "<figcaption>figure5_AP</figcaption>" not in page
+    )

@@ -2,7 +2,7 @@
 
 ``make install`` (and so ``make test``, ``make experiment`` and CI) installs with ``-c requirements.lock``;
 ``make lock`` refreshes the file from a fresh, unconstrained install. The same versions on any x86-64 machine
-give the same decoded pixels and the same embeddings up to float noise (``bench/bench_embedding_noise.py``),
+give the same decoded pixels and the same embeddings up to float noise (``experiments/embedding_noise.py``),
 hence the same curation.
 
 :func:`lock_status` says whether this process runs on the locked versions; every manifest and results file

@@ -12,7 +12,7 @@ Lines printed (AP in %, mean and std over seeds): ``detector_<name>_<test>_AP50_
 ``detector_<name>_epochs``, ``detector_<name>_reused_runs`` (runs finished before, e.g. by an interrupted
 bench), ``detector_pretrained_peak_rss`` (when the pretrained runs trained here).
 
-.venv/bin/python bench/bench_detector_quality.py [--out out/bench-detector-quality] [--seeds 0,1,2]
+.venv/bin/python experiments/detector_quality.py [--out out/bench-detector-quality] [--seeds 0,1,2]
 """
 
 from __future__ import annotations

@@ -5,7 +5,7 @@ rotation), plus 200 distinct distractors. Sources and distractors are picked far
 duplicate groups and throughput, for our embeddings and for a 64-bit perceptual-hash baseline (DCT pHash,
 Hamming <= 10, imagededup's default) run in the same process.
 
-.venv/bin/python bench/bench_dedup_quality.py [DATA_DIR] [SEED]   # goal: pair F1 >= 0.95
+.venv/bin/python experiments/dedup_quality.py [DATA_DIR] [SEED]   # goal: pair F1 >= 0.95
 (the default threshold was chosen on seed 0; other seeds pick other images: a held-out check)
 """
 

@@ -5,7 +5,7 @@
 - ``experiment_demo_runs``: training and scoring every mixture x seed (local executor);
 - ``experiment_demo_wall``: the whole command including tables, figures and report.html.
 
-.venv/bin/python bench/bench_experiment.py [--executor ray]
+.venv/bin/python experiments/experiment.py [--executor ray]
 """
 
 from __future__ import annotations

@@ -9,7 +9,7 @@ of near-filled rectangles (mask >= 90 % of the box: a fire-lit patch taken whole
 written (tight), and with each side widened by ``--loose`` of the box (hand-drawn labels are looser). Also the
 time per cut-out of each rule.
 
-Usage: ``python bench/bench_cutout_masks.py --environments ../shared/data/panoramas [--n 100] [--seed 0]``
+Usage: ``python experiments/cutout_masks.py --environments ../shared/data/panoramas [--n 100] [--seed 0]``
 (generates a Method 2 pool of ``--n`` 416x416 images in a temporary folder) or ``--pool DIR`` (a Method 2 pool
 already made, e.g. by ``fuzzyfire synth method2``).
 """

@@ -17,7 +17,7 @@ how many kept images and split assignments change when every unit embedding is m
 sigma 1e-5 .. 3e-4 per component (3 draws each; the worst draw is printed), and how close the nearest pair
 distance lies to each threshold.
 
-.venv/bin/python bench/bench_embedding_noise.py [FOLDER] [--n 400]
+.venv/bin/python experiments/embedding_noise.py [FOLDER] [--n 400]
 """
 
 from __future__ import annotations
