@@ -39,9 +39,9 @@ class ModelConfig:
     path: Optional[Path] = None  # ONNX file of your own CNN
     input_size: int = 224  # pixels, square
     mean: tuple[float, ...] = (127.0, 127.0, 127.0)  # per channel on 0..255
-    std: tuple[float, ...] = (128.0, 128.0, 128.0)
-    bgr: bool = False
-    layout: Literal["nchw", "nhwc"] = "nchw"
+    std: tuple[float, ...] = (128.0, 128.0, 128.0)  # user models only: divisor per channel on 0..255
+    bgr: bool = False  # user models only: BGR channel order
+    layout: Literal["nchw", "nhwc"] = "nchw"  # user models only: nchw | nhwc input layout
     output: Optional[str] = None  # output name used as the embedding (default: first)
     blur: float = 0.0  # Gaussian sigma in input pixels after resizing
     batch_size: int = 4  # images per onnxruntime call
@@ -52,32 +52,35 @@ class ModelConfig:
 class DedupConfig:
     near: bool = True  # false: exact duplicates only
     threshold: float = DEFAULT_THRESHOLD  # Euclidean distance of unit embeddings, 0..2
-    backend: Literal["auto", "numpy", "flat", "ivf", "hnsw"] = "auto"
+    backend: Literal["auto", "numpy", "flat", "ivf", "hnsw"] = "auto"  # numpy | flat (exact faiss) | ivf | hnsw
+    # (approximate, beyond ~1M images); auto picks by size
     protect_sources: tuple[str, ...] = ()  # source names whose images are never removed
 
 
 @dataclass(frozen=True)
 class RankConfig:
     method: Literal["score", "kcenter"] = "score"  # score = mean distance to k nearest kept images
-    k: int = 10
+    k: int = 10  # neighbours in the score
     top: Optional[int] = None  # keep the N most diverse; default: the sum of the split counts (or all)
 
 
 @dataclass(frozen=True)
 class SplitConfig:
-    sizes: dict[str, float] = field(default_factory=lambda: {"train": 0.8, "valid": 0.1, "test": 0.1})
+    sizes: dict[str, float] = field(default_factory=lambda: {"train": 0.8, "valid": 0.1, "test": 0.1})  # fractions
+    # summing to 1, or counts like {train: 1000, valid: 200, test: 200}
     group_threshold: float = 0.6  # images closer than this always share a split (>= dedup threshold)
-    seed: int = 0
+    seed: int = 0  # same seed + same inputs -> byte-identical split
 
 
 @dataclass(frozen=True)
 class CurateConfig:
-    sources: tuple[SourceConfig, ...]
-    classes: tuple[str, ...] = ("fire", "smoke")
-    dedup: DedupConfig = DedupConfig()
-    rank: RankConfig = RankConfig()
-    split: SplitConfig = SplitConfig()
-    model: ModelConfig = ModelConfig()
+    sources: tuple[SourceConfig, ...]  # the labelled datasets to merge (each: path, format, name, aliases,
+    # drop_classes)
+    classes: tuple[str, ...] = ("fire", "smoke")  # kept classes; other classes' boxes are dropped
+    dedup: DedupConfig = DedupConfig()  # exact and near-duplicate removal
+    rank: RankConfig = RankConfig()  # diversity ranking of the kept images
+    split: SplitConfig = SplitConfig()  # group-aware split (no near-duplicate group across two splits)
+    model: ModelConfig = ModelConfig()  # the embedding CNN (built-in ImageNet Lite0, or your ONNX)
     images: Literal["copy", "hardlink", "symlink"] = "copy"  # how images reach the output folder
 
 

@@ -30,7 +30,7 @@ class SourceConfig:
 class MergeConfig:
     """Several sources merged into one dataset with a fixed class list."""
 
-    sources: tuple[SourceConfig, ...]
+    sources: tuple[SourceConfig, ...]  # the labelled datasets (each: path, format, name, names, aliases, drop_classes)
     classes: tuple[str, ...] = ("fire", "smoke")  # output classes in YOLO id order
 
 

@@ -55,7 +55,7 @@ class EngineConfig:
     """Who trains each run: ``fuzzyfire`` (our detector, the ``train:`` section) or ``command`` (module
     docstring; ``train.epochs``, ``imgsz``, ``batch`` and ``device`` fill the placeholders)."""
 
-    name: Literal["fuzzyfire", "command"] = "fuzzyfire"
+    name: Literal["fuzzyfire", "command"] = "fuzzyfire"  # fuzzyfire (our detector) | command (e.g. ultralytics)
     train: str = ""  # command template that trains, e.g. "yolo detect train data={data_yaml} ..."
     export: str = ""  # command template that exports the ONNX (empty when train writes it)
     onnx: str = "train/weights/best.onnx"  # the ONNX the commands leave, relative to the run folder (a template)

@@ -1,5 +1,6 @@
 """The schema of ``fuzzyfire experiment CONFIG``: frozen dataclasses built once from commented YAML by
-:func:`curate.core.config.load_config` (``configs/demo.yaml`` documents every key with its unit and range).
+:func:`curate.core.config.load_config` (``docs/config.md`` lists every key with its type, default and meaning: it
+is generated from these classes by :mod:`fuzzyfire.reference`).
 
 Component configs are the packages' own: :class:`curate.curation.CurateConfig`, :class:`synth.method1.
 Method1Config`, :class:`synth.method2.Method2Config`, :class:`synth.standin.StandInConfig`,
@@ -35,11 +36,11 @@ class RealConfig:
     ``path``), or a generated stand-in (``standin``, the offline demo). The result must have the three splits."""
 
     path: Optional[Path] = None  # dataset folder (any format the toolkit reads) or COCO .json
-    format: Literal["auto", "coco", "yolo", "voc", "dfire"] = "auto"
+    format: Literal["auto", "coco", "yolo", "voc", "dfire"] = "auto"  # the folder's layout; auto: detected
     aliases: dict[str, str] = field(default_factory=dict)  # source class -> class, e.g. {flame: fire}
     drop_classes: tuple[str, ...] = ()  # classes whose boxes are removed (their images stay)
     curate: Optional[CurateConfig] = None  # `fuzzyfire curate` settings; sources: [] = curate ``path``
-    standin: Optional[StandInConfig] = None
+    standin: Optional[StandInConfig] = None  # a generated stand-in instead of real photos (configs/demo.yaml)
     train_split: str = "train"  # mixtures draw their real images from this split
     val_split: str = "valid"  # every run selects its best epoch on this split
     test_split: str = "test"  # the common test set
@@ -75,12 +76,13 @@ class EvalSetConfig:
     reported). ``holdout`` keeps only the images :func:`curate.core.holdout.held_out` picks at that share: the photos a
     Method 2 pool with the same ``background_holdout`` never composites on."""
 
-    path: Optional[Path] = None
-    format: Literal["auto", "coco", "yolo", "voc", "dfire", "images"] = "auto"
+    path: Optional[Path] = None  # dataset folder (any format) or a folder of unlabelled images
+    format: Literal["auto", "coco", "yolo", "voc", "dfire", "images"] = "auto"  # images: unlabelled, negatives
+    # only; auto: detected
     split: Optional[str] = None  # null = every image of the folder
-    aliases: dict[str, str] = field(default_factory=dict)
-    drop_classes: tuple[str, ...] = ()
-    standin: Optional[StandInConfig] = None
+    aliases: dict[str, str] = field(default_factory=dict)  # source class -> class, e.g. {Fire: fire}
+    drop_classes: tuple[str, ...] = ()  # classes whose boxes are removed (their images stay, maybe as negatives)
+    standin: Optional[StandInConfig] = None  # a generated stand-in set instead of a folder
     holdout: float = 0.0  # 0 = every image; 0 < share <= 1 = only the held-out share (chosen by content hash)
     name: Optional[str] = None  # label in tables and figures; null = the key under ``tests:``
 
@@ -110,8 +112,8 @@ class RareConfig(EvalSetConfig):
 class SynthConfig:
     """The two synthetic pools; ``null`` leaves a method out (Table 1 then has one method)."""
 
-    method1: Optional[Method1Config] = field(default_factory=Method1Config)
-    method2: Optional[Method2Config] = field(default_factory=Method2Config)
+    method1: Optional[Method1Config] = field(default_factory=Method1Config)  # flame planes in 3D scenes; null = none
+    method2: Optional[Method2Config] = field(default_factory=Method2Config)  # flames composited; null = none
 
 
 @dataclass(frozen=True)
@@ -126,10 +128,11 @@ class GridConfig:
         "R750_S250", "R500_S500", "R250_S750",
         "R0_S250", "R0_S500", "R0_S750", "R0_S1000",
     )  # fmt: skip
-    synthetic: Literal["method1", "method2"] = "method2"
-    table1: tuple[str, ...] = ("R0_S1000",)
-    seeds: tuple[int, ...] = (0, 1, 2, 3, 4)
-    control: bool = False
+    # the Table 2 mixtures: R<m>_S<n> = m real + n synthetic training images
+    synthetic: Literal["method1", "method2"] = "method2"  # the pool of Table 2's mixtures: method1 | method2
+    table1: tuple[str, ...] = ("R0_S1000",)  # synthetic-only mixtures trained with every method (Table 1)
+    seeds: tuple[int, ...] = (0, 1, 2, 3, 4)  # every mixture is trained once per seed
+    control: bool = False  # also train each real + synthetic mixture on flame-free copies of its own real images
 
 
 @dataclass(frozen=True)
@@ -143,7 +146,7 @@ class ExecutorConfig:
 
 @dataclass(frozen=True)
 class ReportConfig:
-    title: str = "fuzzyfire study"
+    title: str = "fuzzyfire study"  # the report's title
     bootstrap: int = 1000  # paired image-level bootstrap resamples per comparison (0 = no comparisons)
     baseline: Optional[str] = None  # mixture the others are compared with (default: largest real-only one)
     samples: bool = True  # sample thumbnails with boxes (8 per dataset) in report.html
@@ -152,17 +155,17 @@ class ReportConfig:
 
 @dataclass(frozen=True)
 class ExperimentConfig:
-    real: RealConfig
-    rare: Optional[RareConfig] = None
+    real: RealConfig  # the real data: a folder read as is, a folder curated first, or a stand-in
+    rare: Optional[RareConfig] = None  # the rare test set (never trained on); null = none
     tests: dict[str, EvalSetConfig] = field(default_factory=dict)  # more test sets, by name (scored, not trained on)
     classes: tuple[str, ...] = ("fire",)  # trained and scored classes; other classes' boxes are dropped
-    synth: SynthConfig = field(default_factory=SynthConfig)
-    grid: GridConfig = field(default_factory=GridConfig)
-    train: TrainConfig = field(default_factory=TrainConfig)
+    synth: SynthConfig = field(default_factory=SynthConfig)  # the synthetic pools
+    grid: GridConfig = field(default_factory=GridConfig)  # which mixtures and seeds are trained
+    train: TrainConfig = field(default_factory=TrainConfig)  # each run's detector training (fuzzyfire train's settings)
     engine: EngineConfig = field(default_factory=EngineConfig)  # who trains: fuzzyfire or a command (engine.py)
-    score: ScoreConfig = field(default_factory=ScoreConfig)
-    executor: ExecutorConfig = field(default_factory=ExecutorConfig)
-    report: ReportConfig = field(default_factory=ReportConfig)
+    score: ScoreConfig = field(default_factory=ScoreConfig)  # how each run is scored (fuzzyfire score's settings)
+    executor: ExecutorConfig = field(default_factory=ExecutorConfig)  # where runs run: here, or on a Ray cluster
+    report: ReportConfig = field(default_factory=ReportConfig)  # tables, comparisons and report.html
     images: Literal["symlink", "hardlink", "copy"] = "symlink"  # how images reach the mixture folders
 
     def check(self) -> None:

@@ -57,11 +57,12 @@ NOTICE = (
 class StandInConfig:
     """One stand-in dataset (see the module docstring)."""
 
-    kind: Literal["common", "rare"] = "common"
+    kind: Literal["common", "rare"] = "common"  # common: black-body flames; rare: chemical colours, white cores,
+    # thin jets, heavy smoke
     splits: dict[str, int] = field(default_factory=lambda: {"test": 100})  # images per split
-    seed: int = 0
+    seed: int = 0  # same seed -> the same images
     width: int = 320  # output image size, pixels
-    height: int = 240
+    height: int = 240  # output image height, pixels
     sequences: int = 12  # noise flame sequences in the library
     frames: int = 240  # noise steps per sequence
     keep_every: int = 12  # keep one frame every K steps

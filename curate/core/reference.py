@@ -37,15 +37,19 @@ class Row:
 
 
 def field_docs(cls: type) -> dict[str, str]:
-    """{field name: its comment} from the class source: the ``#`` comment on the field's line and the comment-only
-    lines right below it, joined."""
+    """{field name: its comment} from the class source (and its dataclass bases'): the ``#`` comment on the field's
+    line and the comment-only lines right below it, joined."""
     docs: dict[str, str] = {}
+    for base in reversed(cls.__mro__[1:]):
+        if dataclasses.is_dataclass(base):
+            docs.update({k: v for k, v in field_docs(base).items() if v})
     current: str | None = None
     for line in inspect.getsource(cls).splitlines():
         field, comment = _FIELD.match(line), _COMMENT.match(line)
         if field and not line.lstrip().startswith("#"):
             current = field.group(1)
-            docs[current] = line.split("  # ", 1)[1].strip() if "  # " in line else ""
+            own = line.split("  # ", 1)[1].strip() if "  # " in line else ""
+            docs[current] = own or docs.get(current, "")
         elif comment and current is not None:
             docs[current] = f"{docs[current]} {comment.group(1).strip()}".strip()
         elif line.strip().startswith(("def ", "@")):
