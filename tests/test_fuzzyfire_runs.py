@@ -45,22 +45,6 @@ def test_identity_ignores_the_output_folder_and_uses_the_run_seed(tmp_path: Path
     assert replace(a, method=None).label == "R2_S2"
 
 
-def test_select_enters_the_identity_only_when_not_best(tmp_path: Path) -> None:
-    """Runs trained before ``train.select`` existed keep their hash; select=last is another run."""
-    a = _spec(tmp_path)
-    assert "select" not in a.identity()["train"] and a.identity()["train"]["epochs"] == 1
-    last = replace(a, train=replace(a.train, select="last"))
-    assert last.identity()["train"]["select"] == "last" and last.hash() != a.hash()
-
-
-def test_real_finetune_enters_the_identity_only_when_set(tmp_path: Path) -> None:
-    """Runs trained before ``train.real_finetune`` existed keep their hash; a fine-tuned run is another run."""
-    a = _spec(tmp_path)
-    assert "real_finetune" not in a.identity()["train"]
-    tuned = replace(a, train=replace(a.train, real_finetune=1))
-    assert tuned.identity()["train"]["real_finetune"] == 1 and tuned.hash() != a.hash()
-
-
 def test_a_run_that_differs_only_in_select_starts_from_its_twins_training(tmp_path: Path) -> None:
     from fuzzyfire.runs import adopt_training
 
@@ -166,3 +150,17 @@ def test_a_finished_run_without_its_model_refuses_new_test_sets(tmp_path: Path) 
     extra = replace(spec, evals=(EvalSet("more", spec.val_data),))
     with pytest.raises(RunError, match="exported model .* is gone"):
         exported_model(extra)
+
+
+def test_every_train_key_enters_the_identity_and_the_version_its_hash(tmp_path: Path, monkeypatch) -> None:
+    """No key is left out to keep an old hash (the identity version is bumped instead): ``select`` and
+    ``real_finetune`` at their defaults are in it, another value is another run, and a new version another hash."""
+    from fuzzyfire import stages
+
+    a = _spec(tmp_path)
+    assert a.identity()["train"]["select"] == "best" and a.identity()["train"]["real_finetune"] == 0
+    assert replace(a, train=replace(a.train, select="last")).hash() != a.hash()
+    assert replace(a, train=replace(a.train, real_finetune=1)).hash() != a.hash()
+    before = a.hash()
+    monkeypatch.setattr(stages, "IDENTITY", stages.IDENTITY + 1)
+    assert _spec(tmp_path).hash() != before
