@@ -12,20 +12,25 @@ from pathlib import Path
 
 import numpy as np
 
+from curate.core.imageio import ImageError
+from curate.core.problems import Problem
+from curate.core.walk import walk_files
 from curate.scan import list_image_files
 from synth.envfile import MESH_SUFFIXES, is_environment_sidecar
-from synth.panorama import PANORAMA_SUFFIXES, is_panorama
+from synth.panorama import FLOAT_SUFFIXES, PANORAMA_SUFFIXES, is_panorama, named_panorama, readable_panorama
 
 KINDS = ("photo", "panorama", "render")  # the order of the cumulative draw in :func:`kind_of_view`
 
 
 @dataclass(frozen=True)
 class Places:
-    """``meshes``: paths for :func:`synth.envfile.find_environment_files`; ``panoramas`` and ``photos``: files."""
+    """``meshes``: paths for :func:`synth.envfile.find_environment_files`; ``panoramas`` and ``photos``: files;
+    ``problems``: the files skipped because their header cannot be read (path and reason)."""
 
     meshes: tuple[Path, ...]
     panoramas: tuple[Path, ...]
     photos: tuple[Path, ...]
+    problems: tuple[Problem, ...] = ()
 
 
 def _has_meshes(folder: Path) -> bool:
@@ -38,37 +43,45 @@ def split_places(environments: Iterable[Path | str], backgrounds: Iterable[Path 
     """Sort ``environments`` into mesh paths and panorama files, and ``backgrounds`` into photos and panoramas.
 
     A folder of environments is searched for panoramas when it holds no mesh or sidecar file; a missing path is
-    a FileNotFoundError."""
+    a FileNotFoundError, an environment file named that cannot be read a ValueError. An image in a folder of
+    environments or among the backgrounds whose header cannot be read is skipped and named in ``problems``;
+    backgrounds of which none can be read are a ValueError."""
     meshes: list[Path] = []
     panoramas: list[Path] = []
+    problems: list[Problem] = []
     for item in environments:
         path = Path(item)
         if not path.exists():
             raise FileNotFoundError(f"{path}: no such environment file or folder")
         if path.is_file():
-            (panoramas if path.suffix.lower() in PANORAMA_SUFFIXES and is_panorama(path) else meshes).append(path)
+            (panoramas if path.suffix.lower() in PANORAMA_SUFFIXES and named_panorama(path) else meshes).append(path)
         elif _has_meshes(path):
             meshes.append(path)
         else:
-            panoramas += _panoramas_in(path)
+            panoramas += _panoramas_in(path, problems)
     photos: list[Path] = []
     backgrounds = list(backgrounds)
     if backgrounds:
-        for image in list_image_files(backgrounds):
-            (panoramas if image.suffix.lower() in PANORAMA_SUFFIXES and is_panorama(image) else photos).append(image)
+        images, unreadable = list_image_files(backgrounds), []
+        for image in images:
+            try:
+                (panoramas if is_panorama(image) else photos).append(image)
+            except ImageError as exc:
+                unreadable.append(Problem(str(image), exc.reason))
         for item in backgrounds:  # .hdr/.exr panoramas are not photos list_image_files knows
             if Path(item).is_dir():
-                panoramas += [p for p in _panoramas_in(Path(item)) if p.suffix.lower() in (".hdr", ".exr")]
-    return Places(tuple(meshes), tuple(dict.fromkeys(panoramas)), tuple(photos))
+                panoramas += _panoramas_in(Path(item), unreadable, FLOAT_SUFFIXES)
+        if unreadable and not photos and not panoramas:
+            raise ValueError(f"none of the {len(unreadable)} background images can be read: {unreadable[0]}")
+        problems += unreadable
+    return Places(tuple(meshes), tuple(dict.fromkeys(panoramas)), tuple(photos), tuple(dict.fromkeys(problems)))
 
 
-def _panoramas_in(folder: Path) -> list[Path]:
-    from synth.panorama import list_panoramas
-
-    try:
-        return list_panoramas([folder])
-    except ValueError:
-        return []
+def _panoramas_in(folder: Path, problems: list[Problem], suffixes: tuple[str, ...] = PANORAMA_SUFFIXES) -> list[Path]:
+    """The panoramas in ``folder`` (recursive) with one of ``suffixes``; unreadable ones appended to
+    ``problems``."""
+    files = walk_files(folder, lambda n: n.lower().endswith(suffixes))
+    return [p.absolute() for p in files if readable_panorama(p, problems)]
 
 
 def kind_weights(available: Sequence[str], weights: Mapping[str, float]) -> dict[str, float]:

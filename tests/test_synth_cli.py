@@ -101,11 +101,17 @@ def test_method2_on_photographs(tmp_path, capsys):
 
     for k in range(3):
         write_image(tmp_path / "photos" / f"p{k}.jpg", 200, 150, seed=k)
+    whole = (tmp_path / "photos" / "p0.jpg").read_bytes()
+    (tmp_path / "photos" / "cut.jpg").write_bytes(whole[: len(whole) // 2])  # a truncated download
+    (tmp_path / "photos" / "notes.jpg").write_text("not an image\n")  # a text file named .jpg
     flames = ["synth", "flames", "--out", str(tmp_path / "fl"), "--n", "1", "--frames", "60", "--keep-every", "30"]
     assert main(flames) == 0
     out = tmp_path / "m2"
     args = ["synth", "method2", "--n", "6", "--out", str(out), "--size", "96x64"]
+    capsys.readouterr()
     assert main([*args, "--backgrounds", str(tmp_path / "photos"), "--flames", str(tmp_path / "fl")]) == 0
+    skipped = [line for line in capsys.readouterr().err.splitlines() if "skipped background" in line]
+    assert sorted(Path(line.split(": ")[0]).name for line in skipped) == ["cut.jpg", "notes.jpg"]
     manifest = json.loads((out / "manifest.json").read_text())
     assert manifest["args"]["scenes"] == 0  # the user's photos alone
     assert [Path(img["photo"]).name in {"p0.jpg", "p1.jpg", "p2.jpg"} for img in manifest["args"]["per_image"]] == [

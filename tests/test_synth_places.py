@@ -36,6 +36,33 @@ def test_environments_and_backgrounds_are_sorted_by_kind(tmp_path: Path) -> None
         split_places([tmp_path / "missing"])
 
 
+def _unreadable(folder: Path) -> dict[str, str]:
+    """A truncated JPEG and a text file named .jpg in ``folder``: {file name: the reason each must be named by}."""
+    whole = write_image(folder / "whole.jpg", 64, 48).read_bytes()
+    (folder / "cut.jpg").write_bytes(whole[: len(whole) // 2])
+    (folder / "notes.jpg").write_text("not an image at all\n")
+    return {"cut.jpg": "truncated JPEG", "notes.jpg": "not a"}
+
+
+def test_unreadable_backgrounds_and_panoramas_are_skipped_and_named(tmp_path: Path) -> None:
+    photo = write_image(tmp_path / "photos" / "office.jpg", 64, 48)
+    expected = _unreadable(tmp_path / "photos")
+    places = split_places((), [tmp_path / "photos"])
+    assert set(places.photos) == {photo, tmp_path / "photos" / "whole.jpg"} and places.panoramas == ()
+    assert {Path(p.path).name for p in places.problems} == set(expected)
+    assert all(expected[Path(p.path).name] in p.reason for p in places.problems)
+    pano = _panorama(tmp_path / "panos" / "hall.jpg")
+    _unreadable(tmp_path / "panos")  # a folder of panoramas with broken files in it
+    rooms = split_places([tmp_path / "panos"])
+    assert rooms.panoramas == (pano.absolute(),) and {Path(p.path).name for p in rooms.problems} == set(expected)
+    with pytest.raises(ValueError, match="notes.jpg: not a"):  # an environment named by the user is an error
+        split_places([tmp_path / "panos" / "notes.jpg"])
+    for name in ("office.jpg", "whole.jpg"):
+        (tmp_path / "photos" / name).unlink()
+    with pytest.raises(ValueError, match="none of the 2 background images can be read"):
+        split_places((), [tmp_path / "photos"])
+
+
 def test_kind_weights_and_draws() -> None:
     assert kind_weights(["render"], {"render": 0.0}) == {"render": 1.0}
     assert kind_weights(["photo", "render"], {"photo": 0.25, "render": 0.75, "panorama": 1}) == {
