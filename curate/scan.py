@@ -20,7 +20,7 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from curate.core.imageio import ImageError, decode_sized, is_image_file
+from curate.core.imageio import ImageError, check_complete, decode_sized, is_image_file
 from curate.core.problems import Problem
 from curate.core.progress import progress
 from curate.core.walk import walk_files
@@ -78,13 +78,19 @@ def bounded_map(fn: Callable[[T], R], items: Sequence[T], pool: ThreadPoolExecut
 
 
 def file_sha256(path: Path) -> tuple[int, str] | Problem:
-    """``(bytes, sha256 hex)`` of a file, or a Problem when it cannot be read."""
+    """``(bytes, sha256 hex)`` of a file, or a Problem when it cannot be read or its bytes are truncated or
+    garbled (:func:`~curate.core.imageio.check_complete`: checked here too, so a file cached by a reader that
+    did not check it is not taken from the cache)."""
     try:
         data = path.read_bytes()
     except OSError as exc:
         return Problem(path.as_posix(), f"cannot read ({exc.strerror or exc})")
     if not data:
         return Problem(path.as_posix(), "empty file (0 bytes)")
+    try:
+        check_complete(data, path)
+    except ImageError as exc:
+        return Problem(path.as_posix(), exc.reason)
     return len(data), hashlib.sha256(data).hexdigest()
 
 

@@ -33,6 +33,17 @@ def test_broken_photos_are_skipped_and_named(tmp_path: Path) -> None:
         list_photos([tmp_path / "empty"])
 
 
+def test_a_photo_with_garbled_scan_data_is_skipped_and_named(tmp_path: Path) -> None:
+    from factories import garbled_jpeg
+
+    good = write_image(tmp_path / "a.jpg", 120, 90, seed=1)
+    (tmp_path / "grey.jpg").write_bytes(garbled_jpeg())  # OpenCV decodes it mostly grey without an error
+    photos = PhotoBackgrounds([tmp_path / "grey.jpg", good], 64, 48, seed=0)
+    assert {photos.background(v)[2]["photo"] for v in range(4)} == {good.as_posix()}
+    assert list(photos.problems) == [str(tmp_path / "grey.jpg")]
+    assert "corrupt JPEG data" in photos.problems[str(tmp_path / "grey.jpg")]
+
+
 def test_photo_fingerprints_name_and_hash_each_photo(tmp_path: Path) -> None:
     from synth.photos import photo_fingerprints
 
