@@ -94,8 +94,18 @@ def test_header_errors(tmp_path):
     with pytest.raises(ImageError, match="empty file"):
         image_size(tmp_path / "zero.png")
     (tmp_path / "junk.png").write_bytes(b"\x00" * 100)
-    with pytest.raises(ImageError, match="not a readable image"):
+    with pytest.raises(ImageError, match="not an image"):
         image_size(tmp_path / "junk.png")
+
+
+@pytest.mark.parametrize("content", [b"\x00" * 100, b"hello, not an image\n", b"GIF89a" + bytes(20)])
+def test_a_message_names_the_file_never_an_in_memory_buffer(tmp_path, content):
+    path = tmp_path / "photo.jpg"
+    path.write_bytes(content)
+    for read in (image_size, read_image, lambda p: decode_image(p.read_bytes(), p)):
+        with pytest.raises(ImageError) as info:
+            read(path)
+        assert str(info.value).startswith(f"{path}: ") and "BytesIO" not in str(info.value), str(info.value)
 
 
 def test_decode_bytes_matches_file(tmp_path):

@@ -81,7 +81,7 @@ def test_listing_skips_and_names_an_unreadable_file_in_a_folder_and_refuses_a_na
     assert list_panoramas([tmp_path], problems) == [good]
     assert sorted((Path(p.path).name, p.reason.split(" (")[0]) for p in problems) == [
         ("cut.jpg", "truncated JPEG"),
-        ("notes.png", "not a readable image"),
+        ("notes.png", "not an image"),
     ]
     with pytest.raises(ValueError, match="cut.jpg: truncated JPEG"):
         list_panoramas([tmp_path / "cut.jpg"])

@@ -44,6 +44,11 @@ _EXIF_ORIENTATION = 274
 _SWAPS_AXES = frozenset({5, 6, 7, 8})
 
 
+#: The reason of a file no decoder recognises (a text file named .jpg, an HTML error page saved as an image).
+NOT_AN_IMAGE = "not an image (no image format recognised in its bytes)"
+_BUFFER_REPR = re.compile(r"<_io\.BytesIO object at 0x[0-9a-fA-F]+>")
+
+
 class ImageError(Exception):
     """An image that cannot be used; ``str()`` is ``"<path>: <reason>"``."""
 
@@ -79,8 +84,10 @@ def header_size(data: bytes, path: Path | str = "<bytes>") -> tuple[int, int]:
                 orientation = _orientation(im)
     except Image.DecompressionBombError as exc:  # Pillow's own limit (2 x 89 MP), met before ours
         raise ImageError(path, f"over the {MAX_PIXELS / 1e6:g} MP decoding budget ({exc})") from None
-    except (UnidentifiedImageError, OSError, ValueError, SyntaxError) as exc:
-        raise ImageError(path, f"not a readable image ({exc.__class__.__name__}: {exc})") from None
+    except UnidentifiedImageError:  # its message names the in-memory buffer, not the file
+        raise ImageError(path, NOT_AN_IMAGE) from None
+    except (OSError, ValueError, SyntaxError) as exc:
+        raise ImageError(path, f"not a readable image ({exc.__class__.__name__}: {_without_buffer(exc)})") from None
     if width <= 0 or height <= 0:
         raise ImageError(path, f"invalid image size {width}x{height}")
     return (height, width) if orientation in _SWAPS_AXES else (width, height)
@@ -279,9 +286,15 @@ def _decode_with_pillow(data: bytes, path: Path | str) -> NDArray[np.uint8]:
                 im = ImageOps.exif_transpose(im)
                 arr = np.asarray(im.convert("RGB") if im.mode not in ("I;16", "I", "F") else im)
     except (UnidentifiedImageError, OSError, ValueError, SyntaxError) as exc:
-        reason = "not an image" if isinstance(exc, UnidentifiedImageError) else f"corrupt image ({exc})"
+        reason = NOT_AN_IMAGE if isinstance(exc, UnidentifiedImageError) else f"corrupt image ({_without_buffer(exc)})"
         raise ImageError(path, reason) from None
     return _to_rgb8(_to_uint8(arr), bgr=False)
+
+
+def _without_buffer(exc: Exception) -> str:
+    """``str(exc)`` without the ``<_io.BytesIO object at 0x...>`` a Pillow message may name (the error names the
+    file already)."""
+    return _BUFFER_REPR.sub("the file", str(exc))
 
 
 def unit_to_u8(values: NDArray[np.floating]) -> NDArray[np.uint8]:
