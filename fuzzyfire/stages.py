@@ -210,6 +210,8 @@ def synth_stage(root: Path, method: str, cfg: Any, base: Path, cutouts: Stage | 
         cfg = replace(cfg, backgrounds=tuple(_absolute(Path(p), base) for p in cfg.backgrounds))
     if getattr(cfg, "frames", ()):
         cfg = replace(cfg, frames=tuple(_absolute(Path(p), base) for p in cfg.frames))
+    if getattr(cfg, "backgrounds", ()) or getattr(cfg, "frames", ()):
+        by_path["photo_views"] = PHOTO_VIEWS  # each image on a photo its own crop: pools made before are other data
     places = _places(cfg, None)  # one scan of the places for both uses below
     if getattr(cfg, "stand", "anywhere") == "surfaces" and _renders_rooms(cfg, places):
         by_path["standing"] = STANDING  # rooms' flames on up-facing surfaces: pools made before were other data
@@ -278,6 +280,11 @@ STANDING = 1
 
 #: The version of the photo-site rules (:mod:`synth.sites`) in the identity of every pool with photos.
 PHOTO_SITES = 1
+
+#: The version of how a pool's images are shared out over its photos and frames, in the identity of every pool
+#: with backgrounds or frames: 1 = every image on a photo view has a photo view of its own, the photos used one by
+#: one (:meth:`synth.views.ViewCache.image_background`); pools made before put ``images_per_view`` images on each.
+PHOTO_VIEWS = 1
 
 
 def content_identity(cfg: Any, places: Places | None = None) -> dict[str, Any]:

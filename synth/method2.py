@@ -3,8 +3,8 @@ many times; each flame's box is the box of its final visible mask (after clippin
 restricted to the pixels whose contrast a person would notice (:mod:`synth.visibility`); a flame with too few
 such pixels is erased from the image (composited again without it), so no visible flame goes unboxed.
 
-Image ``i`` uses view ``i // images_per_view`` (see :mod:`synth.views`) and its own rng
-``default_rng([seed, 2, i])``, so any image can be (re)made alone: runs resume and are byte-reproducible.
+Image ``i`` uses view ``i // images_per_view`` (on a photo, a photo view of its own: see :mod:`synth.views`) and
+its own rng ``default_rng([seed, 2, i])``, so any image can be (re)made alone: runs resume and are byte-reproducible.
 Distractors (:mod:`synth.distractors`), decoy pastes (:mod:`synth.decoys`) and the flames' paste edges and looks
 (:mod:`synth.blend`) draw from a second rng, ``default_rng([seed, 2, i, 1])``: turning them on keeps the flames,
 views and camera effects of every image, and the default config draws nothing from it. Auto exposure draws from
@@ -69,7 +69,8 @@ class Method2Config:
     panorama_share: float = 0.5  # weight of panorama views (environments that are 2:1 images) beside photos and renders
     stand: Literal["surfaces", "anywhere"] = "surfaces"  # renders: flames stand on up-facing surfaces (floors, tables:
     # synth.standing), or anywhere in the lower 2/3 (pools made before this key)
-    images_per_view: int = 8  # images composited on each rendered view
+    images_per_view: int = 8  # images composited on each rendered or panorama view (each image on a photo or frame
+    # has a crop of its own: synth.views)
     max_flames: int = 3  # flames per image: uniform in 1..max_flames
     negatives: float = 0.1  # fraction of images without flames
     photo_negatives: float | None = None  # fraction of the images on a fire-free photo (``backgrounds``) without
@@ -490,7 +491,7 @@ def make_image(cfg: Method2Config, i: int, library: Sequence[SpriteSequence], vi
     None when smoke is not a class). A flame nobody could see is erased, not left unboxed
     (:func:`visible_composite`); a kept flame's mask and box are its seen part. Distractors and decoys are part of
     the scene (and of the plate the flames' visibility is measured against); they get no box."""
-    background, depth, view_meta = views.background(i // cfg.images_per_view)
+    background, depth, view_meta = views.image_background(i, cfg.images_per_view)
     swap_rng = np.random.default_rng([cfg.seed, 2, i, 4])
     swapped = swapped_boxes(cfg, view_meta, swap_rng)
     if swapped:  # the frame's fires erased; the flames drawn in their boxes are boxed by what is seen of them

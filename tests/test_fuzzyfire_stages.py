@@ -72,6 +72,7 @@ def test_synth_stage_resolves_environments_and_keeps_old_identities(tmp_path: Pa
     assert "streets" not in identity["config"] and "kits" not in identity["config"]  # nor kit streets while off
     assert identity["config"]["flame_look"] == FLAME_LOOK  # pools of older flames are not reused
     assert identity["config"]["standing"] == STANDING  # renders' flames on up-facing surfaces: new pools
+    assert "photo_views" not in identity["config"]  # a pool without photos keeps its identity
     anywhere, _ = synth_stage(tmp_path / "data", "method2", replace(cfg, stand="anywhere"), tmp_path)
     assert "standing" not in json.loads((anywhere.folder / "stage.json").read_text())["identity"]["config"]
     opaque, _ = synth_stage(tmp_path / "data", "method2", replace(cfg, flame_opacity=(0.9, 1.0)), tmp_path)
@@ -154,6 +155,21 @@ def test_pools_made_by_path_before_content_identities_are_still_found(tmp_path: 
     found, ref = synth_stage(tmp_path / "data", "method2", cfg, tmp_path)
     assert found.cached and found.folder == old.folder and ref.identity == {"kind": "method2", "hash": old.hash}
     assert older_flames.hash != old.hash  # a pool of the flames before FLAME_LOOK is other data
+
+
+def test_a_pool_on_photos_is_other_data_than_one_made_before_each_image_had_its_own_photo(tmp_path: Path) -> None:
+    from factories import write_image
+
+    from fuzzyfire.stages import PHOTO_VIEWS, synth_stage
+    from synth.library import FlameLibraryConfig
+    from synth.method2 import Method2Config
+
+    for k in range(2):
+        write_image(tmp_path / "photos" / f"p{k}.jpg", 80, 60, seed=k)
+    flames = FlameLibraryConfig(sequences=1, frames=60, keep_every=30)
+    cfg = Method2Config(n=2, width=64, height=48, scenes=0, backgrounds=(Path("photos"),), flames=flames)
+    stage, _ = synth_stage(tmp_path / "data", "method2", cfg, tmp_path)
+    assert json.loads((stage.folder / "stage.json").read_text())["identity"]["config"]["photo_views"] == PHOTO_VIEWS
 
 
 def _dataset_builder(n: int, seeds: list[int]):
