@@ -185,6 +185,8 @@ def generate(
     frames = load_frames(getattr(cfg, "frames", ()), unreadable)  # labelled frames: photos keeping their fire boxes
     for problem in places.problems:  # unreadable files among the places and frames: named, never composited on
         print(f"{problem.path}: skipped background ({problem.reason})", file=sys.stderr)
+    if places.panorama_note():
+        print(places.panorama_note(), file=sys.stderr)
     for problem in unreadable:
         print(problem, file=sys.stderr)
     known = set(photo_files)

@@ -140,13 +140,13 @@ def panorama_size(path: Path) -> tuple[int, int]:
     return image_size(path)
 
 
-def is_panorama(path: Path | str) -> bool:
-    """Whether ``path`` is an equirectangular panorama: a panorama suffix and aspect 2:1 (±1 %); ImageError when
-    its header cannot be read."""
+def is_panorama(path: Path | str, min_width: int = 0) -> bool:
+    """Whether ``path`` is an equirectangular panorama: a panorama suffix, aspect 2:1 (±1 %) and at least
+    ``min_width`` pixels wide; ImageError when its header cannot be read."""
     if Path(path).suffix.lower() not in PANORAMA_SUFFIXES:
         return False
     w, h = panorama_size(Path(path))
-    return abs(w / h - 2.0) <= 0.02
+    return abs(w / h - 2.0) <= 0.02 and w >= min_width
 
 
 def readable_panorama(path: Path, problems: list[Problem] | None) -> bool:

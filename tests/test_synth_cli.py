@@ -122,6 +122,24 @@ def test_method2_on_photographs(tmp_path, capsys):
     assert json.loads(capsys.readouterr().out)["mean_iou"] == 1.0
 
 
+def test_method2_says_which_backgrounds_it_took_for_panoramas_and_keeps_small_2_to_1_photos(tmp_path, capsys):
+    import cv2
+    import numpy as np
+    from factories import write_image
+
+    for k in range(2):
+        write_image(tmp_path / "photos" / f"p{k}.jpg", 200, 150, seed=k)
+    write_image(tmp_path / "photos" / "conference.jpg", 450, 225, seed=5)  # a wide photo, 2:1 by chance
+    pano = np.random.default_rng(0).integers(0, 255, (512, 1024, 3), dtype=np.uint8)
+    cv2.imwrite(str(tmp_path / "photos" / "plaza360.jpg"), pano)
+    out = tmp_path / "m2"
+    args = ["synth", "method2", "--n", "4", "--out", str(out), "--size", "96x64", "--flames", str(_flames(tmp_path))]
+    capsys.readouterr()
+    assert main([*args, "--backgrounds", str(tmp_path / "photos")]) == 0
+    note = "took 1 of 4 backgrounds as 360° panoramas (2:1, >= 1024 px wide): plaza360.jpg"
+    assert note in capsys.readouterr().err.splitlines()
+
+
 def test_method2_feathers_a_users_cutouts_on_photographs(tmp_path, capsys):
     """--cutout-feather with a synth cutouts folder: pasted flames fade where their box cut them, boxes stay exact."""
     import numpy as np

@@ -122,7 +122,7 @@ def test_a_held_out_share_of_photos_is_chosen_by_content(tmp_path: Path) -> None
     assert [f["name"] for f in photo_fingerprints([tmp_path / "a"], 0.25)] == [p.name for p in kept]
     with pytest.raises(ValueError, match="held out"):
         pool_photos([tmp_path / "a"], 0.9999999)
-    pano = np.full((32, 64, 3), 90, np.uint8)  # a folder of panoramas holds no photos, and that is no error
+    pano = np.full((512, 1024, 3), 90, np.uint8)  # a folder of panoramas holds no photos, and that is no error
     import cv2
 
     (tmp_path / "p").mkdir()
