@@ -102,3 +102,12 @@ def test_dedup_calibrate_records_threshold(folder: Path, tmp_path: Path, capsys)
     doc = json.loads((tmp_path / "c" / "dedup.json").read_text())
     assert doc["threshold"] == doc["calibration"]["threshold"] and doc["calibration"]["images"] == 9
     assert "calibrated threshold" in capsys.readouterr().out
+
+
+def test_leakage_hints_at_the_json_file_that_holds_every_pair(folder: Path, tmp_path: Path, capsys) -> None:
+    assert main(["leakage", str(folder), str(folder / "sub"), "--show", "1"]) == 1  # pairs found: exit 1
+    out = capsys.readouterr().out
+    assert "more (--json FILE writes every pair)" in out and "use --json" not in out
+    assert main(["leakage", str(folder), str(folder / "sub"), "--show", "1", "--json", str(tmp_path / "l.json")]) == 1
+    assert f"more (see {tmp_path / 'l.json'})" in capsys.readouterr().out
+    assert len(json.loads((tmp_path / "l.json").read_text())["leaks"]) >= 2

@@ -147,7 +147,10 @@ def cmd_leakage(args: argparse.Namespace) -> int:
     for leak in leaks[: args.show]:
         print(f"{leak.kind} {leak.distance:.3f}  {leak.a}  {leak.b}")
     if len(leaks) > args.show:
-        print(f"... and {len(leaks) - args.show} more" + (f" (see {args.json})" if args.json else " (use --json)"))
+        print(
+            f"... and {len(leaks) - args.show} more"
+            + (f" (see {args.json})" if args.json else " (--json FILE writes every pair)")
+        )
     print(
         f"{summary['pairs']} duplicate pairs ({summary['exact_pairs']} exact): {summary['a_with_leak']} of "
         f"{summary['images_a']} images in A have a duplicate among the {summary['images_b']} in B "
