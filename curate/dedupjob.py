@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from curate.core.problems import Problem
 from curate.dedup import DEFAULT_THRESHOLD, DedupResult, find_duplicates
 from curate.embed import OnnxEmbedder
 from curate.embedcache import EmbeddingCache
@@ -29,6 +30,7 @@ APPLY_MODES: tuple[str, ...] = ("copy", "link")
 REPORT_GROUPS = 100  # groups shown in report.html
 REPORT_GROUP_IMAGES = 12  # images shown per group (its kept ones first), with the group's counts
 REPORT_TOP = 60  # top-ranked images shown
+UNREADABLE_SHOWN = 3  # unreadable files named in the summary line (all of them in dedup.json and report.html)
 
 
 @dataclass(frozen=True)
@@ -123,6 +125,16 @@ def dedup_document(run: DedupRun, opts: DedupOptions, inputs: Sequence[str]) -> 
     }
 
 
+def unreadable_summary(problems: Sequence[Problem], shown: int = UNREADABLE_SHOWN) -> str:
+    """``N unreadable`` with the first ``shown`` file names: ``2 unreadable (a.jpg, b.png)``, ``9 unreadable
+    (a.jpg, b.png, c.jpg and 6 more)``; the full list with reasons is in ``problems`` of dedup.json."""
+    if not problems:
+        return "0 unreadable"
+    names = ", ".join(Path(p.path).name for p in problems[:shown])
+    more = f" and {len(problems) - shown} more" if len(problems) > shown else ""
+    return f"{len(problems)} unreadable ({names}{more})"
+
+
 def write_outputs(run: DedupRun, doc: dict[str, Any], out: Path, json_name: str = "dedup.json") -> dict[str, Path]:
     """``dedup.json`` (or ``json_name``), ``distances.png``, ``report.html`` (+ ``thumbs/``) in ``out``."""
     out.mkdir(parents=True, exist_ok=True)
@@ -143,7 +155,7 @@ def write_outputs(run: DedupRun, doc: dict[str, Any], out: Path, json_name: str 
     c = doc["counts"]
     summary = [
         f"{c['images']} images: {c['kept']} kept, {c['removed_exact']} exact and {c['removed_near']} near duplicates "
-        f"removed, {c['unreadable']} unreadable",
+        f"removed, {unreadable_summary(run.scan.problems)}",
         f"threshold {doc['threshold']:.3f} on model {doc['model']}",
         f"keeper policy: {doc['keeper_policy']}",
     ]
@@ -156,6 +168,7 @@ def write_outputs(run: DedupRun, doc: dict[str, Any], out: Path, json_name: str 
         thumbs,
         files["histogram"].name,
         len(run.result.groups),
+        [(p.path, p.reason) for p in run.scan.problems],
     )
     return files
 

@@ -91,10 +91,11 @@ def write_html(
     thumbs: dict[str, str],
     histogram: str | None,
     total_groups: int | None = None,
+    unreadable: Sequence[tuple[str, str]] = (),
 ) -> Path:
     """The report page. ``groups``: the first groups (of ``total_groups``, default all shown), each with its
     heading and images, kept ones first; ``top``: ``(path, caption)`` best first; ``thumbs``: path ->
-    thumbnail (relative to the page)."""
+    thumbnail (relative to the page); ``unreadable``: ``(path, reason)`` of every file skipped, listed last."""
     parts = [f"<!doctype html><meta charset=utf-8><title>{html.escape(title)}</title><style>{_CSS}</style>"]
     parts.append(
         f"<h1>{html.escape(title)}</h1><ul>" + "".join(f"<li>{html.escape(s)}</li>" for s in summary) + "</ul>"
@@ -108,5 +109,8 @@ def write_html(
         parts.append(f'<div class="group"><p>{html.escape(heading)}</p>{figs}</div>')
     parts.append(f"<h2>Most diverse kept images, top {len(top)}</h2><div>")
     parts.append("".join(_figure(p, thumbs.get(p), c, True) for p, c in top) + "</div>")
+    if unreadable:
+        items = "".join(f"<li>{html.escape(p)}: {html.escape(r)}</li>" for p, r in unreadable)
+        parts.append(f"<h2>Unreadable files, skipped: {len(unreadable)}</h2><ul>{items}</ul>")
     path.write_text("\n".join(parts) + "\n", encoding="utf-8")
     return path

@@ -20,7 +20,7 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from curate.core.imageio import ImageError, decode_sized, is_image_file
+from curate.core.imageio import ImageError, check_complete, decode_sized, is_image_file
 from curate.core.problems import Problem
 from curate.core.progress import progress
 from curate.core.walk import walk_files
@@ -66,6 +66,20 @@ def list_image_files(inputs: Iterable[Path | str]) -> list[Path]:
     return sorted(found, key=lambda p: p.as_posix())
 
 
+def list_images_or_fail(inputs: Iterable[Path | str]) -> list[Path]:
+    """:func:`list_image_files`; ValueError naming ``inputs`` and the suffixes looked for when there are none."""
+    inputs = list(inputs)
+    paths = list_image_files(inputs)
+    if not paths:
+        from curate.core.imageio import IMAGE_SUFFIXES
+
+        raise ValueError(
+            f"no image files in {', '.join(map(str, inputs))} (looked for {' '.join(sorted(IMAGE_SUFFIXES))}, "
+            "in subfolders too)"
+        )
+    return paths
+
+
 def bounded_map(fn: Callable[[T], R], items: Sequence[T], pool: ThreadPoolExecutor, ahead: int) -> Iterator[R]:
     """``map(fn, items)`` on ``pool`` in input order, at most ``ahead`` results pending (bounded memory)."""
     pending: deque[Future[R]] = deque()
@@ -78,13 +92,19 @@ def bounded_map(fn: Callable[[T], R], items: Sequence[T], pool: ThreadPoolExecut
 
 
 def file_sha256(path: Path) -> tuple[int, str] | Problem:
-    """``(bytes, sha256 hex)`` of a file, or a Problem when it cannot be read."""
+    """``(bytes, sha256 hex)`` of a file, or a Problem when it cannot be read or its bytes are truncated or
+    garbled (:func:`~curate.core.imageio.check_complete`: checked here too, so a file cached by a reader that
+    did not check it is not taken from the cache)."""
     try:
         data = path.read_bytes()
     except OSError as exc:
         return Problem(path.as_posix(), f"cannot read ({exc.strerror or exc})")
     if not data:
         return Problem(path.as_posix(), "empty file (0 bytes)")
+    try:
+        check_complete(data, path)
+    except ImageError as exc:
+        return Problem(path.as_posix(), exc.reason)
     return len(data), hashlib.sha256(data).hexdigest()
 
 
@@ -157,6 +177,7 @@ def scan_images(
     dim = next(iter(vectors.values())).shape[0] if vectors else 0
     matrix = np.stack([vectors[im.facts.sha256] for im in images]) if images else np.zeros((0, dim), np.float32)
     half = matrix.shape[1] // 2  # cached rows hold [whole view, centre view]
+    problems.sort(key=lambda p: p.path)
     return ScanResult(
         images, l2_normalize(matrix[:, :half]), l2_normalize(matrix[:, half:]), problems, embedder.model_id, cached
     )

@@ -35,11 +35,12 @@ class MergeConfig:
 
 
 def read_source(src: SourceConfig, base: Path) -> tuple[Dataset, list[Problem]]:
-    """Read one source (paths relative to ``base``), drop its ``drop_classes``."""
+    """Read one source (paths relative to ``base``), check its ``aliases`` name its classes, drop its
+    ``drop_classes``."""
     path = src.path if src.path.is_absolute() else base / src.path
     tag = f"real:{src.name}" if src.name else None
     result = read_dataset(path, src.format, names=src.names, source=tag, aliases=src.aliases)
-    result = result.drop_classes(src.drop_classes, option="drop_classes")
+    result = result.check_aliases(src.aliases, option="aliases").drop_classes(src.drop_classes, option="drop_classes")
     return result.dataset, result.problems
 
 

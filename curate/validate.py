@@ -44,4 +44,5 @@ def validate(
     if decode:
         problems += decode_problems(result.dataset)
     order = {level: i for i, level in enumerate(LEVELS)}
-    return ReadResult(result.dataset, sorted(problems, key=lambda p: order[p.level]), result.unlabelled)
+    problems.sort(key=lambda p: order[p.level])
+    return ReadResult(result.dataset, problems, result.unlabelled, result.source_classes)

@@ -14,25 +14,33 @@ from collections.abc import Iterable, Sequence
 from pathlib import Path
 from typing import Any
 
+from curate.core.problems import Problem
+
 #: A box [x, y, w, h] in pixels of the image it is in.
 Box = tuple[float, float, float, float]
 
 #: The class whose boxes a frame keeps.
 FIRE = "fire"
 
+UNREADABLE = "unreadable image"  # how every dataset reader's problem for an image it skipped begins
 MIN_KEPT = 0.2  # share of a frame box's area a crop must keep for the box to stay a label
 MIN_SIDE_PX = 2.0  # pixels of each side of a kept box, in the output image
 
 
-def load_frames(paths: Iterable[Path | str]) -> dict[Path, tuple[Box, ...]]:
+def load_frames(paths: Iterable[Path | str], problems: list[Problem] | None = None) -> dict[Path, tuple[Box, ...]]:
     """Every image of the labelled datasets at ``paths`` (any format the toolkit reads, every split) and its
     ``fire`` boxes [x, y, w, h] px (other classes dropped; an image without fire boxes is a frame too, with
-    none), in the datasets' order; ValueError when a dataset has no images."""
-    from curate.core.load import load_split
+    none), in the datasets' order; ValueError when a dataset has no images. The images the reader skipped as
+    unreadable are appended to ``problems`` (when given), as the reader names them."""
+    from curate.core.formats.registry import read_dataset
+    from curate.core.load import prepare
 
     out: dict[Path, tuple[Box, ...]] = {}
     for path in paths:
-        ds = load_split(path, classes=[FIRE])
+        result = read_dataset(path)
+        if problems is not None:
+            problems += [p for p in result.problems if p.reason.startswith(UNREADABLE)]
+        ds = prepare(result.dataset, None, [FIRE], where=path)
         boxes = ds.annotations_by_image()
         for img in ds.images:
             out[ds.image_path(img)] = tuple(tuple(float(v) for v in a.bbox) for a in boxes[img.id])  # type: ignore[misc]

@@ -174,7 +174,14 @@ def generate(
         raise ValueError(f"{places.panoramas[0]}: a panorama is a Method 2 place (Method 1 needs 3D meshes)")
     files = find_environment_files(places.meshes) if places.meshes else []
     photo_files = keep_in_pool(places.photos, getattr(cfg, "background_holdout", 0.0))
-    frames = load_frames(getattr(cfg, "frames", ()))  # labelled frames: photos that keep their fire boxes
+    unreadable: list = []
+    frames = load_frames(getattr(cfg, "frames", ()), unreadable)  # labelled frames: photos keeping their fire boxes
+    for problem in places.problems:  # unreadable files among the places and frames: named, never composited on
+        print(f"{problem.path}: skipped background ({problem.reason})", file=sys.stderr)
+    if places.panorama_note():
+        print(places.panorama_note(), file=sys.stderr)
+    for problem in unreadable:
+        print(problem, file=sys.stderr)
     known = set(photo_files)
     photo_files += [p for p in frames if p not in known]
     args = {**to_json(cfg), "flame_sequences": [s.name for s in library]}

@@ -3,8 +3,8 @@ many times; each flame's box is the box of its final visible mask (after clippin
 restricted to the pixels whose contrast a person would notice (:mod:`synth.visibility`); a flame with too few
 such pixels is erased from the image (composited again without it), so no visible flame goes unboxed.
 
-Image ``i`` uses view ``i // images_per_view`` (see :mod:`synth.views`) and its own rng
-``default_rng([seed, 2, i])``, so any image can be (re)made alone: runs resume and are byte-reproducible.
+Image ``i`` uses view ``i // images_per_view`` (on a photo, a photo view of its own: see :mod:`synth.views`) and
+its own rng ``default_rng([seed, 2, i])``, so any image can be (re)made alone: runs resume and are byte-reproducible.
 Auto exposure draws from ``default_rng([seed, 2, i, 2])`` (:func:`metering`).
 """
 
@@ -56,7 +56,8 @@ class Method2Config:
     photo_share: float = 0.5  # share of views on a photo (or frame) when 3D scenes are also used, 0..1
     background_holdout: float = 0.0  # share of the photos (by content hash) never composited on: test data, [0, 1)
     panorama_share: float = 0.5  # weight of panorama views beside photos and renders, 0..1
-    images_per_view: int = 8  # images composited on each rendered view (render once, composite many times), >= 1
+    images_per_view: int = 8  # images composited on each rendered or panorama view (render once, composite many
+    # times), >= 1; each image on a photo or frame has a crop of its own (synth.views)
     max_flames: int = 3  # flames per image: uniform in 1..max_flames, >= 1
     negatives: float = 0.1  # fraction of images without flames, 0..1
     photo_negatives: float | None = None  # fraction of the images on a fire-free photo (``backgrounds``) without
@@ -266,7 +267,7 @@ def make_image(cfg: Method2Config, i: int, library: Sequence[SpriteSequence], vi
     """Image ``i``: ((H, W, 3) uint8, kept fire masks, record dict (boxes xywh, metadata), kept smoke masks or
     None when smoke is not a class). A flame nobody could see is erased, not left unboxed
     (:func:`visible_composite`); a kept flame's mask and box are its seen part."""
-    background, depth, view_meta = views.background(i // cfg.images_per_view)
+    background, depth, view_meta = views.image_background(i, cfg.images_per_view)
     rng = np.random.default_rng([cfg.seed, 2, i])
     avoid = kept_clear(view_meta) if view_meta.get("site") else None
     yfov = view_meta["camera"]["yfov"]

@@ -31,6 +31,7 @@ from numpy.typing import NDArray
 
 from curate.core.config import ConfigError, build_config
 from curate.core.imageio import MAX_PIXELS, ImageError, image_size, read_image
+from curate.core.problems import Problem
 from curate.core.walk import walk_files
 from synth import render
 from synth.light import REC709
@@ -139,25 +140,47 @@ def panorama_size(path: Path) -> tuple[int, int]:
     return image_size(path)
 
 
-def is_panorama(path: Path | str) -> bool:
-    """Whether ``path`` is an equirectangular panorama: a panorama suffix and aspect 2:1 (±1 %)."""
+def is_panorama(path: Path | str, min_width: int = 0) -> bool:
+    """Whether ``path`` is an equirectangular panorama: a panorama suffix, aspect 2:1 (±1 %) and at least
+    ``min_width`` pixels wide; ImageError when its header cannot be read."""
     if Path(path).suffix.lower() not in PANORAMA_SUFFIXES:
         return False
     w, h = panorama_size(Path(path))
-    return abs(w / h - 2.0) <= 0.02
+    return abs(w / h - 2.0) <= 0.02 and w >= min_width
 
 
-def list_panoramas(paths: Iterable[Path | str]) -> list[Path]:
-    """Panoramas under ``paths`` (files, or folders searched recursively where other images are skipped), sorted;
-    a file given by name that is not a panorama is a ValueError."""
+def readable_panorama(path: Path, problems: list[Problem] | None) -> bool:
+    """:func:`is_panorama`, False for a file whose header cannot be read (appended to ``problems`` when given:
+    path and reason)."""
+    try:
+        return is_panorama(path)
+    except ImageError as exc:
+        if problems is not None:
+            problems.append(Problem(str(path), exc.reason))
+        return False
+
+
+def named_panorama(path: Path | str) -> bool:
+    """:func:`is_panorama` of a file the user named: one that cannot be read is a ValueError naming it."""
+    try:
+        return is_panorama(path)
+    except ImageError as exc:
+        raise ValueError(str(exc)) from None
+
+
+def list_panoramas(paths: Iterable[Path | str], problems: list[Problem] | None = None) -> list[Path]:
+    """Panoramas under ``paths`` (files, or folders searched recursively where other images are skipped), sorted.
+    A file in a folder whose header cannot be read is skipped and appended to ``problems`` (when given); a file
+    given by name that cannot be read or is not a panorama is a ValueError naming it."""
     paths, found = list(paths), set()
     for item in paths:
         path = Path(item).absolute()
         if path.is_dir():
-            found.update(p for p in walk_files(path, lambda n: n.lower().endswith(PANORAMA_SUFFIXES)) if is_panorama(p))
+            files = walk_files(path, lambda n: n.lower().endswith(PANORAMA_SUFFIXES))
+            found.update(p for p in files if readable_panorama(p, problems))
         elif not path.is_file():
             raise FileNotFoundError(f"{item}: no such file or folder")
-        elif is_panorama(path):
+        elif named_panorama(path):
             found.add(path)
         else:
             raise ValueError(f"{item}: not an equirectangular panorama (a 2:1 {'/'.join(PANORAMA_SUFFIXES)} image)")

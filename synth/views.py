@@ -1,5 +1,9 @@
 """Camera views of the procedural environments, shared by Method 1 and Method 2.
 
+Image ``i`` of a run with ``images_per_view`` images per view is on view ``i // images_per_view``; when that
+view's kind (:func:`synth.places.kind_of_view`) is a photo, the image gets a photo background of its own
+(:meth:`ViewCache.image_background`), so the images on photos use the photos one by one.
+
 View ``v`` of a run seeded ``seed`` looks at environment ``v % scenes`` when all environments are procedural.
 With mesh files (first, then the procedural environments) the ``views`` views of a run go to the environments in
 equal consecutive blocks (``v * environments // views``), so each file scene is loaded, searched and kept in
@@ -82,6 +86,7 @@ class ViewCache:
         self._view: View | None = None
         self._view_index = -1
         self._background: tuple[int, Any] | None = None
+        self._photo_views = [0]  # _photo_views[v]: how many of views 0..v-1 show a photo (grown on demand)
 
     def environment_index(self, view_index: int) -> int:
         """The environment view ``view_index`` looks at (module docstring)."""
@@ -127,6 +132,34 @@ class ViewCache:
         """(H, W) bool where a flame may stand in a render of ``env`` seen from ``pose``: a room's up-facing
         surfaces with ``surfaces``; None: anywhere (the method's own rule)."""
         return standing_mask(depth, pose, yfov) if self.surfaces else None
+
+    def image_background(self, image_index: int, per_view: int) -> tuple[NDArray[np.uint8], NDArray[np.float32], dict]:
+        """The background of image ``image_index`` of a run with ``per_view`` images per view: that of its view
+        ``image_index // per_view`` (:meth:`background`), except on a photo view, where every image has a photo
+        view of its own, photo background :meth:`photo_index` (a crop is cheap, unlike a render): the images on
+        photos go through the photos' order one by one, so a photo folder is used whole before any photo repeats.
+        Depends only on (seed, kinds, ``image_index``, ``per_view``): the same in any process."""
+        view = image_index // per_view
+        kind = kind_of_view(self.seed, view, self.weights)
+        if kind != "photo":
+            return self.background(view)
+        made = self.photos.background(self.photo_index(image_index, per_view))  # type: ignore[union-attr]
+        if len(self.weights) > 1:
+            made[2]["kind"] = kind
+        return made
+
+    def photo_index(self, image_index: int, per_view: int) -> int:
+        """The rank of image ``image_index`` (on a photo view) among the run's images on photo views: every image
+        of the photo views before its view, then its place in its own view."""
+        view = image_index // per_view
+        if len(self.weights) > 1:
+            while len(self._photo_views) <= view:
+                v = len(self._photo_views) - 1
+                self._photo_views.append(self._photo_views[v] + (kind_of_view(self.seed, v, self.weights) == "photo"))
+            before = self._photo_views[view]
+        else:  # photos only: every view before is a photo view
+            before = view
+        return before * per_view + image_index - view * per_view
 
     def background(self, view_index: int) -> tuple[NDArray[np.uint8], NDArray[np.float32], dict]:
         """The background of view ``view_index``: ((H, W, 3) uint8 RGB, (H, W) float32 depth, metadata with its

@@ -34,6 +34,27 @@ def jpeg_bytes(width: int, height: int, seed: int = 0, orientation: int | None =
     return buf.getvalue()
 
 
+def smooth_jpeg(width: int, height: int, seed: int = 0, **save: object) -> bytes:
+    """A JPEG of a smooth random image (a photo's statistics more than noise's); ``save``: Pillow JPEG options."""
+    rng = np.random.default_rng(seed)
+    small = rng.integers(0, 256, size=(max(height // 16, 2), max(width // 16, 2), 3), dtype=np.uint8)
+    buf = io.BytesIO()
+    Image.fromarray(small).resize((width, height), Image.BICUBIC).save(buf, "JPEG", quality=90, **save)
+    return buf.getvalue()
+
+
+def garbled_jpeg(width: int = 160, height: int = 120, seed: int = 0) -> bytes:
+    """:func:`smooth_jpeg` with 64 bytes of its scan data, a third of the way in, overwritten by garbage that holds
+    a marker (as a bad disk sector or network copy leaves it): libjpeg warns "Corrupt JPEG data: premature end of
+    data segment" and OpenCV decodes the rest of the image as flat grey; the end-of-image marker is intact."""
+    data = bytearray(smooth_jpeg(width, height, seed))
+    scan = data.index(b"\xff\xda")
+    at = scan + (len(data) - scan) // 3
+    garbage = np.random.default_rng(seed).integers(0, 256, 64, dtype=np.uint8).tobytes()
+    data[at : at + 64] = garbage[:20] + b"\xff\xd5" + garbage[22:]  # RST5 in a JPEG without restart markers
+    return bytes(data)
+
+
 def write_yolo_dataset(root: Path, names: tuple[str, ...] = ("fire", "smoke")) -> dict[str, list[list[float]]]:
     """A Roboflow-style YOLO folder (train/valid, data.yaml) with known rows; returns label rows per stem."""
     rows = {

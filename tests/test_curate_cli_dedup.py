@@ -56,7 +56,30 @@ def test_dedup_writes_json_report_and_histogram(folder: Path, tmp_path: Path, ca
     assert html.count("<p>2 images: 1 kept, 1 removed</p>") == 3  # each group's counts above its images
     assert len(list((tmp_path / "kept").rglob("*.*"))) == 3
     assert _snapshot(folder) == before  # originals never modified
-    assert "bad.jpg" in capsys.readouterr().err
+    out_text, err = capsys.readouterr()
+    assert "bad.jpg" in err and "<_io.BytesIO" not in err
+    assert "1 unreadable (bad.jpg)" in out_text  # the summary names the file, not only the count
+    assert "Unreadable files, skipped: 1" in html and f"{folder / 'bad.jpg'}: truncated JPEG" in html
+
+
+def test_dedup_of_a_folder_without_readable_images_is_an_input_error(tmp_path: Path, capsys) -> None:
+    (tmp_path / "empty").mkdir()
+    (tmp_path / "notes").mkdir()
+    (tmp_path / "notes" / "readme.txt").write_text("no images here")
+    (tmp_path / "broken").mkdir()
+    (tmp_path / "broken" / "a.jpg").write_bytes(b"\xff\xd8\xff\xe0 garbage")
+    for name, message in [
+        ("empty", "no image files in"),
+        ("notes", "no image files in"),
+        ("broken", "none of the 1 image files in"),
+    ]:
+        assert main(["dedup", str(tmp_path / name), "--out", str(tmp_path / f"out-{name}")]) == 2
+        err = capsys.readouterr().err
+        assert f"error: {message} {tmp_path / name}" in err, err
+        assert not (tmp_path / f"out-{name}").exists()
+    capsys.readouterr()
+    assert main(["leakage", str(tmp_path / "empty"), str(tmp_path / "notes")]) == 2
+    assert "error: no image files in" in capsys.readouterr().err
 
 
 def test_dedup_refuses_bad_arguments(folder: Path, tmp_path: Path, capsys) -> None:
@@ -79,3 +102,12 @@ def test_dedup_calibrate_records_threshold(folder: Path, tmp_path: Path, capsys)
     doc = json.loads((tmp_path / "c" / "dedup.json").read_text())
     assert doc["threshold"] == doc["calibration"]["threshold"] and doc["calibration"]["images"] == 9
     assert "calibrated threshold" in capsys.readouterr().out
+
+
+def test_leakage_hints_at_the_json_file_that_holds_every_pair(folder: Path, tmp_path: Path, capsys) -> None:
+    assert main(["leakage", str(folder), str(folder / "sub"), "--show", "1"]) == 1  # pairs found: exit 1
+    out = capsys.readouterr().out
+    assert "more (--json FILE writes every pair)" in out and "use --json" not in out
+    assert main(["leakage", str(folder), str(folder / "sub"), "--show", "1", "--json", str(tmp_path / "l.json")]) == 1
+    assert f"more (see {tmp_path / 'l.json'})" in capsys.readouterr().out
+    assert len(json.loads((tmp_path / "l.json").read_text())["leaks"]) >= 2

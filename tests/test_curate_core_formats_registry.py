@@ -42,6 +42,20 @@ def test_drop_classes_silences_their_unknown_class_warning(tmp_path):
     assert result.drop_classes([]) is result and result.dataset.category_names == ["fire", "default"]
 
 
+def test_aliases_must_name_a_class_of_the_source_in_any_spelling(tmp_path):
+    from curate.core.names import UnknownNameError
+
+    write_yolo_dataset(tmp_path / "ds", names=("Flame_Big", "Default"))
+    result = read_dataset(tmp_path / "ds", aliases={"flame big": "fire"})
+    assert result.source_classes == ("Flame_Big", "Default") and "fire" in result.dataset.category_names
+    assert result.check_aliases({"flame big": "fire", "DEFAULT": "smoke"}) is result and result.check_aliases(None)
+    with pytest.raises(UnknownNameError, match=r"--alias 'Flames': no such class \(classes: 'Flame_Big', 'Default'\)"):
+        result.check_aliases({"Flames": "fire"})
+    with pytest.raises(UnknownNameError, match=r"aliases 'smok'"):
+        result.check_aliases({"smok": "smoke"}, option="aliases")
+    assert result.drop_classes(["default"]).source_classes == result.source_classes
+
+
 def test_drop_classes_takes_comma_lists_and_refuses_names_that_match_nothing(tmp_path):
     from curate.core.names import UnknownNameError
 

@@ -1,6 +1,6 @@
 import numpy as np
 import pytest
-from factories import jpeg_bytes, write_image
+from factories import garbled_jpeg, jpeg_bytes, smooth_jpeg, write_image
 from PIL import Image
 
 from curate.core.imageio import ImageError, decode_image, image_size, read_image
@@ -94,8 +94,18 @@ def test_header_errors(tmp_path):
     with pytest.raises(ImageError, match="empty file"):
         image_size(tmp_path / "zero.png")
     (tmp_path / "junk.png").write_bytes(b"\x00" * 100)
-    with pytest.raises(ImageError, match="not a readable image"):
+    with pytest.raises(ImageError, match="not an image"):
         image_size(tmp_path / "junk.png")
+
+
+@pytest.mark.parametrize("content", [b"\x00" * 100, b"hello, not an image\n", b"GIF89a" + bytes(20)])
+def test_a_message_names_the_file_never_an_in_memory_buffer(tmp_path, content):
+    path = tmp_path / "photo.jpg"
+    path.write_bytes(content)
+    for read in (image_size, read_image, lambda p: decode_image(p.read_bytes(), p)):
+        with pytest.raises(ImageError) as info:
+            read(path)
+        assert str(info.value).startswith(f"{path}: ") and "BytesIO" not in str(info.value), str(info.value)
 
 
 def test_decode_bytes_matches_file(tmp_path):
@@ -129,6 +139,40 @@ def test_end_marker_before_the_scan_does_not_make_a_truncated_jpeg_complete(tmp_
         decode_image(spliced[: len(spliced) * 2 // 3], "cut.jpg")
     with pytest.raises(ImageError, match="ends inside its headers"):
         decode_image(spliced[:40], "cut.jpg")
+
+
+def test_garbled_scan_data_is_refused_naming_the_file_where_opencv_decodes_grey(tmp_path):
+    import cv2
+
+    data = garbled_jpeg()
+    grey = cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_COLOR)  # what the user got: no error, grey
+    assert grey is not None and (np.abs(grey.astype(int) - 128).max(axis=2) <= 1).mean() > 0.3
+    path = tmp_path / "garbled.jpg"
+    path.write_bytes(data)
+    for read in (read_image, image_size, lambda p: decode_image(p.read_bytes(), p, min_side=16)):
+        with pytest.raises(ImageError, match="corrupt JPEG data") as info:
+            read(path)
+        assert info.value.path == str(path) and "restart marker RST5" in info.value.reason
+
+
+def test_progressive_and_restart_coded_jpegs_read_and_a_restart_out_of_sequence_is_refused(tmp_path):
+    import cv2
+
+    rng = np.random.default_rng(0)
+    bgr = cv2.resize(rng.integers(0, 256, (12, 16, 3), dtype=np.uint8), (160, 120), interpolation=cv2.INTER_CUBIC)
+    files = {
+        "progressive": smooth_jpeg(160, 120, progressive=True),
+        "restarts": cv2.imencode(".jpg", bgr, [cv2.IMWRITE_JPEG_RST_INTERVAL, 2])[1].tobytes(),
+        "both": cv2.imencode(".jpg", bgr, [cv2.IMWRITE_JPEG_PROGRESSIVE, 1, cv2.IMWRITE_JPEG_RST_INTERVAL, 1])[1],
+        "grey": cv2.imencode(".jpg", bgr[:, :, 0], [cv2.IMWRITE_JPEG_PROGRESSIVE, 1])[1].tobytes(),
+    }
+    for name, data in files.items():
+        assert decode_image(bytes(data), name).shape == (120, 160, 3)
+    data = bytearray(files["restarts"])
+    rst = data.index(b"\xff\xd3")  # RST3 -> RST6: the decoder resyncs and shifts the blocks after it
+    data[rst + 1] = 0xD6
+    with pytest.raises(ImageError, match=r"restart marker RST6 at byte \d+: RST3 expected"):
+        decode_image(bytes(data), "resync.jpg")
 
 
 def test_reduced_decoding_keeps_min_side_and_reports_the_full_size(tmp_path):

@@ -52,6 +52,14 @@ def test_prepare_is_load_split_on_a_dataset_already_read(split_folder: Path) -> 
         prepare(ds.filter_images(lambda img: False), None, where="nowhere")
 
 
+def test_an_alias_the_data_lacks_is_named(split_folder: Path) -> None:
+    from curate.core.names import UnknownNameError
+
+    assert load_split(split_folder, aliases={"Smoke": "fire"}).category_names == ["fire"]
+    with pytest.raises(UnknownNameError, match=r"aliases 'flames': no such class \(classes: 'fire', 'smoke'\)"):
+        load_split(split_folder, aliases={"flames": "fire"})
+
+
 def test_a_drop_class_the_data_lacks_and_a_split_of_an_unsplit_set_are_named(split_folder: Path) -> None:
     from curate.core.load import prepare
     from curate.core.names import UnknownNameError

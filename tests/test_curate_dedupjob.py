@@ -7,7 +7,8 @@ from pathlib import Path
 import pytest
 from curate_helpers import save, scene, transformed, use_session_cache
 
-from curate.dedupjob import DedupOptions, apply_selection, dedup_document, run_dedup
+from curate.core.problems import Problem
+from curate.dedupjob import DedupOptions, apply_selection, dedup_document, run_dedup, unreadable_summary
 from curate.embed import load_embedder
 from curate.scan import list_image_files
 
@@ -59,3 +60,10 @@ def test_a_report_group_shows_its_kept_images_first_and_its_totals() -> None:
     heading, shown = _report_group(big, {i: "near" for i in big if i % 40})
     assert heading == "128 images: 4 kept, 124 removed (showing 12 of 128)"
     assert shown[:4] == [0, 40, 80, 120] and len(shown) == REPORT_GROUP_IMAGES
+
+
+def test_the_summary_names_the_first_unreadable_files_and_counts_the_rest() -> None:
+    problems = [Problem(f"/data/x{k}.jpg", "truncated JPEG") for k in range(5)]
+    assert unreadable_summary(problems[:2]) == "2 unreadable (x0.jpg, x1.jpg)"
+    assert unreadable_summary(problems) == "5 unreadable (x0.jpg, x1.jpg, x2.jpg and 2 more)"
+    assert unreadable_summary([]) == "0 unreadable"

@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from curate_helpers import save, scene, use_session_cache
+from factories import garbled_jpeg
 
 from curate.embed import OnnxEmbedder, load_embedder
 from curate.embedcache import EmbeddingCache
@@ -27,6 +28,7 @@ def folder(tmp_path: Path) -> Path:
         save(scene(i), root / f"s{i}.jpg")
     save(scene(1), root / "nested" / "s1.png")  # same scene as s1.jpg, other encoding
     (root / "broken.jpg").write_bytes(b"\xff\xd8\xff\xe0 not really a jpeg")
+    (root / "garbled.jpg").write_bytes(garbled_jpeg())  # decodes grey in OpenCV, with only a warning on stderr
     (root / "empty.png").write_bytes(b"")
     (root / "notes.txt").write_text("not an image")
     return root
@@ -37,6 +39,7 @@ def test_scan_reports_bad_files_and_keeps_going(folder: Path, embedder: OnnxEmbe
     assert [p.name for p in paths] == [
         "broken.jpg",
         "empty.png",
+        "garbled.jpg",
         "s1.png",
         "s0.jpg",
         "s1.jpg",
@@ -47,7 +50,8 @@ def test_scan_reports_bad_files_and_keeps_going(folder: Path, embedder: OnnxEmbe
     before = {p: p.read_bytes() for p in paths}
     with EmbeddingCache(tmp_path / "c.sqlite") as cache:
         result = scan_images(paths, embedder, cache, batch_size=4)
-    assert sorted(Path(p.path).name for p in result.problems) == ["broken.jpg", "empty.png"]
+    assert sorted(Path(p.path).name for p in result.problems) == ["broken.jpg", "empty.png", "garbled.jpg"]
+    assert "corrupt JPEG data" in next(p.reason for p in result.problems if p.path.endswith("garbled.jpg"))
     assert [Path(im.path).name for im in result.images] == ["s1.png", "s0.jpg", "s1.jpg", "s2.jpg", "s3.jpg", "s4.jpg"]
     assert result.vectors.shape == result.crops.shape == (6, 320)
     np.testing.assert_allclose(np.linalg.norm(result.vectors, axis=1), 1.0, rtol=1e-5)
@@ -70,6 +74,24 @@ def test_rerun_hits_cache_with_identical_vectors(folder: Path, embedder: OnnxEmb
     assert [im.path for im in second.images] == [im.path for im in reversed(first.images)]
     np.testing.assert_array_equal(second.vectors, first.vectors[[index[im.path] for im in second.images]])
     np.testing.assert_array_equal(second.crops, first.crops[[index[im.path] for im in second.images]])
+
+
+def test_a_garbled_jpeg_cached_by_an_older_reader_is_still_refused(
+    folder: Path, embedder: OnnxEmbedder, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    import curate.core.imageio as imageio
+
+    paths = [folder / "garbled.jpg", folder / "s0.jpg"]
+    with monkeypatch.context() as older:  # a reader without the scan-data check caches the grey decode
+        older.setattr(imageio, "_check_scan_data", lambda *args: None)
+        with EmbeddingCache(tmp_path / "c.sqlite") as cache:
+            assert len(scan_images(paths, embedder, cache).images) == 2
+    with EmbeddingCache(tmp_path / "c.sqlite") as cache:
+        again = scan_images(paths, embedder, cache)
+    assert [Path(im.path).name for im in again.images] == ["s0.jpg"] and again.cached == 1
+    assert [(Path(p.path).name, p.reason.split(" (")[0]) for p in again.problems] == [
+        ("garbled.jpg", "corrupt JPEG data")
+    ]
 
 
 def test_pixel_hash_sees_pixels_not_bytes(tmp_path: Path) -> None:

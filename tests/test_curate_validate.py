@@ -31,6 +31,18 @@ def test_corrupt_body_found_only_by_full_decode(tmp_path):
     assert [p.path for p in problems if p.level == "error"] == [str(img)]
 
 
+def test_garbled_scan_data_is_an_error_naming_the_image(tmp_path):
+    from factories import garbled_jpeg
+
+    write_yolo_dataset(tmp_path / "ds")
+    img = tmp_path / "ds" / "train" / "images" / "b.jpg"
+    img.write_bytes(garbled_jpeg())  # OpenCV decodes it mostly grey, with only a libjpeg warning on stderr
+    result = validate(tmp_path / "ds")
+    errors = [p for p in result.problems if p.level == "error"]
+    assert [p.path for p in errors] == [str(img)] and "corrupt JPEG data" in errors[0].reason
+    assert "b.jpg" not in {im.file_name.rsplit("/", 1)[-1] for im in result.dataset.images}
+
+
 def test_clean_dataset_has_no_errors(tmp_path):
     write_yolo_dataset(tmp_path / "ds")
     problems = validate(tmp_path / "ds").problems

@@ -69,9 +69,9 @@ def _bad_images(folder: Path) -> dict[str, str]:
     (folder / "huge.png").write_bytes(_png_header_only(30_000, 30_000))
     (folder / "twin.png").write_bytes(good)  # same stem as twin.jpg: both would own twin.txt
     return {
-        "corrupt.jpg": "not a readable image",
+        "corrupt.jpg": "not an image",
         "empty.jpg": "empty file",
-        "text.png": "not a readable image",
+        "text.png": "not an image",
         "truncated.jpg": "truncated JPEG",
         "huge.png": "decoding budget",
         "twin.png": "duplicate file stem",

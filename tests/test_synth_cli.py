@@ -100,11 +100,17 @@ def test_method2_on_photographs(tmp_path, capsys):
 
     for k in range(3):
         write_image(tmp_path / "photos" / f"p{k}.jpg", 200, 150, seed=k)
+    whole = (tmp_path / "photos" / "p0.jpg").read_bytes()
+    (tmp_path / "photos" / "cut.jpg").write_bytes(whole[: len(whole) // 2])  # a truncated download
+    (tmp_path / "photos" / "notes.jpg").write_text("not an image\n")  # a text file named .jpg
     flames = ["synth", "flames", "--out", str(tmp_path / "fl"), "--n", "1", "--frames", "60", "--keep-every", "30"]
     assert main(flames) == 0
     out = tmp_path / "m2"
     args = ["synth", "method2", "--n", "6", "--out", str(out), "--size", "96x64"]
+    capsys.readouterr()
     assert main([*args, "--backgrounds", str(tmp_path / "photos"), "--flames", str(tmp_path / "fl")]) == 0
+    skipped = [line for line in capsys.readouterr().err.splitlines() if "skipped background" in line]
+    assert sorted(Path(line.split(": ")[0]).name for line in skipped) == ["cut.jpg", "notes.jpg"]
     manifest = json.loads((out / "manifest.json").read_text())
     assert manifest["args"]["scenes"] == 0  # the user's photos alone
     assert [Path(img["photo"]).name in {"p0.jpg", "p1.jpg", "p2.jpg"} for img in manifest["args"]["per_image"]] == [
@@ -230,3 +236,21 @@ def test_method2_auto_exposure_from_the_command_line(tmp_path):
     per_image = json.loads((out / "manifest.json").read_text())["args"]["per_image"]
     assert all(0.25 <= m["exposure_gain"] <= 1.0 for m in per_image if m["flames"])
     assert any(m["flames"] for m in per_image)
+
+
+def test_method2_says_which_backgrounds_it_took_for_panoramas_and_keeps_small_2_to_1_photos(tmp_path, capsys):
+    import cv2
+    import numpy as np
+    from factories import write_image
+
+    for k in range(2):
+        write_image(tmp_path / "photos" / f"p{k}.jpg", 200, 150, seed=k)
+    write_image(tmp_path / "photos" / "conference.jpg", 450, 225, seed=5)  # a wide photo, 2:1 by chance
+    pano = np.random.default_rng(0).integers(0, 255, (512, 1024, 3), dtype=np.uint8)
+    cv2.imwrite(str(tmp_path / "photos" / "plaza360.jpg"), pano)
+    out = tmp_path / "m2"
+    args = ["synth", "method2", "--n", "4", "--out", str(out), "--size", "96x64", "--flames", str(_flames(tmp_path))]
+    capsys.readouterr()
+    assert main([*args, "--backgrounds", str(tmp_path / "photos")]) == 0
+    note = "took 1 of 4 backgrounds as 360° panoramas (2:1, >= 1024 px wide): plaza360.jpg"
+    assert note in capsys.readouterr().err.splitlines()

@@ -20,6 +20,17 @@ def test_frames_keep_only_their_fire_boxes_in_pixels(tmp_path: Path) -> None:
     assert all(b[1:] == (50.0, 20.0, 30.0) for boxes in frames.values() for b in boxes)
 
 
+def test_an_unreadable_frame_is_skipped_and_named(tmp_path: Path) -> None:
+    root = write_frames(tmp_path)
+    broken = next(root.rglob("f1.png"))
+    broken.write_bytes(broken.read_bytes()[:200])  # a truncated PNG
+    problems: list = []
+    frames = load_frames([root], problems)
+    assert len(frames) == 2 and broken not in frames
+    assert [(Path(p.path).name, p.reason.split(":")[0]) for p in problems] == [("f1.png", "unreadable image")]
+    assert "truncated PNG" in problems[0].reason
+
+
 def test_a_frame_dataset_is_identified_by_content_not_by_place(tmp_path: Path) -> None:
     a = write_frames(tmp_path / "a")
     b = tmp_path / "b"

@@ -228,3 +228,22 @@ def _read(path: Path) -> np.ndarray:
     import cv2
 
     return cv2.cvtColor(cv2.imread(str(path)), cv2.COLOR_BGR2RGB)
+
+
+def test_n_images_on_at_least_n_photos_use_n_distinct_photos(tmp_path, library):
+    """Each image on a photo gets a photo of its own (a crop is cheap): 12 images on 14 photos show 12 photos,
+    though a rendered view carries 8 images; two processes write the same bytes as one."""
+    from dataclasses import replace
+
+    from factories import write_image
+
+    for k in range(14):
+        write_image(tmp_path / "photos" / f"p{k:02d}.jpg", 120, 90, seed=k)
+    cfg = replace(CFG, n=32, scenes=0, images_per_view=8, backgrounds=(tmp_path / "photos",))
+    one, two = tmp_path / "one", tmp_path / "two"
+    M.run_method2(cfg, library, one)
+    photos = [Path(m["photo"]).name for m in json.loads((one / "manifest.json").read_text())["args"]["per_image"]]
+    assert len(set(photos[:12])) == 12 and len(set(photos[:14])) == 14  # every photo before any repeats
+    assert photos[14:28] == photos[:14]
+    M.run_method2(cfg, library, two, workers=2)
+    assert _files(one) == _files(two)

@@ -73,6 +73,20 @@ def test_listing_finds_2_to_1_images_recursively_sorted_and_refuses_a_named_phot
         list_panoramas([folder / "photo.jpg"])
 
 
+def test_listing_skips_and_names_an_unreadable_file_in_a_folder_and_refuses_a_named_one(tmp_path: Path) -> None:
+    good = write_rgb(tmp_path / "good.jpg", equirect())
+    (tmp_path / "cut.jpg").write_bytes(good.read_bytes()[:2000])
+    (tmp_path / "notes.png").write_text("not a panorama\n")
+    problems: list = []
+    assert list_panoramas([tmp_path], problems) == [good]
+    assert sorted((Path(p.path).name, p.reason.split(" (")[0]) for p in problems) == [
+        ("cut.jpg", "truncated JPEG"),
+        ("notes.png", "not an image"),
+    ]
+    with pytest.raises(ValueError, match="cut.jpg: truncated JPEG"):
+        list_panoramas([tmp_path / "cut.jpg"])
+
+
 def test_the_horizon_row_is_where_the_pinhole_model_puts_it() -> None:
     w, h, yfov = 96, 80, np.radians(60)
     fy = render.intrinsics(yfov, w, h)[1, 1]

@@ -33,6 +33,17 @@ def test_broken_photos_are_skipped_and_named(tmp_path: Path) -> None:
         list_photos([tmp_path / "empty"])
 
 
+def test_a_photo_with_garbled_scan_data_is_skipped_and_named(tmp_path: Path) -> None:
+    from factories import garbled_jpeg
+
+    good = write_image(tmp_path / "a.jpg", 120, 90, seed=1)
+    (tmp_path / "grey.jpg").write_bytes(garbled_jpeg())  # OpenCV decodes it mostly grey without an error
+    photos = PhotoBackgrounds([tmp_path / "grey.jpg", good], 64, 48, seed=0)
+    assert {photos.background(v)[2]["photo"] for v in range(4)} == {good.as_posix()}
+    assert list(photos.problems) == [str(tmp_path / "grey.jpg")]
+    assert "corrupt JPEG data" in photos.problems[str(tmp_path / "grey.jpg")]
+
+
 def test_photo_fingerprints_name_and_hash_each_photo(tmp_path: Path) -> None:
     from synth.photos import photo_fingerprints
 
@@ -111,7 +122,7 @@ def test_a_held_out_share_of_photos_is_chosen_by_content(tmp_path: Path) -> None
     assert [f["name"] for f in photo_fingerprints([tmp_path / "a"], 0.25)] == [p.name for p in kept]
     with pytest.raises(ValueError, match="held out"):
         pool_photos([tmp_path / "a"], 0.9999999)
-    pano = np.full((32, 64, 3), 90, np.uint8)  # a folder of panoramas holds no photos, and that is no error
+    pano = np.full((512, 1024, 3), 90, np.uint8)  # a folder of panoramas holds no photos, and that is no error
     import cv2
 
     (tmp_path / "p").mkdir()

@@ -76,3 +76,29 @@ def test_surfaces_keep_only_up_facing_ground_and_views_that_show_some(renderer):
         assert np.all(depth[~stand] == 0) and np.any(depth[stand] > 0)  # flames may stand only on those pixels
     plain = ViewCache(0, 2, renderer).background(0)
     assert "site" not in plain[2] and plain[1].min() >= 0
+
+
+def _photos(folder, n: int):
+    from factories import write_image
+
+    from synth.photos import PhotoBackgrounds
+
+    paths = [write_image(folder / f"p{k:02d}.jpg", 80, 60, seed=k) for k in range(n)]
+    return PhotoBackgrounds(paths, 64, 48, seed=0)
+
+
+def test_each_image_on_photos_has_a_photo_of_its_own_until_every_photo_is_used(renderer, tmp_path):
+    """N images on P >= N photos show N distinct photos, however many images a rendered view carries; with renders
+    beside them, the images on photos go through every photo before any repeats."""
+    photos = _photos(tmp_path, 14)
+    only = ViewCache(0, 0, renderer, photos=photos)
+    shown = [only.image_background(i, 8)[2]["photo"] for i in range(12)]
+    assert len(set(shown)) == 12
+    assert [only.image_background(i, 8)[2]["photo"] for i in range(12)] == shown  # seeded, remade alike
+    mixed = ViewCache(0, 1, renderer, photos=photos, photo_share=0.5)
+    metas = [mixed.image_background(i, 4)[2] for i in range(80)]
+    on_photos = [m["photo"] for m in metas if m["kind"] == "photo"]
+    assert len(on_photos) >= 28 and {m["kind"] for m in metas} == {"photo", "render"}
+    assert len(set(on_photos[:14])) == 14 and on_photos[14:28] == on_photos[:14]  # all 14, then the same order
+    renders = [m["camera"] for m in metas if m["kind"] == "render"]
+    assert renders[0:4] == [renders[0]] * 4  # a rendered view still carries 4 images

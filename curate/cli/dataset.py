@@ -40,9 +40,9 @@ def cmd_convert(args: argparse.Namespace) -> int:
 
 
 def cmd_validate(args: argparse.Namespace) -> int:
-    result = validate(
-        args.src, args.fmt, names=args.names, aliases=parse_aliases(args.alias), decode=not args.no_decode
-    ).drop_classes(args.drop_class)
+    aliases = parse_aliases(args.alias)
+    result = validate(args.src, args.fmt, names=args.names, aliases=aliases, decode=not args.no_decode)
+    result = result.check_aliases(aliases).drop_classes(args.drop_class)
     ds, problems = result.dataset, result.problems
     stats = dataset_stats(ds, result.unlabelled)
     if args.json:

@@ -69,13 +69,14 @@ def cmd_dedup(args: argparse.Namespace) -> int:
         check_apply_target,
         dedup_document,
         run_dedup,
+        unreadable_summary,
         write_outputs,
     )
-    from curate.scan import list_image_files, scan_images
+    from curate.scan import list_images_or_fail, scan_images
 
     if args.apply and not args.to:
         raise ValueError("--apply needs --to DIR")
-    paths = list_image_files(args.dirs)
+    paths = list_images_or_fail(args.dirs)
     if args.apply:
         check_apply_target(args.dirs, args.to, args.apply)
     embedder, cache = load_model_from_args(args)
@@ -84,6 +85,10 @@ def cmd_dedup(args: argparse.Namespace) -> int:
     finally:
         if cache is not None:
             cache.close()
+    if not scan.images:
+        for problem in scan.problems:
+            print(problem, file=sys.stderr)
+        raise ValueError(f"none of the {len(paths)} image files in {', '.join(map(str, args.dirs))} can be read")
     threshold, calib = args.threshold, None
     if args.calibrate:
         from curate.calibrate import calibrate_threshold
@@ -113,7 +118,7 @@ def cmd_dedup(args: argparse.Namespace) -> int:
     c = doc["counts"]
     print(
         f"{c['images']} images: kept {c['kept']}, removed {c['removed_exact']} exact + {c['removed_near']} near "
-        f"({c['groups']} groups), {c['unreadable']} unreadable; threshold {threshold:.3f}"
+        f"({c['groups']} groups), {unreadable_summary(run.scan.problems)}; threshold {threshold:.3f}"
     )
     print(f"wrote {files['json']}, {files['report']}, {files['histogram']}")
     if args.apply:
@@ -126,13 +131,12 @@ def cmd_leakage(args: argparse.Namespace) -> int:
     import json
 
     from curate.leakage import find_leaks, leak_summary
-    from curate.scan import list_image_files, scan_images
+    from curate.scan import list_images_or_fail, scan_images
 
+    listed = [list_images_or_fail([d]) for d in (args.a, args.b)]
     embedder, cache = load_model_from_args(args)
     try:
-        scans = [
-            scan_images(list_image_files([d]), embedder, cache, args.workers, args.batch_size) for d in (args.a, args.b)
-        ]
+        scans = [scan_images(paths, embedder, cache, args.workers, args.batch_size) for paths in listed]
     finally:
         if cache is not None:
             cache.close()
@@ -143,7 +147,10 @@ def cmd_leakage(args: argparse.Namespace) -> int:
     for leak in leaks[: args.show]:
         print(f"{leak.kind} {leak.distance:.3f}  {leak.a}  {leak.b}")
     if len(leaks) > args.show:
-        print(f"... and {len(leaks) - args.show} more" + (f" (see {args.json})" if args.json else " (use --json)"))
+        print(
+            f"... and {len(leaks) - args.show} more"
+            + (f" (see {args.json})" if args.json else " (--json FILE writes every pair)")
+        )
     print(
         f"{summary['pairs']} duplicate pairs ({summary['exact_pairs']} exact): {summary['a_with_leak']} of "
         f"{summary['images_a']} images in A have a duplicate among the {summary['images_b']} in B "

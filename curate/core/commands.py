@@ -72,10 +72,12 @@ def add_reader_args(p: argparse.ArgumentParser, source: bool = True) -> None:
 
 def read_from_args(args: argparse.Namespace) -> ReadResult:
     """The dataset ``args.src`` as the options of :func:`add_reader_args` describe it: format, YOLO names,
-    source tag and aliases applied, the ``--drop-class`` classes removed."""
+    source tag and aliases applied, the ``--drop-class`` classes removed. An ``--alias`` or ``--drop-class`` of a
+    class the dataset does not have is an :class:`~curate.core.names.UnknownNameError`."""
     source = getattr(args, "source", None)
-    result = read_dataset(args.src, args.fmt, names=args.names, source=source, aliases=parse_aliases(args.alias))
-    return result.drop_classes(args.drop_class)
+    aliases = parse_aliases(args.alias)
+    result = read_dataset(args.src, args.fmt, names=args.names, source=source, aliases=aliases)
+    return result.check_aliases(aliases).drop_classes(args.drop_class)
 
 
 def parse_aliases(items: Sequence[str]) -> dict[str, str]:

@@ -6,7 +6,9 @@
 - Corrupt, truncated, empty and non-image files raise :class:`ImageError` naming the file and the reason.
   Completeness is decided by the file's own structure, the way the decoders decide it: a JPEG is complete when
   its end-of-image marker follows the start of its scan anywhere in the file, a PNG when it has its ``IEND``
-  chunk; zero padding and trailing bytes after the marker (phone exports, metadata tools) are fine.
+  chunk; zero padding and trailing bytes after the marker (phone exports, metadata tools) are fine. A JPEG whose
+  scan data holds a stray marker (garbled bytes: libjpeg warns "Corrupt JPEG data: premature end of data
+  segment" on stderr and OpenCV returns a mostly grey image) is refused as ``corrupt JPEG data``.
 - Where only a small image is needed (embeddings, thumbnails), ``min_side`` decodes a JPEG at 1/2, 1/4 or 1/8
   of its size in the DCT domain (libjpeg scaling: 3-10x faster, a fraction of the memory).
 - Images over :data:`MAX_PIXELS` decoded pixels are refused with a clear error instead of decoding gigabytes.
@@ -16,6 +18,7 @@ from __future__ import annotations
 
 import io
 import os
+import re
 import warnings
 from pathlib import Path
 
@@ -33,8 +36,17 @@ IMAGE_SUFFIXES: frozenset[str] = frozenset(
 MAX_PIXELS = 100_000_000
 _REDUCED_FLAGS = {2: cv2.IMREAD_REDUCED_COLOR_2, 4: cv2.IMREAD_REDUCED_COLOR_4, 8: cv2.IMREAD_REDUCED_COLOR_8}
 _JPEG_STANDALONE = frozenset({0x01, *range(0xD0, 0xD9)})  # markers without a length field (TEM, RSTn, SOI)
+# segments that may stand between two scans: DHT, DAC, DQT, DNL, DRI, APPn, COM (JPEG standard B.2.4)
+_BETWEEN_SCANS = frozenset({0xC4, 0xCC, 0xDB, 0xDC, 0xDD, *range(0xE0, 0xF0), 0xFE})
+_DCT_FRAMES = frozenset({*range(0xC0, 0xC4), *range(0xC5, 0xC8), *range(0xC9, 0xCC), *range(0xCD, 0xD0)})  # SOFn
+_SCAN_MARKER = re.compile(rb"\xff[^\x00\xff]")  # a marker inside scan data (FF 00 is stuffing, FF FF fill)
 _EXIF_ORIENTATION = 274
 _SWAPS_AXES = frozenset({5, 6, 7, 8})
+
+
+#: The reason of a file no decoder recognises (a text file named .jpg, an HTML error page saved as an image).
+NOT_AN_IMAGE = "not an image (no image format recognised in its bytes)"
+_BUFFER_REPR = re.compile(r"<_io\.BytesIO object at 0x[0-9a-fA-F]+>")
 
 
 class ImageError(Exception):
@@ -58,7 +70,7 @@ def image_size(path: Path | str) -> tuple[int, int]:
     """
     path = Path(path)
     data = _read_bytes(path)
-    _check_complete(data, path)
+    check_complete(data, path)
     return header_size(data, path)
 
 
@@ -72,8 +84,10 @@ def header_size(data: bytes, path: Path | str = "<bytes>") -> tuple[int, int]:
                 orientation = _orientation(im)
     except Image.DecompressionBombError as exc:  # Pillow's own limit (2 x 89 MP), met before ours
         raise ImageError(path, f"over the {MAX_PIXELS / 1e6:g} MP decoding budget ({exc})") from None
-    except (UnidentifiedImageError, OSError, ValueError, SyntaxError) as exc:
-        raise ImageError(path, f"not a readable image ({exc.__class__.__name__}: {exc})") from None
+    except UnidentifiedImageError:  # its message names the in-memory buffer, not the file
+        raise ImageError(path, NOT_AN_IMAGE) from None
+    except (OSError, ValueError, SyntaxError) as exc:
+        raise ImageError(path, f"not a readable image ({exc.__class__.__name__}: {_without_buffer(exc)})") from None
     if width <= 0 or height <= 0:
         raise ImageError(path, f"invalid image size {width}x{height}")
     return (height, width) if orientation in _SWAPS_AXES else (width, height)
@@ -109,7 +123,7 @@ def decode_sized(
     data: bytes, path: Path | str = "<bytes>", min_side: int = 0
 ) -> tuple[NDArray[np.uint8], tuple[int, int]]:
     """:func:`decode_image` and the image's full ``(width, height)`` as displayed (the decode may be smaller)."""
-    _check_complete(data, path)
+    check_complete(data, path)
     size = header_size(data, path)
     r = reduction(data, size, min_side)
     if (size[0] // r) * (size[1] // r) > MAX_PIXELS:
@@ -140,19 +154,24 @@ def _read_bytes(path: Path) -> bytes:
     return data
 
 
-def _check_complete(data: bytes, path: Path | str) -> None:
-    """Reject JPEG/PNG files that end before their image data does (truncated downloads decode as grey garbage).
+def check_complete(data: bytes, path: Path | str) -> None:
+    """Reject JPEG/PNG files that end before their image data does (truncated downloads decode as grey garbage)
+    or whose JPEG scan data is garbled, with :class:`ImageError`; no decoding (a pass over the bytes).
 
     JPEG: the end-of-image marker (FF D9) must follow the first start-of-scan anywhere in the file (inside the
     entropy-coded data FF is always stuffed, so FF D9 there is the real end; an EXIF thumbnail's own end marker
-    sits before the scan and does not count). PNG: the ``IEND`` chunk must be present. Bytes after either
-    (zero padding, appended data) are allowed: every decoder and viewer ignores them."""
+    sits before the scan and does not count), and no marker may stand inside the scan data
+    (:func:`_check_scan_data`). PNG: the ``IEND`` chunk must be present. Bytes after either (zero padding,
+    appended data) are allowed: every decoder and viewer ignores them."""
     if data[:3] == b"\xff\xd8\xff":
         scan = _jpeg_scan_start(data)
         if scan is None:
             raise ImageError(path, "truncated JPEG (ends inside its headers)")
         if data.rfind(b"\xff\xd9") < scan:
             raise ImageError(path, "truncated JPEG (no end-of-image marker)")
+        frame, interval = _frame_facts(data, scan) if scan else (0, 0)
+        if frame:  # a DCT JPEG (not JPEG-LS, whose scan data stuffs FF differently)
+            _check_scan_data(data, scan, interval, path)
     elif data[:8] == b"\x89PNG\r\n\x1a\n":
         end = data.rfind(b"IEND")
         if end < 12 or data[end - 4 : end] != b"\x00\x00\x00\x00":
@@ -179,6 +198,76 @@ def _jpeg_scan_start(data: bytes) -> int | None:
     return None
 
 
+def _check_scan_data(data: bytes, pos: int, interval: int, path: Path | str) -> None:
+    """Reject a JPEG whose entropy-coded (scan) data holds a marker that cannot be there: libjpeg stops decoding at
+    it with a "Corrupt JPEG data: premature end of data segment" warning (which neither OpenCV nor Pillow lets a
+    caller see) and fills the rest of the image with flat grey.
+
+    Walks every scan from the first start-of-scan to the end-of-image marker: inside scan data a 0xFF byte is
+    stuffed (FF 00), fill (FF FF) or a restart marker RSTn in sequence 0..7 when a restart interval is set; a scan
+    ends at the end-of-image marker or at a segment that may stand between scans (tables, restart interval,
+    comment, application data) before the next scan of a progressive (or non-interleaved) JPEG. Garbled data that holds no such byte
+    (e.g. a run of zeros) decodes to shifted blocks instead and is not seen here: finding it needs the entropy
+    decoder itself. ``pos``: the offset of the first start-of-scan marker; ``interval``: the restart interval
+    the headers set (0: none)."""
+    n = len(data)
+    while True:  # pos: at a marker, FF xx
+        marker = data[pos + 1]
+        if marker == 0xD9:
+            return
+        if marker in _BETWEEN_SCANS or marker == 0xDA:
+            if pos + 4 > n:
+                raise ImageError(path, "corrupt JPEG data (ends inside a segment)")
+            length = int.from_bytes(data[pos + 2 : pos + 4], "big")
+            if marker == 0xDD and length >= 4:
+                interval = int.from_bytes(data[pos + 4 : pos + 6], "big")
+            pos += 2 + length
+            if marker == 0xDA:
+                pos = _end_of_scan(data, pos, interval, path)
+            elif data[pos : pos + 1] != b"\xff":
+                raise ImageError(path, f"corrupt JPEG data (no marker after the 0x{marker:02x} segment at byte {pos})")
+            while data[pos + 1 : pos + 2] == b"\xff":  # fill bytes before a marker
+                pos += 1
+            if pos + 2 > n:
+                raise ImageError(path, "corrupt JPEG data (ends inside its image data)")
+            continue
+        raise ImageError(path, f"corrupt JPEG data (stray marker 0x{marker:02x} at byte {pos} of its image data)")
+
+
+def _end_of_scan(data: bytes, pos: int, interval: int, path: Path | str) -> int:
+    """Offset of the marker that ends the scan whose entropy-coded data starts at ``pos`` (restart markers checked
+    against the restart ``interval``: allowed only when it is set, in sequence RST0..RST7)."""
+    expected = 0
+    for match in _SCAN_MARKER.finditer(data, pos):
+        marker = data[match.start() + 1]
+        if not 0xD0 <= marker <= 0xD7:
+            return match.start()
+        if not interval or marker != 0xD0 + expected:
+            why = "no restart interval is set" if not interval else f"RST{expected} expected"
+            raise ImageError(
+                path, f"corrupt JPEG data (restart marker RST{marker - 0xD0} at byte {match.start()}: {why})"
+            )
+        expected = (expected + 1) % 8
+    raise ImageError(path, "corrupt JPEG data (no end-of-image marker after its image data)")
+
+
+def _frame_facts(data: bytes, scan: int) -> tuple[int, int]:
+    """The start-of-frame marker (0 when none) and the restart interval in MCUs (0 when no DRI segment sets one)
+    of the headers before the first scan, at ``scan`` (a walk :func:`_jpeg_scan_start` has made already)."""
+    pos, frame, interval = 2, 0, 0
+    while pos < scan:
+        marker = data[pos + 1]
+        if marker == 0xFF or marker in _JPEG_STANDALONE:
+            pos += 1 if marker == 0xFF else 2
+            continue
+        if marker in _DCT_FRAMES:
+            frame = marker
+        elif marker == 0xDD:
+            interval = int.from_bytes(data[pos + 4 : pos + 6], "big")
+        pos += 2 + int.from_bytes(data[pos + 2 : pos + 4], "big")
+    return frame, interval
+
+
 def _orientation(im: Image.Image) -> int:
     try:
         return int(im.getexif().get(_EXIF_ORIENTATION, 1))
@@ -197,9 +286,15 @@ def _decode_with_pillow(data: bytes, path: Path | str) -> NDArray[np.uint8]:
                 im = ImageOps.exif_transpose(im)
                 arr = np.asarray(im.convert("RGB") if im.mode not in ("I;16", "I", "F") else im)
     except (UnidentifiedImageError, OSError, ValueError, SyntaxError) as exc:
-        reason = "not an image" if isinstance(exc, UnidentifiedImageError) else f"corrupt image ({exc})"
+        reason = NOT_AN_IMAGE if isinstance(exc, UnidentifiedImageError) else f"corrupt image ({_without_buffer(exc)})"
         raise ImageError(path, reason) from None
     return _to_rgb8(_to_uint8(arr), bgr=False)
+
+
+def _without_buffer(exc: Exception) -> str:
+    """``str(exc)`` without the ``<_io.BytesIO object at 0x...>`` a Pillow message may name (the error names the
+    file already)."""
+    return _BUFFER_REPR.sub("the file", str(exc))
 
 
 def unit_to_u8(values: NDArray[np.floating]) -> NDArray[np.uint8]:

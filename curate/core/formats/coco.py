@@ -53,7 +53,7 @@ def read_coco(
     new_ids = _read_images(doc["images"], root, json_path, builder, default_source, source is not None, problems)
     _read_annotations(doc.get("annotations") or [], json_path, builder, categories, new_ids, problems)
     info = {"format": "coco", "source_file": str(json_path.resolve())}
-    return ReadResult(builder.build(info), problems)
+    return ReadResult(builder.build(info), problems, source_classes=tuple(resolver.seen))
 
 
 def id_key(value: Any) -> Any:

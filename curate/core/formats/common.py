@@ -10,7 +10,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from curate.core import boxes
-from curate.core.classes import canonical_class, is_known
+from curate.core.classes import canonical_class, is_known, normalise_name
 from curate.core.dataset import Dataset
 from curate.core.imageio import ImageError, image_size, is_image_file
 from curate.core.names import check_names, split_names
@@ -27,6 +27,19 @@ class ReadResult:
     dataset: Dataset
     problems: list[Problem] = field(default_factory=list)
     unlabelled: frozenset[int] = frozenset()
+    source_classes: tuple[str, ...] = ()  # the class names as the source spells them, before any alias
+
+    def check_aliases(self, aliases: Mapping[str, str] | None, option: str = "--alias") -> ReadResult:
+        """This result, after checking that every ``NAME`` of ``aliases`` (``{NAME: CLASS}``, any spelling) names a
+        class of the source: one that names none raises :class:`~curate.core.names.UnknownNameError` listing
+        the source's classes and naming the ``option`` that gave it, like :meth:`drop_classes` (a typo must not
+        leave the boxes under their old name silently)."""
+        spelt = {normalise_name(n) for n in self.source_classes}
+        unknown = [name for name in aliases or {} if normalise_name(name) not in spelt]
+        ds = self.dataset
+        where = str(ds.info.get("source_root") or ds.info.get("source_file") or ds.root)
+        check_names("class", unknown, list(self.source_classes), where, "classes", option)
+        return self
 
     def drop_classes(self, names: Iterable[str], missing_ok: bool = False, option: str = "--drop-class") -> ReadResult:
         """Without the boxes of the classes ``names`` (any spelling; their images stay, maybe as negatives).
@@ -48,7 +61,7 @@ class ReadResult:
         counts = Counter(ds.categories[a.category_id - 1].name for a in ds.annotations)
         problems = [p for p in self.problems if p.code not in {f"unknown-class:{n}" for n in drop}]
         problems += [Problem(where, f"dropped {counts[n]} boxes of class {n!r} as asked", "info") for n in sorted(drop)]
-        return ReadResult(ds.drop_categories(drop), problems, self.unlabelled)
+        return ReadResult(ds.drop_categories(drop), problems, self.unlabelled, self.source_classes)
 
 
 def list_images(folder: Path) -> list[Path]:
@@ -114,8 +127,10 @@ class ClassResolver:
         self.where = where
         self.aliases = dict(aliases or {})
         self._reported: set[str] = set()
+        self.seen: dict[str, None] = {}  # the source's class names, as spelt, in the order met
 
     def resolve(self, name: str, problems: list[Problem]) -> str:
+        self.seen.setdefault(str(name), None)
         canonical = canonical_class(name, self.aliases)
         if not is_known(canonical) and canonical not in self._reported:
             self._reported.add(canonical)

@@ -78,7 +78,7 @@ def read_voc(root: Path | str, source: str | None = None, aliases: Mapping[str, 
             if box is not None:
                 builder.add_box(image_id, resolver.resolve(name, problems), box, iscrowd=int(difficult))
     dataset = builder.build({"format": "voc", "source_root": str(root.resolve())})
-    return ReadResult(dataset, problems, frozenset(unlabelled))
+    return ReadResult(dataset, problems, frozenset(unlabelled), tuple(resolver.seen))
 
 
 def _parse_xml(path: Path, problems: list[Problem]) -> dict | None:

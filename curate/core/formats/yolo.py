@@ -65,7 +65,7 @@ def read_yolo(
     if readable and not any(p.labelled for p in readable):
         problems = _negatives_only(root, len(readable), problems)
     dataset = builder.build({"format": "yolo", "source_root": str(root.resolve())})
-    return ReadResult(dataset, problems, frozenset(unlabelled))
+    return ReadResult(dataset, problems, frozenset(unlabelled), tuple(resolver.seen))
 
 
 def _negatives_only(root: Path, count: int, problems: list[Problem]) -> list[Problem]:
