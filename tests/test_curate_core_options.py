@@ -71,6 +71,10 @@ def test_errors_name_the_file_and_the_key(tmp_path: Path) -> None:
         _build("--set", "nope=1")
     with pytest.raises(ConfigError, match="inner.depth: expected a number"):
         _build("--set", "inner.depth=deep")
+    with pytest.raises(ConfigError, match="is a folder, not a settings file"):
+        _build(str(tmp_path))
+    with pytest.raises(ConfigError, match="does not exist, not a settings file"):
+        _build(str(tmp_path / "nope.yaml"))
 
 
 def test_help_shows_each_flags_key_and_its_dataclass_default() -> None:

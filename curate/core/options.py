@@ -109,6 +109,9 @@ def add_config_options(
 def config_from_args(args: argparse.Namespace, schema: type[T], aliases: Sequence[Alias]) -> T:
     """``schema`` built from ``args.config`` (if any), then the aliases given, then ``args.set``; a
     :class:`~curate.core.config.ConfigError` or ValueError names the file or key at fault."""
+    if args.config is not None and not Path(args.config).is_file():
+        what = "is a folder" if Path(args.config).is_dir() else "does not exist"
+        raise ConfigError(f"{args.config}: {what}, not a settings file (CONFIG.yaml is the optional first argument)")
     raw: dict[str, Any] = read_yaml(args.config) if args.config is not None else {}
     given = [f"{k}={yaml.safe_dump(v, default_flow_style=True, width=10000).strip().removesuffix('...').strip()}"
              for a in aliases if getattr(args, a.dest, None) not in (None, False)
