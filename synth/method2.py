@@ -32,6 +32,11 @@ from synth.views import ViewCache
 from synth.visibility import delta_e, measure
 
 SITE_MAX_HEIGHT = 0.6  # tallest flame on a photo or panorama site, fraction of the image height
+#: A flame's luminous coverage of what is behind its body, drawn per flame in this range (1 = hides it; a more
+#: see-through 0.5-0.95 moved the flame gap away from real fire: docs/findings.md, "Does the flame look matter?").
+FLAME_OPACITY = (0.85, 1.0)
+#: The halo and warm cast a flame spills around its base, drawn per flame in this range (synth.composite).
+FLAME_GLOW = (0.1, 0.5)
 
 
 @dataclass(frozen=True)
@@ -64,9 +69,6 @@ class Method2Config:
     # flames: hard negatives of your own kind, 0..1; null = negatives (frames and other places keep that)
     flame_height_m: tuple[float, float] = (0.3, 2.5)  # flame height in the scene, metres [lo, hi]; pixels = focal *
     # height / depth
-    flame_opacity: tuple[float, float] = (0.85, 1.0)  # luminous coverage of a flame's body [lo, hi] in 0..1 (1 =
-    # hides what is behind it), drawn per flame
-    flame_glow: tuple[float, float] = (0.1, 0.5)  # halo and warm cast a flame spills [lo, hi], >= 0, per flame
     min_box_px: int = 4  # visible flames smaller than this on either side are not annotated, pixels, >= 1
     smoke_class: bool = False  # also annotate smoke (class 'smoke': sprite alpha >= 0.25, visible part)
     auto_exposure: bool = False  # the camera meters each frame with its flames in view: bright flames lower the
@@ -105,9 +107,6 @@ class Method2Config:
                 "photo_negatives is the share of the backgrounds photos left without flames: give backgrounds"
             )
         check_range("flame_height_m", self.flame_height_m, 0.01)
-        check_range("flame_glow", self.flame_glow, 0.0)
-        if not 0.0 <= self.flame_opacity[0] <= self.flame_opacity[1] <= 1.0:
-            raise ValueError(f"flame_opacity must be a range in 0..1, got {list(self.flame_opacity)}")
 
 
 def plan_flames(
@@ -142,17 +141,16 @@ def plan_flames(
             d = float(depth[min(by, cfg.height - 1), bx]) or 10.0
             hpx = int(np.clip(fy * rng.uniform(*cfg.flame_height_m) / d, 12, 0.9 * cfg.height))
         wpx, spx = sprite_pixels(sprite, hpx)
-        out.append((drawn_placement(cfg, sprite, (bx - wpx // 2, by - spx, wpx, spx), rng), f"{seq.name}/{frame}"))
+        out.append((drawn_placement(sprite, (bx - wpx // 2, by - spx, wpx, spx), rng), f"{seq.name}/{frame}"))
     return out
 
 
-def drawn_placement(
-    cfg: Method2Config, sprite: Sprite, rect: tuple[int, int, int, int], rng: np.random.Generator
-) -> Placement:
-    """``sprite`` placed at ``rect`` (x, y, width, height) image pixels with its blend (screen or add), glow and
-    opacity drawn from ``rng`` in that order; its dim edge never darkens the background (:mod:`synth.composite`)."""
+def drawn_placement(sprite: Sprite, rect: tuple[int, int, int, int], rng: np.random.Generator) -> Placement:
+    """``sprite`` placed at ``rect`` (x, y, width, height) image pixels with its blend (screen or add), glow
+    (:data:`FLAME_GLOW`) and opacity (:data:`FLAME_OPACITY`) drawn from ``rng`` in that order; its dim edge never
+    darkens the background (:mod:`synth.composite`)."""
     blend = str(rng.choice(BLEND_MODES))
-    glow, opacity = float(rng.uniform(*cfg.flame_glow)), float(rng.uniform(*cfg.flame_opacity))
+    glow, opacity = float(rng.uniform(*FLAME_GLOW)), float(rng.uniform(*FLAME_OPACITY))
     return Placement(sprite, *rect, blend, glow, opacity, True, never_darken=True)
 
 

@@ -73,7 +73,7 @@ def test_the_control_pool_has_no_flame_and_keeps_the_rest_of_the_method2_config(
     own = replace(m2, own_frames=0.5, flames=replace(m2.flames, source="cutouts"))
     assert control_config(own) == control  # the variants of a study share their control
     places = replace(m2, environments=(Path("panoramas"),), backgrounds=(Path("photos"),), background_holdout=0.25)
-    looks = replace(m2, max_flames=1, flame_opacity=(0.5, 0.6), flames=replace(m2.flames, exposed=True))
+    looks = replace(m2, max_flames=1, flame_height_m=(0.5, 0.6), flames=replace(m2.flames, exposed=True))
     assert control_config(places) == control_config(looks) == control  # places and flame looks: one control
     assert control_config(replace(m2, camera=replace(m2.camera, defocus=0.9))) != control  # what acts on copies counts
 

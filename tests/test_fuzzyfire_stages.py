@@ -68,9 +68,9 @@ def test_synth_stage_resolves_environments_by_content_and_every_key_counts(tmp_p
     stage, _ = synth_stage(tmp_path / "data", "method2", cfg, tmp_path)
     identity = json.loads((stage.folder / "stage.json").read_text())["identity"]
     assert "environments" not in identity["config"]  # no files: nothing to fingerprint
-    assert identity["config"]["flame_opacity"] == [0.85, 1.0]  # every key, at its default too
-    opaque, _ = synth_stage(tmp_path / "data", "method2", replace(cfg, flame_opacity=(0.9, 1.0)), tmp_path)
-    assert opaque.hash != stage.hash
+    assert identity["config"]["flame_height_m"] == [0.3, 2.5]  # every key, at its default too
+    taller, _ = synth_stage(tmp_path / "data", "method2", replace(cfg, flame_height_m=(0.9, 3.0)), tmp_path)
+    assert taller.hash != stage.hash
     write_textured_room(tmp_path / "scenes" / "den.glb")
     files = replace(cfg, scenes=0, environments=(Path("scenes"),))
     stage, _ = synth_stage(tmp_path / "data", "method2", files, tmp_path)

@@ -87,15 +87,11 @@ def test_smoke_class_boxes_come_from_the_smoke_masks(tmp_path):
     assert len(list((out / "masks").glob("*.smoke.png"))) == 4
 
 
-def test_flame_glow_is_drawn_in_its_range(library) -> None:
-    from dataclasses import replace
-
-    cfg = replace(CFG, negatives=0.0, flame_glow=(0.7, 0.9))
-    depth = np.full((cfg.height, cfg.width), 4.0, np.float32)
-    glows = [p.glow for i in range(10) for p, _ in M.plan_flames(cfg, library, depth, 1.0, np.random.default_rng(i))]
-    assert glows and all(0.7 <= g <= 0.9 for g in glows)
-    with pytest.raises(ValueError, match="flame_glow"):
-        M.Method2Config(flame_glow=(0.5, 0.2))
+def test_flame_glow_and_opacity_are_drawn_in_their_ranges(library) -> None:
+    depth = np.full((CFG.height, CFG.width), 4.0, np.float32)
+    placed = [p for i in range(10) for p, _ in M.plan_flames(CFG, library, depth, 1.0, np.random.default_rng(i))]
+    assert placed and all(M.FLAME_GLOW[0] <= p.glow <= M.FLAME_GLOW[1] for p in placed)
+    assert all(M.FLAME_OPACITY[0] <= p.opacity <= M.FLAME_OPACITY[1] for p in placed)
 
 
 def test_a_config_with_no_place_is_refused_unless_the_experiment_adds_its_own_frames() -> None:
