@@ -36,9 +36,9 @@ from pathlib import Path
 
 import numpy as np
 
-from synth import flames as F
-from synth.composite import composite
-from synth.library import FlameLibraryConfig, build_library
+from synth.compose.composite import composite
+from synth.flames import simulate as F
+from synth.flames.library import FlameLibraryConfig, build_library
 from synth.method1 import Method1Config, run_method1
 from synth.method2 import Method2Config, plan_flames, run_method2
 
@@ -127,7 +127,7 @@ def bench_run(name: str, run: Callable[[Path], object], n: int, size: str = "640
 
 def bench_cutouts(n: int, cutouts: Path | None, real: Path, photos: Path, workers: int) -> None:
     from fuzzyfire.cli import main as cli
-    from synth.library import cutout_library
+    from synth.flames.library import cutout_library
 
     with tempfile.TemporaryDirectory() as tmp:
         if cutouts is None:

@@ -1,5 +1,5 @@
 """Cut-out mask quality against true flame masks: the ``colour`` rule against the ``grabcut`` rule
-(:mod:`synth.cutouts`). Prints ``name: value unit`` lines.
+(:mod:`synth.flames.cutouts`). Prints ``name: value unit`` lines.
 
 The images are Method 2 composites, whose flames' true visible masks are kept beside them (``masks/<name>.png``:
 value k = the k-th fire box of the image, annotations in id order; :mod:`synth.audit`). Each fire box at least
@@ -27,14 +27,14 @@ import numpy as np
 from numpy.typing import NDArray
 
 from curate.core.imageio import read_image
-from synth.cutouts import MASK_RULES, cut, pixel_box
+from synth.flames.cutouts import MASK_RULES, cut, pixel_box
 
 NEAR_FILLED = 0.9  # mask share of the box from which a cut-out counts as a filled rectangle
 
 
 def make_pool(environments: list[Path], n: int, seed: int, out: Path) -> Path:
     """A Method 2 pool of ``n`` 416x416 composites on ``environments`` (panoramas or meshes) in ``out``."""
-    from synth.library import build_library
+    from synth.flames.library import build_library
     from synth.method2 import Method2Config, run_method2
 
     cfg = Method2Config(n=n, seed=seed, width=416, height=416, scenes=0, environments=tuple(environments))

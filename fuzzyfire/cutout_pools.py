@@ -2,16 +2,16 @@
 
 For a mixture R<m>_S<n> with m > 0 and a seed, the real training subset is the m real images the mixture trains
 on (:func:`curate.mix.real_subset`, drawn from ``real.train_split`` only). Its fire boxes are cut out
-(:mod:`synth.cutouts`, the ``grabcut`` mask rule) into a stage ``cutouts-<hash>``, and a Method 2 pool
+(:mod:`synth.flames.cutouts`, the ``grabcut`` mask rule) into a stage ``cutouts-<hash>``, and a Method 2 pool
 ``method2-cutouts-<hash>`` is composited with those flames; the mixture's n synthetic images are drawn from that pool. Both stages live in ``OUT/data`` and are identified
 by the subset's content (:func:`curate.core.fingerprint.fingerprint`: image bytes, split and boxes), the mask
 rule's parameters and the pool's config, so mixtures and seeds that draw the same subset share them, and a
 change of the mask rule makes new cut-outs and pools. Validation and test images never reach a pool.
 
 With ``synth.method2.own_frames`` > 0 an own pool also composites on the mixture's own real training images
-(:mod:`synth.frames`: each keeps its own fire boxes, flames stand beside them): the subset is written as a
+(:mod:`synth.places.frames`: each keeps its own fire boxes, flames stand beside them): the subset is written as a
 stage ``frames-<hash>`` (COCO, images linked) and becomes the pool's ``frames``, at that share of the views
-(the photo kind's weight, :func:`synth.places.kind_weights`; the config's places take the rest). The flames
+(the photo kind's weight, :func:`synth.places.kinds.kind_weights`; the config's places take the rest). The flames
 are simulated unless ``flames.source`` says otherwise.
 
 R0_S<n> mixtures have no real images of their own: they keep the experiment's simulated pool (their runs are the
@@ -60,7 +60,7 @@ def is_own(cfg: Method2Config | None) -> bool:
 
 def frames_stage(root: Path, subset: Dataset) -> Stage:
     """``subset`` (images and fire boxes) written as a COCO dataset whose images link to the originals: the
-    labelled frames of an own pool (:mod:`synth.frames`), a cached stage identified by the subset's content."""
+    labelled frames of an own pool (:mod:`synth.places.frames`), a cached stage identified by the subset's content."""
     from curate.core.fingerprint import fingerprint
     from curate.core.writer import write_dataset
 
@@ -70,7 +70,7 @@ def frames_stage(root: Path, subset: Dataset) -> Stage:
 
 def mask_identity() -> dict[str, Any]:
     """The cut-out mask rule and its parameters (in every cut-out stage's identity)."""
-    from synth import cutouts
+    from synth.flames import cutouts
 
     return {
         "rule": "grabcut",
@@ -86,7 +86,7 @@ def cutout_stage(root: Path, subset: Dataset) -> Stage:
     import json
 
     from curate.core.fingerprint import fingerprint
-    from synth.cutouts import cutouts, write_cutouts
+    from synth.flames.cutouts import cutouts, write_cutouts
 
     identity = {
         "kind": "cutouts",

@@ -22,11 +22,11 @@ class LeakageError(ValueError):
 def pool_photos(synth: object, methods: Sequence[str], base: Path) -> dict[str, list[Path]]:
     """The background photos of the pools ``methods`` of ``synth`` (an experiment's
     :class:`fuzzyfire.experiment_config.SynthConfig`), each as its pool takes them
-    (:func:`synth.photos.pool_photos`: without the held-out share and without panoramas); ``backgrounds``
-    resolve against ``base``; the images of labelled ``frames`` (:mod:`synth.frames`) count too. Pools without
+    (:func:`synth.places.photos.pool_photos`: without the held-out share and without panoramas); ``backgrounds``
+    resolve against ``base``; the images of labelled ``frames`` (:mod:`synth.places.frames`) count too. Pools without
     photos are left out."""
-    from synth.frames import load_frames
-    from synth.photos import pool_photos as photos_of
+    from synth.places.frames import load_frames
+    from synth.places.photos import pool_photos as photos_of
 
     out = {}
     for method in methods:

@@ -14,7 +14,7 @@ def sections() -> list[tuple[str, str, type]]:
     from curate.curation import CurateConfig
     from curate.sources import MergeConfig
     from fuzzyfire.experiment_config import ExperimentConfig
-    from synth.library import FlameLibraryConfig
+    from synth.flames.library import FlameLibraryConfig
     from synth.method1 import Method1Config
     from synth.method2 import Method2Config
     from train.config import TrainConfig

@@ -171,7 +171,7 @@ def synth_stage(root: Path, method: str, cfg: Any, base: Path, cutouts: Stage | 
     runs) again. ``cutouts``: a stage of real flame cut-outs (:mod:`fuzzyfire.cutout_pools`) for a ``flames.source:
     cutouts`` pool, named ``<method>-cutouts-<hash>``; its hash enters the pool's identity. The pool is made in one
     process per core."""
-    from synth.library import build_library, cutout_library
+    from synth.flames.library import build_library, cutout_library
     from synth.method1 import run_method1
     from synth.method2 import run_method2
 
@@ -201,10 +201,10 @@ def synth_stage(root: Path, method: str, cfg: Any, base: Path, cutouts: Stage | 
 def content_identity(cfg: Any) -> dict[str, Any]:
     """The environment files, panoramas, background photos and labelled frames of ``cfg`` by content (only the
     keys that are set)."""
-    from synth.envfile import find_environment_files, fingerprint
-    from synth.panorama import panorama_fingerprints
-    from synth.photos import photo_fingerprints
-    from synth.places import split_places
+    from synth.places.envfile import find_environment_files, fingerprint
+    from synth.places.kinds import split_places
+    from synth.places.panorama import panorama_fingerprints
+    from synth.places.photos import photo_fingerprints
 
     out: dict[str, Any] = {}
     places = split_places(cfg.environments, getattr(cfg, "backgrounds", ()))
@@ -215,7 +215,7 @@ def content_identity(cfg: Any) -> dict[str, Any]:
     if getattr(cfg, "backgrounds", ()):
         out["backgrounds"] = photo_fingerprints(cfg.backgrounds, cfg.background_holdout)
     if getattr(cfg, "frames", ()):
-        from synth.frames import frame_fingerprints
+        from synth.places.frames import frame_fingerprints
 
         out["frames"] = frame_fingerprints(cfg.frames)
     return out

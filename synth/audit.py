@@ -7,7 +7,7 @@ audited too: ``{file_name: {mode: [xywh | null, ...]}}``, entry k against instan
 ``masks/<name>.smoke.png`` the same way.
 
 Visibility (Method 2): each fire box's contrast against the flame-free plate (median ΔE*ab over its flame, see
-:mod:`synth.visibility`) as recorded in ``manifest.json``, and how many flames were erased as unseen.
+:mod:`synth.compose.visibility`) as recorded in ``manifest.json``, and how many flames were erased as unseen.
 """
 
 from __future__ import annotations
@@ -79,7 +79,7 @@ def visibility_summary(folder: Path) -> dict[str, Any] | None:
 
 def _frame_boxes(folder: Path, images: int) -> list[int]:
     """Per image (in ``annotations.json`` order), how many of its last fire boxes are a labelled frame's own
-    (``frame_boxes`` in the manifest's per-image records, :mod:`synth.frames`): labels without a flame mask,
+    (``frame_boxes`` in the manifest's per-image records, :mod:`synth.places.frames`): labels without a flame mask,
     not audited."""
     path = folder / "manifest.json"
     manifest = json.loads(path.read_text(encoding="utf-8")) if path.is_file() else {}

@@ -24,9 +24,9 @@ def parse_size(text: str) -> tuple[int, int]:
 def cmd_flames(args: argparse.Namespace) -> int:
     from curate.core.options import config_from_args, print_config
     from curate.core.progress import progress
-    from synth.library import FlameLibraryConfig, build_library
-    from synth.preview import write_preview
-    from synth.sprites import save_sequence
+    from synth.flames.library import FlameLibraryConfig, build_library
+    from synth.flames.preview import write_preview
+    from synth.flames.sprites import save_sequence
 
     cfg = config_from_args(args, FlameLibraryConfig, FLAME_ALIASES)
     if args.print_config:
@@ -47,7 +47,7 @@ def cmd_cutouts(args: argparse.Namespace) -> int:
 
     from curate.core.commands import print_problems, read_from_args
     from curate.core.load import SplitError, pick_split
-    from synth.cutouts import cutouts, write_cutouts
+    from synth.flames.cutouts import cutouts, write_cutouts
 
     result = read_from_args(args)
     try:
@@ -70,7 +70,7 @@ def cmd_scenes(args: argparse.Namespace) -> int:
     import cv2
     import numpy as np
 
-    from synth import camera, render, scenes
+    from synth.places import camera, render, scenes
 
     args.out.mkdir(parents=True, exist_ok=True)
     w, h = args.size
@@ -92,7 +92,7 @@ def _size_keys(size: tuple[int, int]) -> dict[str, int]:
     return {"width": size[0], "height": size[1]}
 
 
-#: Flags of ``synth flames`` (keys of synth.library.FlameLibraryConfig).
+#: Flags of ``synth flames`` (keys of synth.flames.library.FlameLibraryConfig).
 FLAME_ALIASES: tuple[Alias, ...] = (
     Alias("--n", ("sequences",), "procedural flame sequences to simulate", {"type": int, "metavar": "N"}),
     Alias("--seed", ("seed",), "library seed", {"type": int}),
@@ -145,8 +145,8 @@ def _built(args: argparse.Namespace, schema: type, aliases: Sequence[Alias]):
     places are checked before the flame library is made."""
     from curate.core.options import config_from_args, print_config
     from curate.core.writer import check_output_target
-    from synth.envfile import find_environment_files
-    from synth.places import split_places
+    from synth.places.envfile import find_environment_files
+    from synth.places.kinds import split_places
 
     cfg = config_from_args(args, schema, aliases)
     if args.print_config:
@@ -164,7 +164,7 @@ def _built(args: argparse.Namespace, schema: type, aliases: Sequence[Alias]):
 
 
 def cmd_method1(args: argparse.Namespace) -> int:
-    from synth.library import build_library
+    from synth.flames.library import build_library
     from synth.method1 import Method1Config, run_method1
 
     cfg = _built(args, Method1Config, METHOD1_ALIASES)
@@ -176,7 +176,7 @@ def cmd_method1(args: argparse.Namespace) -> int:
 
 
 def cmd_method2(args: argparse.Namespace) -> int:
-    from synth.library import build_library
+    from synth.flames.library import build_library
     from synth.method2 import Method2Config, run_method2
 
     cfg = _built(args, Method2Config, METHOD2_ALIASES)
@@ -282,7 +282,7 @@ def cmd_colour(args: argparse.Namespace) -> int:
     from curate.core.commands import print_problems
     from curate.core.formats.registry import read_dataset
     from curate.core.load import pick_split
-    from synth.flame_colour import flame_colour
+    from synth.flames.measure import flame_colour
 
     sides = {"synthetic": (args.synthetic, args.synthetic_split), "real": (args.real, args.real_split)}
     problems: list = []
@@ -296,7 +296,7 @@ def cmd_colour(args: argparse.Namespace) -> int:
     if args.json:
         print(json.dumps({name: c.to_dict() for name, c in measured.items()}))
         return 0
-    print(f"flame colour of the {args.class_name!r} boxes (their GrabCut flame pixels; synth/flame_colour.py)")
+    print(f"flame colour of the {args.class_name!r} boxes (their GrabCut flame pixels; synth/flames/measure.py)")
     print(f"{'':<10} {'boxes':>6} {'near-white':>10} {'saturation':>10} {'hue':>6} {'red':>6}")
     for name, c in measured.items():
         path, split = sides[name]
@@ -334,7 +334,7 @@ def _register_colour(sub: argparse._SubParsersAction) -> None:
 
 def _register_flames(sub: argparse._SubParsersAction) -> None:
     from curate.core.options import add_config_options
-    from synth.library import FlameLibraryConfig
+    from synth.flames.library import FlameLibraryConfig
 
     p = add_command(
         sub,
@@ -343,7 +343,7 @@ def _register_flames(sub: argparse._SubParsersAction) -> None:
         description="Simulate flame sequences (stable fluids or noise), keep every K-th frame. Each sequence is a\n"
         "folder of NNNN_emission.png (the flame's light on black), NNNN_mask.png and, for frames with smoke,\n"
         "NNNN_smoke.png (RGBA); preview.png shows every sequence composited over a dark and a light background.\n"
-        "Settings: a flames section (synth.library.FlameLibraryConfig), the options below, or --set KEY=VALUE.\n\n"
+        "Settings: a flames section (synth.flames.library.FlameLibraryConfig), the options below, or --set KEY=VALUE.\n\n"
         "example:\n  fuzzyfire synth flames --out out/flames --n 12 --seed 0 --frames 1024\n"
         "  fuzzyfire synth flames --out out/flames-exposed --exposed --set rare=0",
     )
@@ -462,7 +462,7 @@ def _register_audit(sub: argparse._SubParsersAction) -> None:
         help="IoU of written boxes vs pixel-truth mask boxes, and the boxed flames' visibility",
         description="Compare a synthetic dataset's boxes with the boxes of its kept flame masks; for Method 2,\n"
         "also the boxed flames' contrast against the flame-free background (ΔE*ab, min and median) and how\n"
-        "many flames were erased because nobody could see them (synth/visibility.py).\n\n"
+        "many flames were erased because nobody could see them (synth/compose/visibility.py).\n\n"
         "example:\n  fuzzyfire synth audit out/m2 --json",
     )
     p.add_argument("folder", type=Path, help="a dataset written by synth method1 or method2")

@@ -15,16 +15,16 @@ import cv2
 
 from curate.core.progress import progress
 from curate.core.writer import WriteResult, check_output_target
-from synth import render
-from synth.envfile import EnvironmentFile, find_environment_files
-from synth.frames import Box, load_frames
-from synth.panorama import PanoramaBackgrounds
-from synth.photos import PhotoBackgrounds, keep_in_pool
-from synth.places import split_places
+from synth.flames.sprites import SpriteSequence
+from synth.places import render
+from synth.places.envfile import EnvironmentFile, find_environment_files
+from synth.places.frames import Box, load_frames
+from synth.places.kinds import split_places
+from synth.places.panorama import PanoramaBackgrounds
+from synth.places.photos import PhotoBackgrounds, keep_in_pool
+from synth.places.views import ViewCache, environment_index
 from synth.schema import to_json
-from synth.sprites import SpriteSequence
 from synth.staging import Staging, finish
-from synth.views import ViewCache, environment_index
 
 MakeImage = Callable[[Any, int, Sequence[SpriteSequence], ViewCache], tuple]
 

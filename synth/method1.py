@@ -2,10 +2,10 @@
 rendered with it; boxes computed two ways.
 
 Placement: the camera follows the environment's camera rules (area, height, look-at target, limited pitch, no
-roll: :mod:`synth.camera`). Each plane stands on the surface seen at a random pixel of the lower two thirds of
+roll: :mod:`synth.places.camera`). Each plane stands on the surface seen at a random pixel of the lower two thirds of
 the view, ``clearance_m`` in front of it (towards the camera), upright (a horizontal view of a vertical flame),
 turned to face the camera up to ``yaw_jitter_deg``, ``flame_height_m`` tall with the sprite's aspect; the
-plane's texture is the sprite flattened to straight-alpha RGBA (:func:`synth.sprites.flatten_rgba`).
+plane's texture is the sprite flattened to straight-alpha RGBA (:func:`synth.flames.sprites.flatten_rgba`).
 
 Boxes (all in pixels, row 0 at the top):
 - ``paper``: the box of the plane's four projected corners, clipped to the image (the paper's way; it
@@ -14,7 +14,7 @@ Boxes (all in pixels, row 0 at the top):
   ∧ the sprite's flame mask warped by the plane's homography ∧ not behind an opaque part (alpha >= 0.5 or
   flame) of a nearer plane (per-pixel depths from the segmentation passes).
 
-Image ``i`` uses view ``i // images_per_view`` (:mod:`synth.views`) and ``default_rng([seed, 3, i])``, so any
+Image ``i`` uses view ``i // images_per_view`` (:mod:`synth.places.views`) and ``default_rng([seed, 3, i])``, so any
 image can be (re)made alone: runs resume and are byte-reproducible.
 """
 
@@ -30,15 +30,15 @@ import numpy as np
 from numpy.typing import NDArray
 
 from curate.core.boxes import clip_xyxy, mask_to_xywh, points_to_xyxy, xyxy_to_xywh
-from synth import render
-from synth.effects import CameraConfig, Effects, apply_effects, expose, sample_effects
+from synth.compose.effects import CameraConfig, Effects, apply_effects, expose, sample_effects
+from synth.flames.library import FlameLibraryConfig
+from synth.flames.sprites import Sprite, SpriteSequence, flatten_rgba
 from synth.generate import generate
-from synth.library import FlameLibraryConfig
-from synth.scenes import DEFAULT_SCENES, translate
+from synth.places import render
+from synth.places.scenes import DEFAULT_SCENES, translate
+from synth.places.views import View, ViewCache
 from synth.schema import check_range
-from synth.sprites import Sprite, SpriteSequence, flatten_rgba
 from synth.staging import boxes_from_masks
-from synth.views import View, ViewCache
 
 BOX_MODES: tuple[str, ...] = ("paper", "visible")
 
@@ -46,15 +46,15 @@ BOX_MODES: tuple[str, ...] = ("paper", "visible")
 @dataclass(frozen=True)
 class Method1Config:
     """Method 1 settings (``configs/synth-method1.yaml`` documents every key). ``flames`` describes the library
-    a command builds with :func:`synth.library.build_library`; the manifest records the sequences used."""
+    a command builds with :func:`synth.flames.library.build_library`; the manifest records the sequences used."""
 
     n: int = 100  # images
     seed: int = 0  # same seed -> byte-identical dataset
     width: int = 640  # image width, pixels, >= 16
     height: int = 480  # image height, pixels, >= 16
     scenes: int | None = None  # procedural environments (7 families), >= 0; null = 48 unless environments are given
-    environments: tuple[Path, ...] = ()  # mesh files / folders / sidecars (synth.envfile), rendered first; with
-    # files the views go to the environments in consecutive blocks (synth.views)
+    environments: tuple[Path, ...] = ()  # mesh files / folders / sidecars (synth.places.envfile), rendered first; with
+    # files the views go to the environments in consecutive blocks (synth.places.views)
     images_per_view: int = 1  # images (different planes) per camera view
     max_flames: int = 3  # planes per image: uniform in 1..max_flames
     negatives: float = 0.1  # fraction of images without flames

@@ -1,9 +1,9 @@
 """Method 2: render each camera view of a procedural environment once, then composite flame sprites onto it
 many times; each flame's box is the box of its final visible mask (after clipping, truncation and occlusion),
-restricted to the pixels whose contrast a person would notice (:mod:`synth.visibility`); a flame with too few
+restricted to the pixels whose contrast a person would notice (:mod:`synth.compose.visibility`); a flame with too few
 such pixels is erased from the image (composited again without it), so no visible flame goes unboxed.
 
-Image ``i`` uses view ``i // images_per_view`` (on a photo, a photo view of its own: see :mod:`synth.views`) and
+Image ``i`` uses view ``i // images_per_view`` (on a photo, a photo view of its own: see :mod:`synth.places.views`) and
 its own rng ``default_rng([seed, 2, i])``, so any image can be (re)made alone: runs resume and are byte-reproducible.
 Auto exposure draws from ``default_rng([seed, 2, i, 2])`` (:func:`metering`).
 """
@@ -18,31 +18,31 @@ import numpy as np
 from numpy.typing import NDArray
 
 from curate.core.boxes import mask_to_xywh, xywh_overlaps_any
-from synth import render
-from synth.composite import BLEND_MODES, Placement, composite
-from synth.effects import CameraConfig, Effects, apply_effects, expose, sample_effects, scale_light
+from synth.compose.composite import BLEND_MODES, Placement, composite
+from synth.compose.effects import CameraConfig, Effects, apply_effects, expose, sample_effects, scale_light
+from synth.compose.metering import draw_radiance, flame_share, mean_linear_luma, metered_gain
+from synth.compose.visibility import delta_e, measure
+from synth.flames.library import FlameLibraryConfig, pick_sequence
+from synth.flames.sprites import Sprite, SpriteSequence, flame_extent
 from synth.generate import generate
-from synth.library import FlameLibraryConfig, pick_sequence
-from synth.metering import draw_radiance, flame_share, mean_linear_luma, metered_gain
-from synth.scenes import DEFAULT_SCENES
+from synth.places import render
+from synth.places.scenes import DEFAULT_SCENES
+from synth.places.views import ViewCache
 from synth.schema import check_range
-from synth.sprites import Sprite, SpriteSequence, flame_extent
 from synth.staging import boxes_from_masks
-from synth.views import ViewCache
-from synth.visibility import delta_e, measure
 
 SITE_MAX_HEIGHT = 0.6  # tallest flame on a photo or panorama site, fraction of the image height
 #: A flame's luminous coverage of what is behind its body, drawn per flame in this range (1 = hides it; a more
 #: see-through 0.5-0.95 moved the flame gap away from real fire: docs/findings.md, "Does the flame look matter?").
 FLAME_OPACITY = (0.85, 1.0)
-#: The halo and warm cast a flame spills around its base, drawn per flame in this range (synth.composite).
+#: The halo and warm cast a flame spills around its base, drawn per flame in this range (synth.compose.composite).
 FLAME_GLOW = (0.1, 0.5)
 
 
 @dataclass(frozen=True)
 class Method2Config:
     """Method 2 settings (``configs/synth-method2.yaml`` lists every key; ``docs/config.md`` is generated from
-    here). ``flames`` describes the library a command builds with :func:`synth.library.build_library`; the manifest
+    here). ``flames`` describes the library a command builds with :func:`synth.flames.library.build_library`; the manifest
     records the sequences used."""
 
     n: int = 100  # images to write, >= 1
@@ -51,18 +51,20 @@ class Method2Config:
     height: int = 480  # image height, pixels, >= 16
     scenes: int | None = None  # procedural environments (7 families), >= 0; null = 48 unless environments,
     # backgrounds, frames or own_frames are given (then only those)
-    environments: tuple[Path, ...] = ()  # mesh files / folders / sidecar YAMLs (synth.envfile) and 2:1 panoramas,
-    # rendered first; with files the views go to the environments in consecutive blocks (synth.views)
+    environments: tuple[
+        Path, ...
+    ] = ()  # mesh files / folders / sidecar YAMLs (synth.places.envfile) and 2:1 panoramas,
+    # rendered first; with files the views go to the environments in consecutive blocks (synth.places.views)
     backgrounds: tuple[Path, ...] = ()  # fire-free photos (files / folders) composited on; 2:1 ones are panoramas
     frames: tuple[Path, ...] = ()  # labelled datasets composited on like photos, each image keeping its own fire
-    # boxes, no flame placed over them (synth.frames): e.g. your cameras' frames
+    # boxes, no flame placed over them (synth.places.frames): e.g. your cameras' frames
     own_frames: float = 0.0  # experiment only: share of an own pool's views on its mixture's real training images
     # (fuzzyfire.cutout_pools; they become the pool's frames), 0..1; 0 = none
     photo_share: float = 0.5  # share of views on a photo (or frame) when 3D scenes are also used, 0..1
     background_holdout: float = 0.0  # share of the photos (by content hash) never composited on: test data, [0, 1)
     panorama_share: float = 0.5  # weight of panorama views beside photos and renders, 0..1
     images_per_view: int = 8  # images composited on each rendered or panorama view (render once, composite many
-    # times), >= 1; each image on a photo or frame has a crop of its own (synth.views)
+    # times), >= 1; each image on a photo or frame has a crop of its own (synth.places.views)
     max_flames: int = 3  # flames per image: uniform in 1..max_flames, >= 1
     negatives: float = 0.1  # fraction of images without flames, 0..1
     photo_negatives: float | None = None  # fraction of the images on a fire-free photo (``backgrounds``) without
@@ -72,7 +74,7 @@ class Method2Config:
     min_box_px: int = 4  # visible flames smaller than this on either side are not annotated, pixels, >= 1
     smoke_class: bool = False  # also annotate smoke (class 'smoke': sprite alpha >= 0.25, visible part)
     auto_exposure: bool = False  # the camera meters each frame with its flames in view: bright flames lower the
-    # exposure of the scene around them (synth.metering)
+    # exposure of the scene around them (synth.compose.metering)
     camera: CameraConfig = field(default_factory=CameraConfig)  # probabilities of the stronger camera effects
     flames: FlameLibraryConfig = field(default_factory=FlameLibraryConfig)  # the flame library
 
@@ -120,7 +122,7 @@ def plan_flames(
 ) -> list[tuple[Placement, str]]:
     """Random flames standing at random pixels, sized by the scene depth there (world height in metres of the flame
     itself, its mask: the sprite, smoke included, is scaled to match); on a site (``avoid`` given: a photo,
-    panorama or room, :mod:`synth.sites`) only at pixels whose depth is > 0 (the ground) and never over the
+    panorama or room, :mod:`synth.places.sites`) only at pixels whose depth is > 0 (the ground) and never over the
     ``avoid`` boxes [x, y, w, h] (:func:`kept_clear`). No flame (an empty list) with probability ``negatives``
     (default ``cfg.negatives``; per view: :func:`negative_share`)."""
     if rng.random() < (cfg.negatives if negatives is None else negatives):
@@ -148,7 +150,7 @@ def plan_flames(
 def drawn_placement(sprite: Sprite, rect: tuple[int, int, int, int], rng: np.random.Generator) -> Placement:
     """``sprite`` placed at ``rect`` (x, y, width, height) image pixels with its blend (screen or add), glow
     (:data:`FLAME_GLOW`) and opacity (:data:`FLAME_OPACITY`) drawn from ``rng`` in that order; its dim edge never
-    darkens the background (:mod:`synth.composite`)."""
+    darkens the background (:mod:`synth.compose.composite`)."""
     blend = str(rng.choice(BLEND_MODES))
     glow, opacity = float(rng.uniform(*FLAME_GLOW)), float(rng.uniform(*FLAME_OPACITY))
     return Placement(sprite, *rect, blend, glow, opacity, True, never_darken=True)
@@ -194,7 +196,7 @@ def flame_box(bx: int, by: int, hpx: int, flame_size: tuple[int, int]) -> list[i
 
 def kept_clear(meta: dict) -> list:
     """Boxes [x, y, w, h] of a view where no flame may go: a photo site's people and a labelled frame's own fires
-    (:mod:`synth.frames`)."""
+    (:mod:`synth.places.frames`)."""
     return [*meta.get("people", []), *meta.get("frame_boxes", [])]
 
 
@@ -206,12 +208,12 @@ def visible_composite(
     meter: Callable[[NDArray[np.uint8], list[Placement]], NDArray[np.uint8]] | None = None,
 ):
     """Composite ``planned`` on the exposed ``scene`` and take it through the camera (``effects``), erasing every
-    flame that cannot be seen (:mod:`synth.visibility`: contrast against the plate, the scene through the same
+    flame that cannot be seen (:mod:`synth.compose.visibility`: contrast against the plate, the scene through the same
     camera without flames) or whose seen part is smaller than ``min_box_px``, and compositing again without it
     until every flame left is seen (erasing one can unhide another). ``meter(scene, placements)``: the scene as
-    the camera exposes it with those flames in view (:mod:`synth.metering`; the plate is that scene too), redone
+    the camera exposes it with those flames in view (:mod:`synth.compose.metering`; the plate is that scene too), redone
     for the flames left after each erasure. Returns (image (H, W, 3) uint8, the composite, the flames kept (a
-    sublist of ``planned``), their :class:`synth.visibility.Visibility`)."""
+    sublist of ``planned``), their :class:`synth.compose.visibility.Visibility`)."""
     plate = apply_effects(scene, effects) if meter is None else None
     shown = list(planned)
     while True:
@@ -237,7 +239,7 @@ def negative_share(cfg: Method2Config, view_meta: dict) -> float:
 
 @dataclass(frozen=True)
 class Meter:
-    """A camera's auto exposure for one image's scene (:mod:`synth.metering`): the scene's ``mean`` linear
+    """A camera's auto exposure for one image's scene (:mod:`synth.compose.metering`): the scene's ``mean`` linear
     luminance (read once), its flames' ``radiance``; called with the scene and the placements in view, returns the
     scene at the exposure it meters."""
 

@@ -8,8 +8,8 @@ toolkit makes itself and labels as stand-ins everywhere. What keeps them apart f
   (``jacksboro_fault_dem.npz``), or a folder of the user's own fire-free photos. Each image takes a random crop
   (``crop_area`` of the picture's area, output aspect), a horizontal flip and colour jitter (brightness,
   contrast, gamma, hue, saturation; sometimes greyscale, like a night-mode CCTV camera).
-- **Flames** come from the cheap ``noise`` generator of :mod:`synth.flames` (the training sets simulate
-  ``fluid`` flames), composited in 2D by :func:`synth.composite.composite`; every box is the box of the
+- **Flames** come from the cheap ``noise`` generator of :mod:`synth.flames.simulate` (the training sets simulate
+  ``fluid`` flames), composited in 2D by :func:`synth.compose.composite.composite`; every box is the box of the
   flame's final visible mask (pixels, xywh).
 - ``kind: common``: black-body flames of every shape. ``kind: rare``: unusual flames: chemical colours
   (green copper and boron, blue methane, lilac potassium, crimson lithium and strontium), white-hot cores,
@@ -35,15 +35,15 @@ from curate.core.formats.common import list_images
 from curate.core.imageio import ImageError, read_image, unit_to_u8
 from curate.core.progress import progress
 from curate.core.writer import WriteResult, plan_image_names, write_dataset
-from synth.composite import BLEND_MODES, Placement, composite
-from synth.effects import apply_effects, sample_effects
-from synth.flames import generate_sequence, sample_params
-from synth.sprites import SpriteSequence
+from synth.compose.composite import BLEND_MODES, Placement, composite
+from synth.compose.effects import apply_effects, sample_effects
+from synth.flames.simulate import generate_sequence, sample_params
+from synth.flames.sprites import SpriteSequence
 from synth.staging import Staging, boxes_from_masks, build_dataset, contact_sheet
 
 KINDS: tuple[str, ...] = ("common", "rare")
 KIND_CODE = {"common": 11, "rare": 12}
-#: Rare palettes: chemical line spectra of :data:`synth.colour.CHEMICAL_LINES` (not yellow sodium) and "white"
+#: Rare palettes: chemical line spectra of :data:`synth.flames.colour.CHEMICAL_LINES` (not yellow sodium) and "white"
 #: (a black-body flame exposed until its core clips to white).
 RARE_PALETTES: tuple[str, ...] = ("copper", "boron", "methane", "potassium", "lithium", "strontium", "white")
 RARE_SHAPES: tuple[str, ...] = ("jet", "line", "point")

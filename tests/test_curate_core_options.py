@@ -96,7 +96,7 @@ def test_printed_config_reads_back_as_the_same_settings(tmp_path: Path) -> None:
 
 def _commands():
     from synth.cli import FLAME_ALIASES, METHOD1_ALIASES, METHOD2_ALIASES
-    from synth.library import FlameLibraryConfig
+    from synth.flames.library import FlameLibraryConfig
     from synth.method1 import Method1Config
     from synth.method2 import Method2Config
     from train.cli import ALIASES as TRAIN_ALIASES

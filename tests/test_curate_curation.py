@@ -108,13 +108,13 @@ def _picked(result) -> list[tuple[str, str]]:
 
 @pytest.mark.slow
 @pytest.mark.shared_data
-def test_shared_curation_is_the_one_the_readme_states(shared_curation) -> None:
+def test_shared_curation_is_the_one_the_findings_state(shared_curation) -> None:
     from curate.core.fingerprint import fingerprint
 
     *_, result = shared_curation
     assert fingerprint(result.dataset).describe() == SHARED_CURATION
-    readme = (Path(__file__).resolve().parents[1] / "README.md").read_text(encoding="utf-8")
-    assert SHARED_CURATION.split("fingerprint ")[1] in readme
+    findings = (Path(__file__).resolve().parents[1] / "docs" / "findings.md").read_text(encoding="utf-8")
+    assert SHARED_CURATION.split("fingerprint ")[1] in findings
 
 
 @pytest.mark.slow

@@ -60,7 +60,7 @@ def test_synth_stage_resolves_environments_by_content_and_every_key_counts(tmp_p
     from factories import write_textured_room
 
     from fuzzyfire.stages import synth_stage
-    from synth.library import FlameLibraryConfig
+    from synth.flames.library import FlameLibraryConfig
     from synth.method2 import Method2Config
 
     flames = FlameLibraryConfig(sequences=1, frames=60, keep_every=30)
@@ -89,7 +89,7 @@ def test_pools_are_identified_by_the_content_of_their_environments_and_photos(tm
     from factories_train import painted_dataset
 
     from fuzzyfire.stages import synth_stage
-    from synth.library import FlameLibraryConfig
+    from synth.flames.library import FlameLibraryConfig
     from synth.method2 import Method2Config
 
     for where in ("a", "b"):

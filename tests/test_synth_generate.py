@@ -13,9 +13,9 @@ import numpy as np
 import pytest
 
 from curate.core.formats.registry import read_dataset
-from synth import flames as F
+from synth.flames import simulate as F
+from synth.flames.sprites import Sprite, SpriteSequence
 from synth.generate import BLOCK_VIEWS, Job, blocks, generate
-from synth.sprites import Sprite, SpriteSequence
 from synth.staging import staging_dir
 
 

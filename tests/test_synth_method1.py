@@ -12,15 +12,15 @@ import pytest
 import trimesh
 
 from curate.core.boxes import box_iou_xyxy, mask_to_xywh, xywh_to_xyxy
-from synth import camera as C
-from synth import flames as F
 from synth import method1 as M
-from synth import render as R
 from synth.audit import audit_dataset
-from synth.scenes import translate
-from synth.sprites import Sprite
+from synth.flames import simulate as F
+from synth.flames.sprites import Sprite
+from synth.places import camera as C
+from synth.places import render as R
+from synth.places.scenes import translate
+from synth.places.views import View, ViewCache
 from synth.staging import Staging, staging_dir
-from synth.views import View, ViewCache
 
 CFG = M.Method1Config(n=6, seed=5, width=128, height=96, scenes=3, max_flames=3, negatives=0.0, min_box_px=2)
 W, H = 128, 96
@@ -243,8 +243,8 @@ def test_smoke_mask_is_warped_like_the_flame(renderer):
 
 
 def test_flames_light_their_surroundings_and_flicker_with_their_frames():
+    from synth.flames.sprites import Sprite
     from synth.method1 import FLAME_LIGHT, Plane, flame_light
-    from synth.sprites import Sprite
 
     def plane(value: int) -> Plane:
         emission = np.zeros((8, 4, 3), np.uint8)

@@ -8,10 +8,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from synth import flames as F
 from synth import method2 as M
 from synth.audit import audit_dataset
-from synth.metering import mean_linear_luma
+from synth.compose.metering import mean_linear_luma
+from synth.flames import simulate as F
 from synth.staging import staging_dir
 
 CFG = M.Method2Config(n=6, seed=3, width=96, height=72, scenes=2, images_per_view=3, max_flames=3, negatives=0.0)
@@ -107,8 +107,8 @@ def _plain_flame(colour: tuple[int, int, int]) -> F.Sprite:
 
 
 def test_an_unseen_flame_is_erased_and_a_seen_one_boxed():
-    from synth.composite import Placement
-    from synth.effects import Effects
+    from synth.compose.composite import Placement
+    from synth.compose.effects import Effects
 
     wall = np.full((40, 40, 3), 235, np.uint8)
     faint = (Placement(_plain_flame((40, 12, 0)), 4, 4, 8, 12, glow=0.3), "faint")
@@ -130,7 +130,7 @@ def test_audit_reports_the_visibility_of_the_boxes(written):
 
 
 def test_labelled_frames_keep_their_fire_boxes_and_flames_stand_beside_them(tmp_path, library):
-    """On labelled frames (synth.frames) each image's last boxes are its frame's own fires, cropped with it
+    """On labelled frames (synth.places.frames) each image's last boxes are its frame's own fires, cropped with it
     (unaudited, counted); every flame box is exact and overlaps none of them; the same seed, the same bytes."""
     from dataclasses import replace
 

@@ -2,7 +2,7 @@ from pathlib import Path
 
 import pytest
 
-from synth.library import FlameLibraryConfig
+from synth.flames.library import FlameLibraryConfig
 from synth.method2 import Method2Config
 from synth.schema import check_range, to_json
 

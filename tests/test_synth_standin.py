@@ -11,7 +11,7 @@ from PIL import Image
 
 from curate.core.boxes import mask_to_xywh
 from curate.core.formats.registry import read_dataset
-from synth.colour import CHEMICAL_LINES
+from synth.flames.colour import CHEMICAL_LINES
 from synth.standin import (
     NOTICE,
     RARE_PALETTES,

@@ -1,0 +1,194 @@
+"""Flame cut-outs from a labelled real dataset: the flame pixels inside each box as an RGBA sprite.
+
+A flame library of real flames (Method 1 and 2 take it with ``--flames`` / ``flames.folders``) measures how
+much of the synthetic-to-real gap is the flames' appearance and how much the scenes around them: the same
+pipeline with real flames in place of simulated ones. It is also copy-paste augmentation (real flames put in
+new surroundings) for a user who has labelled fire images.
+
+Two mask rules (:data:`MASK_RULES`). ``colour``: a pixel is fire when it is warm (R > 0.5, R >= G >= 0.9 B,
+R - B > 0.25, channels in [0, 1]) or a bright core (R > 0.8, G > 0.65, R >= B); the mask is closed (5x5) and
+its holes filled. Warm or bright surfaces lit by the fire pass it too, so a box on a lit wall becomes a filled
+rectangle. ``grabcut`` (the default): that mask only starts ``cv2.grabCut`` (its pixels probable flame, the
+box's other pixels probable background, a ring of :data:`CONTEXT` x the box's longer side around the box
+background), which learns the image's own flame and background colours and cuts along their edges; when it
+keeps under :data:`MIN_KEPT` of the box (or the box has no background pixel to learn from) the colour mask is
+kept. ``experiments/cutout_masks.py`` measures both against true masks. Either mask is softened into the alpha
+channel; boxes whose colour-rule share is below ``min_cover`` are skipped.
+"""
+
+from __future__ import annotations
+
+import json
+import shutil
+from collections.abc import Iterator
+from dataclasses import dataclass
+from pathlib import Path
+
+import cv2
+import numpy as np
+from numpy.typing import NDArray
+
+from curate.core.classes import canonical_class
+from curate.core.dataset import Dataset
+from curate.core.imageio import ImageError, read_image, unit_to_u8
+from curate.core.names import check_names
+from curate.core.problems import Problem
+from curate.core.progress import progress
+from synth.flames.sprites import write_png
+
+#: Cut-outs per sequence folder (Method 1/2 pick a sequence, then one of its frames).
+PER_SEQUENCE = 25
+
+#: The mask rules of :func:`cut` (module docstring); ``grabcut`` is the default.
+MASK_RULES: tuple[str, ...] = ("colour", "grabcut")
+
+#: GrabCut's background ring around a box: this fraction of the box's longer side (clipped to the image).
+CONTEXT = 0.3
+
+#: GrabCut iterations (colour models re-fitted, graph cut again).
+GRABCUT_ITERATIONS = 5
+
+#: A GrabCut mask keeping less than this share of the box is discarded for the colour mask.
+MIN_KEPT = 0.05
+
+
+@dataclass(frozen=True)
+class Cutout:
+    """One cut-out: ``rgba`` (h, w, 4) uint8 straight alpha, cropped to its source ``box`` (x, y, w, h pixels,
+    integer, inside the image) of image ``file``; ``cover`` the fire-coloured share of the box."""
+
+    rgba: NDArray[np.uint8]
+    file: str
+    box: tuple[int, int, int, int]
+    cover: float
+
+
+def fire_mask(rgb: NDArray[np.uint8]) -> NDArray[np.bool_]:
+    """(h, w) bool: fire-coloured pixels of an (h, w, 3) RGB image (the rule in the module docstring)."""
+    f = rgb.astype(np.float32) / 255.0
+    r, g, b = f[..., 0], f[..., 1], f[..., 2]
+    warm = (r > 0.5) & (r >= g) & (g >= 0.9 * b) & (r - b > 0.25)
+    core = (r > 0.8) & (g > 0.65) & (r >= b)
+    return warm | core
+
+
+def filled(mask: NDArray[np.bool_]) -> NDArray[np.bool_]:
+    """``mask`` closed with a 5x5 square and every hole of its outer contours filled."""
+    m = cv2.morphologyEx(mask.astype(np.uint8), cv2.MORPH_CLOSE, np.ones((5, 5), np.uint8))
+    contours, _ = cv2.findContours(m, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
+    return cv2.drawContours(np.zeros_like(m), contours, -1, 1, thickness=-1).astype(bool)
+
+
+def grabcut_mask(rgb: NDArray[np.uint8], box: tuple[int, int, int, int], start: NDArray[np.bool_]) -> NDArray[np.bool_]:
+    """(h, w) bool flame mask of integer box (x, y, w, h) of the (H, W, 3) RGB image ``rgb``: GrabCut started
+    from ``start`` ((h, w) bool, the colour mask) as the module docstring says; ``start`` itself when GrabCut
+    keeps too little or has no background to learn from. Deterministic: OpenCV draws its k-means start from the
+    calling thread's RNG, which is reset before the call, so a mask never depends on what was cut before it."""
+    x, y, w, h = box
+    height, width = rgb.shape[:2]
+    pad = max(4, int(round(CONTEXT * max(w, h))))
+    x0, y0, x1, y1 = max(x - pad, 0), max(y - pad, 0), min(x + w + pad, width), min(y + h + pad, height)
+    labels = np.full((y1 - y0, x1 - x0), cv2.GC_BGD, np.uint8)
+    labels[y - y0 : y - y0 + h, x - x0 : x - x0 + w] = np.where(start, cv2.GC_PR_FGD, cv2.GC_PR_BGD)
+    if not start.any() or not (labels != cv2.GC_PR_FGD).any():
+        return start
+    bgr = np.ascontiguousarray(rgb[y0:y1, x0:x1, ::-1])
+    cv2.setRNGSeed(0)
+    models = (np.zeros((1, 65), np.float64), np.zeros((1, 65), np.float64))
+    cv2.grabCut(bgr, labels, None, models[0], models[1], GRABCUT_ITERATIONS, cv2.GC_INIT_WITH_MASK)
+    kept = np.isin(labels[y - y0 : y - y0 + h, x - x0 : x - x0 + w], (cv2.GC_FGD, cv2.GC_PR_FGD))
+    return kept if kept.mean() >= MIN_KEPT else start
+
+
+def cut(
+    rgb: NDArray[np.uint8],
+    box: tuple[int, int, int, int],
+    min_cover: float,
+    mask: str = "grabcut",
+) -> tuple[NDArray[np.uint8], float] | None:
+    """The RGBA cut-out (h, w, 4) of integer box (x, y, w, h) of ``rgb`` and its fire share (colour rule), or
+    None when less than ``min_cover`` of the box is fire-coloured. ``mask``: one of :data:`MASK_RULES`."""
+    if mask not in MASK_RULES:
+        raise ValueError(f"unknown cut-out mask rule {mask!r}; choose one of {', '.join(MASK_RULES)}")
+    x, y, w, h = box
+    crop = rgb[y : y + h, x : x + w]
+    raw = fire_mask(crop)
+    cover = float(raw.mean())
+    if cover < min_cover:
+        return None
+    flame = filled(raw) if mask == "colour" else grabcut_mask(rgb, box, filled(raw))
+    alpha = cv2.GaussianBlur(flame.astype(np.float32), (0, 0), 1.0)
+    return np.dstack([crop, unit_to_u8(alpha)]), cover
+
+
+def pixel_box(bbox: tuple[float, float, float, float], width: int, height: int) -> tuple[int, int, int, int]:
+    """COCO ``[x, y, w, h]`` (float pixels) -> the integer pixel box covering it, clipped to the image
+    (coordinates rounded to 1/1000 pixel first: normalised labels carry float noise)."""
+    x, y, w, h = (round(float(v), 3) for v in bbox)
+    x0, y0 = max(int(np.floor(x)), 0), max(int(np.floor(y)), 0)
+    x1, y1 = min(int(np.ceil(round(x + w, 3))), width), min(int(np.ceil(round(y + h, 3))), height)
+    return x0, y0, max(x1 - x0, 0), max(y1 - y0, 0)
+
+
+def cutouts(
+    ds: Dataset,
+    category: str,
+    min_side: int = 16,
+    min_cover: float = 0.08,
+    problems: list[Problem] | None = None,
+    mask: str = "grabcut",
+) -> Iterator[Cutout]:
+    """Cut-outs of every ``category`` box of ``ds`` at least ``min_side`` pixels on both sides, image by image
+    in the dataset's order (each image read once), with the ``mask`` rule (:data:`MASK_RULES`) (:func:`cut`).
+    Unreadable images are appended to ``problems``."""
+    category = canonical_class(category)
+    check_names("class", [category], ds.category_names, str(ds.root), "classes", "--class")
+    cat_ids = {c.id for c in ds.categories if c.name == category}
+    boxes: dict[int, list[tuple[float, float, float, float]]] = {}
+    for a in ds.annotations:
+        if a.category_id in cat_ids and not a.iscrowd and min(a.bbox[2], a.bbox[3]) >= min_side:
+            boxes.setdefault(a.image_id, []).append(tuple(a.bbox))
+    images = [img for img in ds.images if img.id in boxes]
+    for img in progress(images, total=len(images), desc="cut-outs", unit="img"):
+        path = ds.image_path(img)
+        try:
+            rgb = read_image(path)
+        except ImageError as exc:
+            if problems is not None:
+                problems.append(Problem(str(path), f"skipped: {exc.reason}"))
+            continue
+        height, width = rgb.shape[:2]
+        for bbox in boxes[img.id]:
+            box = pixel_box(bbox, width, height)
+            got = cut(rgb, box, min_cover, mask) if min(box[2], box[3]) >= min_side else None
+            if got is not None:
+                yield Cutout(got[0], str(img.file_name), box, got[1])
+
+
+def write_cutouts(items: Iterator[Cutout], out: Path, per_sequence: int = PER_SEQUENCE) -> int:
+    """Write ``items`` as RGBA PNG sequence folders ``out/real-KKK/NNNNN.png`` (``per_sequence`` each) and
+    ``out/cutouts.json`` (source file, box, cover of each PNG); returns the count. ``out`` must be new or empty
+    (:class:`FileExistsError` otherwise); when writing fails, what was written is removed."""
+    if (out / "cutouts.json").exists():
+        raise FileExistsError(f"{out}: holds cut-outs already (cutouts.json); choose an empty folder")
+    if out.exists() and (not out.is_dir() or any(out.iterdir())):
+        raise FileExistsError(f"{out}: is not an empty folder; choose a new or empty one")
+    created = not out.exists()
+    try:
+        return _write_sequences(items, out, per_sequence)
+    except BaseException:
+        for child in [out] if created else list(out.iterdir()):
+            shutil.rmtree(child, ignore_errors=True)
+        raise
+
+
+def _write_sequences(items: Iterator[Cutout], out: Path, per_sequence: int) -> int:
+    index = []
+    for n, item in enumerate(items):
+        name = f"real-{n // per_sequence:03d}/{n:05d}.png"
+        (out / name).parent.mkdir(parents=True, exist_ok=True)
+        write_png(out / name, item.rgba)
+        index.append({"png": name, "file": item.file, "box": list(item.box), "cover": round(item.cover, 4)})
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "cutouts.json").write_text(json.dumps(index, indent=1) + "\n", encoding="utf-8")
+    return len(index)

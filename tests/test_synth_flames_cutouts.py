@@ -1,0 +1,212 @@
+"""Flame cut-outs from labelled images: the colour rule, the RGBA crop, and the command's sequence folders."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pytest
+
+from curate.core.formats.registry import read_dataset
+from curate.core.problems import Problem
+from fuzzyfire.cli import main
+from synth.flames.cutouts import MIN_KEPT, cut, cutouts, filled, fire_mask, grabcut_mask, pixel_box
+from synth.flames.sprites import load_library, write_png
+
+ORANGE, CORE, BLUE, GREY = (240, 120, 20), (255, 240, 200), (30, 60, 200), (128, 128, 128)
+
+
+def _image_with_disc(size: tuple[int, int] = (120, 160), centre: tuple[int, int] = (60, 50), r: int = 20) -> np.ndarray:
+    """(h, w, 3) RGB: blue background, an orange disc with a bright core at ``centre`` (x, y)."""
+    img = np.zeros(size + (3,), np.uint8)
+    img[:] = BLUE
+    cv2.circle(img, centre, r, ORANGE, -1)
+    cv2.circle(img, centre, r // 3, CORE, -1)
+    return img
+
+
+def test_the_colour_rule_takes_flames_and_their_core_not_sky_or_grey() -> None:
+    px = np.array([[ORANGE, CORE, BLUE, GREY, (255, 255, 255)]], np.uint8)
+    assert fire_mask(px).tolist() == [[True, True, False, False, True]]
+
+
+def test_holes_are_filled_and_the_outside_stays_empty() -> None:
+    ring = np.zeros((40, 40), np.uint8)
+    cv2.circle(ring, (20, 20), 12, 1, 3)
+    out = filled(ring.astype(bool))
+    assert out[20, 20] and out[20, 10] and not out[0, 0] and not out[39, 39]
+
+
+def test_a_cutout_is_the_crop_with_the_flame_as_alpha() -> None:
+    img = _image_with_disc()
+    got = cut(img, (30, 20, 60, 60), min_cover=0.08)
+    assert got is not None
+    rgba, cover = got
+    assert rgba.shape == (60, 60, 4) and np.array_equal(rgba[..., :3], img[20:80, 30:90])
+    assert rgba[30, 30, 3] == 255 and rgba[0, 0, 3] == 0  # disc centre opaque, blue corner transparent
+    assert 0.25 < cover < 0.45  # pi 20^2 / 60^2 = 0.35
+    assert cut(img, (100, 0, 50, 30), min_cover=0.08) is None  # only sky
+
+
+WALL = (190, 110, 60)  # a warm wall lit by the fire: fire-coloured by the colour rule
+
+
+def _flame_on_a_lit_wall() -> tuple[np.ndarray, np.ndarray]:
+    """(h, w, 3) RGB: a flame disc (r 22 at (80, 60)) on a lit wall wider than its box; and the disc's true mask."""
+    img = np.zeros((120, 160, 3), np.uint8)
+    img[:] = (60, 70, 90)
+    img[10:110, 20:140] = WALL
+    cv2.circle(img, (80, 60), 22, ORANGE, -1)
+    cv2.circle(img, (80, 60), 9, CORE, -1)
+    truth = np.zeros((120, 160), np.uint8)
+    cv2.circle(truth, (80, 60), 22, 1, -1)
+    return img, truth.astype(bool)
+
+
+def _iou(a: np.ndarray, b: np.ndarray) -> float:
+    return float((a & b).sum() / (a | b).sum())
+
+
+def test_grabcut_cuts_the_flame_out_of_a_fire_lit_wall_the_colour_rule_takes_whole() -> None:
+    img, truth = _flame_on_a_lit_wall()
+    box = (50, 30, 60, 60)
+    inside = truth[30:90, 50:110]
+    colour, cover = cut(img, box, 0.08, mask="colour")
+    grab, same_cover = cut(img, box, 0.08, mask="grabcut")
+    assert cover == same_cover == 1.0  # the whole box passes the colour rule: the skip rule is unchanged
+    assert (colour[..., 3] >= 128).all()  # a filled rectangle
+    assert _iou(grab[..., 3] >= 128, inside) > 0.95 and grab[0, 0, 3] == 0 and grab[30, 30, 3] == 255
+    assert np.array_equal(grab[..., :3], colour[..., :3])  # the same pixels, another alpha
+    assert cut(_image_with_disc(), (30, 20, 60, 60), 0.08)[0][0, 0, 3] == 0  # sky corner stays out (default rule)
+    with pytest.raises(ValueError, match="unknown cut-out mask rule 'snake'; choose one of colour, grabcut"):
+        cut(img, box, 0.08, mask="snake")
+
+
+def test_grabcut_masks_are_deterministic_and_independent_of_earlier_cuts() -> None:
+    img, _ = _flame_on_a_lit_wall()
+    other = _image_with_disc(centre=(100, 70), r=25)
+    alone = cut(img, (50, 30, 60, 60), 0.08)[0]
+    cut(other, (75, 45, 50, 50), 0.08)  # k-means draws from OpenCV's RNG: reset before each cut
+    cv2.setRNGSeed(12345)
+    assert cut(img, (50, 30, 60, 60), 0.08)[0].tobytes() == alone.tobytes()
+
+
+def test_grabcut_keeps_the_colour_mask_without_background_to_learn_from_or_when_it_keeps_too_little() -> None:
+    orange = np.zeros((40, 40, 3), np.uint8)
+    orange[:] = ORANGE
+    start = filled(fire_mask(orange))
+    assert grabcut_mask(orange, (0, 0, 40, 40), start) is start  # the box is the image and all flame
+    img, _ = _flame_on_a_lit_wall()
+    speck = np.zeros((60, 60), bool)
+    speck[0, 0] = True  # a start GrabCut reduces to under MIN_KEPT of the box
+    got = grabcut_mask(img, (50, 30, 60, 60), speck)
+    assert got is speck or got.mean() >= MIN_KEPT
+
+
+def test_pixel_boxes_cover_the_float_box_and_stay_in_the_image() -> None:
+    assert pixel_box((10.2, 5.7, 20.5, 10.0), 100, 100) == (10, 5, 21, 11)
+    assert pixel_box((-4.0, 90.5, 20.0, 20.0), 100, 100) == (0, 90, 16, 10)
+
+
+def _write_yolo(root: Path, images: dict[str, tuple[np.ndarray, list[str]]]) -> None:
+    for split in ("train", "valid"):
+        (root / split / "images").mkdir(parents=True)
+        (root / split / "labels").mkdir(parents=True)
+    for name, (img, rows) in images.items():
+        split = "valid" if name.startswith("v") else "train"
+        cv2.imwrite(str(root / split / "images" / f"{name}.png"), cv2.cvtColor(img, cv2.COLOR_RGB2BGR))
+        (root / split / "labels" / f"{name}.txt").write_text("".join(r + "\n" for r in rows))
+    (root / "data.yaml").write_text("names: [fire, smoke]\nnc: 2\n")
+
+
+@pytest.fixture
+def labelled(tmp_path: Path) -> Path:
+    """train: a0 (a flame box, a 10-px fire box, a sky box, a smoke box over the flame), a1 (a flame box);
+    valid: v0 (a flame box)."""
+    root = tmp_path / "real"
+
+    def row(cls: int, x: int, y: int, w: int, h: int) -> str:  # pixel box of a 160x120 image -> a YOLO row
+        return f"{cls} {(x + w / 2) / 160:.9f} {(y + h / 2) / 120:.9f} {w / 160:.9f} {h / 120:.9f}"
+
+    flame = row(0, 30, 20, 60, 60)  # the disc
+    _write_yolo(
+        root,
+        {
+            "a0": (_image_with_disc(), [flame, row(0, 140, 5, 10, 10), row(0, 100, 2, 48, 30), row(1, 30, 20, 60, 60)]),
+            "a1": (_image_with_disc(centre=(100, 70), r=25), [row(0, 75, 45, 50, 50)]),
+            "v0": (_image_with_disc(), [flame]),
+        },
+    )
+    return root
+
+
+def test_cutouts_skip_small_and_sky_boxes_and_other_classes(labelled: Path) -> None:
+    ds = read_dataset(labelled).dataset.select_split("train")
+    problems: list[Problem] = []
+    items = list(cutouts(ds, "fire", min_side=16, min_cover=0.08, problems=problems))
+    assert [(Path(c.file).stem, c.box) for c in items] == [("a0", (30, 20, 60, 60)), ("a1", (75, 45, 50, 50))]
+    assert not problems
+    assert [c.box for c in cutouts(ds, "Flames")] == [c.box for c in items]  # a synonym of fire
+    with pytest.raises(ValueError, match=r"--class 'flamme': no such class \(classes: 'fire', 'smoke'\)"):
+        list(cutouts(ds, "flamme"))
+
+
+def test_an_unreadable_image_is_named_and_the_rest_is_cut(labelled: Path) -> None:
+    ds = read_dataset(labelled).dataset.select_split("train")
+    (labelled / "train" / "images" / "a1.png").write_bytes(b"not a png")  # broken after the listing
+    problems: list[Problem] = []
+    items = list(cutouts(ds, "fire", problems=problems))
+    assert [Path(c.file).stem for c in items] == ["a0"]
+    assert len(problems) == 1 and problems[0].path.endswith("a1.png")
+
+
+def test_the_command_writes_a_flame_library_and_refuses_to_overwrite(labelled: Path, tmp_path: Path, capsys) -> None:
+    out = tmp_path / "cutouts"
+    assert main(["synth", "cutouts", str(labelled), "--split", "train", "--out", str(out)]) == 0
+    assert "wrote 2 cut-outs" in capsys.readouterr().out
+    index = json.loads((out / "cutouts.json").read_text())
+    assert [(e["png"], e["box"]) for e in index] == [
+        ("real-000/00000.png", [30, 20, 60, 60]),
+        ("real-000/00001.png", [75, 45, 50, 50]),
+    ]
+    (seq,) = load_library([out])
+    assert len(seq.sprites) == 2 and all(s.mask.any() for s in seq.sprites)
+    assert seq.sprites[0].size[0] <= 60 and seq.sprites[0].mask.mean() > 0.5  # cropped to the disc
+    assert main(["synth", "cutouts", str(labelled), "--out", str(out)]) == 2
+    assert "holds cut-outs already" in capsys.readouterr().err
+    assert main(["synth", "cutouts", str(labelled), "--split", "test", "--out", str(tmp_path / "x")]) == 2
+
+
+def test_a_mistyped_class_or_a_used_folder_fails_before_any_cut(labelled: Path, tmp_path: Path, capsys) -> None:
+    out = tmp_path / "cutouts"
+    assert main(["synth", "cutouts", str(labelled), "--class", "flamme", "--out", str(out)]) == 2
+    assert "--class 'flamme': no such class (classes: 'fire', 'smoke')" in capsys.readouterr().err
+    assert not out.exists()
+    (out / "mine").mkdir(parents=True)
+    assert main(["synth", "cutouts", str(labelled), "--out", str(out)]) == 2
+    assert "is not an empty folder" in capsys.readouterr().err
+    assert [p.name for p in out.iterdir()] == ["mine"]  # the user's folder untouched
+
+
+def test_a_failed_write_removes_what_it_wrote(labelled: Path, tmp_path: Path, monkeypatch) -> None:
+    import synth.flames.cutouts as module
+
+    ds = read_dataset(labelled).dataset.select_split("train")
+    written = []
+
+    def write_once(path: Path, rgba) -> None:
+        if written:
+            raise OSError("disk full")
+        written.append(path)
+        write_png(path, rgba)
+
+    monkeypatch.setattr(module, "write_png", write_once)
+    (tmp_path / "empty").mkdir()
+    for out in (tmp_path / "new", tmp_path / "empty"):
+        written.clear()
+        with pytest.raises(OSError, match="disk full"):
+            module.write_cutouts(cutouts(ds, "fire", min_cover=0.08), out)
+        assert written and not written[0].exists()
+    assert not (tmp_path / "new").exists() and (tmp_path / "empty").is_dir()
