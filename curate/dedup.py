@@ -17,7 +17,7 @@ not depend on input order: vectors are indexed in (sha256, path) order and all c
 above. Nor do they hang on the last float bits where they need not: a removed image names the kept duplicate in
 the nearest :data:`curate.search.DISTANCE_GRID` cell (keeper order among equals), sharpness is compared to 10
 significant digits and ties go to content, not path. A distance within float noise of the threshold itself can
-still flip (any threshold has an edge); the README ("Reproducible anywhere") measures how far the shared data's
+still flip (any threshold has an edge); docs/findings.md ("Is the curated set the same on every machine?") measures how far the shared data's
 decisions are from it.
 """
 

@@ -2,8 +2,8 @@
 by flame-free copies of its own real images.
 
 A mixture R<m>_S<n> trains on more images, more steps and more augmented views than R<m>_S0, so part of what it
-gains over R<m>_S0 has nothing to do with the flames (README, "Own frames, and the control every synthetic pool
-needs": on the shared data 200 such copies gain +2.6 AP50 over R200_S0). The control run R<m>_S<n> ``copies``
+gains over R<m>_S0 has nothing to do with the flames (on the shared data 200 such copies gain +2.6 AP50 over
+R200_S0: docs/findings.md, "Does a control of flame-free copies explain the gain?"). The control run R<m>_S<n> ``copies``
 draws its n synthetic images from a Method 2 pool made of the mixture's own m real training images for that seed
 (:func:`fuzzyfire.cutout_pools.own_pool`: the same crops and camera effects as the study's Method 2 pool, each
 image keeping its own fire boxes) with no flame added (``negatives`` 1) and no other

@@ -137,7 +137,7 @@ def _lite0(depth: float, width: float, imgsz: int, pretrained: bool, freeze: int
     if freeze and not pretrained:
         raise ValueError("model.freeze keeps random weights when model.pretrained is false")
     if freeze is None:
-        freeze = len(LITE0_STAGE_ENDS) if pretrained else 0  # every stage: the measured default (README)
+        freeze = len(LITE0_STAGE_ENDS) if pretrained else 0  # every stage: the measured default (docs/findings.md)
     return EfficientLite0Backbone(imgsz, pretrained, freeze)
 
 

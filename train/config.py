@@ -1,6 +1,6 @@
 """Training hyper-parameters as frozen dataclasses (``curate.core.config`` builds them from commented YAML).
 
-The defaults are the study's detector, chosen by AP per CPU-minute on real data (README, "The detector"):
+The defaults are the study's detector, chosen by AP per CPU-minute on real data (docs/findings.md, "Which detector recipe, and why?"):
 ImageNet EfficientNet-Lite0 with every stage frozen, its features computed once for 20 augmented views
 per image, a YOLOv5n-width PAN neck and head trained with AdamW (lr 0.002, ultralytics' choice for short runs),
 one step per batch of 16, a short warm-up, an EMA over ~100 steps, mosaic 0.5 and scale 0.3, 40 epochs at 416 px.

@@ -2,7 +2,7 @@
 
 Two folders with the same fingerprint hold the same pictures in the same splits with the same labels, wherever
 they are and whatever their image files are called (symbolic links are followed). Used by the experiment's
-stages (``stage.json`` records the fingerprint of what a stage produced) and by the README's statement of the
+stages (``stage.json`` records the fingerprint of what a stage produced) and by docs/findings.md's statement of the
 shared-data curated set.
 """
 

@@ -136,7 +136,7 @@ def exposed_palette(
     white (:data:`ROLL_OFF`, :data:`BLOOM`). Dim gas is red, brighter orange, then yellow as green saturates, and a
     core bright enough is white, as fires are in photographs (``fuzzyfire synth colour``: the shared real train
     flames have a quarter of their pixels near-white and the colourful ones at hue 31 degrees, the display palette's
-    composited flames 1 % and 39 degrees; README, "Exposed flames")."""
+    composited flames 1 % and 39 degrees; docs/findings.md, "Does the flame look matter?")."""
     if gain <= 0:
         raise ValueError(f"gain must be > 0, got {gain}")
     t = np.linspace(0.0, 1.0, n)

@@ -1,7 +1,7 @@
 """Flame colour: how the flames of a labelled set look, in four figures a person can check against a photo.
 
 The flame gap (:mod:`synth.gap`, ``--crops``) is a distance between CNN embeddings; it has not ranked the flame
-looks tried on this project the way the eye does (README, "Exposed flames"). These figures do, and they tell
+looks tried on this project the way the eye does (docs/findings.md, "Does the flame look matter?"). These figures do, and they tell
 what to change. Over the flame pixels of every ``category`` box of a set - the GrabCut cut-out mask of
 :func:`synth.flames.cutouts.cutouts` (alpha >= 0.5), the same rule for a synthetic pool and a real set, so that neither
 side is measured on truer masks than the other:

@@ -16,7 +16,7 @@ What makes them read as fire (issue 23): the fuel burns in a *body* at the base 
 ``body`` of the grid high) held at full temperature, so a flame is a bright saturated mass with tongues torn off
 its top, not a thin ribbon of hot gas; the palette is exposed so that the core saturates to yellow (yellow-white
 at the higher peaks) over an orange gradient to a red edge (on the flame gap a wide gradient beats a body clipped
-flat to pale yellow: see the README); the rendered field is warped by sub-grid noise (``detail`` cells) for
+flat to pale yellow: docs/findings.md, "Does the flame look matter?"); the rendered field is warped by sub-grid noise (``detail`` cells) for
 crisp, turbulent edges; frames are kept only after ``warmup`` steps (the first plume's mushroom cap has left);
 a sequence is stretched sideways to a sampled box aspect ratio (``aspect``, the real boxes' distribution).
 Chemical palettes tint a black-body flame (:data:`TINTS`): methane is blue at the base, metal salts colour
@@ -60,7 +60,7 @@ MAX_STRETCH = 1.6  # a sequence is stretched sideways by at most this factor (or
 DRAG = 0.97  # sideways velocity kept per step: wind and swirls do not pile up into a flame blown flat
 #: Camera gain range of an exposed flame (:func:`exposed_gain`): with :data:`synth.flames.colour.EXPOSED_T_MAX` the
 #: composited flames come near the real train flames' near-white share, saturation and hue (``synth colour``;
-#: README, "Exposed flames").
+#: docs/findings.md, "Does the flame look matter?").
 EXPOSED_GAIN = (3.0, 10.0)
 
 
@@ -152,7 +152,7 @@ def sample_params(
         smoke_grey=float(rng.uniform(0.12, 0.45)),
         palette=palette,
         exposure=float(rng.uniform(8.0, 13.0)),  # measured on the flame gap: a wide orange-yellow gradient
-        peak=float(rng.uniform(1.3, 2.0)),  # beats a body clipped flat to pale yellow (see the README)
+        peak=float(rng.uniform(1.3, 2.0)),  # beats a body clipped flat to pale yellow (docs/findings.md)
         body=float(rng.uniform(0.15, 0.35)),
         detail=float(rng.uniform(1.5, 2.5)),
         aspect=aspect,

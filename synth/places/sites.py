@@ -15,7 +15,7 @@ A **site** is read from a sidecar when there is one (a fixed camera whose floor 
   (otherwise - rooms, streets between buildings - it is drawn in 0.3..0.5 of the height, and never above the
   lowest sky pixel); *water* is sky-like pixels below the horizon (a lake mirrors the sky) and fairly smooth,
   saturated blue or blue-green ones; *people* are OpenCV's HOG pedestrian detections (upright people only: a seated person
-  is missed - the README says how often a flame lands on one). Ground = below the horizon, none of those.
+  is missed - docs/findings.md says how often a flame lands on one). Ground = below the horizon, none of those.
 
 Pseudo depth on the ground: a camera ``camera_height`` above flat ground with vertical field of view ``yfov``
 sees row ``v`` below the horizon at ``camera_height * fy / (v - horizon_px)`` metres (z along the view axis).
