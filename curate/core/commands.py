@@ -103,7 +103,7 @@ def print_problems(problems: Sequence[Problem], stream: TextIO | None = None, li
     for p in shown:
         print(p, file=stream)
     if limit is not None and len(problems) > limit:
-        print(f"... and {len(problems) - limit} more (see --json)", file=stream)
+        print(f"... and {len(problems) - limit} more (fuzzyfire validate DATASET lists every one)", file=stream)
     stream.flush()
     counts = count_levels(problems)
     print(f"{counts['error']} errors, {counts['warning']} warnings, {counts['info']} info", file=sys.stderr)
