@@ -175,6 +175,8 @@ def cmd_compare(args: argparse.Namespace) -> int:
     from eval.stats import MatchTable, paired_bootstrap
 
     sides = (args.model_a, args.model_b)
+    if args.alarm_budget <= 0 or args.samples < 1:
+        raise ValueError(f"--alarm-budget must be > 0 and --samples >= 1, got {args.alarm_budget}, {args.samples}")
     try:
         test = _load(args)
         results = [[_score_model(m, args, test.dataset, test.problems) for m in side] for side in sides]

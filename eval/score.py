@@ -39,6 +39,15 @@ class ScoreConfig:
     threads: int = 0  # onnxruntime threads; 0 = every core the run may use
     device: str = "auto"  # auto | cpu | cuda | cuda:N; auto = onnxruntime's CUDA provider when installed
 
+    def __post_init__(self) -> None:
+        if not 0.0 <= self.conf < 1.0 or not 0.0 < self.iou <= 1.0:
+            raise ValueError(f"conf must be in [0, 1) and iou in (0, 1], got conf {self.conf}, iou {self.iou}")
+        if self.max_det < 1 or self.batch < 1 or self.workers < 0 or self.threads < 0:
+            raise ValueError(
+                f"max_det and batch must be >= 1, workers and threads >= 0; got {self.max_det}, {self.batch}, "
+                f"{self.workers}, {self.threads}"
+            )
+
     def predict_options(self, resize: str = "area") -> PredictOptions:
         """The post-processing and batching options of :func:`eval.predict.predict_dataset`."""
         return PredictOptions(

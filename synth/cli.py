@@ -49,6 +49,8 @@ def cmd_cutouts(args: argparse.Namespace) -> int:
     from curate.core.load import SplitError, pick_split
     from synth.flames.cutouts import cutouts, write_cutouts
 
+    if args.min_side < 1 or not 0.0 <= args.min_cover <= 1.0:
+        raise ValueError(f"--min-side must be >= 1 and --min-cover in 0..1, got {args.min_side}, {args.min_cover}")
     result = read_from_args(args)
     try:
         ds = pick_split(result.dataset, args.split, args.src)

@@ -130,5 +130,9 @@ def test_print_problems_one_line_each_then_the_counts(capsys: pytest.CaptureFixt
     problems = [Problem(f"a/{i}.jpg", "unreadable", "error") for i in range(3)] + [Problem("b.txt", "empty", "info")]
     print_problems(problems, limit=2)
     out, err = capsys.readouterr()
-    assert out.splitlines() == ["a/0.jpg: unreadable", "a/1.jpg: unreadable", "... and 2 more (fuzzyfire validate DATASET lists every one)"]
+    assert out.splitlines() == [
+        "a/0.jpg: unreadable",
+        "a/1.jpg: unreadable",
+        "... and 2 more (fuzzyfire validate DATASET lists every one)",
+    ]
     assert err == "3 errors, 0 warnings, 1 info\n"

@@ -327,3 +327,10 @@ def test_errors_out_draws_the_worst_false_alarms_and_misses(work, tmp_path):
         x, y, w, h = (k * int(v) for v in entry["bbox"])
         assert tuple(picture[y + h - 1, x + w // 2]) == colour  # the box's bottom edge, in its colour
         assert tuple(picture[y + h // 2, x + w // 2]) == tuple(original[0, 0])  # its inside untouched
+
+
+def test_compare_refuses_a_budget_or_resample_count_out_of_range_before_scoring(work, capsys):
+    good = oracle_model(work["root"] / "good.onnx")
+    for extra in (["--alarm-budget", "-3"], ["--samples", "0"]):
+        assert main(["compare", str(good), str(good), "--data", str(work["test"]), *extra]) == 2
+        assert "--alarm-budget must be > 0 and --samples >= 1" in capsys.readouterr().err

@@ -77,3 +77,14 @@ def test_operating_data_cover_the_images_and_classes_scored(work, tmp_path):
     found, alarms = score_operating(fire, negatives)
     assert found.boxes == 6 and found.recall(0.0) == pytest.approx(1.0)  # the oracle finds every box
     assert alarms.images == 3 and alarms.scores.tolist() == pytest.approx([0.70], abs=1e-6)
+
+
+def test_score_settings_out_of_range_are_refused_before_any_work() -> None:
+    import pytest
+
+    from eval.score import ScoreConfig
+
+    for bad in ({"conf": 1.0}, {"conf": -0.1}, {"iou": 0.0}, {"max_det": 0}, {"batch": 0}, {"workers": -1}):
+        with pytest.raises(ValueError, match="must be"):
+            ScoreConfig(**bad)
+    assert ScoreConfig(conf=0.0, iou=1.0).conf == 0.0
