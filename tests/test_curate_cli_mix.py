@@ -44,6 +44,10 @@ def test_cli_val_option(pools: tuple[Dataset, Dataset], tmp_path: Path) -> None:
     assert main([*args, "--val", str(tmp_path / "real"), "--out", str(tmp_path / "o")]) == 0
     doc = yaml.safe_load((tmp_path / "o" / "seed0" / "R5_S5" / "data.yaml").read_text())
     assert doc["val"] == str((tmp_path / "real" / "images").absolute())
+    dotted = tmp_path / "synth" / ".." / "real"  # a relative-looking path: data.yaml names the folder resolved
+    assert main([*args, "--val", str(dotted), "--out", str(tmp_path / "o3")]) == 0
+    doc = yaml.safe_load((tmp_path / "o3" / "seed0" / "R5_S5" / "data.yaml").read_text())
+    assert doc["val"] == str((tmp_path / "real" / "images").resolve()) and ".." not in doc["val"]
     assert main([*args, "--val", str(tmp_path / "synth"), "--out", str(tmp_path / "o2")]) == 2
 
 

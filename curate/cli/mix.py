@@ -60,7 +60,8 @@ def _validation(args: argparse.Namespace) -> Dataset | None:
         if given:
             raise MixError(f"{' and '.join(given)} describe --val, which is not given")
         return None
-    return pick_split(read_dataset(args.val, args.val_format or "auto").dataset, args.val_split, args.val, ("val",))
+    where = Path(args.val).resolve()  # data.yaml names its image folders by this path: no '..' in it
+    return pick_split(read_dataset(where, args.val_format or "auto").dataset, args.val_split, args.val, ("val",))
 
 
 def _grid(args: argparse.Namespace) -> list[Mixture]:
@@ -98,7 +99,8 @@ def cmd_mix(args: argparse.Namespace) -> int:
     except (MixError, SplitError, OutputError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
-    print_problems(errors, sys.stderr, limit=20)
+    if errors:
+        print_problems(errors, sys.stderr, limit=20)
     for seed, mix in plan:
         try:
             folder = write_mixture(
