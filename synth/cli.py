@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 
 from curate.core.commands import add_command
@@ -334,9 +334,26 @@ def _register_colour(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=cmd_colour)
 
 
+def _flame_library_config() -> type:
+    from synth.flames.library import FlameLibraryConfig
+
+    return FlameLibraryConfig
+
+
+def _method1_config() -> type:
+    from synth.method1 import Method1Config
+
+    return Method1Config
+
+
+def _method2_config() -> type:
+    from synth.method2 import Method2Config
+
+    return Method2Config
+
+
 def _register_flames(sub: argparse._SubParsersAction) -> None:
     from curate.core.options import add_config_options
-    from synth.flames.library import FlameLibraryConfig
 
     p = add_command(
         sub,
@@ -350,7 +367,7 @@ def _register_flames(sub: argparse._SubParsersAction) -> None:
         "  fuzzyfire synth flames --out out/flames-exposed --exposed --set rare=0",
     )
     p.add_argument("--out", required=True, type=Path, help="folder for the sequence folders")
-    add_config_options(p, FlameLibraryConfig, FLAME_ALIASES, "docs/config.md#flame-library")
+    add_config_options(p, _flame_library_config, FLAME_ALIASES, "docs/config.md#flame-library")
     p.set_defaults(func=cmd_flames)
 
 
@@ -397,8 +414,11 @@ def _register_scenes(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=cmd_scenes)
 
 
-def _dataset_arguments(p: argparse.ArgumentParser, schema: type, aliases: Sequence[Alias], anchor: str) -> None:
-    """Method 1 and Method 2's options: the run's own (--out, --overwrite, --workers) and the settings."""
+def _dataset_arguments(
+    p: argparse.ArgumentParser, schema: Callable[[], type], aliases: Sequence[Alias], anchor: str
+) -> None:
+    """Method 1 and Method 2's options: the run's own (--out, --overwrite, --workers) and the settings (``schema``
+    imports the config class only when the help is printed)."""
     from curate.core.options import add_config_options
 
     p.add_argument("--out", type=Path, help="output dataset folder (required unless --print-config)")
@@ -413,8 +433,6 @@ def _dataset_arguments(p: argparse.ArgumentParser, schema: type, aliases: Sequen
 
 
 def _register_method1(sub: argparse._SubParsersAction) -> None:
-    from synth.method1 import Method1Config
-
     p = add_command(
         sub,
         "method1",
@@ -429,13 +447,11 @@ def _register_method1(sub: argparse._SubParsersAction) -> None:
         "  fuzzyfire synth method1 configs/synth-method1.yaml --set n=200 --out out/m1-yaml\n"
         "  fuzzyfire synth audit out/m1 --json",
     )
-    _dataset_arguments(p, Method1Config, METHOD1_ALIASES, "synth-method1")
+    _dataset_arguments(p, _method1_config, METHOD1_ALIASES, "synth-method1")
     p.set_defaults(func=cmd_method1)
 
 
 def _register_method2(sub: argparse._SubParsersAction) -> None:
-    from synth.method2 import Method2Config
-
     p = add_command(
         sub,
         "method2",
@@ -453,7 +469,7 @@ def _register_method2(sub: argparse._SubParsersAction) -> None:
         "  fuzzyfire synth method2 configs/synth-method2.yaml --set n=200 --set flames.exposed=true --out out/m2-yaml\n"
         "  fuzzyfire synth audit out/m2 --json",
     )
-    _dataset_arguments(p, Method2Config, METHOD2_ALIASES, "synth-method2")
+    _dataset_arguments(p, _method2_config, METHOD2_ALIASES, "synth-method2")
     p.set_defaults(func=cmd_method2)
 
 

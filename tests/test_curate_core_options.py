@@ -38,9 +38,11 @@ ALIASES = (
 )
 
 
-def _parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser()
-    add_config_options(p, Settings, ALIASES, "docs/config.md#settings")
+def _parser(schema=Settings) -> argparse.ArgumentParser:
+    from curate.core.commands import HelpFormatter
+
+    p = argparse.ArgumentParser(formatter_class=HelpFormatter)
+    add_config_options(p, schema, ALIASES, "docs/config.md#settings")
     return p
 
 
@@ -78,8 +80,9 @@ def test_errors_name_the_file_and_the_key(tmp_path: Path) -> None:
 
 
 def test_help_shows_each_flags_key_and_its_dataclass_default() -> None:
-    text = _parser().format_help()
-    assert "[n=3]" in text and "[paths=[]]" in text and "[inner.depth=0.5]" in text
+    for schema in (Settings, lambda: Settings):  # the class, or a function importing it when the help is printed
+        text = _parser(schema).format_help()
+        assert "[n=3]" in text and "[paths=[]]" in text and "[inner.depth=0.5]" in text
     assert key_default(Settings, "inner.depth") == 0.5
     with pytest.raises(KeyError, match="no key 'deep'"):
         key_default(Settings, "inner.deep")

@@ -23,10 +23,14 @@ T = TypeVar("T")
 class HelpFormatter(argparse.RawDescriptionHelpFormatter):
     """The description (with its examples) printed as written, and every option's default in its help line:
     ``(default: VALUE)`` is added unless the help already speaks of its default or there is none to show
-    (None, a switch, an empty list)."""
+    (None, a switch, an empty list); an alias of config keys (:func:`curate.core.options.add_config_options`)
+    ends with ``[key=default]``, read from its dataclass now."""
 
     def _get_help_string(self, action: argparse.Action) -> str | None:
         text = action.help or ""
+        key_defaults = getattr(action, "key_defaults", None)
+        if key_defaults is not None:
+            return f"{text} [{key_defaults()}]"
         default = action.default
         if not action.option_strings or "default" in text or default in (None, argparse.SUPPRESS):
             return text

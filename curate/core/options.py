@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import functools
 import sys
 import typing
 from collections.abc import Callable, Mapping, Sequence
@@ -21,6 +22,7 @@ from typing import Any, TypeVar
 import yaml
 
 from curate.core.config import ConfigError, apply_overrides, build_config, read_yaml, to_dict
+from curate.core.reference import flow
 
 T = TypeVar("T")
 
@@ -70,24 +72,24 @@ def key_default(schema: type, key: str) -> Any:
     return to_dict(value)
 
 
-def show_default(value: Any) -> str:
-    """A default as the help shows it: YAML flow style (``null``, ``[]``, ``0.5``, ``[0.3, 2.5]``)."""
-    return yaml.safe_dump(value, default_flow_style=True, width=1000).strip().removesuffix("...").strip()
-
-
 def add_config_options(
-    p: argparse.ArgumentParser, schema: type, aliases: Sequence[Alias], reference: str, required: bool = False
+    p: argparse.ArgumentParser,
+    schema: type | Callable[[], type],
+    aliases: Sequence[Alias],
+    reference: str,
+    required: bool = False,
 ) -> None:
     """The positional ``config`` (YAML of ``schema``; optional unless ``required``), ``--set KEY=VALUE``
     (repeatable), ``--print-config``, and the ``aliases`` in a group of their own, each help ending with its keys'
-    defaults from ``schema``. ``reference``: where every key is documented (e.g. ``docs/config.md#synth-method2``)."""
+    defaults from ``schema``. ``schema`` may be a function that imports and returns the dataclass: the defaults are
+    then read only when the help is printed (:class:`curate.core.commands.HelpFormatter` shows them), so building
+    the command line imports no generator. ``reference``: where every key is documented (``docs/config.md#...``)."""
     p.add_argument(
         "config",
         type=Path,
         nargs=None if required else "?",
         metavar="CONFIG.yaml",
-        help=f"settings file ({schema.__name__}; every key: {reference})"
-        + ("" if required else "; default: the defaults shown here"),
+        help=f"settings file (every key: {reference})" + ("" if required else "; default: the defaults shown here"),
     )
     p.add_argument(
         "--set",
@@ -99,11 +101,17 @@ def add_config_options(
     p.add_argument("--print-config", action="store_true", help="print the resolved settings as YAML and stop")
     group = p.add_argument_group("settings (each an alias of a config key; defaults are the keys')")
     for a in aliases:
-        shown = ", ".join(f"{k}={show_default(key_default(schema, k))}" for k in a.keys)
         kwargs = dict(a.kwargs)
         if kwargs.get("action") is None:
             kwargs.setdefault("metavar", a.flag.lstrip("-").upper().replace("-", "_"))
-        group.add_argument(a.flag, dest=a.dest, default=None, help=f"{a.help} [{shown}]", **kwargs)
+        action = group.add_argument(a.flag, dest=a.dest, default=None, help=a.help, **kwargs)
+        action.key_defaults = functools.partial(key_defaults, schema, a.keys)  # type: ignore[attr-defined]
+
+
+def key_defaults(schema: type | Callable[[], type], keys: Sequence[str]) -> str:
+    """``key=default, ...`` of ``keys`` in ``schema`` (a dataclass, or a function returning it), as a help line ends."""
+    cls = schema if isinstance(schema, type) else schema()
+    return ", ".join(f"{k}={flow(key_default(cls, k))}" for k in keys)
 
 
 def config_from_args(args: argparse.Namespace, schema: type[T], aliases: Sequence[Alias]) -> T:
@@ -113,8 +121,7 @@ def config_from_args(args: argparse.Namespace, schema: type[T], aliases: Sequenc
         what = "is a folder" if Path(args.config).is_dir() else "does not exist"
         raise ConfigError(f"{args.config}: {what}, not a settings file (CONFIG.yaml is the optional first argument)")
     raw: dict[str, Any] = read_yaml(args.config) if args.config is not None else {}
-    given = [f"{k}={yaml.safe_dump(v, default_flow_style=True, width=10000).strip().removesuffix('...').strip()}"
-             for a in aliases if getattr(args, a.dest, None) not in (None, False)
+    given = [f"{k}={flow(v)}" for a in aliases if getattr(args, a.dest, None) not in (None, False)
              for k, v in a.values(getattr(args, a.dest)).items()]  # fmt: skip
     where = f"{args.config}: " if args.config is not None else ""
     try:
