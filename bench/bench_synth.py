@@ -127,7 +127,7 @@ def bench_run(name: str, run: Callable[[Path], object], n: int, size: str = "640
 
 def bench_cutouts(n: int, cutouts: Path | None, real: Path, photos: Path, workers: int) -> None:
     from fuzzyfire.cli import main as cli
-    from synth.flames.library import cutout_library
+    from synth.flames.sprites import load_library
 
     with tempfile.TemporaryDirectory() as tmp:
         if cutouts is None:
@@ -136,7 +136,7 @@ def bench_cutouts(n: int, cutouts: Path | None, real: Path, photos: Path, worker
             if cli(["synth", "cutouts", str(real), "--split", "train", "--out", str(cutouts)]) != 0:
                 raise SystemExit(f"could not cut flames from {real}")
             print(f"cutouts_from_train_split: {time.perf_counter() - t:.1f} s")
-        library = cutout_library(cutouts)
+        library = load_library([cutouts])
         cfg = Method2Config(n=n, width=416, height=416, scenes=0, backgrounds=(photos,), background_holdout=0.25,
                             images_per_view=2, flames=FlameLibraryConfig(source="cutouts"))  # fmt: skip
         bench_run("method2_cutouts", lambda out: run_method2(cfg, library, out, workers=workers), n, "416x416")

@@ -171,7 +171,8 @@ def synth_stage(root: Path, method: str, cfg: Any, base: Path, cutouts: Stage | 
     runs) again. ``cutouts``: a stage of real flame cut-outs (:mod:`fuzzyfire.cutout_pools`) for a ``flames.source:
     cutouts`` pool, named ``<method>-cutouts-<hash>``; its hash enters the pool's identity. The pool is made in one
     process per core."""
-    from synth.flames.library import build_library, cutout_library
+    from synth.flames.library import build_library
+    from synth.flames.sprites import load_library
     from synth.method1 import run_method1
     from synth.method2 import run_method2
 
@@ -190,7 +191,7 @@ def synth_stage(root: Path, method: str, cfg: Any, base: Path, cutouts: Stage | 
         {"kind": method, "config": {**config, **files, **flames}},
         lambda out: runner(
             cfg,
-            build_library(cfg.flames, cutout_library(cutouts.folder) if cutouts else ()),
+            build_library(cfg.flames, load_library([cutouts.folder]) if cutouts else ()),
             out,
             workers=os.cpu_count() or 1,  # the same bytes from any number of processes
         ),

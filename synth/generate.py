@@ -178,15 +178,16 @@ def generate(
     frames = load_frames(getattr(cfg, "frames", ()), unreadable)  # labelled frames: photos keeping their fire boxes
     for problem in places.problems:  # unreadable files among the places and frames: named, never composited on
         print(f"{problem.path}: skipped background ({problem.reason})", file=sys.stderr)
-    if places.panorama_note():
-        print(places.panorama_note(), file=sys.stderr)
+    if note := places.panorama_note():
+        print(note, file=sys.stderr)
     for problem in unreadable:
         print(problem, file=sys.stderr)
     known = set(photo_files)
     photo_files += [p for p in frames if p not in known]
     args = {**to_json(cfg), "flame_sequences": [s.name for s in library]}
     staging = Staging(out, args)
-    job = Job(method, cfg, make_image, tuple(library), out, platform, tuple(files), tuple(photo_files), tuple(places.panoramas), frames)  # fmt: skip
+    job = Job(method, cfg, make_image, tuple(library), out, platform, tuple(files), tuple(photo_files),
+              tuple(places.panoramas), frames)  # fmt: skip
     try:
         todo = [i for i in range(cfg.n) if not staging.done(i)]
         workers = min(workers, len(todo) // MIN_IMAGES_PER_WORKER)

@@ -73,7 +73,7 @@ def test_flame_sources_are_checked_in_one_line():
 
 
 def test_a_library_takes_the_cutouts_its_source_names():
-    cut = [_tagged("real-000", L.CUTOUT_GENERATOR)]
+    cut = [_tagged("real-000", "user-rgba")]  # as a synth cutouts folder loads
     small = {"sequences": 1, "frames": 24, "keep_every": 12}
     assert [s.name for s in L.build_library(L.FlameLibraryConfig(source="cutouts", **small), cut)] == ["real-000"]
     with pytest.raises(ValueError, match="flames.source cutouts: no cut-outs given"):

@@ -7,20 +7,17 @@ which the caller supplies (``fuzzyfire experiment`` cuts them from each mixture'
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Literal
 
 import numpy as np
 
 from synth.flames.simulate import GENERATORS, generate_sequence, sample_params
-from synth.flames.sprites import SpriteSequence, load_library, load_rgba_folder
+from synth.flames.sprites import SpriteSequence, load_library
 
 #: Where a library's flames come from (``FlameLibraryConfig.source``).
 FLAME_SOURCES: tuple[str, ...] = ("simulated", "cutouts")
-
-#: ``meta["generator"]`` of a cut-out sequence (:func:`cutout_library`).
-CUTOUT_GENERATOR = "cutouts"
 
 
 @dataclass(frozen=True)
@@ -82,7 +79,8 @@ def procedural_library(
 
 def build_library(cfg: FlameLibraryConfig, cutouts: Sequence[SpriteSequence] = ()) -> list[SpriteSequence]:
     """The sequences ``cfg`` describes: ``source`` simulated: loaded from ``folders`` when given, else simulated;
-    cutouts: ``cutouts`` (:func:`cutout_library`). ValueError when ``cutouts`` are missing for source cutouts or
+    cutouts: ``cutouts`` (a ``fuzzyfire synth cutouts`` output read by :func:`synth.flames.sprites.load_library`).
+    ValueError when ``cutouts`` are missing for source cutouts or
     given to source simulated."""
     if cfg.source == "simulated" and cutouts:
         raise ValueError("cut-outs given to a flame library whose source is simulated")
@@ -97,21 +95,6 @@ def build_library(cfg: FlameLibraryConfig, cutouts: Sequence[SpriteSequence] = (
         return load_library(list(cfg.folders))
     args = (cfg.sequences, cfg.seed, cfg.frames, cfg.keep_every, cfg.rare, cfg.generator, cfg.texture)
     return procedural_library(*args, cfg.exposed)
-
-
-def cutout_library(folder: Path) -> list[SpriteSequence]:
-    """The sequence folders of a ``fuzzyfire synth cutouts`` output ``folder`` (:func:`synth.flames.cutouts.write_cutouts`),
-    each marked as cut-outs (``meta["generator"]`` = :data:`CUTOUT_GENERATOR`), each sprite cropped to its content
-    (as a user's RGBA frames)."""
-    subs = sorted(p for p in Path(folder).iterdir() if p.is_dir())
-    return [
-        replace(seq, meta={**seq.meta, "generator": CUTOUT_GENERATOR}) for seq in (load_rgba_folder(s) for s in subs)
-    ]
-
-
-def is_cutout(seq: SpriteSequence) -> bool:
-    """Whether ``seq`` holds real cut-out flames (:func:`cutout_library`), not simulated ones."""
-    return seq.meta.get("generator") == CUTOUT_GENERATOR
 
 
 def pick_sequence(library: Sequence[SpriteSequence], rng: np.random.Generator) -> SpriteSequence:

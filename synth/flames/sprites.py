@@ -109,14 +109,13 @@ def crop_to_content(sprite: Sprite, threshold: int = 2, pad: int = 1) -> Sprite 
     return None if rect is None else crop_sprite(sprite, rect)
 
 
-def shown_part(sprite: Sprite, crop: bool = True) -> tuple[Sprite, tuple[int, int]] | None:
-    """(``sprite`` cropped to :func:`content_rect` when ``crop``, else whole; (x, y) of that part's top-left in
-    ``sprite``), or None when the part holds no flame pixel."""
-    rect = content_rect(sprite) if crop else (0, 0, *sprite.size)
+def shown_part(sprite: Sprite) -> Sprite | None:
+    """``sprite`` cropped to :func:`content_rect`, or None when that part holds no flame pixel."""
+    rect = content_rect(sprite)
     if rect is None:
         return None
-    part = crop_sprite(sprite, rect) if crop else sprite
-    return (part, (int(rect[0]), int(rect[1]))) if part.mask.any() else None
+    part = crop_sprite(sprite, rect)
+    return part if part.mask.any() else None
 
 
 def crop_sprite(sprite: Sprite, rect: tuple[int, int, int, int]) -> Sprite:
@@ -206,27 +205,25 @@ def _read_over(folder: Path, i: int, shape: tuple[int, int]) -> NDArray[np.uint8
     return np.zeros((*shape, 4), np.uint8)
 
 
-def load_rgba_folder(folder: Path, crop: bool = True) -> SpriteSequence:
-    """A user's RGBA sequence: every ``*.png`` in ``folder`` with an alpha channel, cropped to its content (or,
-    ``crop`` False, each on its whole canvas: a real cut-out's canvas is the box it was cut from); frames with no
-    flame pixel are skipped. ``meta``: ``files``, the PNG of each kept sprite, and ``offsets``, the (x, y) of
-    each kept sprite's top-left in its PNG's pixels ((0, 0) on the whole canvas)."""
+def load_rgba_folder(folder: Path) -> SpriteSequence:
+    """A user's RGBA sequence (or a ``synth cutouts`` sequence): every ``*.png`` in ``folder`` with an alpha channel,
+    cropped to its content; frames with no flame pixel are skipped. ``meta["files"]``: the PNG of each kept
+    sprite."""
     paths = sorted(p for p in folder.glob("*.png") if p.is_file())
     if not paths:
         raise FileNotFoundError(f"{folder}: no sequence.json and no PNG frames")
-    sprites, files, offsets = [], [], []
+    sprites, files = [], []
     for path in paths:
         rgba = _read_png(path)
         if rgba.ndim != 3 or rgba.shape[2] != 4:
             raise ImageError(path, "has no alpha channel (RGBA PNG needed)")
-        kept = shown_part(sprite_from_rgba(rgba), crop)
+        kept = shown_part(sprite_from_rgba(rgba))
         if kept is not None:
-            sprites.append(kept[0])
+            sprites.append(kept)
             files.append(path.name)
-            offsets.append(kept[1])
     if not sprites:
         raise ImageError(folder, "no frame shows a flame (bright, opaque pixels)")
-    return SpriteSequence(folder.name, tuple(sprites), {"generator": "user-rgba", "files": files, "offsets": offsets})
+    return SpriteSequence(folder.name, tuple(sprites), {"generator": "user-rgba", "files": files})
 
 
 def load_library(folders: Sequence[Path]) -> list[SpriteSequence]:

@@ -118,7 +118,7 @@ class ViewCache:
             return depths[-1]
 
         def shows_ground(v: camera.CameraView, depth: NDArray[np.float32]) -> bool:
-            stand = self._stand_mask(env, v.pose, v.yfov, depth)
+            stand = self._stand_mask(v.pose, v.yfov, depth)
             return stand is None or float(stand.mean()) >= MIN_ZONE_SHARE
 
         cam = camera.find_view(env.camera, rng, depth_of, accept=shows_ground)
@@ -127,9 +127,9 @@ class ViewCache:
         return self._view
 
     def _stand_mask(
-        self, env: scenes.Environment, pose: NDArray[np.float64], yfov: float, depth: NDArray[np.float32]
+        self, pose: NDArray[np.float64], yfov: float, depth: NDArray[np.float32]
     ) -> NDArray[np.bool_] | None:
-        """(H, W) bool where a flame may stand in a render of ``env`` seen from ``pose``: a room's up-facing
+        """(H, W) bool where a flame may stand in a render seen from ``pose`` with ``depth``: a room's up-facing
         surfaces with ``surfaces``; None: anywhere (the method's own rule)."""
         return standing_mask(depth, pose, yfov) if self.surfaces else None
 
@@ -178,7 +178,7 @@ class ViewCache:
             v = self.view(view_index)
             rgb, depth = render.render_view(self.renderer, v.scene, v.camera.pose, v.camera.yfov)
             made = (rgb, depth, v.meta())
-            stand = self._stand_mask(v.env, v.camera.pose, v.camera.yfov, depth)
+            stand = self._stand_mask(v.camera.pose, v.camera.yfov, depth)
             if stand is not None:  # flames stand only there (a site, like a photo's ground)
                 made = (rgb, np.where(stand, depth, np.float32(0)), {**made[2], "site": "surfaces", "people": []})
         if len(self.weights) > 1:
