@@ -40,7 +40,7 @@ def read_source(src: SourceConfig, base: Path) -> tuple[Dataset, list[Problem]]:
     path = src.path if src.path.is_absolute() else base / src.path
     tag = f"real:{src.name}" if src.name else None
     result = read_dataset(path, src.format, names=src.names, source=tag, aliases=src.aliases)
-    result = result.check_aliases(src.aliases, option="aliases").drop_classes(src.drop_classes, option="drop_classes")
+    result = result.drop_classes(src.drop_classes, option="drop_classes")
     return result.dataset, result.problems
 
 

@@ -37,9 +37,11 @@ def validate(
     names: Sequence[str] | None = None,
     aliases: Mapping[str, str] | None = None,
     decode: bool = True,
+    alias_option: str = "aliases",
 ) -> ReadResult:
-    """Read ``path`` and check it; returns what could be read with every problem, sorted by level."""
-    result = read_dataset(path, fmt, names=names, aliases=aliases)
+    """Read ``path`` and check it; returns what could be read with every problem, sorted by level (``aliases``
+    of classes the source lacks: :func:`~curate.core.formats.registry.read_dataset`)."""
+    result = read_dataset(path, fmt, names=names, aliases=aliases, alias_option=alias_option)
     problems = list(result.problems)
     if decode:
         problems += decode_problems(result.dataset)

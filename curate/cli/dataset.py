@@ -41,8 +41,10 @@ def cmd_convert(args: argparse.Namespace) -> int:
 
 def cmd_validate(args: argparse.Namespace) -> int:
     aliases = parse_aliases(args.alias)
-    result = validate(args.src, args.fmt, names=args.names, aliases=aliases, decode=not args.no_decode)
-    result = result.check_aliases(aliases).drop_classes(args.drop_class)
+    result = validate(
+        args.src, args.fmt, names=args.names, aliases=aliases, decode=not args.no_decode, alias_option="--alias"
+    )
+    result = result.drop_classes(args.drop_class)
     ds, problems = result.dataset, result.problems
     stats = dataset_stats(ds, result.unlabelled)
     if args.json:

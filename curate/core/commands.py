@@ -80,8 +80,8 @@ def read_from_args(args: argparse.Namespace) -> ReadResult:
     class the dataset does not have is an :class:`~curate.core.names.UnknownNameError`."""
     source = getattr(args, "source", None)
     aliases = parse_aliases(args.alias)
-    result = read_dataset(args.src, args.fmt, names=args.names, source=source, aliases=aliases)
-    return result.check_aliases(aliases).drop_classes(args.drop_class)
+    result = read_dataset(args.src, args.fmt, names=args.names, source=source, aliases=aliases, alias_option="--alias")
+    return result.drop_classes(args.drop_class)
 
 
 def parse_aliases(items: Sequence[str]) -> dict[str, str]:

@@ -78,5 +78,4 @@ def load_split(
     """Read the dataset at ``path`` (:func:`curate.core.formats.registry.read_dataset`, class ``aliases``
     applied; an alias of a class the dataset does not have is an :class:`~curate.core.names.UnknownNameError`)
     and :func:`prepare` split ``split`` with ``classes``."""
-    result = read_dataset(path, fmt, aliases=aliases or None).check_aliases(aliases, "aliases")
-    return prepare(result.dataset, split, classes, drop, path)
+    return prepare(read_dataset(path, fmt, aliases=aliases or None).dataset, split, classes, drop, path)

@@ -56,8 +56,11 @@ def read_dataset(
     names: Sequence[str] | None = None,
     source: str | None = None,
     aliases: Mapping[str, str] | None = None,
+    alias_option: str = "aliases",
 ) -> ReadResult:
-    """Read a dataset of format ``fmt`` (``auto`` detects it). ``names`` only applies to YOLO."""
+    """Read a dataset of format ``fmt`` (``auto`` detects it). ``names`` only applies to YOLO. An alias of a
+    class the source does not have is an :class:`~curate.core.names.UnknownNameError` naming ``alias_option``
+    (the option or key that gave it: :meth:`~curate.core.formats.common.ReadResult.check_aliases`)."""
     fmt = detect_format(path) if fmt == "auto" else fmt
     readers: dict[str, Callable[[], ReadResult]] = {
         "coco": lambda: read_coco(path, source=source, aliases=aliases),
@@ -68,4 +71,4 @@ def read_dataset(
     }
     if fmt not in readers:
         raise ValueError(f"unknown format {fmt!r}; choose one of {', '.join(FORMATS)}")
-    return readers[fmt]()
+    return readers[fmt]().check_aliases(aliases, alias_option)
