@@ -18,8 +18,9 @@ from curate.core.load import load_split, prepare
 @dataclass(frozen=True)
 class DataRef:
     """A labelled dataset a run reads: ``path`` (folder or COCO .json) in ``format``, one ``split`` of it (None =
-    every image), classes renamed by ``aliases`` and ``drop`` removed, and with ``holdout`` > 0 only the images
-    :func:`curate.core.holdout.held_out` picks at that share. ``identity``: what made it
+    every image), classes renamed by ``aliases`` and ``drop`` removed, with ``holdout`` > 0 only the images
+    :func:`curate.core.holdout.held_out` picks at that share, and without the images ``exclude`` names (their
+    ``file_name``: test images that leak from the training data, :mod:`fuzzyfire.leakage`). ``identity``: what made it
     (hashable JSON; no absolute output paths, so two experiment folders give the same run identities)."""
 
     path: Path
@@ -30,13 +31,15 @@ class DataRef:
     drop: tuple[str, ...] = ()
     standin: bool = False
     holdout: float = 0.0
+    exclude: tuple[str, ...] = ()
 
     def with_split(self, split: str | None) -> DataRef:
         return replace(self, split=split)
 
     def key(self) -> dict[str, Any]:
-        """The identity of this split of the data."""
-        return {"data": dict(self.identity), "split": self.split}
+        """The identity of this split of the data (and of the images it leaves out, when it leaves any)."""
+        left_out = {"exclude": sorted(self.exclude)} if self.exclude else {}
+        return {"data": dict(self.identity), "split": self.split, **left_out}
 
     def source(self) -> tuple[str, str, tuple[tuple[str, str], ...]]:
         """What is read from disk: the same for every split of one dataset."""
@@ -64,14 +67,22 @@ class Datasets:
     def get(self, ref: DataRef) -> Dataset:
         """Split ``ref.split`` (None = every image) with exactly the experiment's classes, in their order.
         Raises ValueError when the split is missing or has no images."""
-        key = (ref.source(), ref.split, ref.drop, ref.holdout)
+        key = (ref.source(), ref.split, ref.drop, ref.holdout, ref.exclude)
         if key not in self._prepared:
             ds = prepare(self.read(ref), ref.split, self.classes, ref.drop, ref.path)
-            self._prepared[key] = held_out_images(ds, ref.holdout, ref.path) if ref.holdout else ds
+            self._prepared[key] = _narrowed(ds, ref)
         return self._prepared[key]
+
+
+def _narrowed(ds: Dataset, ref: DataRef) -> Dataset:
+    """``ds`` (``ref``'s split, prepared) with only its held-out share and without the images ``ref`` excludes."""
+    ds = held_out_images(ds, ref.holdout, ref.path) if ref.holdout else ds
+    if ref.exclude:
+        left_out = set(ref.exclude)
+        ds = ds.filter_images(lambda img: img.file_name not in left_out)
+    return ds
 
 
 def load_data(ref: DataRef, classes: Sequence[str]) -> Dataset:
     """``ref``'s split with exactly ``classes``, read from disk now (a run outside an experiment)."""
-    ds = load_split(ref.path, ref.format, ref.split, classes, dict(ref.aliases), ref.drop)
-    return held_out_images(ds, ref.holdout, ref.path) if ref.holdout else ds
+    return _narrowed(load_split(ref.path, ref.format, ref.split, classes, dict(ref.aliases), ref.drop), ref)

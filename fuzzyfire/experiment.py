@@ -1,10 +1,11 @@
 """``fuzzyfire experiment``: the study in one call. Wiring only; the work lives in the stages, runs and eval.
 
 curate (optional) -> synth Method 1 and Method 2 -> mix -> train each mixture x seed -> score every run on
-every test set (common, rare and the named ``tests:``; a test set holding a pool's background photo is refused
-first, :mod:`fuzzyfire.leakage`) -> aggregate -> report. Output folder::
+every test set (common, rare and the named ``tests:``; each checked first against the training data, its
+leaked images dropped, and refused when it holds a pool's background photo, :mod:`fuzzyfire.leakage`) -> aggregate -> report. Output folder::
 
     OUT/experiment.json            resolved config, versions, git commit, stages, runs and their status
+    OUT/leakage.json               every test set's images found in the training data (dropped from it)
     OUT/data/<stage>-<hash>/       real / rare / method1 / method2 datasets (cached by config hash)
     OUT/mixtures/<pool>-<hash>/seed<S>/R<m>_S<n>/   training mixtures (images symlinked)
     OUT/runs/<mixture>[-<method>]/seed<S>-<hash>/  one run: train/, scores/, results.json (written last)
@@ -34,7 +35,16 @@ from fuzzyfire.cutout_pools import cutout_pools, is_own, simulated
 from fuzzyfire.datasets import DataRef, Datasets
 from fuzzyfire.executors import Outcome
 from fuzzyfire.experiment_config import METHODS, EvalSetConfig, ExperimentConfig
-from fuzzyfire.leakage import check_leakage, pool_photos
+from fuzzyfire.leakage import (
+    LEAKS_FILE,
+    LeakageError,
+    TestLeaks,
+    check_leakage,
+    find_test_leaks,
+    pool_photos,
+    reference_images,
+    write_leaks,
+)
 from fuzzyfire.runs import EvalSet, RunSpec, RunTask, execute_task, finished, missing_evals, run_data
 from fuzzyfire.stages import Prepared, curate_stage, digest, folder_ref, label, standin_stage, synth_stage
 from train.config import TrainConfig
@@ -247,12 +257,45 @@ def _train_for(train: TrainConfig, mixture: str) -> TrainConfig:
 
 
 def test_sets(cfg: ExperimentConfig, data: Prepared) -> tuple[tuple[EvalSet, ...], tuple[EvalSet, ...]]:
-    """The test sets of every run: the common and rare sets (in the run identity, as always) and the named sets
-    of ``tests:`` (not in it: adding one scores the finished runs, it trains nothing)."""
-    tests = [EvalSet(label(cfg.real.name, data.real.standin), data.real.with_split(cfg.real.test_split))]
+    """The test sets of every run: the common and rare sets, and the named sets of ``tests:`` (adding one scores
+    the finished runs, it trains nothing), each without the images that leak from the training data when
+    ``leakage.action`` is drop (``data.leaks``)."""
+    tests = {label(cfg.real.name, data.real.standin): data.real.with_split(cfg.real.test_split)}
     if data.rare is not None:
-        tests.append(EvalSet(label(cfg.rare.name, data.rare.standin), data.rare))
-    return tuple(tests), tuple(EvalSet(name, ref) for name, ref in data.tests.items())
+        tests[label(cfg.rare.name, data.rare.standin)] = data.rare
+    drop = cfg.leakage.action == "drop"
+
+    def clean(name: str, ref: DataRef) -> EvalSet:
+        leaks = data.leaks.get(name)
+        return EvalSet(name, replace(ref, exclude=leaks.leaked) if drop and leaks and leaks.leaked else ref)
+
+    return tuple(clean(n, r) for n, r in tests.items()), tuple(clean(n, r) for n, r in data.tests.items())
+
+
+def check_test_leaks(cfg: ExperimentConfig, data: Prepared, datasets: Datasets, base: Path) -> dict[str, TestLeaks]:
+    """Every test set against the real training data (:func:`fuzzyfire.leakage.find_test_leaks`), one line per
+    set; raises :class:`fuzzyfire.leakage.LeakageError` when one leaks and ``leakage.action`` is refuse."""
+    from curate.embed import embedding_cache_path, load_embedder
+    from curate.embedcache import EmbeddingCache
+    from curate.scan import scan_images
+
+    trained = [datasets.get(data.real.with_split(s)) for s in (cfg.real.train_split, cfg.real.val_split)]
+    sources = [s.path if s.path.is_absolute() else base / s.path for s in cfg.real.curate_config().sources] \
+        if cfg.real.source() == "curate" else []  # fmt: skip
+    common, named = test_sets(cfg, replace(data, leaks={}))
+    own = common[0].name  # the real set's own test split: its images are among the curated sources
+    tests = {t.name: (datasets.get(t.data), reference_images(trained, [] if t.name == own else sources))
+             for t in (*common, *named)}  # fmt: skip
+    _say(f"leak   checking {len(tests)} test sets against the training data ...")
+    embedder = load_embedder()
+    with EmbeddingCache(embedding_cache_path()) as cache:
+        leaks = find_test_leaks(tests, cfg.leakage.threshold, lambda paths: scan_images(paths, embedder, cache))
+    for t in leaks.values():
+        _say(f"leak   {t.line(cfg.leakage.action)}")
+    if cfg.leakage.action == "refuse" and any(t.leaked for t in leaks.values()):
+        worst = max(leaks.values(), key=lambda t: len(t.leaked))
+        raise LeakageError(f"leakage: {worst.line('refuse')}; set leakage.action: drop to test without them")
+    return leaks
 
 
 def run_grid(specs: Sequence[RunSpec], datasets: Datasets, executor) -> list[dict[str, Any] | None]:
@@ -329,6 +372,8 @@ def run_experiment(cfg: ExperimentConfig, base: Path, out: Path, executor=None) 
     datasets = Datasets(cfg.classes)
     data = prepare_data(cfg, base, out, ())  # the real and test sets, checked before any pool is built
     check_data(cfg, data, datasets, pool_photos(cfg.synth, needed_methods(grid), base))
+    data = replace(data, leaks=check_test_leaks(cfg, data, datasets, base))
+    write_leaks(out / LEAKS_FILE, data.leaks, cfg.leakage.threshold, cfg.leakage.action)
     data = replace(data, pools=prepare_pools(cfg, base, out, shared_methods(cfg, grid)))
     if data.standin:
         _say(STANDIN_NOTICE)

@@ -145,6 +145,17 @@ class ExecutorConfig:
 
 
 @dataclass(frozen=True)
+class LeakageConfig:
+    """Every test set is checked against the real training data before anything is trained
+    (:mod:`fuzzyfire.leakage`): its copies and near duplicates of training images are dropped or refuse the study."""
+
+    action: Literal["drop", "refuse"] = "drop"  # drop: leaked test images leave their set (listed in leakage.json
+    # and the report) | refuse: the study stops before training and names them
+    threshold: float = 0.45  # Euclidean distance of unit embeddings, 0..2, under which two images are duplicates
+    # (the dedup's default)
+
+
+@dataclass(frozen=True)
 class ReportConfig:
     title: str = "fuzzyfire study"  # the report's title
     bootstrap: int = 1000  # paired image-level bootstrap resamples per comparison (0 = no comparisons)
@@ -165,6 +176,7 @@ class ExperimentConfig:
     engine: EngineConfig = field(default_factory=EngineConfig)  # who trains: fuzzyfire or a command (engine.py)
     score: ScoreConfig = field(default_factory=ScoreConfig)  # how each run is scored (fuzzyfire score's settings)
     executor: ExecutorConfig = field(default_factory=ExecutorConfig)  # where runs run: here, or on a Ray cluster
+    leakage: LeakageConfig = field(default_factory=LeakageConfig)  # test images that are training images: dropped
     report: ReportConfig = field(default_factory=ReportConfig)  # tables, comparisons and report.html
     images: Literal["symlink", "hardlink", "copy"] = "symlink"  # how images reach the mixture folders
 
@@ -188,6 +200,8 @@ class ExperimentConfig:
             raise ExperimentConfigError("grid.mixtures and grid.table1 are both empty: nothing to train")
         if not self.classes:
             raise ExperimentConfigError("classes is empty")
+        if not 0.0 <= self.leakage.threshold <= 2.0:
+            raise ExperimentConfigError(f"leakage.threshold must be in 0..2, got {self.leakage.threshold:g}")
         try:
             self.engine.check()
         except EngineError as exc:

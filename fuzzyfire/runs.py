@@ -5,9 +5,9 @@ writes into ``spec.out``: ``run.json`` (the spec) first, ``train/`` (the trainin
 its ``last.pt``), ``scores/<test set>/`` (metrics.json, predictions.json, matches.npz, pr_curve.png,
 errors.json), ``timing.json``
 and, last, ``results.json``. A run whose ``results.json`` carries the same identity hash is not trained again,
-so a rerun does nothing and an interrupted grid resumes; the named test sets (``spec.evals``) are no part of
-that identity: one added later (or redefined) is scored with the finished run's model and added to its
-``results.json``. ``results.json`` holds no timings or absolute paths: the same spec gives byte-identical files.
+so a rerun does nothing and an interrupted grid resumes. No test set is part of that identity (a test set does
+not change the model): one added later, or redefined (e.g. leaked images dropped, :mod:`fuzzyfire.leakage`), is
+scored with the finished run's model and its entry in ``results.json`` replaced. ``results.json`` holds no timings or absolute paths: the same spec gives byte-identical files.
 """
 
 from __future__ import annotations
@@ -62,8 +62,8 @@ class RunSpec:
     ``seed`` is the run's seed, its ``threads`` resolved); ``score`` eval's own scoring options; ``engine`` an
     external trainer (:mod:`fuzzyfire.engine`; None = our detector); ``tables`` the study tables the run's rows
     belong to (``table1``, ``table2``); ``root`` the experiment folder (the run's own folder, :attr:`out`,
-    follows from its label, seed and identity hash); ``tests`` the common and rare sets (in the identity, as
-    they always were), ``evals`` the named test sets (not in it)."""
+    follows from its label, seed and identity hash); ``tests`` the common and rare sets, ``evals`` the named
+    test sets (no test set is in the identity: module docstring)."""
 
     mixture: str
     method: str | None
@@ -76,7 +76,7 @@ class RunSpec:
     root: Path
     engine: EngineConfig | None = None
     tables: tuple[str, ...] = ()
-    evals: tuple[EvalSet, ...] = ()  # named test sets: scored, but not in the identity (added ones need no training)
+    evals: tuple[EvalSet, ...] = ()  # named test sets
 
     @property
     def seed(self) -> int:
@@ -92,7 +92,8 @@ class RunSpec:
         return self.root / "runs" / self.label / f"seed{self.seed}-{self.hash()[:8]}"
 
     def identity(self) -> dict[str, Any]:
-        """What makes the run (no paths of ours, no table membership): equal identities give equal results."""
+        """What makes the run's model and its scoring (no test set, no paths of ours, no table membership): equal
+        identities give equal results on equal test sets."""
         engine = {"engine": to_dict(self.engine)} if self.engine is not None else {}
         return {
             **engine,
@@ -101,7 +102,6 @@ class RunSpec:
             "seed": self.seed,
             "train_data": self.train_data.key(),
             "val_data": self.val_data.key(),
-            "tests": {t.name: t.data.key() for t in self.tests},
             "classes": list(self.classes),
             "train": train_identity(self.train),
             "score": to_dict(self.score),
@@ -195,8 +195,8 @@ def score_run(
     spec: RunSpec, model: Path, tests: dict[str, Dataset], which: Sequence[EvalSet] | None = None
 ) -> dict[str, dict[str, Any]]:
     """Score ``model`` on the test sets ``which`` (None = every one of ``spec``; ``tests``: their datasets by
-    name); writes ``scores/<name>/``; returns headline metrics per test set (:func:`headline`). A named test
-    set's entry carries its data's digest (:func:`eval_key`): a redefined set is scored again."""
+    name); writes ``scores/<name>/``; returns headline metrics per test set (:func:`headline`). Each entry
+    carries its data's digest (:func:`eval_key`): a redefined set is scored again."""
     from eval.score import score, score_errors, write_outputs
 
     detector = spec.score.detector(model)
@@ -210,9 +210,7 @@ def score_run(
         write_outputs(result, folder)
         errors = score_errors(result)
         errors.write(folder)
-        out[test.name] = headline(result.metrics, errors, f"scores/{slug(test.name)}")
-        if test in spec.evals:
-            out[test.name]["data"] = eval_key(test)
+        out[test.name] = {**headline(result.metrics, errors, f"scores/{slug(test.name)}"), "data": eval_key(test)}
     return out
 
 
@@ -234,13 +232,13 @@ def headline(m: CocoMetrics, errors: ErrorBreakdown, folder: str) -> dict[str, A
 
 
 def eval_key(test: EvalSet) -> str:
-    """The digest of a named test set's data (its identity and split) as its results entry records it."""
+    """The digest of a test set's data (its identity, split and dropped images) as its results entry records it."""
     return digest(test.data.key())
 
 
 def missing_evals(spec: RunSpec, results: dict[str, Any]) -> list[EvalSet]:
-    """The named test sets of ``spec`` that its finished ``results`` were not scored on (or on other data)."""
-    return [t for t in spec.evals if results["tests"].get(t.name, {}).get("data") != eval_key(t)]
+    """The test sets of ``spec`` that its finished ``results`` were not scored on (or on other data)."""
+    return [t for t in spec.test_sets if results["tests"].get(t.name, {}).get("data") != eval_key(t)]
 
 
 def exported_model(spec: RunSpec) -> Path:
@@ -273,8 +271,8 @@ def slug(name: str) -> str:
 
 
 def execute_run(spec: RunSpec, data: RunData | None = None) -> dict[str, Any]:
-    """Run ``spec`` (module docstring) unless it already finished (then only score it on the named test sets
-    its results lack); returns its ``results.json`` content.
+    """Run ``spec`` (module docstring) unless it already finished (then only score it on the test sets its
+    results lack); returns its ``results.json`` content.
     ``data``: its shared datasets as the experiment prepared them (None: read here)."""
     done = finished(spec)
     if done is not None:

@@ -249,13 +249,15 @@ def _curate(cfg: Any, base: Path, out: Path) -> None:
 
 @dataclass(frozen=True)
 class Prepared:
-    """The experiment's data: the real set (with splits), the rare test set, the synthetic pools and the named
-    test sets (``tests:``) by label."""
+    """The experiment's data: the real set (with splits), the rare test set, the synthetic pools, the named
+    test sets (``tests:``) by label and, by test-set label, the check of each against the training data
+    (:class:`fuzzyfire.leakage.TestLeaks`; its leaked images leave the set when ``leakage.action`` is drop)."""
 
     real: DataRef
     rare: DataRef | None
     pools: dict[str, DataRef]
     tests: dict[str, DataRef] = field(default_factory=dict)
+    leaks: dict[str, Any] = field(default_factory=dict)
 
     @property
     def standin(self) -> bool:

@@ -17,6 +17,7 @@ from fuzzyfire.runs import (
     RunError,
     RunSpec,
     execute_run,
+    eval_key,
     exported_model,
     finished,
     missing_evals,
@@ -69,9 +70,20 @@ def test_finished_runs_are_skipped_only_with_the_same_spec(tmp_path: Path) -> No
     spec.out.mkdir(parents=True)
     (spec.out / RESULTS_FILE).write_text(json.dumps({"hash": "other", "tests": {}}))
     assert finished(spec) is None
-    (spec.out / RESULTS_FILE).write_text(json.dumps({"hash": spec.hash(), "tests": {"common": {}}}))
+    scored = {"common": {"data": eval_key(spec.tests[0])}}
+    (spec.out / RESULTS_FILE).write_text(json.dumps({"hash": spec.hash(), "tests": scored}))
     result = execute_run(spec)  # no training: the data paths do not even exist
-    assert result["skipped"] is True and result["tests"] == {"common": {}}
+    assert result["skipped"] is True and result["tests"] == scored
+
+
+def test_no_test_set_is_in_the_identity_and_a_redefined_one_is_scored_again(tmp_path: Path) -> None:
+    """A test set does not change the model: dropping images from it (leakage) keeps the run, but the run's
+    results on it are stale."""
+    spec = _spec(tmp_path)
+    narrowed = replace(spec, tests=(EvalSet("common", replace(spec.tests[0].data, exclude=("a.jpg",))),))
+    assert narrowed.hash() == spec.hash() and eval_key(narrowed.tests[0]) != eval_key(spec.tests[0])
+    done = {"hash": spec.hash(), "tests": {"common": {"data": eval_key(spec.tests[0])}}}
+    assert missing_evals(spec, done) == [] and missing_evals(narrowed, done) == list(narrowed.tests)
 
 
 def test_slug_makes_folder_names() -> None:
