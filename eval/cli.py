@@ -11,6 +11,8 @@ from pathlib import Path
 from curate.core.commands import add_command
 from curate.core.formats.registry import FORMATS
 from eval.cli_options import add_model_args, build_detector
+from eval.errors import ALARM_CONF
+from eval.imagelevel import IMAGE_RECALL
 from eval.operating import ALARM_BUDGET, RECALL_AT_ALARMS
 
 
@@ -170,13 +172,18 @@ def cmd_compare(args: argparse.Namespace) -> int:
     import numpy as np
 
     from curate.core.cocoeval import ClassMatchError
+    from eval.imagelevel import paired_image_recall
     from eval.onnx_model import ModelError
-    from eval.score import ScoreError
+    from eval.score import ScoreError, score_operating
     from eval.stats import MatchTable, paired_bootstrap
 
     sides = (args.model_a, args.model_b)
     if args.alarm_budget <= 0 or args.samples < 1:
         raise ValueError(f"--alarm-budget must be > 0 and --samples >= 1, got {args.alarm_budget}, {args.samples}")
+    if (args.attributes is not None or args.forest is not None) and not args.slices:
+        raise ValueError("--attributes and --forest go with --slices")
+    if args.attributes is not None and not args.attributes.is_file():
+        raise FileNotFoundError(f"--attributes: {args.attributes}: no such file")
     try:
         test = _load(args)
         results = [[_score_model(m, args, test.dataset, test.problems) for m in side] for side in sides]
@@ -197,13 +204,21 @@ def cmd_compare(args: argparse.Namespace) -> int:
         "samples": args.samples,
         "seed": args.seed,
     }
+    free = None
     if args.negatives is not None:
         try:
-            points = _operating_data(args, results)
+            free = _negatives_scored(args)
         except (ModelError, ScoreError, ClassMatchError, ValueError) as exc:
             print(f"error: {exc}", file=sys.stderr)
             return 2
+        points = [[score_operating(r, n) for r, n in zip(side, neg)] for side, neg in zip(results, free)]
         deltas[RECALL_AT_ALARMS] = _add_operating(doc, points, args)
+    levels = _image_levels(results, free)
+    deltas[IMAGE_RECALL] = paired_image_recall(levels[0], levels[1], np.random.default_rng(args.seed), args.samples,
+                                               args.alarm_budget)  # fmt: skip
+    doc["delta"][IMAGE_RECALL] = deltas[IMAGE_RECALL].to_dict()
+    if args.slices:
+        doc["slices"] = _compare_slices(args, results, levels)
     if args.json:
         print(json.dumps(doc, indent=1))
         return 0
@@ -222,13 +237,99 @@ def cmd_compare(args: argparse.Namespace) -> int:
               f"raises at most {neg['budget']:g} alarms per 100 of them")  # fmt: skip
     for key, d in deltas.items():
         iv, images = d.interval, f"{doc['images']} images"
-        name = key if key != RECALL_AT_ALARMS else f"recall at {args.alarm_budget:g} alarms/100"
-        images += f" and {doc['negatives']['images']} without fire" if key == RECALL_AT_ALARMS else ""
+        name = {RECALL_AT_ALARMS: f"recall at {args.alarm_budget:g} alarms/100",
+                IMAGE_RECALL: f"image recall at {args.alarm_budget:g} false-alarm images/100" if free else
+                f"image recall at confidence {ALARM_CONF:g}"}.get(key, key)  # fmt: skip
+        images += f" and {doc['negatives']['images']} without fire" if key != "AP" and key != "AP50" and free else ""
         print(
             f"B - A  {name} {100 * iv.point:+.1f} points, 95% CI [{100 * iv.low:+.1f}, {100 * iv.high:+.1f}], "
             f"p = {d.p_value:.3f} ({args.samples} paired resamples of {images})"
         )
     return 0
+
+
+def _negatives_scored(args: argparse.Namespace) -> list[list]:  # per side, per model: eval.score.ScoreResult
+    """Every model of both sides scored on ``--negatives`` (raises ValueError when that set has boxes)."""
+    from eval.score import ALL_SPLITS, load_test_set
+
+    negatives = load_test_set(args.negatives, "auto", ALL_SPLITS, holdout=args.negatives_holdout)
+    if negatives.dataset.annotations:
+        raise ValueError(f"{args.negatives}: --negatives takes images without fire; it has "
+                         f"{len(negatives.dataset.annotations)} boxes")  # fmt: skip
+    return [[_score_model(m, args, negatives.dataset, negatives.problems) for m in models]
+            for models in (args.model_a, args.model_b)]  # fmt: skip
+
+
+def _image_levels(results: list[list], free: list[list] | None) -> list[list]:
+    """Per side, per model: (its :class:`eval.imagelevel.ImageHits` on the test set, its per-image alarms on
+    ``--negatives`` or, without them, the confidence :data:`eval.errors.ALARM_CONF` it is read at)."""
+    from eval.imagelevel import image_alarms, image_hits
+    from eval.score import scored_images
+
+    out = []
+    for k, side in enumerate(results):
+        levels = []
+        for j, r in enumerate(side):
+            ds, cat_ids = scored_images(r)
+            if free is None:
+                levels.append((image_hits(ds, r.records, cat_ids), ALARM_CONF))
+                continue
+            neg, _ = scored_images(free[k][j])
+            levels.append(
+                (image_hits(ds, r.records, cat_ids), image_alarms(free[k][j].records, [i.id for i in neg.images]))
+            )
+        out.append(levels)
+    return out
+
+
+def _compare_slices(args: argparse.Namespace, results: list[list], levels: list[list]) -> list[dict]:
+    """``--slices``: the comparison slice by slice (:func:`eval.slices.compare_slices`) on the test set's
+    computed attributes (and ``--attributes``), printed as a table unless ``--json``; ``--forest`` draws them."""
+    import numpy as np
+
+    from curate.core.cocoeval import LOOSE_IOU, run_cocoeval
+    from eval.attributes import dataset_attributes, merged, read_attributes_csv
+    from eval.score import scored_images
+    from eval.slices import Side, compare_slices, make_slices
+    from eval.stats import MatchTable
+
+    ds, cat_ids = scored_images(results[0][0])
+    attrs = dataset_attributes(ds, args.workers)
+    if args.attributes is not None:
+        attrs = merged(attrs, read_attributes_csv(args.attributes, ds))
+    hits = levels[0][0][0]
+    slices = make_slices(attrs, hits.image_ids, hits.fire)
+    sides = [Side([MatchTable(r.evaluation) for r in side],
+                  [MatchTable(run_cocoeval(ds, r.records, cat_ids, [LOOSE_IOU])) for r in side], level)
+             for side, level in zip(results, levels)]  # fmt: skip
+    rows = compare_slices(sides[0], sides[1], slices, np.random.default_rng(args.seed), args.samples)
+    if args.forest is not None:
+        from eval.plots import plot_forest
+
+        panels: dict[str, list[dict]] = {}
+        for r in rows:
+            panels.setdefault(r["metric"], []).append(r)
+        plot_forest(panels, args.forest, "B − A by slice (fire images)")
+    if not args.json:
+        few = [f"{s.name} ({s.fire_images})" for s in slices if s.too_few]
+        print("slice                          fire  Δ AP50               Δ AP25               Δ image recall")
+        by: dict[str, dict[str, dict]] = {}
+        for r in rows:
+            by.setdefault(r["slice"], {})[r["metric"]] = r
+        for name, metrics in by.items():
+            cells = [_slice_cell(metrics.get(m)) for m in ("AP50", "AP25", "image_recall")]
+            print(f"{name:<30} {next(iter(metrics.values()))['fire_images']:>4}  {'  '.join(cells)}")
+        print("*: the difference holds after Holm's correction over the slices of its metric (5 % family-wise)"
+              + (f"; too few fire images to compare: {', '.join(few)}" if few else ""))  # fmt: skip
+    return rows
+
+
+def _slice_cell(r: dict | None) -> str:
+    if r is None:
+        return f"{'–':<19}"
+    d = r["delta"]
+    text = f"{100 * d['value']:+.1f} [{100 * d['low']:+.1f},{100 * d['high']:+.1f}]{'*' if r['verdict'] != '-' else ''}"
+    return f"{text:<19}"
 
 
 def _at_budget(side: dict) -> str:
@@ -239,21 +340,6 @@ def _at_budget(side: dict) -> str:
     return f"  recall {side[RECALL_AT_ALARMS]:.3f}" + (
         f" at threshold {side['threshold']:.3f}" if "threshold" in side else ""
     )
-
-
-def _operating_data(args: argparse.Namespace, results: list[list]) -> list[list]:
-    """Per side, per model: its (:class:`eval.operating.FoundScores` on the test set, :class:`eval.operating.Alarms`
-    on ``--negatives``), each model scored there now. Raises ValueError when that set has boxes."""
-    from eval.score import ALL_SPLITS, load_test_set, score_operating
-
-    negatives = load_test_set(args.negatives, "auto", ALL_SPLITS, holdout=args.negatives_holdout)
-    if negatives.dataset.annotations:
-        raise ValueError(f"{args.negatives}: --negatives takes images without fire; it has "
-                         f"{len(negatives.dataset.annotations)} boxes")  # fmt: skip
-    return [
-        [score_operating(r, _score_model(m, args, negatives.dataset, negatives.problems)) for m, r in zip(models, side)]
-        for models, side in zip((args.model_a, args.model_b), results)
-    ]
 
 
 def _add_operating(doc: dict, points: list[list], args: argparse.Namespace):  # -> eval.stats.PairedDelta
@@ -421,6 +507,22 @@ def register(sub: argparse._SubParsersAction) -> None:
         metavar="SHARE",
         help="--negatives: only the photos held out by content at this share, those a pool with "
         "background_holdout SHARE never composited on (default 0: every image)",
+    )
+    p.add_argument(
+        "--slices",
+        action="store_true",
+        help="also compare slice by slice: the test images cut by what they show (fire size, count, night/day, "
+        "fire colour, sky, blur, source; docs/scoring.md), AP50, AP25 and image recall per slice with paired "
+        "intervals, Holm-corrected",
+    )
+    p.add_argument(
+        "--attributes",
+        type=Path,
+        metavar="CSV",
+        help="--slices: your own attributes of the test images, a CSV with the header image,attribute,value",
+    )
+    p.add_argument(
+        "--forest", type=Path, metavar="PNG", help="--slices: draw the per-slice differences (a forest plot)"
     )
     p.add_argument(
         "--json",

@@ -115,10 +115,11 @@ def plot_operating_curves(
     path: Path,
     budget: float | None = None,
     title: str = "",
+    labels: tuple[str, str] = ("false alarms per 100 images without fire", "fire boxes found at IoU 0.5 (%)"),
 ) -> Path:
     """Recall (in percent) against false alarms per 100 images without fire: per label (e.g. a mixture) its runs'
     recall (N, R) at the alarm rates ``rates`` (R,), the mean as a line and the runs' range as a band; a dotted
-    line at ``budget``."""
+    line at ``budget``; ``labels``: the x and y axes' titles."""
     from matplotlib.figure import Figure
 
     fig = Figure(figsize=(5.8, 4.4), dpi=110)
@@ -132,5 +133,39 @@ def plot_operating_curves(
         ax.axvline(budget, color="0.4", linestyle=":", linewidth=1)
     ax.set_xlim(float(rates[0]), float(rates[-1]))
     ax.set_ylim(bottom=0)
-    labels = ("false alarms per 100 images without fire", "fire boxes found at IoU 0.5 (%)")
     return _save_lines(fig, ax, path, labels, title, "lower right" if curves else None)
+
+
+def plot_forest(panels: Mapping[str, Sequence[Mapping[str, object]]], path: Path, title: str = "") -> Path:
+    """A forest plot: per panel (a metric, e.g. ``"AP50"``) its rows (:func:`eval.slices.compare_slices`: ``slice``,
+    ``fire_images``, ``delta`` {value, low, high} in 0..1, ``verdict``) as points with their 95 % intervals, in
+    points (x 100), one line per slice (the same slices in every panel, top to bottom in the first panel's
+    order); a filled point is a slice the pool helps or hurts after Holm's correction, an open one is not; the
+    dotted line is no difference."""
+    from matplotlib.figure import Figure
+
+    names = list(dict.fromkeys(str(r["slice"]) for rows in panels.values() for r in rows))
+    fire = {str(r["slice"]): r["fire_images"] for rows in panels.values() for r in rows}
+    fig = Figure(figsize=(3.2 * max(len(panels), 1) + 2.2, 0.28 * len(names) + 1.4), dpi=110)
+    axes = fig.subplots(1, max(len(panels), 1), sharey=True, squeeze=False)[0]
+    y = {name: len(names) - 1 - k for k, name in enumerate(names)}
+    for ax, (metric, rows) in zip(axes, panels.items()):
+        for r in rows:
+            d = r["delta"]
+            value, low, high = (100.0 * float(d[k]) for k in ("value", "low", "high"))  # type: ignore[index]
+            colour = {"helps": "tab:green", "hurts": "tab:red"}.get(str(r.get("verdict")), "0.35")
+            yy = y[str(r["slice"])]
+            ax.plot([low, high], [yy, yy], color=colour, linewidth=1.4)
+            filled = r.get("verdict") in ("helps", "hurts")
+            ax.plot([value], [yy], "o", color=colour, markerfacecolor=colour if filled else "white", markersize=5)
+        ax.axvline(0.0, color="0.4", linestyle=":", linewidth=1)
+        ax.set_xlabel(f"Δ {metric} (points)")
+        ax.grid(axis="x", alpha=0.3)
+    axes[0].set_yticks([y[n] for n in names], [f"{n} ({fire[n]})" for n in names], fontsize=8)
+    axes[0].set_ylim(-0.7, len(names) - 0.3)
+    if title:
+        fig.suptitle(title, fontsize=10)
+    fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path)
+    return path

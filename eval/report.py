@@ -16,7 +16,8 @@ from curate.core.dataset import Dataset
 from curate.core.imageio import ImageError, read_image
 from eval.draw import draw_boxes
 from eval.errors import ALARMS
-from eval.operating import ALARM_BUDGET, OPERATING, RECALL_AT_ALARMS, recall_at_rates
+from eval.imagelevel import IMAGE_RECALL, IMAGELEVEL, image_operating_curve
+from eval.operating import ALARM_BUDGET, OPERATING, RECALL_AT_ALARMS, Alarms, recall_at_rates
 from eval.tables import METRIC_LABELS, Table, heading, marks, shown_scale, to_csv, to_latex, to_markdown
 
 _CSS = """body{font-family:system-ui,sans-serif;margin:2em auto;max-width:1100px;color:#222}
@@ -223,6 +224,10 @@ def write_study_report(
     run_columns: Sequence[str] = ("mixture", "seed", "test_set", "AP", "AP50"),
     notice: str = "",
     title: str = "fuzzyfire study",
+    answer: Sequence[str] = (),
+    slices: Sequence[Mapping[str, Any]] = (),
+    slice_sets: Mapping[str, Sequence[Mapping[str, Any]]] | None = None,
+    forests: Sequence[tuple[Path, str]] = (),
 ) -> Path:
     """Write ``out/tables/table{1,2}.{md,csv,tex}`` (AP, AP50 and, when every run has it, AP25),
     ``out/figures/figure5_{AP,AP50}.png``, sample thumbnails and ``out/report.html``, and remove the table files of
@@ -236,19 +241,24 @@ def write_study_report(
     ``out/tables/comparisons.csv``, :func:`comparisons_csv`); ``errors``: see :func:`errors_html`;
     ``samples``: datasets to show a few images of, by label; ``notice``: shown at the top of the page. Rows of sets
     with fire that carry :data:`eval.operating.OPERATING` also draw ``out/figures/operating_<test set>.png``
-    (:func:`operating_figures`)."""
+    (:func:`operating_figures`). ``answer``: the study's answer in sentences, the page's first section;
+    ``slices``: the slice comparisons (:func:`slices_html`), ``slice_sets`` the slices of each test set
+    (:func:`slice_sets_html`) and ``forests`` their forest plots with captions, the section after Table 2."""
     from eval.plots import plot_figure5
     from eval.tables import control_table, table1, table2
 
     parts = {"table1": method_results, "table2": results, "controls": controls}
     drop_stale_tables(out / "tables", [stem for stem, rows in parts.items() if rows], bool(comparisons))
     sections: list[tuple[str, str]] = []
+    if answer:
+        sections.append(("The answer", "<ul>" + "".join(f"<li>{html.escape(a)}</li>" for a in answer) + "</ul>"))
+    later: list[tuple[str, str]] = []  # sections after Table 2
     if method_results:
         t1 = table1(method_results, metrics=table_metrics(method_results))
         write_table_files(t1, out / "tables", "table1")
-        sections.append(("Table 1 — Method 1 vs Method 2", table_html(t1)))
+        later.append(("Table 1 — Method 1 vs Method 2", table_html(t1)))
     if gaps:
-        sections.append(("Realism gap of the synthetic pools", gaps_html(gaps)))
+        later.append(("Realism gap of the synthetic pools", gaps_html(gaps)))
     if results:
         metrics = table_metrics(results)
         t2 = table2(results, metrics=metrics)
@@ -256,12 +266,18 @@ def write_study_report(
         alarms = (ALARMS,) if any(r.get(ALARMS) is not None for r in results) else ()
         shown = ("AP", "AP50", *alarms, *(m for m in metrics if m == RECALL_AT_ALARMS))
         figures = [plot_figure5(results, out / "figures" / f"figure5_{m}.png", m) for m in shown]
-        sections.append(("Table 2 — training mixtures", table_html(t2)))
+        sections.append(("Table 2 — training mixtures", table_html(t2) + TABLE2_LEGEND))
+        if slices or slice_sets:
+            body = "".join(figure_html(f, out, c) for f, c in forests) + slices_html(slices)
+            sections.append(("On which fires — slices", body + slice_sets_html(slice_sets or {})))
+        sections += later
+        later = []
         captions = [_figure5_caption(m) for m in shown]
         sections.append(("Figure 5", "".join(figure_html(f, out, c) for f, c in zip(figures, captions))))
-        if curves := operating_figures(results, out / "figures"):
+        if curves := operating_figures(results, out / "figures") + image_operating_figures(results, out / "figures"):
             caption = f"the dotted line: {ALARM_BUDGET:g} alarms per 100, where Table 2 reads the recall"
             sections.append(("Fire found against false alarms", "".join(figure_html(f, out, caption) for f in curves)))
+    sections += later
     if controls:
         tc = control_table(controls, metrics=table_metrics(controls))
         write_table_files(tc, out / "tables", "controls")
@@ -281,6 +297,62 @@ def write_study_report(
     out.mkdir(parents=True, exist_ok=True)
     page.write_text(render_page(title, sections, notice), encoding="utf-8")
     return page
+
+
+TABLE2_LEGEND = (
+    '<p class="legend">image recall: the share of fire images with a detection on their fire (IoU ≥ 0.1 with a box, '
+    "or its centre inside one) at the threshold where at most 10 of 100 fire-free images raise an alarm (at "
+    "confidence 0.25 without a fire-free set); it does not hang on how a set's boxes are drawn. A set with fewer "
+    "than 50 fire images has no AP or AP50 (–): too few for an interval that tells mixtures apart.</p>"
+)
+
+
+def slices_html(rows: Sequence[Mapping[str, Any]]) -> str:
+    """The slice comparisons (:func:`eval.slices.compare_slices` rows with ``test_set``, ``mixture``,
+    ``baseline``): one row per (comparison, test set, slice), a column per metric with Δ and its 95 % interval in
+    points, bold where Holm's correction keeps it (helps or hurts)."""
+    if not rows:
+        return ""
+    metrics = list(dict.fromkeys(r["metric"] for r in rows))
+    grouped: dict[tuple[str, str, str, str], dict[str, Mapping[str, Any]]] = {}
+    for r in rows:
+        grouped.setdefault((r["test_set"], r["mixture"], r["baseline"], r["slice"]), {})[r["metric"]] = r
+    head = "<tr><th>test set</th><th>mixture</th><th>vs</th><th>slice</th><th>fire images</th>"
+    head += "".join(f"<th>Δ {html.escape(METRIC_LABELS.get(m, m))}</th>" for m in metrics) + "</tr>"
+    body = []
+    for (test, mixture, base, name), by_metric in grouped.items():
+        first = next(iter(by_metric.values()))
+        cells = []
+        for m in metrics:
+            r = by_metric.get(m)
+            if r is None:
+                cells.append("<td>–</td>")
+                continue
+            d = r["delta"]
+            text = f"{100 * d['value']:+.1f} [{100 * d['low']:+.1f}, {100 * d['high']:+.1f}]"
+            cells.append(f"<td><b>{text}</b></td>" if r["verdict"] != "-" else f"<td>{text}</td>")
+        body.append(f"<tr><td>{html.escape(test)}</td><td>{html.escape(mixture)}</td><td>{html.escape(base)}</td>"
+                    f"<td>{html.escape(name)}</td><td>{first['fire_images']}</td>{''.join(cells)}</tr>")  # fmt: skip
+    caption = ("<caption>Each comparison slice by slice: Δ (points) with its 95 % paired bootstrap interval over the "
+               "slice's images and the seeds. <b>Bold</b>: the difference holds after Holm's correction over the "
+               "slices of one comparison and metric (family-wise error 5 %).</caption>")  # fmt: skip
+    return f"<table>{caption}{head}{''.join(body)}</table>"
+
+
+def slice_sets_html(sets: Mapping[str, Sequence[Mapping[str, Any]]]) -> str:
+    """The slices of each test set (images, fire images); those with too few fire images to compare are marked."""
+    body = []
+    for test, rows in sets.items():
+        for r in rows:
+            mark = " (too few to compare)" if r["too_few"] else ""
+            body.append(f"<tr><td>{html.escape(test)}</td><td>{html.escape(r['slice'])}</td><td>{r['images']}</td>"
+                        f"<td>{r['fire_images']}{mark}</td></tr>")  # fmt: skip
+    if not body:
+        return ""
+    caption = ("<caption>The slices: attributes computed from each image and its boxes (docs/scoring.md); slices "
+               "with fewer than 20 fire images are merged with a neighbour or into 'other'.</caption>")  # fmt: skip
+    head = "<tr><th>test set</th><th>slice</th><th>images</th><th>fire images</th></tr>"
+    return f"<details><summary>Slices of each test set</summary><table>{caption}{head}{''.join(body)}</table></details>"
 
 
 def _figure5_caption(metric: str) -> str:
@@ -339,13 +411,37 @@ def operating_figures(results: Sequence[Mapping[str, Any]], folder: Path) -> lis
     ]  # fmt: skip
 
 
+def image_operating_figures(results: Sequence[Mapping[str, Any]], folder: Path) -> list[Path]:
+    """``folder/image_operating_<test set>.png`` per set with fire whose rows carry
+    :data:`eval.imagelevel.IMAGELEVEL` with per-image alarms: each mixture's image recall against false-alarm
+    images per 100 images without fire (:func:`eval.imagelevel.image_operating_curve`, seeds' mean and range)."""
+    from eval.plots import plot_operating_curves
+
+    by_test: dict[str, dict[str, list]] = {}
+    for r in results:
+        level = r.get(IMAGELEVEL)
+        if level is None or not isinstance(level[1], Alarms):
+            continue
+        rate, recall = image_operating_curve(*level)
+        at = np.searchsorted(rate, OPERATING_RATES, side="right") - 1
+        curve = np.where(at >= 0, recall[np.maximum(at, 0)], 0.0)
+        by_test.setdefault(r["test_set"], {}).setdefault(r["mixture"], []).append(curve)
+    return [
+        plot_operating_curves({m: np.stack(c) for m, c in curves.items()}, OPERATING_RATES,
+                              folder / f"image_operating_{_slug(test)}.png", ALARM_BUDGET,
+                              f"{test}: fire images detected against false-alarm images",
+                              ("fire-free images with a false alarm, per 100", "fire images detected (%)"))
+        for test, curves in by_test.items()
+    ]  # fmt: skip
+
+
 def table_metrics(results: Sequence[Mapping[str, Any]]) -> tuple[str, ...]:
-    """The paper's AP and AP50, then AP25 (:mod:`curate.core.cocoeval`; runs scored before it existed lack it) and
+    """The paper's AP and AP50, then AP25 (:mod:`curate.core.cocoeval`; runs scored before it existed lack it),
     the recall at 10 alarms per 100 images without fire (:mod:`eval.operating`; only studies with a set without
-    fire have it), each when every row of a set with fire has it; the sets without fire have their alarm column
+    fire have it) and the image recall (:mod:`eval.imagelevel`), each when every row of a set with fire has it; the sets without fire have their alarm column
     whatever this says."""
     fire = [r for r in results if r.get(ALARMS) is None]
-    extra = [m for m in ("AP25", RECALL_AT_ALARMS) if fire and all(r.get(m) is not None for r in fire)]
+    extra = [m for m in ("AP25", RECALL_AT_ALARMS, IMAGE_RECALL) if fire and all(r.get(m) is not None for r in fire)]
     return ("AP", "AP50", *extra)
 
 

@@ -157,7 +157,7 @@ def score(
     return ScoreResult(metrics, ev, records, preds, detector.spec, dataset, [*problems, *preds.problems])
 
 
-def _scored(result: ScoreResult) -> tuple[Dataset, list[int]]:
+def scored_images(result: ScoreResult) -> tuple[Dataset, list[int]]:
     """The images (those that could be read) and the category ids ``result`` was scored on."""
     scored = result.dataset.filter_images(lambda img: img.id in result.predictions.by_image)
     return scored, list(result.evaluation.params.catIds)
@@ -165,14 +165,14 @@ def _scored(result: ScoreResult) -> tuple[Dataset, list[int]]:
 
 def score_errors(result: ScoreResult, alarm_conf: float = ALARM_CONF) -> ErrorBreakdown:
     """The error breakdown (:mod:`eval.errors`) of a scored result, over the images and classes it was scored on."""
-    scored, cat_ids = _scored(result)
+    scored, cat_ids = scored_images(result)
     return error_breakdown(scored, result.records, cat_ids, alarm_conf)
 
 
 def score_found(result: ScoreResult, conf: float = ALARM_CONF) -> BoxesFound:
     """Which ground-truth boxes a scored result finds at ``conf`` (:mod:`eval.found`), over the images and
     classes it was scored on."""
-    scored, cat_ids = _scored(result)
+    scored, cat_ids = scored_images(result)
     return boxes_found(scored, result.records, cat_ids, conf)
 
 
@@ -180,15 +180,15 @@ def score_operating(fire: ScoreResult, negatives: ScoreResult) -> tuple[FoundSco
     """A model's operating data (:mod:`eval.operating`) from its scoring of a set with fire and of a set without:
     the boxes it found and the alarms it raised, over the images (those that could be read) and classes each
     was scored on."""
-    scored, cat_ids = _scored(fire)
-    free, _ = _scored(negatives)
+    scored, cat_ids = scored_images(fire)
+    free, _ = scored_images(negatives)
     return found_scores(scored, fire.records, cat_ids), alarms_of(negatives.records, [img.id for img in free.images])
 
 
 def error_pictures(result: ScoreResult, out: Path, count: int = WORST) -> tuple[Path, list[Problem]]:
     """Pictures of the ``count`` worst false alarms and missed boxes of a scored result in ``out/errors/``
     (:func:`eval.error_pictures.write_error_pictures`); returns the folder and the images not drawn."""
-    scored, cat_ids = _scored(result)
+    scored, cat_ids = scored_images(result)
     return write_error_pictures(scored, result.records, cat_ids, out, count)
 
 

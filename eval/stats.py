@@ -161,6 +161,22 @@ class MatchTable:
         prec = self.precision(weights)
         return {"AP": _mean_valid(prec), "AP50": _mean_valid(prec[:1])}
 
+    def restricted(self, thresholds: Sequence[int], keep: NDArray[np.bool_]) -> MatchTable:
+        """The table at the IoU thresholds of index ``thresholds`` only, and with only the detections and boxes
+        of the images ``keep`` (I,) (the others weigh 0: an AP on those images, computed faster). Image order is
+        kept, so the same weights apply."""
+        table = MatchTable.__new__(MatchTable)
+        table.image_ids, table.cat_ids, table.rec_thrs = self.image_ids, self.cat_ids, self.rec_thrs
+        rows = list(thresholds)
+        table.classes = []
+        for cm in self.classes:
+            on = keep[cm.image]
+            score = None if cm.score is None else cm.score[on]
+            table.classes.append(
+                ClassMatches(cm.image[on], cm.tp[rows][:, on], cm.fp[rows][:, on], cm.npig * keep, score)
+            )
+        return table
+
     def save(self, path: Path) -> Path:
         """Store the table (a few arrays per class) so a report can bootstrap without re-running a model."""
         arrays: dict[str, NDArray] = {"image_ids": self.image_ids, "cat_ids": np.asarray(self.cat_ids)}

@@ -21,6 +21,7 @@ from typing import Any
 
 from curate.mix import Mixture, parse_mixture
 from eval.errors import ALARMS
+from eval.imagelevel import IMAGE_RECALL
 from eval.operating import ALARM_BUDGET, RECALL_AT_ALARMS
 from eval.stats import MeanStd, mean_std
 
@@ -30,6 +31,7 @@ METHOD_LABELS: Mapping[str, str] = {"method1": "Method 1 (3D)", "method2": "Meth
 METRIC_LABELS: Mapping[str, str] = {
     ALARMS: "alarms/100",
     RECALL_AT_ALARMS: f"recall@{ALARM_BUDGET:g} alarms/100",
+    IMAGE_RECALL: "image recall",
 }  # column headings of metrics not named as they are keyed
 
 

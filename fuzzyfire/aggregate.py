@@ -4,7 +4,6 @@
 
 from __future__ import annotations
 
-import hashlib
 import json
 from collections.abc import Iterator, Mapping, Sequence
 from pathlib import Path
@@ -13,8 +12,10 @@ import numpy as np
 
 from curate.core.config import to_dict
 from curate.mix import parse_mixture
-from eval.errors import ALARMS
+from eval.errors import ALARM_CONF, ALARMS
+from eval.imagelevel import IMAGE_RECALL, IMAGELEVEL
 from eval.operating import (
+    ALARM_BUDGET,
     OPERATING,
     RECALL_AT_ALARMS,
     Alarms,
@@ -28,7 +29,9 @@ from eval.operating import (
 from fuzzyfire.controls import CONTROL, CONTROL_TABLE, control_label
 from fuzzyfire.datasets import DataRef, Datasets
 from fuzzyfire.experiment_config import ExperimentConfig
+from fuzzyfire.kept import keep, kept
 from fuzzyfire.runs import EvalSet, RunSpec
+from fuzzyfire.slicing import run_hits
 from fuzzyfire.stages import Prepared, digest, label
 
 STANDIN_NOTICE = (
@@ -48,18 +51,30 @@ def _scored(specs: Sequence[RunSpec], results: Sequence[dict | None]) -> Iterato
                 yield spec, test, scored, spec.out / scored["scores"]
 
 
+AP_MIN_FIRE_IMAGES = 50  # a test set with fewer fire images gets no AP/AP50 (its interval would be too wide to
+# tell mixtures apart): AP25 and image recall, with their intervals, are reported instead
+
+
 def result_rows(
     specs: Sequence[RunSpec], results: Sequence[dict | None], out: Path, datasets: Datasets | None = None
 ) -> list[dict]:
     """One row per (finished run, test set): mixture, method, seed, test_set, AP, AP50, AP25, run folder (relative
     to ``out``), the tables it belongs to (as its spec says) and its matches file; a set without boxes (AP None)
     also :data:`eval.errors.ALARMS`, its false alarms per 100 images. Runs scored before AP25 existed get it
-    from their predictions once (:func:`run_ap25`) when ``datasets`` is given, else None. With ``datasets``, a set
-    with boxes of a run also scored on sets without fire carries :data:`eval.operating.RECALL_AT_ALARMS`, the
-    share of its boxes found at the threshold where the run raises at most
-    :data:`eval.operating.ALARM_BUDGET` alarms per 100 of those images (pooled), and that ``threshold_at_alarms``."""
+    from their predictions once (:func:`run_ap25`) when ``datasets`` is given, else None.
+
+    With ``datasets``, a set with boxes also carries ``fire_images`` and :data:`eval.imagelevel.IMAGE_RECALL`, the
+    share of its fire images detected (:mod:`eval.imagelevel`) at the threshold where the run raises a false alarm
+    on at most :data:`eval.operating.ALARM_BUDGET` of 100 images without fire (pooled; at confidence
+    :data:`eval.errors.ALARM_CONF` when the run has no set without fire), its :data:`fuzzyfire.slicing.IMAGELEVEL`;
+    under :data:`AP_MIN_FIRE_IMAGES` fire images its AP and AP50 are None. A run also scored on sets without
+    fire carries :data:`eval.operating.RECALL_AT_ALARMS`, the share of its boxes found at the threshold where it
+    raises at most :data:`eval.operating.ALARM_BUDGET` alarms per 100 of those images, and that
+    ``threshold_at_alarms``."""
     rows = []
     alarms = {} if datasets is None else {s.out: run_alarms(datasets, s, r) for s, r in zip(specs, results) if r}
+    frames = {} if datasets is None else {s.out: run_alarms(datasets, s, r, per_image=True)
+                                          for s, r in zip(specs, results) if r}  # fmt: skip
     for spec, test, m, folder in _scored(specs, results):
         negatives = m.get(ALARMS) is not None
         ap25 = m.get("AP25") if datasets is None or negatives else run_ap25(datasets, folder, test.data, m)
@@ -67,11 +82,19 @@ def result_rows(
         if datasets is not None and m.get("boxes") and (raised := alarms.get(spec.out)) is not None:
             operating = (run_found(datasets, folder, test.data), raised)
             point = operating_point(*operating)
+        ap, images = {"AP": m["AP"], "AP50": m["AP50"]}, {}
+        if datasets is not None and m.get("boxes"):
+            hits = run_hits(datasets, folder, test.data)
+            level = (hits, frames.get(spec.out) or ALARM_CONF)
+            threshold = level[1].threshold(ALARM_BUDGET) if isinstance(level[1], Alarms) else level[1]
+            fire = int(hits.fire.sum())
+            images = {"fire_images": fire, IMAGE_RECALL: hits.recall(threshold), IMAGELEVEL: level}
+            ap = ap if fire >= AP_MIN_FIRE_IMAGES else {"AP": None, "AP50": None}
         rows.append({
             "mixture": spec.mixture, "method": spec.method or "-", "seed": spec.seed, "test_set": test.name,
-            "AP": m["AP"], "AP50": m["AP50"], "AP25": ap25, **({ALARMS: m[ALARMS]} if negatives else {}),
+            **ap, "AP25": ap25, **({ALARMS: m[ALARMS]} if negatives else {}),
             **({RECALL_AT_ALARMS: point.recall, "threshold_at_alarms": point.threshold, OPERATING: operating}
-               if point else {}),
+               if point else {}), **images,
             "run": spec.out.relative_to(out).as_posix(), "tables": list(spec.tables),
             "matches": (folder / "matches.npz").as_posix(),
         })  # fmt: skip
@@ -91,11 +114,11 @@ def run_ap25(datasets: Datasets, folder: Path, test: DataRef, scored: dict) -> f
     if scored.get("AP25") is not None:
         return scored["AP25"]
     predictions = (folder / "predictions.json").read_bytes()
-    if (kept := _kept(folder / LOOSE_FILE, predictions)) is not None:
-        return kept["AP25"]
+    if (known := kept(folder / LOOSE_FILE, predictions)) is not None:
+        return known["AP25"]
     ds = datasets.get(test)
     value = loose_ap(ds, json.loads(predictions), [c.id for c in ds.categories])
-    _keep(folder / LOOSE_FILE, predictions, {"AP25": value})
+    keep(folder / LOOSE_FILE, predictions, {"AP25": value})
     return value
 
 
@@ -104,40 +127,27 @@ def run_found(datasets: Datasets, folder: Path, test: DataRef) -> FoundScores:
     ``folder/predictions.json``; kept in ``folder/found_scores.json`` with the digest of the predictions it was
     read from (a set scored again is read again)."""
     predictions = (folder / "predictions.json").read_bytes()
-    if (kept := _kept(folder / FOUND_FILE, predictions)) is not None:
-        arrays = {k: np.asarray(kept[k], dtype=np.int64) for k in ("image", "image_boxes")}
-        return FoundScores(np.asarray(kept["scores"], dtype=np.float64), **arrays)
+    if (known := kept(folder / FOUND_FILE, predictions)) is not None:
+        arrays = {k: np.asarray(known[k], dtype=np.int64) for k in ("image", "image_boxes")}
+        return FoundScores(np.asarray(known["scores"], dtype=np.float64), **arrays)
     ds = datasets.get(test)
     found = found_scores(ds, json.loads(predictions), [c.id for c in ds.categories])
     doc = {"scores": found.scores.tolist(), "image": found.image.tolist(), "image_boxes": found.image_boxes.tolist()}
-    _keep(folder / FOUND_FILE, predictions, doc)
+    keep(folder / FOUND_FILE, predictions, doc)
     return found
 
 
-def _digest(predictions: bytes) -> str:
-    return hashlib.sha256(predictions).hexdigest()[:16]
+def run_alarms(datasets: Datasets, spec: RunSpec, run: dict, per_image: bool = False) -> Alarms | None:
+    """A finished run's detections on its sets without fire, pooled (:func:`eval.operating.pooled`); with
+    ``per_image``, its best detection on each image (:func:`eval.imagelevel.image_alarms`: the rate counts
+    false-alarm images); None when it was scored on none (``run``: its ``results.json``)."""
+    from eval.imagelevel import image_alarms
 
-
-def _kept(path: Path, predictions: bytes) -> dict | None:
-    """The figures kept in ``path`` when they were read from these ``predictions`` (the file's bytes), else None."""
-    if not path.is_file():
-        return None
-    kept = json.loads(path.read_text(encoding="utf-8"))
-    return kept if kept.get("predictions") == _digest(predictions) else None
-
-
-def _keep(path: Path, predictions: bytes, doc: dict) -> None:
-    """Keep ``doc``, figures read from ``predictions`` (the file's bytes), in ``path`` with their digest."""
-    path.write_text(json.dumps({"predictions": _digest(predictions), **doc}) + "\n", encoding="utf-8")
-
-
-def run_alarms(datasets: Datasets, spec: RunSpec, run: dict) -> Alarms | None:
-    """A finished run's detections on its sets without fire, pooled (:func:`eval.operating.pooled`); None when it
-    was scored on none (``run``: its ``results.json``)."""
     sets = [(t, run["tests"][t.name]) for t in spec.test_sets if run["tests"].get(t.name, {}).get(ALARMS) is not None]
     if not sets:
         return None
-    return pooled([alarms_of(_predictions(spec.out / m["scores"]), [i.id for i in datasets.get(t.data).images])
+    read = image_alarms if per_image else alarms_of
+    return pooled([read(_predictions(spec.out / m["scores"]), [i.id for i in datasets.get(t.data).images])
                    for t, m in sets])  # fmt: skip
 
 
@@ -146,44 +156,56 @@ def _predictions(folder: Path) -> list[dict]:
     return json.loads((folder / "predictions.json").read_text(encoding="utf-8"))
 
 
-def comparisons(cfg: ExperimentConfig, rows: Sequence[dict]) -> list[dict]:
-    """Paired image-level bootstrap of every Table-2 mixture against the baseline, then of every mixture that has a
-    control run (``grid.control``) against that control (``baseline`` named by
-    :func:`fuzzyfire.controls.control_label`), per test set with boxes and metric (seeds averaged per resample);
-    sets without boxes have no AP to compare."""
-    from eval.stats import MatchTable, paired_bootstrap
-
-    if not cfg.report.bootstrap:
-        return []
-    compared = ("table2", CONTROL_TABLE)  # Table 1's runs are not compared: their matches are not read
+def comparison_pairs(cfg: ExperimentConfig, rows: Sequence[dict]) -> list[tuple[str, str, str, str]]:
+    """The comparisons the study makes, as (baseline's table, baseline mixture, its label, compared mixture): every
+    Table 2 mixture against the baseline (``report.baseline``, default the largest real-only mixture), then every
+    mixture that has a control run (``grid.control``) against that control (labelled by
+    :func:`fuzzyfire.controls.control_label`)."""
+    compared = ("table2", CONTROL_TABLE)  # Table 1's runs are not compared
     scored = [r for r in rows if ALARMS not in r and any(t in r["tables"] for t in compared)]
     names = list(dict.fromkeys(r["mixture"] for r in scored if "table2" in r["tables"]))
     real_only = [n for n in names if parse_mixture(n).synth == 0]
     baseline = cfg.report.baseline or (max(real_only, key=lambda n: parse_mixture(n).real) if real_only else None)
-    # (baseline's table, its mixture, its label, the compared mixture): Table 2 runs against the baseline, then
-    # each mixture against its control run
     pairs = [("table2", baseline, baseline, n) for n in names if n != baseline] if baseline in names else []
     controlled = dict.fromkeys(r["mixture"] for r in scored if CONTROL_TABLE in r["tables"])
-    pairs += [(CONTROL_TABLE, n, control_label(n), n) for n in names if n in controlled]
-    if not pairs:
+    return pairs + [(CONTROL_TABLE, n, control_label(n), n) for n in names if n in controlled]
+
+
+def comparisons(cfg: ExperimentConfig, rows: Sequence[dict]) -> list[dict]:
+    """Paired image-level bootstrap of every pair of :func:`comparison_pairs`, per test set with boxes and metric
+    (seeds averaged per resample): AP and AP50 (not on a set with too few fire images: their rows' AP is None),
+    box recall at the alarm budget, and image recall (:func:`eval.imagelevel.paired_image_recall`); sets without
+    boxes have no AP to compare."""
+    from eval.imagelevel import paired_image_recall
+    from eval.stats import MatchTable, paired_bootstrap
+
+    if not cfg.report.bootstrap:
         return []
+    pairs = comparison_pairs(cfg, rows)
+    scored = [r for r in rows if ALARMS not in r and any(t in r["tables"] for t in ("table2", CONTROL_TABLE))]
     out = []
     rngs = {"table2": np.random.default_rng(0), CONTROL_TABLE: np.random.default_rng(1)}  # controls leave the rest
     at_budget = np.random.default_rng(2)  # the recall comparisons draw apart: the AP ones stay as they were
+    frames = np.random.default_rng(3)
     for test in dict.fromkeys(r["test_set"] for r in scored if "table2" in r["tables"]):
-        runs: dict[tuple[str, str], list[MatchTable]] = {}
-        points: dict[tuple[str, str], list[tuple[FoundScores, Alarms] | None]] = {}
+        runs: dict[tuple[str, str], list[dict]] = {}
         for r in (r for r in scored if r["test_set"] == test):
-            matches = MatchTable.load(Path(r["matches"]))
             for table in r["tables"]:
-                runs.setdefault((table, r["mixture"]), []).append(matches)
-                points.setdefault((table, r["mixture"]), []).append(r.get(OPERATING))
+                runs.setdefault((table, r["mixture"]), []).append(r)
         for table, base, base_label, name in pairs:
             a, b = runs.get((table, base), []), runs.get(("table2", name), [])
-            deltas = paired_bootstrap(a, b, rngs[table], cfg.report.bootstrap) if a and b else {}
-            pa, pb = points.get((table, base), []), points.get(("table2", name), [])
-            if pa and pb and None not in pa + pb:  # every run on both sides scored on the sets without fire
+            if not a or not b:
+                continue
+            deltas = {}
+            if all(r["AP50"] is not None for r in a + b):
+                load = lambda side: [MatchTable.load(Path(r["matches"])) for r in side]  # noqa: E731
+                deltas = paired_bootstrap(load(a), load(b), rngs[table], cfg.report.bootstrap)
+            pa, pb = [r.get(OPERATING) for r in a], [r.get(OPERATING) for r in b]
+            if None not in pa + pb:  # every run on both sides scored on the sets without fire
                 deltas[RECALL_AT_ALARMS] = paired_recall_bootstrap(pa, pb, at_budget, cfg.report.bootstrap)  # type: ignore[arg-type]
+            ia, ib = [r.get(IMAGELEVEL) for r in a], [r.get(IMAGELEVEL) for r in b]
+            if None not in ia + ib:
+                deltas[IMAGE_RECALL] = paired_image_recall(ia, ib, frames, cfg.report.bootstrap, ALARM_BUDGET)  # type: ignore[arg-type]
             for metric, d in deltas.items():
                 out.append({"test_set": test, "mixture": name, "baseline": base_label, "metric": metric,
                             "delta": d.to_dict()})  # fmt: skip
@@ -200,30 +222,81 @@ def write_report(
     results: Sequence[dict | None] = (),
     own: Mapping[tuple[str, str, int], DataRef] | None = None,
 ) -> Path:
-    """Tables, Figure 5, comparisons, samples and the run list (:func:`eval.report.write_study_report`); the
-    synthetic samples and gaps are those of :func:`report_pools` (``own``: the own cut-out pools by (mixture,
-    method, seed), :func:`fuzzyfire.cutout_pools.cutout_pools`)."""
+    """The answer (:func:`fuzzyfire.answer.answer`, also written to ``out/answer.md``), tables, the slices
+    (:func:`fuzzyfire.slicing.study_slices`, ``out/tables/slices.csv``, forest plots), Figure 5, comparisons,
+    samples and the run list (:func:`eval.report.write_study_report`); the synthetic samples and gaps are those of
+    :func:`report_pools` (``own``: the own cut-out pools by (mixture, method, seed),
+    :func:`fuzzyfire.cutout_pools.cutout_pools`)."""
     from eval.report import write_study_report
+    from fuzzyfire.answer import answer
+    from fuzzyfire.slicing import SLICES_FILE, forest_figures, slices_csv, study_slices
 
     t2 = [r for r in rows if "table2" in r["tables"]]
     t1 = [r for r in rows if "table1" in r["tables"]]
     controls = [r for r in rows if CONTROL_TABLE in r["tables"]]
+    tests = {t.name: t.data for s in specs for t in s.test_sets}  # as scored: leaked images dropped
     samples = {label("real (train split)", data.real.standin): data.real.with_split(cfg.real.train_split)}
     if data.rare is not None:
-        samples[label(cfg.rare.name, data.rare.standin)] = data.rare
+        rare = label(cfg.rare.name, data.rare.standin)
+        samples[rare] = tests.get(rare, data.rare)
     pools = report_pools(cfg, data, own or {})
     samples.update({f"synthetic {m}": ref for m, ref in pools.items()})
-    samples.update(data.tests)
+    samples.update({name: tests.get(name, ref) for name, ref in data.tests.items()})
     shown = {k: datasets.get(ref) for k, ref in samples.items()} if cfg.report.samples else {}
-    alarms = tuple(k for k in (ALARMS, RECALL_AT_ALARMS) if any(k in r for r in rows))
+    alarms = tuple(k for k in (ALARMS, RECALL_AT_ALARMS, IMAGE_RECALL) if any(k in r for r in rows))
     columns = ("mixture", "method", "seed", "test_set", "AP", "AP50", "AP25", *alarms, "run")
     title = cfg.report.title + (" — STAND-IN DATA" if data.standin else "")
+    compared = comparisons(cfg, rows)
+    sliced, sets = ([], {}) if not cfg.report.bootstrap else study_slices(
+        rows, comparison_pairs(cfg, rows), tests, datasets, out, np.random.default_rng(4), cfg.report.bootstrap,
+        cfg.report.attributes)  # fmt: skip
+    if sliced:
+        (out / "tables").mkdir(parents=True, exist_ok=True)
+        (out / "tables" / SLICES_FILE).write_text(slices_csv(sliced), encoding="utf-8")
+    said = answer(t2 + controls, compared, sliced, [*leak_notes(data, cfg.leakage.action, rows), *too_few_notes(sets)])
+    (out / ANSWER_FILE).write_text("".join(f"- {line}\n" for line in said), encoding="utf-8")
     return write_study_report(
         out, t2, np.random.default_rng(0), method_results=t1, controls=controls,
         gaps=realism_gaps(cfg, data, datasets, out, pools),
-        comparisons=comparisons(cfg, rows), errors=error_rows(datasets, specs, results), samples=shown,
+        comparisons=compared, errors=error_rows(datasets, specs, results), samples=shown,
         run_columns=columns, notice=STANDIN_NOTICE if data.standin else "", title=title,
+        answer=said, slices=sliced, slice_sets=sets, forests=forest_figures(sliced, out / "figures"),
     )  # fmt: skip
+
+
+ANSWER_FILE = "answer.md"  # the answer's sentences, one per line, as the report's first section says them
+
+
+def leak_notes(data: Prepared, action: str, rows: Sequence[dict]) -> list[str]:
+    """One sentence per test set that lost leaked images: how many, and the fire images left (and that they are
+    too few for AP, :data:`AP_MIN_FIRE_IMAGES`)."""
+    notes = []
+    for name, leaks in data.leaks.items():
+        if not leaks.leaked or action != "drop":
+            continue
+        fire = next((r["fire_images"] for r in rows if r["test_set"] == name and "fire_images" in r), None)
+        left = "" if fire is None else f"; {fire} fire images remain"
+        few = (", too few for AP (AP25 and image recall are reported)" if fire is not None
+               and fire < AP_MIN_FIRE_IMAGES else "")  # fmt: skip
+        notes.append(f"{name}: {len(leaks.leaked)} of its {leaks.images} images are copies or near duplicates of "
+                     f"training images and were dropped before scoring (leakage.json){left}{few}.")  # fmt: skip
+    return notes
+
+
+def too_few_notes(sets: Mapping[str, Sequence[Mapping]]) -> list[str]:
+    """One sentence listing the slices left uncompared for too few fire images, when there are any."""
+    from eval.slices import MIN_FIRE_IMAGES
+
+    few = [f"{t}: {s['slice']} ({s['fire_images']})" for t, rows in sets.items() for s in rows if s["too_few"]]
+    if not few:
+        return []
+    return [f"Not compared (fewer than {MIN_FIRE_IMAGES} fire images even after merging): {', '.join(few)}."]
+
+
+def answer_text(out: Path) -> str:
+    """The answer as written into ``out/answer.md`` (empty when the study has none yet)."""
+    path = out / ANSWER_FILE
+    return path.read_text(encoding="utf-8") if path.is_file() else ""
 
 
 def error_rows(datasets: Datasets, specs: Sequence[RunSpec], results: Sequence[dict | None]) -> list[dict]:
@@ -330,7 +403,7 @@ def write_summary(cfg: ExperimentConfig, specs, results, rows, out: Path, standi
     if standin:
         doc["notice"] = STANDIN_NOTICE
     (out / "experiment.json").write_text(json.dumps(doc, indent=1) + "\n", encoding="utf-8")
-    lines = [json.dumps({k: v for k, v in r.items() if k not in ("matches", OPERATING)}, sort_keys=True) for r in rows]
+    lines = [json.dumps({k: v for k, v in r.items() if k not in ("matches", OPERATING, IMAGELEVEL)}, sort_keys=True) for r in rows]
     (out / "results.jsonl").write_text("".join(line + "\n" for line in lines), encoding="utf-8")
 
 

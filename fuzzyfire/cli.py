@@ -41,7 +41,7 @@ configs/demo.yaml needs no data: its 'real' and 'rare' sets are generated stand-
 
 def cmd_experiment(args: argparse.Namespace) -> int:
     from curate.core.config import ConfigError, load_config
-    from fuzzyfire.aggregate import STANDIN_NOTICE, table_text
+    from fuzzyfire.aggregate import STANDIN_NOTICE, answer_text, table_text
     from fuzzyfire.executors import ExecutorError, build_executor
     from fuzzyfire.experiment import run_experiment
     from fuzzyfire.experiment_config import ExperimentConfig, ExperimentConfigError
@@ -69,6 +69,7 @@ def cmd_experiment(args: argparse.Namespace) -> int:
         if executor is not None:
             executor.close()
     print(table_text(out.resolve()))
+    print(answer_text(out.resolve()))
     if result.standin:
         print(STANDIN_NOTICE)
     if args.report_only:

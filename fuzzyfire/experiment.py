@@ -34,7 +34,7 @@ from fuzzyfire.controls import CONTROL, CONTROL_TABLE, control_pools, has_contro
 from fuzzyfire.cutout_pools import cutout_pools, is_own, simulated
 from fuzzyfire.datasets import DataRef, Datasets
 from fuzzyfire.executors import Outcome
-from fuzzyfire.experiment_config import METHODS, EvalSetConfig, ExperimentConfig
+from fuzzyfire.experiment_config import METHODS, EvalSetConfig, ExperimentConfig, ExperimentConfigError
 from fuzzyfire.leakage import (
     LEAKS_FILE,
     LeakageError,
@@ -358,6 +358,12 @@ def check_data(cfg: ExperimentConfig, data: Prepared, datasets: Datasets, photos
         except SplitError as exc:
             raise SplitError(f"{exc}: curate the real set (real.curate) or name its splits (real.*_split)") from None
     every = [t for group in test_sets(cfg, data) for t in group]
+    for name, path in cfg.report.attributes.items():
+        if name not in {t.name for t in every}:
+            raise ExperimentConfigError(f"report.attributes: no test set {name!r} (test sets: "
+                                        f"{', '.join(t.name for t in every)})")  # fmt: skip
+        if not Path(path).is_file():
+            raise FileNotFoundError(f"report.attributes.{name}: {path}: no such file")
     check_leakage(photos, {t.name: datasets.get(t.data) for t in every} if photos else {})
 
 
@@ -365,6 +371,8 @@ def run_experiment(cfg: ExperimentConfig, base: Path, out: Path, executor=None) 
     """The whole study (module docstring); ``base`` resolves relative paths of the config. Without an
     ``executor`` nothing is trained: the report covers the runs finished so far (``failed`` lists the others)."""
     cfg.check()
+    given = {k: p if Path(p).is_absolute() else base / p for k, p in cfg.report.attributes.items()}
+    cfg = replace(cfg, report=replace(cfg.report, attributes=given))
     out = Path(out).resolve()
     out.mkdir(parents=True, exist_ok=True)
     _say(f"env    {lock_summary(lock_status())}")

@@ -98,9 +98,7 @@ class TestLeaks:
                 f"distance {d:.3f})")  # fmt: skip
 
 
-def reference_images(
-    trained: Sequence[Dataset], sources: Sequence[Path], own: Dataset | None = None
-) -> list[Path]:
+def reference_images(trained: Sequence[Dataset], sources: Sequence[Path], own: Dataset | None = None) -> list[Path]:
     """The training data a test set is checked against: every image of the ``trained`` datasets (the real train
     and validation splits) and of the ``sources`` folders the real set was curated from (not for ``own``, the
     real set's own test split, whose images are among those sources), each once, links resolved."""

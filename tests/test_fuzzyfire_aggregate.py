@@ -121,15 +121,21 @@ def test_a_set_with_fire_carries_its_recall_at_the_alarm_budget(tmp_path: Path) 
     # 20 images without fire, 10 per 100: two alarms allowed, so the threshold lies just above 0.4 (the third)
     assert at == {("R12_S0", "common"): 0.5, ("R12_S0", "rare"): 0.5, ("R12_S0", "fire-free"): None,
                   ("R6_S6", "common"): None, ("R6_S6", "rare"): None}  # fmt: skip
-    assert 0.4 < rows[0]["threshold_at_alarms"] < 0.41 and Loader.reads == 2
+    assert 0.4 < rows[0]["threshold_at_alarms"] < 0.41 and Loader.reads == 6  # 2 found scores, 4 image hits
     assert (with_free.out / "scores" / "common" / FOUND_FILE).is_file()
+    # image recall: with the fire-free set, 1 of 20 images alarmed (5 per 100) lets every detection count;
+    # without it, read at confidence 0.25 (image 2 of rare has no detection)
+    recall = {(r["mixture"], r["test_set"]): r.get("image_recall") for r in rows}
+    assert recall == {("R12_S0", "common"): 1.0, ("R12_S0", "rare"): 0.5, ("R12_S0", "fire-free"): None,
+                      ("R6_S6", "common"): 1.0, ("R6_S6", "rare"): 0.5}  # fmt: skip
+    assert rows[0]["fire_images"] == 2 and rows[0]["AP50"] is None  # under AP_MIN_FIRE_IMAGES: no AP
     assert result_rows([with_free], results[:1], tmp_path, Loader())[0][RECALL_AT_ALARMS] == 0.5  # type: ignore[arg-type]
-    assert Loader.reads == 2  # read from found_scores.json
+    assert Loader.reads == 6  # read from found_scores.json and image_hits.json
     (with_free.out / "scores" / "common" / "predictions.json").write_text(
         json.dumps([box(1, [10, 10, 20, 20], 0.9), box(2, [50, 50, 20, 20], 0.6)]), encoding="utf-8"
     )  # scored again: read again
     assert result_rows([with_free], results[:1], tmp_path, Loader())[0][RECALL_AT_ALARMS] == 1.0  # type: ignore[arg-type]
-    assert Loader.reads == 3
+    assert Loader.reads == 8  # found scores and image hits of the set scored again
 
 
 def test_the_recall_at_the_alarm_budget_is_compared_when_every_run_has_it(
@@ -174,11 +180,16 @@ def test_the_recall_at_the_alarm_budget_is_compared_when_every_run_has_it(
     monkeypatch.setattr(stats, "paired_bootstrap", lambda *a: {})  # the AP comparisons: their own tests
     out = comparisons(toy_config(mixtures=["R12_S0", "R6_S6"]), rows)
     assert [(c["test_set"], c["mixture"], c["baseline"], c["metric"]) for c in out] == [
-        ("common", "R6_S6", "R12_S0", RECALL_AT_ALARMS), ("rare", "R6_S6", "R12_S0", RECALL_AT_ALARMS)]  # fmt: skip
+        ("common", "R6_S6", "R12_S0", RECALL_AT_ALARMS), ("common", "R6_S6", "R12_S0", "image_recall"),
+        ("rare", "R6_S6", "R12_S0", RECALL_AT_ALARMS), ("rare", "R6_S6", "R12_S0", "image_recall")]  # fmt: skip
     assert out[0]["delta"]["value"] == 0.5  # one alarm of 20 images allowed at 10 per 100: 2 of 2 found vs 1 of 2
+    assert out[1]["delta"]["value"] == 0.5  # and 2 of 2 fire images detected against 1 of 2
     for row in rows:  # a run scored on no set without fire has none
         row.pop("operating", None)
     assert all(c["metric"] != RECALL_AT_ALARMS for c in comparisons(toy_config(mixtures=["R12_S0", "R6_S6"]), rows))
+    for row in rows:  # nor image recall without its image hits
+        row.pop("imagelevel", None)
+    assert comparisons(toy_config(mixtures=["R12_S0", "R6_S6"]), rows) == []
 
 
 def test_report_shows_the_pools_the_mixtures_trained_on() -> None:

@@ -80,3 +80,69 @@ def test_labelled_frames_are_pool_photos_too(tmp_path: Path) -> None:
     assert len(pool) == 3
     with pytest.raises(LeakageError, match="leakage: 3 images of test set 'cams' are background photos"):
         check_leakage({"method2": pool}, {"cams": load_split(frames)})
+
+
+def test_test_images_that_are_training_images_are_found_and_named(
+    tmp_path: Path, tmp_path_factory: pytest.TempPathFactory
+) -> None:
+    """A copy and a near copy (cropped) of training images in a test set are its leaks, through a linked folder
+    too; the real set's own test split is checked against its splits only, not the folders it was curated from."""
+    from curate_helpers import save, scene, transformed, use_session_cache
+
+    from curate.core.dataset import DatasetBuilder
+    from curate.embed import load_embedder
+    from curate.scan import scan_images
+    from fuzzyfire.leakage import find_test_leaks, reference_images, write_leaks
+
+    use_session_cache(tmp_path_factory)
+    train = DatasetBuilder(tmp_path / "train", ["fire"])
+    for i in range(5):
+        save(scene(70 + i), tmp_path / "train" / f"t{i}.jpg")
+        train.add_image(f"t{i}.jpg", 160, 120)
+    save(scene(90), tmp_path / "sources" / "unused.jpg")  # curated away: in the sources, not in a split
+    test = DatasetBuilder(tmp_path / "test", ["fire"])
+    for name, img in (("q0.jpg", scene(80)), ("copy.jpg", scene(71)), ("near.jpg", transformed(scene(72), "crop")),
+                      ("source.jpg", scene(90))):  # fmt: skip
+        save(img, tmp_path / "test" / name)
+        test.add_image(name, 160, 120)
+    trained = [train.build()]
+    tests = {"rare": (test.build(), reference_images(trained, [tmp_path / "sources"])),
+             "common": (test.build(), reference_images(trained, []))}  # fmt: skip
+    embedder = load_embedder()
+    leaks = find_test_leaks(tests, 0.45, lambda paths: scan_images(paths, embedder))
+    assert leaks["rare"].leaked == ("copy.jpg", "near.jpg", "source.jpg") and leaks["rare"].reference == 6
+    assert leaks["common"].leaked == ("copy.jpg", "near.jpg") and leaks["common"].images == 4
+    assert leaks["rare"].examples[0][2] == 0.0  # the exact copy first
+    assert "3 of its 4 images are copies or near duplicates" in leaks["rare"].line("drop")
+    write_leaks(tmp_path / "leakage.json", leaks, 0.45, "drop")
+    assert "near.jpg" in (tmp_path / "leakage.json").read_text()
+
+
+@pytest.mark.slow
+def test_the_experiment_drops_leaked_test_images_or_refuses(tmp_path: Path) -> None:
+    """A rare set holding a copy of a real training image: dropped from it (leakage.json, the report, and the
+    scored image count), or the study refused before training under ``leakage.action: refuse``."""
+    import json
+
+    doc = toy_dict(mixtures=["R12_S0"], table1=[])
+    doc["synth"]["method1"] = None
+    out = tmp_path / "A"
+    config = tmp_path / "toy.yaml"
+    config.write_text(yaml.safe_dump(doc), encoding="utf-8")
+    assert main(["experiment", str(config), "--out", str(out), "--report-only"]) == 0
+    before = set(json.loads((out / "leakage.json").read_text())["sets"]["rare (stand-in)"]["leaked"])
+    real = next((out / "data").glob("real-standin-*"))
+    rare = next((out / "data").glob("rare-standin-*"))
+    train = json.loads((real / "annotations.json").read_text())
+    first = next(i for i in train["images"] if i.get("split") == "train")
+    victim = next(i["file_name"] for i in json.loads((rare / "annotations.json").read_text())["images"]
+                  if i["file_name"] not in before)  # fmt: skip
+    shutil.copyfile(real / first["file_name"], rare / victim)  # a training image inside the rare set
+    assert main(["experiment", str(config), "--out", str(out), "--report-only"]) == 0
+    leaks = json.loads((out / "leakage.json").read_text())["sets"]
+    assert set(leaks["rare (stand-in)"]["leaked"]) == before | {victim} and victim not in before
+    assert leaks["common (stand-in)"]["leaked"] == []
+    assert "were dropped before scoring" in (out / "answer.md").read_text()
+    doc["leakage"] = {"action": "refuse"}
+    config.write_text(yaml.safe_dump(doc), encoding="utf-8")
+    assert main(["experiment", str(config), "--out", str(out)]) == 2

@@ -33,6 +33,8 @@ import numpy as np
 import yaml
 from numpy.typing import NDArray
 
+from curate.core.sky import sky_like, top_connected
+
 SIDECAR_FOLDER = "_site.yaml"
 CAMERA_HEIGHT_M = 1.6
 YFOV_DEG = 60.0
@@ -111,7 +113,7 @@ def estimate_site(image: NDArray[np.uint8], rng: np.random.Generator, sidecar: d
     scale = _WORK / max(h, w)
     small = cv2.resize(image, (max(int(w * scale), 8), max(int(h * scale), 8)), interpolation=cv2.INTER_AREA)
     skylike = sky_like(small)
-    sky = _top_connected(skylike)
+    sky = top_connected(skylike)
     if "horizon" in sidecar:
         horizon = sidecar["horizon"] * h
     else:
@@ -139,20 +141,6 @@ def estimate_site(image: NDArray[np.uint8], rng: np.random.Generator, sidecar: d
     )
 
 
-def sky_like(rgb: NDArray[np.uint8]) -> NDArray[np.bool_]:
-    """(H, W) bool: smooth pixels that are blue, or bright and grey (overcast), or near black (night sky)."""
-    lab = cv2.cvtColor(rgb, cv2.COLOR_RGB2LAB).astype(np.float32)
-    light, b = lab[..., 0] * (100 / 255), lab[..., 2] - 128
-    sat = cv2.cvtColor(rgb, cv2.COLOR_RGB2HSV)[..., 1].astype(np.float32) / 255
-    grey = cv2.cvtColor(rgb, cv2.COLOR_RGB2GRAY).astype(np.float32)
-    texture = cv2.blur(np.abs(cv2.Laplacian(grey, cv2.CV_32F)), (5, 5))
-    smooth = texture < 6.0
-    blue = (b < -8) & (light > 35)
-    overcast = (light > 70) & (sat < 0.18)
-    night = light < 8
-    return smooth & (blue | overcast | night)
-
-
 def water_like(rgb: NDArray[np.uint8]) -> NDArray[np.bool_]:
     """(H, W) bool: fairly smooth, saturated blue or blue-green pixels (lakes, sea, pools), dilated by 2 px."""
     hsv = cv2.cvtColor(rgb, cv2.COLOR_RGB2HSV).astype(np.float32)
@@ -167,13 +155,6 @@ def _lowest_sky(sky: NDArray[np.bool_], height: int) -> float:
     """The row below the lowest sky pixel, in ``height``-row px (0 without sky)."""
     rows = np.flatnonzero(sky.any(axis=1))
     return float(rows[-1] + 1) * height / sky.shape[0] if len(rows) else 0.0
-
-
-def _top_connected(mask: NDArray[np.bool_]) -> NDArray[np.bool_]:
-    """The parts of ``mask`` connected to the top row (8-connectivity)."""
-    n, labels = cv2.connectedComponents(mask.astype(np.uint8), connectivity=8)
-    top = set(np.unique(labels[0][mask[0]]).tolist()) - {0}
-    return np.isin(labels, list(top)) if top else np.zeros_like(mask)
 
 
 def _horizon_from_sky(sky: NDArray[np.bool_], height: int) -> float:

@@ -1,0 +1,179 @@
+"""What each test image shows, computed from the image and its boxes: the attributes the slices of
+:mod:`eval.slices` are cut by ("on which fires does the pool help?").
+
+Each image gets one value per attribute (None where it has none, e.g. the fire colour of a fire-free image):
+
+- ``size``: COCO's bucket of its largest fire box (side = square root of the area in pixels: small < 32 <=
+  medium < 96 <= large); ``size_fine``: the finer buckets of :data:`eval.found.SIZES`.
+- ``fires``: how many fire boxes it holds (``1``, ``2-3``, ``4+``).
+- ``light``: scene brightness, the mean luma (Rec. 601, 0..255) of the whole image: ``night`` < 70 <= ``dusk``
+  < 110 <= ``day``.
+- ``colour``: the colour of its fire, read from the brightest third of the pixels inside its fire boxes (hue
+  in degrees, saturation 0..1 of OpenCV's HSV): ``chemical`` when most of them are neither red, orange nor yellow
+  (hue 60-330 deg with saturation > 0.25: blue, green, violet flames), else ``yellow-white`` when they are pale or
+  yellow (median saturation < 0.35 or median hue >= 35 deg), else ``orange-red``.
+- ``sky``: ``sky`` when the sky (:func:`curate.core.sky.sky_mask`) covers at least 5 % of the image, else
+  ``no sky`` (rooms, close-ups, streets between walls).
+- ``blur``: the variance of the Laplacian of the grey image at 256 px on the long side (:func:`curate.scan.
+  sharpness`): ``blurred`` < 50 <= ``soft`` < 200 <= ``sharp``.
+- ``source``: the image's ``source`` field (its dataset, when merged from several; ``-`` when unset).
+
+Images are read at 256 px on the long side (boxes scaled with them), so the attributes of a set cost a fraction
+of its scoring. A user's own attributes come from a CSV (:func:`read_attributes_csv`).
+"""
+
+from __future__ import annotations
+
+import csv
+from collections.abc import Iterable, Mapping, Sequence
+from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
+
+import cv2
+import numpy as np
+from numpy.typing import NDArray
+
+from curate.core.dataset import Annotation, Dataset
+from curate.core.imageio import read_image
+from curate.core.progress import progress
+from curate.core.sky import sky_mask
+from curate.scan import sharpness
+from eval.found import SIZES
+
+#: The computed attributes and their values in order (ordinal ones from low to high).
+ATTRIBUTES: dict[str, tuple[str, ...]] = {
+    "size": ("small", "medium", "large"),
+    "size_fine": tuple(name for name, _, _ in SIZES),
+    "fires": ("1", "2-3", "4+"),
+    "light": ("night", "dusk", "day"),
+    "colour": ("orange-red", "yellow-white", "chemical"),
+    "sky": ("no sky", "sky"),
+    "blur": ("blurred", "soft", "sharp"),
+    "source": (),
+}
+WORK_SIDE = 256  # long side, pixels, the attributes are computed at
+COCO_SIZES = (("small", 0, 32), ("medium", 32, 96), ("large", 96, float("inf")))
+NIGHT, DAY = 70.0, 110.0  # mean luma (0..255) below which a scene is night, at or above which it is day
+SKY_SHARE = 0.05  # share of the image the sky must cover
+BLURRED, SOFT = 50.0, 200.0  # Laplacian variance below which an image is blurred, soft
+CHEMICAL_SHARE = 0.5  # share of the bright fire pixels that must be non-warm for a chemical flame
+PALE_SAT, YELLOW_HUE = 0.35, 35.0  # median saturation under which / median hue (deg) from which a fire is yellow-white
+
+Attributes = dict[int, dict[str, str | None]]  # image id -> attribute -> value
+
+
+def image_attributes(image: NDArray[np.uint8], boxes: NDArray[np.float64], source: str = "") -> dict[str, str | None]:
+    """The attributes (module docstring) of one (H, W, 3) uint8 RGB image with its fire ``boxes`` (N, 4)
+    [x, y, w, h] in pixels of that image."""
+    grey = cv2.cvtColor(image, cv2.COLOR_RGB2GRAY)
+    mean = float(grey.mean())
+    out: dict[str, str | None] = {
+        "light": "night" if mean < NIGHT else "dusk" if mean < DAY else "day",
+        "sky": "sky" if float(sky_mask(image).mean()) >= SKY_SHARE else "no sky",
+        "blur": _bucket(((b, lo, hi) for b, lo, hi in (("blurred", 0, BLURRED), ("soft", BLURRED, SOFT),
+                                                         ("sharp", SOFT, np.inf))), sharpness(image)),  # fmt: skip
+        "source": source or "-",
+        "size": None, "size_fine": None, "fires": None, "colour": None,
+    }  # fmt: skip
+    if len(boxes):
+        side = float(np.sqrt((boxes[:, 2] * boxes[:, 3]).max()))
+        out["size"] = _bucket(COCO_SIZES, side)
+        out["size_fine"] = _bucket(SIZES, side)
+        out["fires"] = "1" if len(boxes) == 1 else "2-3" if len(boxes) <= 3 else "4+"
+        out["colour"] = fire_colour(image, boxes)
+    return out
+
+
+def fire_colour(image: NDArray[np.uint8], boxes: NDArray[np.float64]) -> str | None:
+    """``orange-red``, ``yellow-white`` or ``chemical`` (module docstring) of the pixels inside ``boxes`` (N, 4)
+    [x, y, w, h] px of the (H, W, 3) uint8 RGB ``image``; None when the boxes hold no pixel."""
+    h, w = image.shape[:2]
+    inside = np.zeros((h, w), dtype=bool)
+    for x, y, bw, bh in boxes:
+        x0, y0 = int(max(np.floor(x), 0)), int(max(np.floor(y), 0))
+        inside[y0 : int(min(np.ceil(y + bh), h)), x0 : int(min(np.ceil(x + bw), w))] = True
+    if not inside.any():
+        return None
+    hsv = cv2.cvtColor(image, cv2.COLOR_RGB2HSV)[inside].astype(np.float64)
+    hue, sat, val = hsv[:, 0] * 2.0, hsv[:, 1] / 255.0, hsv[:, 2]
+    bright = val >= np.quantile(val, 2 / 3)
+    hue, sat = hue[bright], sat[bright]
+    cold = (hue >= 60) & (hue <= 330) & (sat > 0.25)
+    if cold.mean() > CHEMICAL_SHARE:
+        return "chemical"
+    warm_hue = np.where(hue > 330, hue - 360, hue)[~cold]  # reds just below 360 deg count as 0
+    if np.median(sat[~cold]) < PALE_SAT or np.median(warm_hue) >= YELLOW_HUE:
+        return "yellow-white"
+    return "orange-red"
+
+
+def _bucket(buckets: Iterable[tuple[str, float, float]], value: float) -> str:
+    return next(name for name, lo, hi in buckets if lo <= value < hi)
+
+
+def dataset_attributes(ds: Dataset, workers: int = 0) -> Attributes:
+    """:func:`image_attributes` of every image of ``ds`` (its boxes of every class it keeps are its fires), read at
+    :data:`WORK_SIDE` px; an image that cannot be read raises ValueError naming it."""
+    by_image = ds.annotations_by_image()
+
+    def one(img) -> dict[str, str | None]:
+        path = ds.image_path(img)
+        try:
+            pixels = read_image(path, min_side=WORK_SIDE)
+        except Exception as exc:  # noqa: BLE001 - named below with its reason
+            raise ValueError(f"{path}: cannot read it for its attributes ({exc})") from None
+        scale = WORK_SIDE / max(pixels.shape[:2])
+        if scale < 1:
+            pixels = cv2.resize(pixels, (max(round(pixels.shape[1] * scale), 1), max(round(pixels.shape[0] * scale), 1)),
+                                interpolation=cv2.INTER_AREA)  # fmt: skip
+        boxes = _boxes(by_image.get(img.id, []), pixels.shape[1] / img.width)
+        return image_attributes(pixels, boxes, img.source)
+
+    with ThreadPoolExecutor(max_workers=workers or None) as pool:
+        values = list(progress(pool.map(one, ds.images), total=len(ds.images), desc="attributes"))
+    return {img.id: v for img, v in zip(ds.images, values)}
+
+
+def _boxes(anns: Sequence[Annotation], scale: float) -> NDArray[np.float64]:
+    """(N, 4) [x, y, w, h] of the non-crowd ``anns``, times ``scale``."""
+    kept = [a.bbox for a in anns if not a.iscrowd]
+    return np.asarray(kept, dtype=np.float64).reshape(-1, 4) * scale
+
+
+class AttributesError(ValueError):
+    """A user's attributes CSV that cannot be read (the file and line in the message)."""
+
+
+def read_attributes_csv(path: Path, ds: Dataset) -> Attributes:
+    """A user's attributes of ``ds``'s images from the CSV ``path`` with the header ``image,attribute,value``
+    (``image``: the image's ``file_name`` or file name; one row per image and attribute). Raises
+    :class:`AttributesError` on a missing column, an image the set lacks, an attribute that shadows a computed one
+    or an image given twice the same attribute."""
+    by_name: dict[str, int] = {}
+    for img in ds.images:
+        by_name[img.file_name] = img.id
+        by_name.setdefault(Path(img.file_name).name, img.id)
+    out: Attributes = {}
+    with open(path, newline="", encoding="utf-8") as f:
+        reader = csv.DictReader(f)
+        if reader.fieldnames is None or not {"image", "attribute", "value"} <= set(reader.fieldnames):
+            raise AttributesError(f"{path}: the header must be image,attribute,value (got {reader.fieldnames})")
+        for line, row in enumerate(reader, start=2):
+            image, key, value = (row["image"] or "").strip(), (row["attribute"] or "").strip(), (row["value"] or "")
+            if image not in by_name:
+                raise AttributesError(f"{path}:{line}: no image {image!r} in the test set")
+            if not key or key in ATTRIBUTES:
+                raise AttributesError(f"{path}:{line}: attribute {key!r} is empty or computed by fuzzyfire "
+                                      f"({', '.join(ATTRIBUTES)}): name yours otherwise")  # fmt: skip
+            values = out.setdefault(by_name[image], {})
+            if key in values:
+                raise AttributesError(f"{path}:{line}: {image} has {key} twice")
+            values[key] = value.strip() or None
+    return out
+
+
+def merged(computed: Attributes, given: Mapping[int, Mapping[str, str | None]]) -> Attributes:
+    """The computed attributes of every image with the user's (``given``) added; a user attribute an image lacks
+    is None for it."""
+    keys = sorted({k for v in given.values() for k in v})
+    return {i: {**a, **{k: given.get(i, {}).get(k) for k in keys}} for i, a in computed.items()}

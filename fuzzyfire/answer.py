@@ -1,0 +1,128 @@
+"""The study's answer in plain sentences, built from its numbers only: which mixture is best on which test set,
+what the synthetic images add against the baseline and against the control (with 95 % intervals), the slices
+where that difference holds after Holm's correction, and the false-alarm trade-off, with a caveat where the seeds,
+the test images or a slice are too few. The report's first screen and ``fuzzyfire experiment``'s last lines."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+from eval.errors import ALARMS
+from eval.imagelevel import IMAGE_RECALL
+from eval.stats import mean_std
+
+FEW_SEEDS = 5  # fewer seeds than this: the intervals cover test images and these seeds' mean only
+NAMES = {"AP50": "AP50", "AP25": "AP25", IMAGE_RECALL: "image recall", "AP": "AP"}
+
+
+def _mean(rows: Sequence[Mapping[str, Any]], mixture: str, test: str, metric: str) -> tuple[float, float | None, int]:
+    values = [
+        r[metric] for r in rows if r["mixture"] == mixture and r["test_set"] == test and r.get(metric) is not None
+    ]
+    m = mean_std(values)
+    return m.mean, m.std, m.n
+
+
+def headline_metric(rows: Sequence[Mapping[str, Any]], test: str) -> str | None:
+    """The metric a test set is judged by: AP50 when its rows have it, else image recall (too few fire images
+    for AP), else None (a set without fire)."""
+    mine = [r for r in rows if r["test_set"] == test]
+    for metric in ("AP50", IMAGE_RECALL):
+        if mine and all(r.get(metric) is not None for r in mine):
+            return metric
+    return None
+
+
+def _points(value: float, scale: float = 100.0) -> str:
+    return f"{scale * value:+.1f}"
+
+
+def _delta_text(d: Mapping[str, float]) -> str:
+    return f"{_points(d['value'])} [{_points(d['low'])}, {_points(d['high'])}]"
+
+
+def _verdict(d: Mapping[str, float]) -> str:
+    if d["low"] > 0:
+        return "the interval excludes 0: it helps"
+    if d["high"] < 0:
+        return "the interval excludes 0: it hurts"
+    return "not distinguishable from 0"
+
+
+def answer(
+    rows: Sequence[Mapping[str, Any]],
+    comparisons: Sequence[Mapping[str, Any]],
+    slices: Sequence[Mapping[str, Any]] = (),
+    notes: Sequence[str] = (),
+) -> list[str]:
+    """The answer's sentences (module docstring). ``rows``: Table 2's rows (:func:`fuzzyfire.aggregate.result_rows`);
+    ``comparisons``: :func:`fuzzyfire.aggregate.comparisons`; ``slices``: :func:`fuzzyfire.slicing.study_slices`'s
+    comparison rows; ``notes``: caveats known elsewhere (leaked test images dropped), appended as they are."""
+    lines = []
+    tests = list(dict.fromkeys(r["test_set"] for r in rows))
+    mixtures = list(dict.fromkeys(r["mixture"] for r in rows))
+    for test in tests:
+        metric = headline_metric(rows, test)
+        if metric is None:
+            continue
+        ranked = sorted(mixtures, key=lambda m: -_mean(rows, m, test, metric)[0] if _has(rows, m, test, metric) else 1)
+        ranked = [m for m in ranked if _has(rows, m, test, metric)]
+        shown = "; ".join(_cell(rows, m, test, metric) for m in ranked)
+        lines.append(f"Best on {test} by {NAMES.get(metric, metric)}: {ranked[0]} ({shown}).")
+    for c in comparisons:
+        metric = headline_metric(rows, c["test_set"])
+        if c["metric"] != metric:
+            continue
+        lines.append(f"On {c['test_set']}, {c['mixture']} against {c['baseline']}: {NAMES[metric]} "
+                     f"{_delta_text(c['delta'])} points, {_verdict(c['delta'])}.")  # fmt: skip
+    lines += _slice_lines(slices)
+    lines += _alarm_lines(rows, tests, mixtures)
+    seeds = max((len({r["seed"] for r in rows if r["mixture"] == m}) for m in mixtures), default=0)
+    if 0 < seeds < FEW_SEEDS:
+        lines.append(f"Caveat: {seeds} seed{'s' * (seeds != 1)} per mixture; the intervals cover the test images and "
+                     "the mean of these seeds, not how another training of the same mixture would land.")  # fmt: skip
+    return lines + list(notes)
+
+
+def _has(rows: Sequence[Mapping[str, Any]], mixture: str, test: str, metric: str) -> bool:
+    return any(r["mixture"] == mixture and r["test_set"] == test and r.get(metric) is not None for r in rows)
+
+
+def _cell(rows: Sequence[Mapping[str, Any]], mixture: str, test: str, metric: str) -> str:
+    mean, std, n = _mean(rows, mixture, test, metric)
+    spread = f" ± {100 * std:.1f}" if std is not None else ""
+    return f"{mixture} {100 * mean:.1f}{spread}"
+
+
+def _slice_lines(slices: Sequence[Mapping[str, Any]]) -> list[str]:
+    """Per (comparison, test set): the slices helped and hurt after Holm's correction, or that none is."""
+    groups: dict[tuple[str, str, str], list[Mapping[str, Any]]] = {}
+    for r in slices:
+        groups.setdefault((r["test_set"], r["mixture"], r["baseline"]), []).append(r)
+    lines = []
+    for (test, mixture, baseline), rows in groups.items():
+        found = [r for r in rows if r["verdict"] != "-"]
+        names = len({r["slice"] for r in rows})
+        if not found:
+            lines.append(f"On {test}, no slice separates {mixture} from {baseline} after Holm's correction "
+                         f"({names} slices x {len({r['metric'] for r in rows})} metrics).")  # fmt: skip
+            continue
+        for verdict in ("helps", "hurts"):
+            these = [r for r in found if r["verdict"] == verdict]
+            if these:
+                text = "; ".join(f"{r['slice']} ({r['fire_images']} fire images) {NAMES[r['metric']]} "
+                                 f"{_delta_text(r['delta'])}" for r in these)  # fmt: skip
+                lines.append(f"On {test}, {mixture} against {baseline} {verdict} on {text} (Holm-corrected).")
+    return lines
+
+
+def _alarm_lines(rows: Sequence[Mapping[str, Any]], tests: Sequence[str], mixtures: Sequence[str]) -> list[str]:
+    """The false alarms of each mixture on the sets without fire, and the image recall they buy."""
+    lines = []
+    for test in tests:
+        if not any(r["test_set"] == test and r.get(ALARMS) is not None for r in rows):
+            continue
+        shown = "; ".join(f"{m} {_mean(rows, m, test, ALARMS)[0]:.1f}" for m in mixtures if _has(rows, m, test, ALARMS))
+        lines.append(f"False alarms on {test} (detections at confidence 0.25 per 100 images): {shown}.")
+    return lines
