@@ -144,6 +144,8 @@ def plot_forest(panels: Mapping[str, Sequence[Mapping[str, object]]], path: Path
     dotted line is no difference."""
     from matplotlib.figure import Figure
 
+    from eval.tables import METRIC_LABELS
+
     names = list(dict.fromkeys(str(r["slice"]) for rows in panels.values() for r in rows))
     fire = {str(r["slice"]): r["fire_images"] for rows in panels.values() for r in rows}
     fig = Figure(figsize=(3.2 * max(len(panels), 1) + 2.2, 0.28 * len(names) + 1.4), dpi=110)
@@ -159,7 +161,7 @@ def plot_forest(panels: Mapping[str, Sequence[Mapping[str, object]]], path: Path
             filled = r.get("verdict") in ("helps", "hurts")
             ax.plot([value], [yy], "o", color=colour, markerfacecolor=colour if filled else "white", markersize=5)
         ax.axvline(0.0, color="0.4", linestyle=":", linewidth=1)
-        ax.set_xlabel(f"Δ {metric} (points)")
+        ax.set_xlabel(f"Δ {METRIC_LABELS.get(metric, metric)} (points)")
         ax.grid(axis="x", alpha=0.3)
     axes[0].set_yticks([y[n] for n in names], [f"{n} ({fire[n]})" for n in names], fontsize=8)
     axes[0].set_ylim(-0.7, len(names) - 0.3)

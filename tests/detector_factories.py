@@ -47,10 +47,10 @@ IMAGES = (
 )
 
 
-def write_test_set(root: Path) -> Path:
-    """The images of :data:`IMAGES` as PNGs plus ``annotations.json`` (COCO) in ``root``."""
+def write_test_set(root: Path, images: tuple[TestImage, ...] = IMAGES) -> Path:
+    """The ``images`` (default :data:`IMAGES`) as PNGs plus ``annotations.json`` (COCO) in ``root``."""
     builder = DatasetBuilder(root, NAMES)
-    for img in IMAGES:
+    for img in images:
         path = root / "images" / f"{img.name}.png"
         path.parent.mkdir(parents=True, exist_ok=True)
         Image.fromarray(np.full((img.height, img.width, 3), img.grey, dtype=np.uint8)).save(path)

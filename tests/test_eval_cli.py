@@ -334,3 +334,35 @@ def test_compare_refuses_a_budget_or_resample_count_out_of_range_before_scoring(
     for extra in (["--alarm-budget", "-3"], ["--samples", "0"]):
         assert main(["compare", str(good), str(good), "--data", str(work["test"]), *extra]) == 2
         assert "--alarm-budget must be > 0 and --samples >= 1" in capsys.readouterr().err
+
+
+def test_compare_slices_finds_the_fires_one_model_misses(tmp_path, capsys):
+    """40 frames, 20 at night and 20 by day; B misses every night fire (its boxes moved off them): --slices says
+    B hurts at night (AP50, AP25 and image recall, Holm-corrected) and not by day, and draws the forest plot."""
+    from detector_factories import TestImage, to_input_cxcywh
+
+    night = [TestImage(f"n{i}", 200, 150, 10 + 2 * i, (0.32, 0.32), (0, 8), (("fire", (40, 30, 120, 100)),))
+             for i in range(20)]  # fmt: skip
+    day = [TestImage(f"d{i}", 200, 150, 150 + 4 * i, (0.32, 0.32), (0, 8), (("fire", (40, 30, 120, 100)),))
+           for i in range(20)]  # fmt: skip
+    test = write_test_set(tmp_path / "test", (*night, *day))
+
+    def rows(miss_night: bool) -> list:
+        return [(img.grey, to_input_cxcywh(img, img.boxes[0][1], 40.0 if miss_night and img in night else 0.0), 0,
+                 0.95 - 0.01 * k) for k, img in enumerate((*night, *day))]  # fmt: skip
+
+    a, b = oracle_model(tmp_path / "a.onnx", rows=rows(False)), oracle_model(tmp_path / "b.onnx", rows=rows(True))
+    forest = tmp_path / "forest.png"
+    argv = ["compare", str(a), str(b), "--data", str(test), "--samples", "200", "--format", "yolov5", "--slices"]
+    assert main([*argv, "--forest", str(forest)]) == 0
+    text = capsys.readouterr().out
+    night_line = next(line for line in text.splitlines() if line.startswith("light=night"))
+    day_line = next(line for line in text.splitlines() if line.startswith("light=day"))
+    assert night_line.count("*") == 3 and "-100.0" in night_line and "*" not in day_line
+    assert "B - A  image recall at confidence 0.25 -50.0 points" in text and forest.stat().st_size > 0
+    assert main([*argv, "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    verdicts = {(r["slice"], r["metric"]): r["verdict"] for r in doc["slices"] if r["attribute"] == "light"}
+    assert verdicts == {("light=night", m): "hurts" for m in ("AP50", "AP25", "image_recall")} | {
+        ("light=day", m): "-" for m in ("AP50", "AP25", "image_recall")}
+    assert main(["compare", str(a), str(b), "--data", str(test), "--forest", str(forest)]) == 2  # needs --slices
