@@ -403,7 +403,10 @@ def write_summary(cfg: ExperimentConfig, specs, results, rows, out: Path, standi
     if standin:
         doc["notice"] = STANDIN_NOTICE
     (out / "experiment.json").write_text(json.dumps(doc, indent=1) + "\n", encoding="utf-8")
-    lines = [json.dumps({k: v for k, v in r.items() if k not in ("matches", OPERATING, IMAGELEVEL)}, sort_keys=True) for r in rows]
+    lines = [
+        json.dumps({k: v for k, v in r.items() if k not in ("matches", OPERATING, IMAGELEVEL)}, sort_keys=True)
+        for r in rows
+    ]
     (out / "results.jsonl").write_text("".join(line + "\n" for line in lines), encoding="utf-8")
 
 

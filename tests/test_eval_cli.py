@@ -364,5 +364,6 @@ def test_compare_slices_finds_the_fires_one_model_misses(tmp_path, capsys):
     doc = json.loads(capsys.readouterr().out)
     verdicts = {(r["slice"], r["metric"]): r["verdict"] for r in doc["slices"] if r["attribute"] == "light"}
     assert verdicts == {("light=night", m): "hurts" for m in ("AP50", "AP25", "image_recall")} | {
-        ("light=day", m): "-" for m in ("AP50", "AP25", "image_recall")}
+        ("light=day", m): "-" for m in ("AP50", "AP25", "image_recall")
+    }
     assert main(["compare", str(a), str(b), "--data", str(test), "--forest", str(forest)]) == 2  # needs --slices
