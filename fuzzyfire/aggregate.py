@@ -51,12 +51,12 @@ def _scored(specs: Sequence[RunSpec], results: Sequence[dict | None]) -> Iterato
                 yield spec, test, scored, spec.out / scored["scores"]
 
 
-AP_MIN_FIRE_IMAGES = 50  # a test set with fewer fire images gets no AP/AP50 (its interval would be too wide to
-# tell mixtures apart): AP25 and image recall, with their intervals, are reported instead
-
-
 def result_rows(
-    specs: Sequence[RunSpec], results: Sequence[dict | None], out: Path, datasets: Datasets | None = None
+    specs: Sequence[RunSpec],
+    results: Sequence[dict | None],
+    out: Path,
+    datasets: Datasets | None = None,
+    min_fire_images: int = 0,
 ) -> list[dict]:
     """One row per (finished run, test set): mixture, method, seed, test_set, AP, AP50, AP25, run folder (relative
     to ``out``), the tables it belongs to (as its spec says) and its matches file; a set without boxes (AP None)
@@ -67,7 +67,7 @@ def result_rows(
     share of its fire images detected (:mod:`eval.imagelevel`) at the threshold where the run raises a false alarm
     on at most :data:`eval.operating.ALARM_BUDGET` of 100 images without fire (pooled; at confidence
     :data:`eval.errors.ALARM_CONF` when the run has no set without fire), its :data:`fuzzyfire.slicing.IMAGELEVEL`;
-    under :data:`AP_MIN_FIRE_IMAGES` fire images its AP and AP50 are None. A run also scored on sets without
+    under ``min_fire_images`` fire images (``report.min_fire_images``) its AP and AP50 are None. A run also scored on sets without
     fire carries :data:`eval.operating.RECALL_AT_ALARMS`, the share of its boxes found at the threshold where it
     raises at most :data:`eval.operating.ALARM_BUDGET` alarms per 100 of those images, and that
     ``threshold_at_alarms``."""
@@ -89,7 +89,7 @@ def result_rows(
             threshold = level[1].threshold(ALARM_BUDGET) if isinstance(level[1], Alarms) else level[1]
             fire = int(hits.fire.sum())
             images = {"fire_images": fire, IMAGE_RECALL: hits.recall(threshold), IMAGELEVEL: level}
-            ap = ap if fire >= AP_MIN_FIRE_IMAGES else {"AP": None, "AP50": None}
+            ap = ap if fire >= min_fire_images else {"AP": None, "AP50": None}
         rows.append({
             "mixture": spec.mixture, "method": spec.method or "-", "seed": spec.seed, "test_set": test.name,
             **ap, "AP25": ap25, **({ALARMS: m[ALARMS]} if negatives else {}),
@@ -182,6 +182,7 @@ def comparisons(cfg: ExperimentConfig, rows: Sequence[dict]) -> list[dict]:
     if not cfg.report.bootstrap:
         return []
     pairs = comparison_pairs(cfg, rows)
+    enough = cfg.report.min_fire_images
     scored = [r for r in rows if ALARMS not in r and any(t in r["tables"] for t in ("table2", CONTROL_TABLE))]
     out = []
     rngs = {"table2": np.random.default_rng(0), CONTROL_TABLE: np.random.default_rng(1)}  # controls leave the rest
@@ -197,7 +198,7 @@ def comparisons(cfg: ExperimentConfig, rows: Sequence[dict]) -> list[dict]:
             if not a or not b:
                 continue
             deltas = {}
-            if all(r["AP50"] is not None for r in a + b):
+            if all(r.get("fire_images", enough) >= enough for r in a + b):
                 load = lambda side: [MatchTable.load(Path(r["matches"])) for r in side]  # noqa: E731
                 deltas = paired_bootstrap(load(a), load(b), rngs[table], cfg.report.bootstrap)
             pa, pb = [r.get(OPERATING) for r in a], [r.get(OPERATING) for r in b]
@@ -253,7 +254,12 @@ def write_report(
     if sliced:
         (out / "tables").mkdir(parents=True, exist_ok=True)
         (out / "tables" / SLICES_FILE).write_text(slices_csv(sliced), encoding="utf-8")
-    said = answer(t2 + controls, compared, sliced, [*leak_notes(data, cfg.leakage.action, rows), *too_few_notes(sets)])
+    said = answer(
+        t2 + controls,
+        compared,
+        sliced,
+        [*leak_notes(data, cfg.leakage.action, rows, cfg.report.min_fire_images), *too_few_notes(sets)],
+    )
     (out / ANSWER_FILE).write_text("".join(f"- {line}\n" for line in said), encoding="utf-8")
     return write_study_report(
         out, t2, np.random.default_rng(0), method_results=t1, controls=controls,
@@ -267,9 +273,9 @@ def write_report(
 ANSWER_FILE = "answer.md"  # the answer's sentences, one per line, as the report's first section says them
 
 
-def leak_notes(data: Prepared, action: str, rows: Sequence[dict]) -> list[str]:
+def leak_notes(data: Prepared, action: str, rows: Sequence[dict], min_fire_images: int) -> list[str]:
     """One sentence per test set that lost leaked images: how many, and the fire images left (and that they are
-    too few for AP, :data:`AP_MIN_FIRE_IMAGES`)."""
+    too few for AP, under ``min_fire_images``)."""
     notes = []
     for name, leaks in data.leaks.items():
         if not leaks.leaked or action != "drop":
@@ -277,7 +283,7 @@ def leak_notes(data: Prepared, action: str, rows: Sequence[dict]) -> list[str]:
         fire = next((r["fire_images"] for r in rows if r["test_set"] == name and "fire_images" in r), None)
         left = "" if fire is None else f"; {fire} fire images remain"
         few = (", too few for AP (AP25 and image recall are reported)" if fire is not None
-               and fire < AP_MIN_FIRE_IMAGES else "")  # fmt: skip
+               and fire < min_fire_images else "")  # fmt: skip
         notes.append(f"{name}: {len(leaks.leaked)} of its {leaks.images} images are copies or near duplicates of "
                      f"training images and were dropped before scoring (leakage.json){left}{few}.")  # fmt: skip
     return notes

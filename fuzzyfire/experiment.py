@@ -392,7 +392,7 @@ def run_experiment(cfg: ExperimentConfig, base: Path, out: Path, executor=None) 
     own = {**own, **control_pools(cfg, controlled, real_train, datasets, base, out)}
     specs = plan_runs(cfg, grid, data, write_mixtures(cfg, grid, data, datasets, out, own), out)
     results = run_grid(specs, datasets, executor) if executor is not None else finished_runs(specs)
-    rows = result_rows(specs, results, out, datasets)
+    rows = result_rows(specs, results, out, datasets, cfg.report.min_fire_images)
     write_summary(cfg, specs, results, rows, out, data.standin)
     report = write_report(cfg, data, datasets, rows, out, specs, results, own)
     failed = [s for s, r in zip(specs, results) if r is None]

@@ -53,7 +53,7 @@ def toy_dict(*, fire_free: bool = False, **grid: Any) -> dict[str, Any]:
         "grid": {"mixtures": ["R12_S0", "R6_S6"], "table1": ["R0_S12"], "seeds": [0], **grid},
         "train": {"epochs": 1, "imgsz": 64, "batch": 8, "optim": {"warmup_min_iters": 2, "nominal_batch": 16}},
         "executor": {"num_cpus": 2, "local_cpus": 2},
-        "report": {"bootstrap": 20, "samples": True},
+        "report": {"bootstrap": 20, "samples": True, "min_fire_images": 1},  # toy test sets: a few images
     }
     return {**doc, "tests": FIRE_FREE} if fire_free else doc
 

@@ -116,7 +116,7 @@ def test_a_set_with_fire_carries_its_recall_at_the_alarm_budget(tmp_path: Path) 
     free = {"AP": None, "AP50": None, ALARMS: 50.0, "images": 20, "scores": "scores/fire-free"}
     tests = {"common": {**fire, "scores": "scores/common"}, "rare": {**fire, "scores": "scores/rare"}}
     results = [{"tests": {**tests, "fire-free": free}}, {"tests": tests}]
-    rows = result_rows([with_free, without], results, tmp_path, Loader())  # type: ignore[arg-type]
+    rows = result_rows([with_free, without], results, tmp_path, Loader(), 3)  # type: ignore[arg-type]
     at = {(r["mixture"], r["test_set"]): r.get(RECALL_AT_ALARMS) for r in rows}
     # 20 images without fire, 10 per 100: two alarms allowed, so the threshold lies just above 0.4 (the third)
     assert at == {("R12_S0", "common"): 0.5, ("R12_S0", "rare"): 0.5, ("R12_S0", "fire-free"): None,
@@ -128,7 +128,7 @@ def test_a_set_with_fire_carries_its_recall_at_the_alarm_budget(tmp_path: Path) 
     recall = {(r["mixture"], r["test_set"]): r.get("image_recall") for r in rows}
     assert recall == {("R12_S0", "common"): 1.0, ("R12_S0", "rare"): 0.5, ("R12_S0", "fire-free"): None,
                       ("R6_S6", "common"): 1.0, ("R6_S6", "rare"): 0.5}  # fmt: skip
-    assert rows[0]["fire_images"] == 2 and rows[0]["AP50"] is None  # under AP_MIN_FIRE_IMAGES: no AP
+    assert rows[0]["fire_images"] == 2 and rows[0]["AP50"] is None  # under the minimum of 3 fire images: no AP
     assert result_rows([with_free], results[:1], tmp_path, Loader())[0][RECALL_AT_ALARMS] == 0.5  # type: ignore[arg-type]
     assert Loader.reads == 6  # read from found_scores.json and image_hits.json
     (with_free.out / "scores" / "common" / "predictions.json").write_text(

@@ -264,8 +264,9 @@ def test_a_test_set_added_to_a_finished_study_is_scored_without_training(
     assert "(done before)" in capsys.readouterr().out
 
 
-def test_named_test_sets_leave_every_run_identity_as_it_was(tmp_path: Path) -> None:
-    """A config without ``tests:`` plans the runs it always did; adding named sets changes no run's hash."""
+def test_no_test_set_changes_a_run_identity(tmp_path: Path) -> None:
+    """Adding named sets, or dropping a test set's leaked images, changes no run's hash: no test set is in the
+    identity (a test set does not change the model)."""
     from fuzzyfire.datasets import DataRef
     from fuzzyfire.experiment import plan_runs
     from fuzzyfire.stages import Prepared
@@ -278,8 +279,11 @@ def test_named_test_sets_leave_every_run_identity_as_it_was(tmp_path: Path) -> N
     after = plan_runs(named, grid_entries(named), Prepared(ref, ref, pools, {"fire-free": ref}), mixtures, tmp_path)
     assert [s.hash() for s in before] == [s.hash() for s in after] and all(not s.evals for s in before)
     assert all([t.name for t in s.evals] == ["fire-free"] for s in after)
-    assert set(before[0].identity()) == {"mixture", "method", "seed", "train_data", "val_data", "tests", "classes",
-                                         "train", "score"}  # fmt: skip
+    assert set(before[0].identity()) == {"mixture", "method", "seed", "train_data", "val_data", "classes", "train",
+                                         "score"}  # fmt: skip
+    narrowed = replace(ref, exclude=("images/test/000001.jpg",))
+    leaked = plan_runs(plain, grid_entries(plain), Prepared(ref, narrowed, pools), mixtures, tmp_path)
+    assert [s.hash() for s in leaked] == [s.hash() for s in before] and leaked[0].tests[1].data.exclude
 
 
 def test_real_finetune_reaches_only_the_runs_with_real_and_synthetic_images(tmp_path: Path) -> None:
