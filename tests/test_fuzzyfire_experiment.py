@@ -96,9 +96,14 @@ def test_report_files_exist_and_say_stand_in(full_run: tuple[Path, str, Counter]
         assert (out / "tables" / name).stat().st_size > 0
         assert "(stand-in)" in (out / "tables" / name).read_text()
     figures = {p.name for p in (out / "figures").iterdir()}
-    at_budget = {"figure5_recall_at_10_alarms.png", "operating_common__stand_in.png"}  # the rare stand-in has no box
+    at_budget = {"figure5_recall_at_10_alarms.png", "operating_common__stand_in.png",
+                 "image_operating_common__stand_in.png"}  # the rare stand-in has no box  # fmt: skip
     assert figures == {"figure5_AP.png", "figure5_AP50.png", "figure5_alarms_per_100.png", *at_budget}
     page = (out / "report.html").read_text()
+    answer = (out / "answer.md").read_text()  # the report's first section, and the command's last lines
+    assert page.index("<h2>The answer</h2>") < page.index("<h2>Table 2") and answer.startswith("- Best on common")
+    assert "R6_S6 against R12_S0" in answer and answer.splitlines()[0][2:] in printed
+    assert json.loads((out / "leakage.json").read_text())["action"] == "drop"
     assert "STAND-IN DATA" in page and "Paired comparisons" in page and "R6_S6" in page
     gaps = json.loads((out / "tables" / "gap.json").read_text())["gaps"]
     assert [g["method"] for g in gaps] == ["method1", "method2"] and "Realism gap" in page
