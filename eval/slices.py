@@ -63,10 +63,8 @@ def make_slices(
     """The slices (module docstring) of the images ``image_ids`` (I,) (``fire`` (I,): which hold fire) by every
     attribute of ``attributes`` (image id -> attribute -> value), computed attributes first in
     :data:`eval.attributes.ATTRIBUTES` order, then the user's sorted by name."""
-    names = sorted(
-        {k for v in attributes.values() for k in v},
-        key=lambda k: (k not in ATTRIBUTES, list(ATTRIBUTES).index(k) if k in ATTRIBUTES else 0, k),
-    )  # noqa: E501
+    given = {k for v in attributes.values() for k in v}
+    names = [k for k in ATTRIBUTES if k in given] + sorted(given - set(ATTRIBUTES))
     out = []
     for attr in names:
         values = np.asarray([attributes.get(int(i), {}).get(attr) for i in image_ids], dtype=object)
