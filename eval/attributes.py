@@ -34,7 +34,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from curate.core.dataset import Annotation, Dataset
-from curate.core.imageio import read_image
+from curate.core.imageio import ImageError, read_image
 from curate.core.progress import progress
 from curate.core.sky import sky_mask
 from curate.scan import sharpness
@@ -56,27 +56,30 @@ COCO_SIZES = (("small", 0, 32), ("medium", 32, 96), ("large", 96, float("inf")))
 NIGHT, DAY = 70.0, 110.0  # mean luma (0..255) below which a scene is night, at or above which it is day
 SKY_SHARE = 0.05  # share of the image the sky must cover
 BLURRED, SOFT = 50.0, 200.0  # Laplacian variance below which an image is blurred, soft
+BLUR = (("blurred", 0.0, BLURRED), ("soft", BLURRED, SOFT), ("sharp", SOFT, float("inf")))
 CHEMICAL_SHARE = 0.5  # share of the bright fire pixels that must be non-warm for a chemical flame
 PALE_SAT, YELLOW_HUE = 0.35, 35.0  # median saturation under which / median hue (deg) from which a fire is yellow-white
 
 Attributes = dict[int, dict[str, str | None]]  # image id -> attribute -> value
 
 
-def image_attributes(image: NDArray[np.uint8], boxes: NDArray[np.float64], source: str = "") -> dict[str, str | None]:
+def image_attributes(
+    image: NDArray[np.uint8], boxes: NDArray[np.float64], source: str = "", scale: float = 1.0
+) -> dict[str, str | None]:
     """The attributes (module docstring) of one (H, W, 3) uint8 RGB image with its fire ``boxes`` (N, 4)
-    [x, y, w, h] in pixels of that image."""
+    [x, y, w, h] in pixels of that image; ``scale``: its pixels per pixel of the original image (a picture read
+    smaller), so the sizes are the original's."""
     grey = cv2.cvtColor(image, cv2.COLOR_RGB2GRAY)
     mean = float(grey.mean())
     out: dict[str, str | None] = {
         "light": "night" if mean < NIGHT else "dusk" if mean < DAY else "day",
         "sky": "sky" if float(sky_mask(image).mean()) >= SKY_SHARE else "no sky",
-        "blur": _bucket(((b, lo, hi) for b, lo, hi in (("blurred", 0, BLURRED), ("soft", BLURRED, SOFT),
-                                                         ("sharp", SOFT, np.inf))), sharpness(image)),  # fmt: skip
+        "blur": _bucket(BLUR, sharpness(image)),
         "source": source or "-",
         "size": None, "size_fine": None, "fires": None, "colour": None,
     }  # fmt: skip
     if len(boxes):
-        side = float(np.sqrt((boxes[:, 2] * boxes[:, 3]).max()))
+        side = float(np.sqrt((boxes[:, 2] * boxes[:, 3]).max())) / scale
         out["size"] = _bucket(COCO_SIZES, side)
         out["size_fine"] = _bucket(SIZES, side)
         out["fires"] = "1" if len(boxes) == 1 else "2-3" if len(boxes) <= 3 else "4+"
@@ -120,14 +123,14 @@ def dataset_attributes(ds: Dataset, workers: int = 0) -> Attributes:
         path = ds.image_path(img)
         try:
             pixels = read_image(path, min_side=WORK_SIDE)
-        except Exception as exc:  # noqa: BLE001 - named below with its reason
+        except ImageError as exc:
             raise ValueError(f"{path}: cannot read it for its attributes ({exc})") from None
         scale = WORK_SIDE / max(pixels.shape[:2])
         if scale < 1:
             pixels = cv2.resize(pixels, (max(round(pixels.shape[1] * scale), 1), max(round(pixels.shape[0] * scale), 1)),
                                 interpolation=cv2.INTER_AREA)  # fmt: skip
-        boxes = _boxes(by_image.get(img.id, []), pixels.shape[1] / img.width)
-        return image_attributes(pixels, boxes, img.source)
+        scale = pixels.shape[1] / img.width
+        return image_attributes(pixels, _boxes(by_image.get(img.id, []), scale), img.source, scale)
 
     with ThreadPoolExecutor(max_workers=workers or None) as pool:
         values = list(progress(pool.map(one, ds.images), total=len(ds.images), desc="attributes"))
