@@ -5,7 +5,7 @@ on each: on which fires does one beat the other, and how sure is that.
 ``size_fine``, ``fires``, ``colour``) hold only images with fire; the others (``light``, ``sky``, ``blur``,
 ``source`` and a user's) hold every image with that value, fire-free ones included (their detections are false
 positives there as everywhere). A slice with fewer than :data:`MIN_FIRE_IMAGES` fire images is merged: with its
-smaller neighbour for an ordered attribute (:data:`ORDERED`: ``size`` small+medium), into ``other`` for the
+smaller neighbour for an ordered attribute (:data:`ORDERED`: ``size=small,medium``), into ``other`` for the
 rest; one still too
 small is kept and marked (``too_few``) and never compared. An attribute left with one slice is no cut at all and
 is dropped.
@@ -78,7 +78,7 @@ def make_slices(
             continue
         for vals, mask in groups:
             n_fire = int((mask & fire).sum())
-            out.append(Slice(attr, "+".join(vals), mask, int(mask.sum()), n_fire, n_fire < minimum))
+            out.append(Slice(attr, ",".join(vals), mask, int(mask.sum()), n_fire, n_fire < minimum))
     return out
 
 

@@ -254,12 +254,9 @@ def write_report(
     if sliced:
         (out / "tables").mkdir(parents=True, exist_ok=True)
         (out / "tables" / SLICES_FILE).write_text(slices_csv(sliced), encoding="utf-8")
-    said = answer(
-        t2 + controls,
-        compared,
-        sliced,
-        [*leak_notes(data, cfg.leakage.action, rows, cfg.report.min_fire_images), *too_few_notes(sets)],
-    )
+    labelled = t2 + [{**r, "mixture": control_label(r["mixture"])} for r in controls]  # a control is its own row
+    notes = [*leak_notes(data, cfg.leakage.action, rows, cfg.report.min_fire_images), *too_few_notes(sets)]
+    said = answer(labelled, compared, sliced, notes)
     (out / ANSWER_FILE).write_text("".join(f"- {line}\n" for line in said), encoding="utf-8")
     return write_study_report(
         out, t2, np.random.default_rng(0), method_results=t1, controls=controls,

@@ -22,8 +22,8 @@ def test_small_slices_merge_with_their_smaller_neighbour_or_into_other() -> None
     colours = ["orange-red"] * 30 + ["chemical"] * 8 + ["yellow-white"] * 12 + [None] * 10
     attrs = {int(i): {"size": s, "colour": c, "light": "day"} for i, s, c in zip(ids, sizes, colours)}
     slices = {s.name: s for s in make_slices(attrs, ids, fire, minimum=20)}
-    assert set(slices) == {"size=small+medium", "size=large", "colour=orange-red", "colour=other"}  # light: one value
-    assert slices["size=small+medium"].fire_images == 30 and slices["colour=other"].fire_images == 20
+    assert set(slices) == {"size=small,medium", "size=large", "colour=orange-red", "colour=other"}  # light: one value
+    assert slices["size=small,medium"].fire_images == 30 and slices["colour=other"].fire_images == 20
     assert not any(s.too_few for s in slices.values())
     tiny = make_slices({int(i): {"sky": "sky" if i < 3 else "no sky"} for i in ids}, ids, fire, minimum=50)
     assert [(s.name, s.too_few) for s in tiny] == []  # merged into one slice: no cut left
