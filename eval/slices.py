@@ -115,24 +115,34 @@ class Side:
 
 
 def compare_slices(
-    a: Side, b: Side, slices: Sequence[Slice], rng: np.random.Generator, num_samples: int = 1000
+    a: Side,
+    b: Side,
+    slices: Sequence[Slice],
+    rng: np.random.Generator,
+    num_samples: int = 1000,
+    metrics: Sequence[str] = METRICS,
 ) -> list[dict[str, Any]]:
-    """One row per (slice, metric) with enough fire images: ``slice``, ``attribute``, ``value``, ``images``,
-    ``fire_images``, ``metric`` (:data:`METRICS`), ``delta`` (:meth:`eval.stats.PairedDelta.to_dict` of ``b - a``),
-    ``p_holm`` (Holm-adjusted within the metric) and ``verdict`` (``helps``, ``hurts`` or ``-``)."""
+    """One row per (slice, metric of ``metrics``) with enough fire images: ``slice``, ``attribute``, ``value``,
+    ``images``, ``fire_images``, ``metric`` (:data:`METRICS`), ``delta`` (:meth:`eval.stats.PairedDelta.to_dict`
+    of ``b - a``), ``p_holm`` (Holm-adjusted within the metric) and ``verdict`` (``helps``, ``hurts`` or ``-``).
+    Leave AP50 out of ``metrics`` on a set with too few fire images for AP."""
+    unknown = set(metrics) - set(METRICS)
+    if unknown:
+        raise ValueError(f"unknown slice metrics {sorted(unknown)}; known: {', '.join(METRICS)}")
     rows = []
     for s in (s for s in slices if not s.too_few):
-        deltas = {
-            "AP50": _paired_ap([t.restricted([0], s.mask) for t in a.ap50],
-                               [t.restricted([0], s.mask) for t in b.ap50], s.mask, rng, num_samples),
-            "AP25": _paired_ap([t.restricted([0], s.mask) for t in a.ap25],
-                               [t.restricted([0], s.mask) for t in b.ap25], s.mask, rng, num_samples),
-            "image_recall": paired_image_recall(a.hits, b.hits, rng, num_samples, mask=s.mask),
-        }  # fmt: skip
+        deltas = {}
+        for metric in metrics:
+            if metric == "image_recall":
+                deltas[metric] = paired_image_recall(a.hits, b.hits, rng, num_samples, mask=s.mask)
+                continue
+            ta, tb = (a.ap50, b.ap50) if metric == "AP50" else (a.ap25, b.ap25)
+            narrowed = [t.restricted([0], s.mask) for t in ta], [t.restricted([0], s.mask) for t in tb]
+            deltas[metric] = _paired_ap(*narrowed, s.mask, rng, num_samples)
         for metric, d in deltas.items():
             rows.append({"slice": s.name, "attribute": s.attribute, "value": s.value, "images": s.images,
                          "fire_images": s.fire_images, "metric": metric, "delta": d.to_dict()})  # fmt: skip
-    for metric in METRICS:
+    for metric in metrics:
         family = [r for r in rows if r["metric"] == metric]
         for r, p in zip(family, holm([r["delta"]["p_value"] for r in family])):
             r["p_holm"] = p

@@ -20,7 +20,7 @@ import numpy as np
 
 from eval.attributes import Attributes, dataset_attributes, merged, read_attributes_csv
 from eval.imagelevel import IMAGELEVEL, ImageHits, image_hits
-from eval.slices import Side, compare_slices, make_slices, slice_table
+from eval.slices import METRICS, Side, compare_slices, make_slices, slice_table
 from eval.stats import MatchTable
 from fuzzyfire.datasets import DataRef, Datasets
 from fuzzyfire.kept import keep, kept
@@ -32,7 +32,7 @@ MATCHES25_FILE = "matches25.npz"
 SLICES_FILE = "slices.csv"
 
 
-def test_attributes(datasets: Datasets, ref: DataRef, out: Path, user: Path | None = None) -> Attributes:
+def set_attributes(datasets: Datasets, ref: DataRef, out: Path, user: Path | None = None) -> Attributes:
     """The attributes of every image of the test set ``ref``: computed once and kept in
     ``out/slices/<digest of the set>.json``, with the user's CSV ``user`` (:func:`eval.attributes.read_attributes_csv`)
     added when given."""
@@ -100,7 +100,8 @@ def study_slices(
         if not scored:
             continue
         hits = scored[0][IMAGELEVEL][0]
-        attrs = test_attributes(datasets, ref, out, (user or {}).get(test))
+        metrics = METRICS if all(r["AP50"] is not None for r in scored) else tuple(m for m in METRICS if m != "AP50")
+        attrs = set_attributes(datasets, ref, out, (user or {}).get(test))
         slices = make_slices(attrs, hits.image_ids, hits.fire)
         tables[test] = slice_table(slices)
         sides = _sides(scored, datasets, ref)
@@ -108,7 +109,7 @@ def study_slices(
             a, b = sides.get((table, base)), sides.get(("table2", name))
             if a is None or b is None:
                 continue
-            for r in compare_slices(a, b, slices, rng, num_samples):
+            for r in compare_slices(a, b, slices, rng, num_samples, metrics):
                 out_rows.append({"test_set": test, "mixture": name, "baseline": base_label, **r})
     return out_rows, tables
 
@@ -133,15 +134,19 @@ def _sides(rows: Sequence[Mapping[str, Any]], datasets: Datasets, ref: DataRef) 
 
 def slices_csv(rows: Sequence[Mapping[str, Any]]) -> str:
     """The slice comparisons as CSV: deltas and 95 % interval in points, bootstrap and Holm p-values, verdict."""
-    head = "test_set,mixture,baseline,slice,images,fire_images,metric,delta,low,high,p_value,p_holm,verdict"
-    lines = [head]
+    import csv
+    import io
+
+    text = io.StringIO()
+    writer = csv.writer(text, lineterminator="\n")
+    writer.writerow(["test_set", "mixture", "baseline", "slice", "images", "fire_images", "metric", "delta", "low",
+                     "high", "p_value", "p_holm", "verdict"])  # fmt: skip
     for r in rows:
         d = r["delta"]
-        lines.append(",".join([str(r[k]) for k in ("test_set", "mixture", "baseline", "slice", "images", "fire_images",
-                                                    "metric")]
-                              + [f"{100 * d[k]:.2f}" for k in ("value", "low", "high")]
-                              + [f"{d['p_value']:.4f}", f"{r['p_holm']:.4f}", r["verdict"]]))  # fmt: skip
-    return "\n".join(lines) + "\n"
+        writer.writerow([r["test_set"], r["mixture"], r["baseline"], r["slice"], r["images"], r["fire_images"],
+                         r["metric"], *(f"{100 * d[k]:.2f}" for k in ("value", "low", "high")),
+                         f"{d['p_value']:.4f}", f"{r['p_holm']:.4f}", r["verdict"]])  # fmt: skip
+    return text.getvalue()
 
 
 def forest_figures(rows: Sequence[Mapping[str, Any]], folder: Path) -> list[tuple[Path, str]]:
