@@ -3,8 +3,8 @@ paired bootstrap.
 
 - ``slices_attributes_share``: computing every attribute of every test image (:func:`eval.attributes.
   dataset_attributes`, decode at 256 px, 2 threads) as a share of scoring the same images end to end at 320 px
-  (``fuzzyfire score``: decode, letterbox, onnxruntime, NMS, pycocotools), on ../shared/data/fire-smoke-608 (979
-  images) or 100 generated 640x480 JPEGs (target <= 0.10).
+  (``fuzzyfire score`` as a study scores: conf 0.001, decode, letterbox, onnxruntime, NMS, pycocotools), on
+  ../shared/data/fire-smoke-608 (979 images) or 100 generated 640x480 JPEGs (target <= 0.10).
 - ``slices_image_hits``: :func:`eval.imagelevel.image_hits` of one scored set, and the matches at IoU 0.25.
 - ``slices_bootstrap``: :func:`eval.slices.compare_slices` of 3 runs against 3 at 1,000 resamples over every slice.
 
@@ -41,13 +41,13 @@ def main() -> None:
         det = OnnxDetector(export_onnx(Detector(1).eval(), Path(tmp) / "det.onnx", SIZE, ["fire"]))
         ds, what = _dataset(Path(tmp))
         start = time.perf_counter()
-        result = score(det, ds, PredictOptions(batch=16, conf=0.05))
+        result = score(det, ds, PredictOptions(batch=16))
         scoring = time.perf_counter() - start
         start = time.perf_counter()
         attrs = dataset_attributes(ds, workers=2)
         attributes = time.perf_counter() - start
         print(f"slices_attributes: {len(ds.images) / attributes:.0f} img/s ({what})")
-        print(f"slices_scoring: {len(ds.images) / scoring:.0f} img/s (same images, {SIZE} px, conf 0.05)")
+        print(f"slices_scoring: {len(ds.images) / scoring:.0f} img/s (same images, {SIZE} px, conf 0.001)")
         print(f"slices_attributes_share: {attributes / scoring:.3f} of the scoring time (target <= 0.10)")
         scored, cat_ids = scored_images(result)
         start = time.perf_counter()

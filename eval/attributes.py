@@ -12,7 +12,7 @@ Each image gets one value per attribute (None where it has none, e.g. the fire c
   in degrees, saturation 0..1 of OpenCV's HSV): ``chemical`` when most of them are neither red, orange nor yellow
   (hue 60-330 deg with saturation > 0.25: blue, green, violet flames), else ``yellow-white`` when they are pale or
   yellow (median saturation < 0.35 or median hue >= 35 deg), else ``orange-red``.
-- ``sky``: ``sky`` when the sky (:func:`curate.core.sky.sky_mask`) covers at least 5 % of the image, else
+- ``sky``: ``sky`` when the sky (:func:`curate.core.sky.sky_mask`, at 160 px) covers at least 5 % of the image, else
   ``no sky`` (rooms, close-ups, streets between walls).
 - ``blur``: the variance of the Laplacian of the grey image at 256 px on the long side (:func:`curate.scan.
   sharpness`): ``blurred`` < 50 <= ``soft`` < 200 <= ``sharp``.
@@ -55,6 +55,7 @@ WORK_SIDE = 256  # long side, pixels, the attributes are computed at
 COCO_SIZES = (("small", 0, 32), ("medium", 32, 96), ("large", 96, float("inf")))
 NIGHT, DAY = 70.0, 110.0  # mean luma (0..255) below which a scene is night, at or above which it is day
 SKY_SHARE = 0.05  # share of the image the sky must cover
+SKY_SIDE = 160  # long side, pixels, the sky is found at (as the photo-site estimate of Method 2 finds it)
 BLURRED, SOFT = 50.0, 200.0  # Laplacian variance below which an image is blurred, soft
 BLUR = (("blurred", 0.0, BLURRED), ("soft", BLURRED, SOFT), ("sharp", SOFT, float("inf")))
 CHEMICAL_SHARE = 0.5  # share of the bright fire pixels that must be non-warm for a chemical flame
@@ -73,7 +74,7 @@ def image_attributes(
     mean = float(grey.mean())
     out: dict[str, str | None] = {
         "light": "night" if mean < NIGHT else "dusk" if mean < DAY else "day",
-        "sky": "sky" if float(sky_mask(image).mean()) >= SKY_SHARE else "no sky",
+        "sky": "sky" if float(sky_mask(_small(image, SKY_SIDE)).mean()) >= SKY_SHARE else "no sky",
         "blur": _bucket(BLUR, sharpness(image)),
         "source": source or "-",
         "size": None, "size_fine": None, "fires": None, "colour": None,
@@ -91,13 +92,18 @@ def fire_colour(image: NDArray[np.uint8], boxes: NDArray[np.float64]) -> str | N
     """``orange-red``, ``yellow-white`` or ``chemical`` (module docstring) of the pixels inside ``boxes`` (N, 4)
     [x, y, w, h] px of the (H, W, 3) uint8 RGB ``image``; None when the boxes hold no pixel."""
     h, w = image.shape[:2]
-    inside = np.zeros((h, w), dtype=bool)
-    for x, y, bw, bh in boxes:
-        x0, y0 = int(max(np.floor(x), 0)), int(max(np.floor(y), 0))
-        inside[y0 : int(min(np.ceil(y + bh), h)), x0 : int(min(np.ceil(x + bw), w))] = True
+    xyxy = np.column_stack([boxes[:, 0], boxes[:, 1], boxes[:, 0] + boxes[:, 2], boxes[:, 1] + boxes[:, 3]])
+    x0, y0 = (int(max(np.floor(v), 0)) for v in xyxy[:, :2].min(axis=0))
+    x1, y1 = int(min(np.ceil(xyxy[:, 2].max()), w)), int(min(np.ceil(xyxy[:, 3].max()), h))
+    if x1 <= x0 or y1 <= y0:
+        return None
+    crop = image[y0:y1, x0:x1]  # the boxes' union: only its pixels are converted
+    inside = np.zeros(crop.shape[:2], dtype=bool)
+    for bx0, by0, bx1, by1 in xyxy - [x0, y0, x0, y0]:
+        inside[int(max(np.floor(by0), 0)) : int(np.ceil(by1)), int(max(np.floor(bx0), 0)) : int(np.ceil(bx1))] = True
     if not inside.any():
         return None
-    hsv = cv2.cvtColor(image, cv2.COLOR_RGB2HSV)[inside].astype(np.float64)
+    hsv = cv2.cvtColor(crop, cv2.COLOR_RGB2HSV)[inside].astype(np.float64)
     hue, sat, val = hsv[:, 0] * 2.0, hsv[:, 1] / 255.0, hsv[:, 2]
     bright = val >= np.quantile(val, 2 / 3)
     hue, sat = hue[bright], sat[bright]
@@ -108,6 +114,17 @@ def fire_colour(image: NDArray[np.uint8], boxes: NDArray[np.float64]) -> str | N
     if np.median(sat[~cold]) < PALE_SAT or np.median(warm_hue) >= YELLOW_HUE:
         return "yellow-white"
     return "orange-red"
+
+
+def _small(image: NDArray[np.uint8], side: int) -> NDArray[np.uint8]:
+    """``image`` (H, W, 3) shrunk to ``side`` px on its long side (as it is when already smaller). Bilinear: a
+    JPEG is decoded at most 2x larger (:func:`curate.core.imageio.read_image` ``min_side``), where it matches area
+    averaging closely at a fraction of its cost."""
+    h, w = image.shape[:2]
+    scale = side / max(h, w)
+    if scale >= 1:
+        return image
+    return cv2.resize(image, (max(round(w * scale), 1), max(round(h * scale), 1)), interpolation=cv2.INTER_LINEAR)
 
 
 def _bucket(buckets: Iterable[tuple[str, float, float]], value: float) -> str:
@@ -125,10 +142,7 @@ def dataset_attributes(ds: Dataset, workers: int = 0) -> Attributes:
             pixels = read_image(path, min_side=WORK_SIDE)
         except ImageError as exc:
             raise ValueError(f"{path}: cannot read it for its attributes ({exc})") from None
-        scale = WORK_SIDE / max(pixels.shape[:2])
-        if scale < 1:
-            pixels = cv2.resize(pixels, (max(round(pixels.shape[1] * scale), 1), max(round(pixels.shape[0] * scale), 1)),
-                                interpolation=cv2.INTER_AREA)  # fmt: skip
+        pixels = _small(pixels, WORK_SIDE)
         scale = pixels.shape[1] / img.width
         return image_attributes(pixels, _boxes(by_image.get(img.id, []), scale), img.source, scale)
 
