@@ -144,7 +144,7 @@ def slices_csv(rows: Sequence[Mapping[str, Any]]) -> str:
     for r in rows:
         d = r["delta"]
         writer.writerow([r["test_set"], r["mixture"], r["baseline"], r["slice"], r["images"], r["fire_images"],
-                         r["metric"], *(f"{100 * d[k]:.2f}" for k in ("value", "low", "high")),
+                         r["metric"], *(f"{100 * d[k]:.3f}" for k in ("value", "low", "high")),
                          f"{d['p_value']:.4f}", f"{r['p_holm']:.4f}", r["verdict"]])  # fmt: skip
     return text.getvalue()
 
