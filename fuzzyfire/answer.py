@@ -13,6 +13,7 @@ from eval.imagelevel import IMAGE_RECALL
 from eval.stats import mean_std
 
 FEW_SEEDS = 5  # fewer seeds than this: the intervals cover test images and these seeds' mean only
+SHOWN_SLICES = 4  # slices named per comparison and direction (the largest differences); the rest are counted
 NAMES = {"AP50": "AP50", "AP25": "AP25", IMAGE_RECALL: "image recall", "AP": "AP"}
 
 
@@ -109,12 +110,24 @@ def _slice_lines(slices: Sequence[Mapping[str, Any]]) -> list[str]:
                          f"({names} slices x {len({r['metric'] for r in rows})} metrics).")  # fmt: skip
             continue
         for verdict in ("helps", "hurts"):
-            these = [r for r in found if r["verdict"] == verdict]
-            if these:
-                text = "; ".join(f"{r['slice']} ({r['fire_images']} fire images) {NAMES[r['metric']]} "
-                                 f"{_delta_text(r['delta'])}" for r in these)  # fmt: skip
-                lines.append(f"On {test}, {mixture} against {baseline} {verdict} on {text} (Holm-corrected).")
+            these = _strongest([r for r in found if r["verdict"] == verdict])
+            if not these:
+                continue
+            text = "; ".join(f"{r['slice']} ({r['fire_images']} fire images) {NAMES[r['metric']]} "
+                             f"{_delta_text(r['delta'])}" for r in these[:SHOWN_SLICES])  # fmt: skip
+            more = len(these) - SHOWN_SLICES
+            rest = f"; and {more} more slice{'s' * (more > 1)} (tables/slices.csv)" if more > 0 else ""
+            lines.append(f"On {test}, {mixture} against {baseline} {verdict} on {text}{rest} (Holm-corrected).")
     return lines
+
+
+def _strongest(rows: Sequence[Mapping[str, Any]]) -> list[Mapping[str, Any]]:
+    """One row per slice, its largest difference of any metric, slices by that difference, largest first."""
+    best: dict[str, Mapping[str, Any]] = {}
+    for r in rows:
+        if r["slice"] not in best or abs(r["delta"]["value"]) > abs(best[r["slice"]]["delta"]["value"]):
+            best[r["slice"]] = r
+    return sorted(best.values(), key=lambda r: -abs(r["delta"]["value"]))
 
 
 def _alarm_lines(rows: Sequence[Mapping[str, Any]], tests: Sequence[str], mixtures: Sequence[str]) -> list[str]:

@@ -81,3 +81,12 @@ def test_no_slice_kept_is_said_too() -> None:
     ]
     said = answer([], [], slices)
     assert said == ["On common, no slice separates B from A after Holm's correction (4 slices x 2 metrics)."]
+
+
+def test_many_kept_slices_are_named_by_size_and_the_rest_counted() -> None:
+    slices = [{"test_set": "common", "mixture": "B", "baseline": "A", "slice": f"s{i}", "fire_images": 30,
+               "metric": m, "delta": _delta(-0.01 * (i + 1) * (2 if m == "AP25" else 1), -1, -0.001),
+               "verdict": "hurts"} for i in range(6) for m in ("AP50", "AP25")]  # fmt: skip
+    (said,) = answer([], [], slices)
+    assert said.startswith("On common, B against A hurts on s5 (30 fire images) AP25 -12.0 [-100.0, -0.1]; s4 ")
+    assert said.endswith("; and 2 more slices (tables/slices.csv) (Holm-corrected).") and " s1 " not in said
