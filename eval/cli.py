@@ -204,7 +204,7 @@ def cmd_compare(args: argparse.Namespace) -> int:
         "samples": args.samples,
         "seed": args.seed,
     }
-    free = None
+    free = points = None
     if args.negatives is not None:
         try:
             free = _negatives_scored(args)
@@ -213,7 +213,7 @@ def cmd_compare(args: argparse.Namespace) -> int:
             return 2
         points = [[score_operating(r, n) for r, n in zip(side, neg)] for side, neg in zip(results, free)]
         deltas[RECALL_AT_ALARMS] = _add_operating(doc, points, args)
-    levels = _image_levels(results, free)
+    levels = _image_levels(results, points)
     deltas[IMAGE_RECALL] = paired_image_recall(levels[0], levels[1], np.random.default_rng(args.seed), args.samples,
                                                args.alarm_budget)  # fmt: skip
     doc["delta"][IMAGE_RECALL] = deltas[IMAGE_RECALL].to_dict()
@@ -260,9 +260,10 @@ def _negatives_scored(args: argparse.Namespace) -> list[list]:  # per side, per 
             for models in (args.model_a, args.model_b)]  # fmt: skip
 
 
-def _image_levels(results: list[list], free: list[list] | None) -> list[list]:
+def _image_levels(results: list[list], points: list[list] | None) -> list[list]:
     """Per side, per model: (its :class:`eval.imagelevel.ImageHits` on the test set, its per-image alarms on
-    ``--negatives`` or, without them, the confidence :data:`eval.errors.ALARM_CONF` it is read at)."""
+    ``--negatives`` (from its operating data ``points``) or, without them, the confidence
+    :data:`eval.errors.ALARM_CONF` it is read at)."""
     from eval.imagelevel import image_alarms, image_hits
     from eval.score import scored_images
 
@@ -271,13 +272,8 @@ def _image_levels(results: list[list], free: list[list] | None) -> list[list]:
         levels = []
         for j, r in enumerate(side):
             ds, cat_ids = scored_images(r)
-            if free is None:
-                levels.append((image_hits(ds, r.records, cat_ids), ALARM_CONF))
-                continue
-            neg, _ = scored_images(free[k][j])
-            levels.append(
-                (image_hits(ds, r.records, cat_ids), image_alarms(free[k][j].records, [i.id for i in neg.images]))
-            )
+            read_at = ALARM_CONF if points is None else image_alarms(points[k][j][1])
+            levels.append((image_hits(ds, r.records, cat_ids), read_at))
         out.append(levels)
     return out
 

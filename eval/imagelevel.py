@@ -26,7 +26,7 @@ from numpy.typing import NDArray
 
 from curate.core.boxes import box_iou_xyxy, xywh_to_xyxy
 from curate.core.dataset import Dataset
-from eval.operating import Alarms, alarms_of
+from eval.operating import Alarms
 from eval.stats import PairedDelta, paired_delta, resample_weights
 
 HIT_IOU = 0.1  # IoU with a fire box at which a detection hits it (or its centre inside the box)
@@ -93,14 +93,13 @@ def _best_hit(boxes: Sequence[tuple[int, list[float]]], dets: Sequence[dict[str,
     return best
 
 
-def image_alarms(records: Sequence[dict[str, Any]], image_ids: Sequence[int]) -> Alarms:
-    """Per-image alarms on the images ``image_ids`` without fire: one entry per image with a detection, its best
-    score (:class:`eval.operating.Alarms`; its rate is then false-alarm *images* per 100)."""
-    every = alarms_of(records, image_ids)
-    keep = np.zeros(len(every.image), dtype=bool)
-    _, first = np.unique(every.image, return_index=True)  # best first: each image's first entry is its best
+def image_alarms(alarms: Alarms) -> Alarms:
+    """The per-image view of ``alarms`` (detections on images without fire, :func:`eval.operating.alarms_of`): one
+    entry per image with a detection, its best score (its rate is then false-alarm *images* per 100)."""
+    keep = np.zeros(len(alarms.image), dtype=bool)
+    _, first = np.unique(alarms.image, return_index=True)  # best first: each image's first entry is its best
     keep[first] = True
-    return Alarms(every.scores[keep], every.image[keep], every.images)
+    return Alarms(alarms.scores[keep], alarms.image[keep], alarms.images)
 
 
 def image_operating_curve(hits: ImageHits, alarms: Alarms) -> tuple[NDArray[np.float64], NDArray[np.float64]]:

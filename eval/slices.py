@@ -29,8 +29,8 @@ from numpy.typing import NDArray
 
 from eval.attributes import ATTRIBUTES, Attributes
 from eval.imagelevel import ImageHits, paired_image_recall
-from eval.operating import ALARM_BUDGET, Alarms
-from eval.stats import MatchTable, PairedDelta, paired_delta, resample_weights
+from eval.operating import Alarms
+from eval.stats import MatchTable, paired_bootstrap
 
 MIN_FIRE_IMAGES = 20  # fire images a slice needs to be compared
 FIRE_ATTRIBUTES = ("size", "size_fine", "fires", "colour")  # attributes only images with fire have
@@ -138,7 +138,7 @@ def compare_slices(
                 continue
             ta, tb = (a.ap50, b.ap50) if metric == "AP50" else (a.ap25, b.ap25)
             narrowed = [t.restricted([0], s.mask) for t in ta], [t.restricted([0], s.mask) for t in tb]
-            deltas[metric] = _paired_ap(*narrowed, s.mask, rng, num_samples)
+            deltas[metric] = paired_bootstrap(*narrowed, rng, num_samples, keep=s.mask)["AP50"]  # first threshold
         for metric, d in deltas.items():
             rows.append({"slice": s.name, "attribute": s.attribute, "value": s.value, "images": s.images,
                          "fire_images": s.fire_images, "metric": metric, "delta": d.to_dict()})  # fmt: skip
@@ -149,30 +149,6 @@ def compare_slices(
             value = r["delta"]["value"]
             r["verdict"] = ("helps" if value > 0 else "hurts") if p < ALPHA and np.isfinite(value) else "-"
     return rows
-
-
-def _ap(tables: Sequence[MatchTable], weights: NDArray | None) -> float:
-    """Mean over ``tables`` of the AP at their (one) IoU threshold under image ``weights``."""
-    values = []
-    for t in tables:
-        prec = t.precision(weights)[:1]
-        valid = prec[prec > -1]
-        values.append(float(valid.mean()) if valid.size else np.nan)
-    return float(np.mean(values))
-
-
-def _paired_ap(
-    a: Sequence[MatchTable], b: Sequence[MatchTable], mask: NDArray[np.bool_], rng: np.random.Generator, n: int
-) -> PairedDelta:
-    """Paired bootstrap of the AP difference ``b - a`` on the images of ``mask`` (tables already restricted)."""
-    where = np.flatnonzero(mask)
-    samples = np.empty(n)
-    for s, wd in enumerate(resample_weights(len(where), n, rng)):
-        w = np.zeros(len(mask))
-        w[where] = wd
-        samples[s] = _ap(b, w) - _ap(a, w)
-    full = mask.astype(np.float64)
-    return paired_delta(_ap(b, full) - _ap(a, full), samples)
 
 
 def holm(p_values: Sequence[float]) -> list[float]:
@@ -194,20 +170,3 @@ def slice_table(slices: Sequence[Slice]) -> list[dict[str, Any]]:
     """The slices as rows (attribute, value, images, fire images, too_few) for the report and ``slices.json``."""
     return [{"slice": s.name, "attribute": s.attribute, "value": s.value, "images": s.images,
              "fire_images": s.fire_images, "too_few": s.too_few} for s in slices]  # fmt: skip
-
-
-def side_means(side: Side, slices: Sequence[Slice]) -> dict[str, dict]:
-    """Per slice, the side's mean AP50, AP25 and image recall over its runs (the points the deltas compare)."""
-    out = {}
-    for s in slices:
-        w = s.mask.astype(np.float64)
-        out[s.name] = {
-            "AP50": _ap([t.restricted([0], s.mask) for t in side.ap50], w),
-            "AP25": _ap([t.restricted([0], s.mask) for t in side.ap25], w),
-            "image_recall": float(
-                np.mean(
-                    [h.recall(al.threshold(ALARM_BUDGET) if isinstance(al, Alarms) else al, w) for h, al in side.hits]
-                )
-            ),  # fmt: skip
-        }
-    return out

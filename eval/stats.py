@@ -264,17 +264,25 @@ def paired_bootstrap(
     rng: np.random.Generator,
     num_samples: int = 1000,
     level: float = 0.95,
+    keep: NDArray[np.bool_] | None = None,
 ) -> dict[str, PairedDelta]:
     """Paired image-level bootstrap of the AP and AP50 differences ``b - a``: each resample draws one set of
     test images and scores both on it. ``a`` and ``b`` may each be several runs (e.g. one per seed) whose
-    AP is averaged per resample. Every table must cover the same image ids."""
+    AP is averaged per resample. Every table must cover the same image ids. ``keep`` (I,): only those images
+    are drawn, the others weigh 0 (a slice; give tables :meth:`MatchTable.restricted` to it, whose AP50 is then
+    the AP at their one IoU threshold)."""
     ta = [a] if isinstance(a, MatchTable) else list(a)
     tb = [b] if isinstance(b, MatchTable) else list(b)
     if not ta or not tb:
         raise ValueError("paired bootstrap needs at least one table on each side")
     if any(not np.array_equal(ta[0].image_ids, t.image_ids) for t in ta + tb):
         raise ValueError("paired bootstrap needs both models scored on the same test images")
-    weights = resample_weights(len(ta[0].image_ids), num_samples, rng)
+    if keep is None:
+        weights = resample_weights(len(ta[0].image_ids), num_samples, rng)
+    else:
+        where = np.flatnonzero(keep)
+        weights = np.zeros((num_samples, len(keep)), dtype=np.int64)
+        weights[:, where] = resample_weights(len(where), num_samples, rng)
     pa, pb = _mean_ap(ta, None), _mean_ap(tb, None)
     deltas: dict[str, list[float]] = {key: [] for key in pa}
     for w in weights:

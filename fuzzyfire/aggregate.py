@@ -4,6 +4,7 @@
 
 from __future__ import annotations
 
+import functools
 import json
 from collections.abc import Iterator, Mapping, Sequence
 from pathlib import Path
@@ -13,7 +14,7 @@ import numpy as np
 from curate.core.config import to_dict
 from curate.mix import parse_mixture
 from eval.errors import ALARM_CONF, ALARMS
-from eval.imagelevel import IMAGE_RECALL, IMAGELEVEL
+from eval.imagelevel import IMAGE_RECALL, IMAGELEVEL, image_alarms
 from eval.operating import (
     ALARM_BUDGET,
     OPERATING,
@@ -73,8 +74,7 @@ def result_rows(
     ``threshold_at_alarms``."""
     rows = []
     alarms = {} if datasets is None else {s.out: run_alarms(datasets, s, r) for s, r in zip(specs, results) if r}
-    frames = {} if datasets is None else {s.out: run_alarms(datasets, s, r, per_image=True)
-                                          for s, r in zip(specs, results) if r}  # fmt: skip
+    frames = {out: image_alarms(raised) for out, raised in alarms.items() if raised is not None}
     for spec, test, m, folder in _scored(specs, results):
         negatives = m.get(ALARMS) is not None
         ap25 = m.get("AP25") if datasets is None or negatives else run_ap25(datasets, folder, test.data, m)
@@ -137,17 +137,13 @@ def run_found(datasets: Datasets, folder: Path, test: DataRef) -> FoundScores:
     return found
 
 
-def run_alarms(datasets: Datasets, spec: RunSpec, run: dict, per_image: bool = False) -> Alarms | None:
-    """A finished run's detections on its sets without fire, pooled (:func:`eval.operating.pooled`); with
-    ``per_image``, its best detection on each image (:func:`eval.imagelevel.image_alarms`: the rate counts
-    false-alarm images); None when it was scored on none (``run``: its ``results.json``)."""
-    from eval.imagelevel import image_alarms
-
+def run_alarms(datasets: Datasets, spec: RunSpec, run: dict) -> Alarms | None:
+    """A finished run's detections on its sets without fire, pooled (:func:`eval.operating.pooled`); None when it
+    was scored on none (``run``: its ``results.json``)."""
     sets = [(t, run["tests"][t.name]) for t in spec.test_sets if run["tests"].get(t.name, {}).get(ALARMS) is not None]
     if not sets:
         return None
-    read = image_alarms if per_image else alarms_of
-    return pooled([read(_predictions(spec.out / m["scores"]), [i.id for i in datasets.get(t.data).images])
+    return pooled([alarms_of(_predictions(spec.out / m["scores"]), [i.id for i in datasets.get(t.data).images])
                    for t, m in sets])  # fmt: skip
 
 
@@ -188,6 +184,7 @@ def comparisons(cfg: ExperimentConfig, rows: Sequence[dict]) -> list[dict]:
     rngs = {"table2": np.random.default_rng(0), CONTROL_TABLE: np.random.default_rng(1)}  # controls leave the rest
     at_budget = np.random.default_rng(2)  # the recall comparisons draw apart: the AP ones stay as they were
     frames = np.random.default_rng(3)
+    matches = functools.cache(lambda path: MatchTable.load(Path(path)))  # each run's once, whatever its pairs
     for test in dict.fromkeys(r["test_set"] for r in scored if "table2" in r["tables"]):
         runs: dict[tuple[str, str], list[dict]] = {}
         for r in (r for r in scored if r["test_set"] == test):
@@ -199,8 +196,8 @@ def comparisons(cfg: ExperimentConfig, rows: Sequence[dict]) -> list[dict]:
                 continue
             deltas = {}
             if all(r.get("fire_images", enough) >= enough for r in a + b):
-                load = lambda side: [MatchTable.load(Path(r["matches"])) for r in side]  # noqa: E731
-                deltas = paired_bootstrap(load(a), load(b), rngs[table], cfg.report.bootstrap)
+                tables = [[matches(r["matches"]) for r in side] for side in (a, b)]
+                deltas = paired_bootstrap(*tables, rngs[table], cfg.report.bootstrap)
             pa, pb = [r.get(OPERATING) for r in a], [r.get(OPERATING) for r in b]
             if None not in pa + pb:  # every run on both sides scored on the sets without fire
                 deltas[RECALL_AT_ALARMS] = paired_recall_bootstrap(pa, pb, at_budget, cfg.report.bootstrap)  # type: ignore[arg-type]

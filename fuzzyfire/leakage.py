@@ -98,15 +98,13 @@ class TestLeaks:
                 f"distance {d:.3f})")  # fmt: skip
 
 
-def reference_images(trained: Sequence[Dataset], sources: Sequence[Path], own: Dataset | None = None) -> list[Path]:
+def reference_images(trained: Sequence[Dataset], sources: Sequence[Path]) -> list[Path]:
     """The training data a test set is checked against: every image of the ``trained`` datasets (the real train
-    and validation splits) and of the ``sources`` folders the real set was curated from (not for ``own``, the
-    real set's own test split, whose images are among those sources), each once, links resolved."""
+    and validation splits) and of the ``sources`` folders the real set was curated from (none for the real set's
+    own test split, whose images are among those sources), each once, links resolved."""
     from curate.scan import list_image_files
 
-    paths = [ds.image_path(img) for ds in trained for img in ds.images]
-    if own is None:
-        paths += list_image_files(sources)
+    paths = [ds.image_path(img) for ds in trained for img in ds.images] + list_image_files(sources)
     return sorted({Path(p).resolve() for p in paths})
 
 

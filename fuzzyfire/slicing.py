@@ -104,7 +104,8 @@ def study_slices(
         attrs = set_attributes(datasets, ref, out, (user or {}).get(test))
         slices = make_slices(attrs, hits.image_ids, hits.fire)
         tables[test] = slice_table(slices)
-        sides = _sides(scored, datasets, ref)
+        needed = {(table, base) for table, base, _, _ in pairs} | {("table2", name) for *_, name in pairs}
+        sides = _sides(scored, needed, datasets, ref)
         for table, base, base_label, name in pairs:
             a, b = sides.get((table, base)), sides.get(("table2", name))
             if a is None or b is None:
@@ -114,12 +115,16 @@ def study_slices(
     return out_rows, tables
 
 
-def _sides(rows: Sequence[Mapping[str, Any]], datasets: Datasets, ref: DataRef) -> dict[tuple[str, str], Side]:
-    """The :class:`eval.slices.Side` of every (table, mixture) among ``rows`` (one test set), its seeds in order."""
+def _sides(
+    rows: Sequence[Mapping[str, Any]], needed: set[tuple[str, str]], datasets: Datasets, ref: DataRef
+) -> dict[tuple[str, str], Side]:
+    """The :class:`eval.slices.Side` of every (table, mixture) of ``needed`` among ``rows`` (one test set), its
+    seeds in order (the runs of Table 1 and other uncompared ones get no loose matches)."""
     by: dict[tuple[str, str], list[Mapping[str, Any]]] = {}
     for r in rows:
         for table in r["tables"]:
-            by.setdefault((table, r["mixture"]), []).append(r)
+            if (table, r["mixture"]) in needed:
+                by.setdefault((table, r["mixture"]), []).append(r)
     sides = {}
     for key, group in by.items():
         group = sorted(group, key=lambda r: r["seed"])

@@ -16,7 +16,7 @@ from eval.imagelevel import (
     image_operating_curve,
     paired_image_recall,
 )
-from eval.operating import Alarms
+from eval.operating import Alarms, alarms_of
 
 
 def _set(tmp_path: Path):
@@ -52,7 +52,7 @@ def test_a_hit_by_overlap_or_by_centre_and_a_miss_far_away(tmp_path: Path) -> No
 
 def test_alarms_count_images_not_detections() -> None:
     records = [_det(7, [0, 0, 5, 5], s) for s in (0.9, 0.8, 0.3)] + [_det(8, [0, 0, 5, 5], 0.5)]
-    alarms = image_alarms(records, [7, 8, 9])
+    alarms = image_alarms(alarms_of(records, [7, 8, 9]))
     assert alarms.scores.tolist() == [0.9, 0.5] and alarms.images == 3
     assert alarms.per_100(0.4) == pytest.approx(200 / 3)
 
