@@ -180,6 +180,13 @@ def paired_recall_bootstrap(
 def recall_at_rates(found: FoundScores, alarms: Alarms, rates: NDArray[np.float64]) -> NDArray[np.float64]:
     """The recall (R,) at each alarm budget of ``rates`` (R,) (alarms per 100 images): :func:`operating_point`
     read along the curve."""
-    rate, recall = operating_curve(found, alarms)
+    return curve_at_rates(*operating_curve(found, alarms), rates, found.recall(np.inf))
+
+
+def curve_at_rates(
+    rate: NDArray[np.float64], recall: NDArray[np.float64], rates: NDArray[np.float64], floor: float = 0.0
+) -> NDArray[np.float64]:
+    """An operating curve (``rate`` (P,) rising, ``recall`` (P,): :func:`operating_curve`) read at each budget of
+    ``rates`` (R,): the recall of its last point within the budget, ``floor`` below its first point."""
     at = np.searchsorted(rate, rates, side="right") - 1  # the last curve point within each budget
-    return np.where(at >= 0, recall[np.maximum(at, 0)], found.recall(np.inf)).astype(np.float64)
+    return np.where(at >= 0, recall[np.maximum(at, 0)], floor).astype(np.float64)

@@ -17,7 +17,7 @@ from curate.core.imageio import ImageError, read_image
 from eval.draw import draw_boxes
 from eval.errors import ALARMS
 from eval.imagelevel import IMAGE_RECALL, IMAGELEVEL, image_operating_curve
-from eval.operating import ALARM_BUDGET, OPERATING, RECALL_AT_ALARMS, Alarms, recall_at_rates
+from eval.operating import ALARM_BUDGET, OPERATING, RECALL_AT_ALARMS, Alarms, curve_at_rates, recall_at_rates
 from eval.tables import METRIC_LABELS, Table, heading, marks, shown_scale, to_csv, to_latex, to_markdown
 
 _CSS = """body{font-family:system-ui,sans-serif;margin:2em auto;max-width:1100px;color:#222}
@@ -252,32 +252,29 @@ def write_study_report(
     sections: list[tuple[str, str]] = []
     if answer:
         sections.append(("The answer", "<ul>" + "".join(f"<li>{html.escape(a)}</li>" for a in answer) + "</ul>"))
-    later: list[tuple[str, str]] = []  # sections after Table 2
-    if method_results:
-        t1 = table1(method_results, metrics=table_metrics(method_results))
-        write_table_files(t1, out / "tables", "table1")
-        later.append(("Table 1 — Method 1 vs Method 2", table_html(t1)))
-    if gaps:
-        later.append(("Realism gap of the synthetic pools", gaps_html(gaps)))
     if results:
         metrics = table_metrics(results)
         t2 = table2(results, metrics=metrics)
         write_table_files(t2, out / "tables", "table2")
-        alarms = (ALARMS,) if any(r.get(ALARMS) is not None for r in results) else ()
-        shown = ("AP", "AP50", *alarms, *(m for m in metrics if m == RECALL_AT_ALARMS))
-        figures = [plot_figure5(results, out / "figures" / f"figure5_{m}.png", m) for m in shown]
         sections.append(("Table 2 — training mixtures", table_html(t2) + TABLE2_LEGEND))
         if slices or slice_sets:
             body = "".join(figure_html(f, out, c) for f, c in forests) + slices_html(slices)
             sections.append(("On which fires — slices", body + slice_sets_html(slice_sets or {})))
-        sections += later
-        later = []
+    if method_results:
+        t1 = table1(method_results, metrics=table_metrics(method_results))
+        write_table_files(t1, out / "tables", "table1")
+        sections.append(("Table 1 — Method 1 vs Method 2", table_html(t1)))
+    if gaps:
+        sections.append(("Realism gap of the synthetic pools", gaps_html(gaps)))
+    if results:
+        alarms = (ALARMS,) if any(r.get(ALARMS) is not None for r in results) else ()
+        shown = ("AP", "AP50", *alarms, *(m for m in metrics if m == RECALL_AT_ALARMS))
+        figures = [plot_figure5(results, out / "figures" / f"figure5_{m}.png", m) for m in shown]
         captions = [_figure5_caption(m) for m in shown]
         sections.append(("Figure 5", "".join(figure_html(f, out, c) for f, c in zip(figures, captions))))
         if curves := operating_figures(results, out / "figures") + image_operating_figures(results, out / "figures"):
             caption = f"the dotted line: {ALARM_BUDGET:g} alarms per 100, where Table 2 reads the recall"
             sections.append(("Fire found against false alarms", "".join(figure_html(f, out, caption) for f in curves)))
-    sections += later
     if controls:
         tc = control_table(controls, metrics=table_metrics(controls))
         write_table_files(tc, out / "tables", "controls")
@@ -422,9 +419,7 @@ def image_operating_figures(results: Sequence[Mapping[str, Any]], folder: Path) 
         level = r.get(IMAGELEVEL)
         if level is None or not isinstance(level[1], Alarms):
             continue
-        rate, recall = image_operating_curve(*level)
-        at = np.searchsorted(rate, OPERATING_RATES, side="right") - 1
-        curve = np.where(at >= 0, recall[np.maximum(at, 0)], 0.0)
+        curve = curve_at_rates(*image_operating_curve(*level), OPERATING_RATES)
         by_test.setdefault(r["test_set"], {}).setdefault(r["mixture"], []).append(curve)
     return [
         plot_operating_curves({m: np.stack(c) for m, c in curves.items()}, OPERATING_RATES,
