@@ -25,7 +25,7 @@ of its scoring. A user's own attributes come from a CSV (:func:`read_attributes_
 from __future__ import annotations
 
 import csv
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
@@ -38,7 +38,8 @@ from curate.core.imageio import ImageError, read_image
 from curate.core.progress import progress
 from curate.core.sky import sky_mask
 from curate.scan import sharpness
-from eval.found import SIZES
+from curate.stats import LARGE_AREA, SMALL_AREA
+from eval.found import SIZES, bucket
 
 #: The computed attributes and their values in order (ordinal ones from low to high).
 ATTRIBUTES: dict[str, tuple[str, ...]] = {
@@ -52,7 +53,8 @@ ATTRIBUTES: dict[str, tuple[str, ...]] = {
     "source": (),
 }
 WORK_SIDE = 256  # long side, pixels, the attributes are computed at
-COCO_SIZES = (("small", 0, 32), ("medium", 32, 96), ("large", 96, float("inf")))
+COCO_SIZES = (("small", 0.0, SMALL_AREA**0.5), ("medium", SMALL_AREA**0.5, LARGE_AREA**0.5),
+              ("large", LARGE_AREA**0.5, float("inf")))  # box sides of COCO's area ranges  # fmt: skip
 NIGHT, DAY = 70.0, 110.0  # mean luma (0..255) below which a scene is night, at or above which it is day
 SKY_SHARE = 0.05  # share of the image the sky must cover
 SKY_SIDE = 160  # long side, pixels, the sky is found at (as the photo-site estimate of Method 2 finds it)
@@ -75,14 +77,14 @@ def image_attributes(
     out: dict[str, str | None] = {
         "light": "night" if mean < NIGHT else "dusk" if mean < DAY else "day",
         "sky": "sky" if float(sky_mask(_small(image, SKY_SIDE)).mean()) >= SKY_SHARE else "no sky",
-        "blur": _bucket(BLUR, sharpness(image)),
+        "blur": bucket(BLUR, sharpness(image)),
         "source": source or "-",
         "size": None, "size_fine": None, "fires": None, "colour": None,
     }  # fmt: skip
     if len(boxes):
         side = float(np.sqrt((boxes[:, 2] * boxes[:, 3]).max())) / scale
-        out["size"] = _bucket(COCO_SIZES, side)
-        out["size_fine"] = _bucket(SIZES, side)
+        out["size"] = bucket(COCO_SIZES, side)
+        out["size_fine"] = bucket(SIZES, side)
         out["fires"] = "1" if len(boxes) == 1 else "2-3" if len(boxes) <= 3 else "4+"
         out["colour"] = fire_colour(image, boxes)
     return out
@@ -125,10 +127,6 @@ def _small(image: NDArray[np.uint8], side: int) -> NDArray[np.uint8]:
     if scale >= 1:
         return image
     return cv2.resize(image, (max(round(w * scale), 1), max(round(h * scale), 1)), interpolation=cv2.INTER_LINEAR)
-
-
-def _bucket(buckets: Iterable[tuple[str, float, float]], value: float) -> str:
-    return next(name for name, lo, hi in buckets if lo <= value < hi)
 
 
 def dataset_attributes(ds: Dataset, workers: int = 0) -> Attributes:

@@ -75,7 +75,7 @@ def boxes_found(
             outcomes[kind] += 1
             side = float(np.sqrt(ann.bbox[2] * ann.bbox[3]))
             for table, key in (
-                (by_size, _bucket(SIZES, side)),
+                (by_size, bucket(SIZES, side)),
                 (by_crowd, crowding_bucket(len(boxes))),
             ):
                 table[key][0] += kind == "found"
@@ -103,7 +103,7 @@ def outcome(box: Sequence[float], image_boxes: Sequence[Sequence[float]], dets: 
     return "too_large" if d[best, 2] * d[best, 3] > box[2] * box[3] else "too_small"
 
 
-def _bucket(buckets: Sequence[tuple[str, float, float]], value: float) -> str:
+def bucket(buckets: Sequence[tuple[str, float, float]], value: float) -> str:
     """The name of the bucket (name, lo, hi) holding ``value``: lo <= value < hi."""
     return next(name for name, lo, hi in buckets if lo <= value < hi)
 
