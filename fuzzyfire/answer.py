@@ -11,10 +11,10 @@ from typing import Any
 from eval.errors import ALARMS
 from eval.imagelevel import IMAGE_RECALL
 from eval.stats import mean_std
+from eval.tables import METRIC_LABELS
 
 FEW_SEEDS = 5  # fewer seeds than this: the intervals cover test images and these seeds' mean only
 SHOWN_SLICES = 4  # slices named per comparison and direction (the largest differences); the rest are counted
-NAMES = {"AP50": "AP50", "AP25": "AP25", IMAGE_RECALL: "image recall", "AP": "AP"}
 
 
 def _mean(rows: Sequence[Mapping[str, Any]], mixture: str, test: str, metric: str) -> tuple[float, float | None, int]:
@@ -33,6 +33,11 @@ def headline_metric(rows: Sequence[Mapping[str, Any]], test: str) -> str | None:
         if mine and all(r.get(metric) is not None for r in mine):
             return metric
     return None
+
+
+def _name(metric: str) -> str:
+    """A metric as the tables head it (``image_recall`` -> ``image recall``)."""
+    return METRIC_LABELS.get(metric, metric)
 
 
 def _points(value: float, scale: float = 100.0) -> str:
@@ -67,15 +72,16 @@ def answer(
         metric = headline_metric(rows, test)
         if metric is None:
             continue
-        ranked = sorted(mixtures, key=lambda m: -_mean(rows, m, test, metric)[0] if _has(rows, m, test, metric) else 1)
-        ranked = [m for m in ranked if _has(rows, m, test, metric)]
+        ranked = sorted(
+            (m for m in mixtures if _has(rows, m, test, metric)), key=lambda m: -_mean(rows, m, test, metric)[0]
+        )
         shown = "; ".join(_cell(rows, m, test, metric) for m in ranked)
-        lines.append(f"Best on {test} by {NAMES.get(metric, metric)}: {ranked[0]} ({shown}).")
+        lines.append(f"Best on {test} by {_name(metric)}: {ranked[0]} ({shown}).")
     for c in comparisons:
         metric = headline_metric(rows, c["test_set"])
         if c["metric"] != metric:
             continue
-        lines.append(f"On {c['test_set']}, {c['mixture']} against {c['baseline']}: {NAMES[metric]} "
+        lines.append(f"On {c['test_set']}, {c['mixture']} against {c['baseline']}: {_name(metric)} "
                      f"{_delta_text(c['delta'])} points, {_verdict(c['delta'])}.")  # fmt: skip
     lines += _slice_lines(slices)
     lines += _alarm_lines(rows, tests, mixtures)
@@ -113,7 +119,7 @@ def _slice_lines(slices: Sequence[Mapping[str, Any]]) -> list[str]:
             these = _strongest([r for r in found if r["verdict"] == verdict])
             if not these:
                 continue
-            text = "; ".join(f"{r['slice']} ({r['fire_images']} fire images) {NAMES[r['metric']]} "
+            text = "; ".join(f"{r['slice']} ({r['fire_images']} fire images) {_name(r['metric'])} "
                              f"{_delta_text(r['delta'])}" for r in these[:SHOWN_SLICES])  # fmt: skip
             more = len(these) - SHOWN_SLICES
             rest = f"; and {more} more slice{'s' * (more > 1)} (tables/slices.csv)" if more > 0 else ""
