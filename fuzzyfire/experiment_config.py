@@ -15,6 +15,7 @@ from pathlib import Path
 from typing import Literal, Optional
 
 from curate.curation import CurateConfig
+from curate.dedup import DEFAULT_THRESHOLD
 from curate.sources import SourceConfig
 from eval.score import ScoreConfig
 from fuzzyfire.engine import EngineConfig, EngineError
@@ -151,8 +152,8 @@ class LeakageConfig:
 
     action: Literal["drop", "refuse"] = "drop"  # drop: leaked test images leave their set (listed in leakage.json
     # and the report) | refuse: the study stops before training and names them
-    threshold: float = 0.45  # Euclidean distance of unit embeddings, 0..2, under which two images are duplicates
-    # (the dedup's default)
+    threshold: float = DEFAULT_THRESHOLD  # Euclidean distance of unit embeddings, 0..2, under which two images
+    # are duplicates (the dedup's default)
 
 
 @dataclass(frozen=True)
