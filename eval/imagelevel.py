@@ -24,7 +24,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from curate.core.boxes import box_iou_xyxy, xywh_to_xyxy
+from curate.core.boxes import box_iou_xyxy, xywh_to_xyxy, xyxy_to_cxcywh
 from curate.core.dataset import Dataset
 from eval.operating import Alarms
 from eval.stats import PairedDelta, paired_delta, resample_weights
@@ -84,7 +84,7 @@ def _best_hit(boxes: Sequence[tuple[int, list[float]]], dets: Sequence[dict[str,
             continue
         d = xywh_to_xyxy(np.asarray([m["bbox"] for m in mine], dtype=np.float64))
         scores = np.asarray([m["score"] for m in mine], dtype=np.float64)
-        cx, cy = (d[:, 0] + d[:, 2]) / 2, (d[:, 1] + d[:, 3]) / 2
+        cx, cy = xyxy_to_cxcywh(d)[:, :2].T
         inside = (cx[:, None] >= g[None, :, 0]) & (cx[:, None] <= g[None, :, 2])
         inside &= (cy[:, None] >= g[None, :, 1]) & (cy[:, None] <= g[None, :, 3])
         hit = ((box_iou_xyxy(d, g) >= HIT_IOU) | inside).any(axis=1)
