@@ -17,6 +17,7 @@ from typing import Any, Literal, Optional
 
 import numpy as np
 
+from curate.core.cluster import Cluster, open_cluster
 from curate.core.dataset import Dataset
 from curate.core.problems import Problem
 from curate.core.writer import write_dataset
@@ -46,14 +47,23 @@ class ModelConfig:
     blur: float = 0.0  # Gaussian sigma in input pixels after resizing
     batch_size: int = 4  # images per onnxruntime call
     workers: int = 0  # decode + embed threads; 0 = one per CPU core
+    device: str = "auto"  # auto | cpu | cuda | cuda:N: onnxruntime's CUDA provider when installed (auto: if present)
+
+
+@dataclass(frozen=True)
+class ExecutorConfig:
+    """Where decoding, embedding and a partitioned search run (docs/scaling.md)."""
+
+    name: Literal["local", "ray"] = "local"  # local (this process, a thread per core) | ray (Ray workers)
+    address: Optional[str] = None  # ray: a running cluster (HOST:6379 or ray://HOST:10001); null = a local Ray
 
 
 @dataclass(frozen=True)
 class DedupConfig:
     near: bool = True  # false: exact duplicates only
     threshold: float = DEFAULT_THRESHOLD  # Euclidean distance of unit embeddings, 0..2
-    backend: Literal["auto", "numpy", "flat", "ivf", "hnsw"] = "auto"  # numpy | flat (exact faiss) | ivf | hnsw
-    # (approximate, beyond ~1M images); auto picks by size
+    backend: Literal["auto", "numpy", "flat", "ivf", "hnsw", "partition"] = "auto"  # numpy | flat (exact faiss)
+    # | ivf | hnsw (approximate, beyond ~1M images) | partition (k-means cells, beyond ~10M); auto picks by size
     protect_sources: tuple[str, ...] = ()  # source names whose images are never removed
 
 
@@ -82,6 +92,7 @@ class CurateConfig:
     split: SplitConfig = SplitConfig()  # group-aware split (no near-duplicate group across two splits)
     model: ModelConfig = ModelConfig()  # the embedding CNN (built-in ImageNet Lite0, or your ONNX)
     images: Literal["copy", "hardlink", "symlink"] = "copy"  # how images reach the output folder
+    executor: ExecutorConfig = ExecutorConfig()  # where decoding and embedding run: here, or on a Ray cluster
 
 
 @dataclass
@@ -94,9 +105,9 @@ class CurateResult:
 
 def build_embedder(cfg: ModelConfig) -> OnnxEmbedder:
     if cfg.path is None:
-        return load_embedder()
+        return load_embedder(device=cfg.device)
     pre = Preprocess(cfg.input_size, tuple(cfg.mean), tuple(cfg.std), cfg.bgr, cfg.layout, cfg.blur)  # type: ignore[arg-type]
-    return load_embedder(cfg.path, pre, output=cfg.output)
+    return load_embedder(cfg.path, pre, output=cfg.output, device=cfg.device)
 
 
 def _selection_size(cfg: CurateConfig, n: int) -> int | None:
@@ -114,9 +125,11 @@ def curate(
     embedder: OnnxEmbedder,
     cache: EmbeddingCache | None,
     scan: ScanResult | None = None,
+    cluster: Cluster | None = None,
 ) -> CurateResult:
     """Run the pipeline (module docstring); relative source paths resolve against ``base``. ``scan``: the
-    facts and embeddings of the merged images, when already computed (e.g. a previous result's ``run.scan``)."""
+    facts and embeddings of the merged images, when already computed (e.g. a previous result's ``run.scan``);
+    ``cluster``: the Ray cluster that decodes and embeds (:func:`curate.dedupjob.run_dedup`)."""
     merged, problems = merge_sources(MergeConfig(cfg.sources, cfg.classes), base, out)
     protect = tuple(_source_path(s, base) for s in cfg.sources if s.name and s.name in cfg.dedup.protect_sources)
     paths = [Path(img.file_name) for img in merged.images]
@@ -131,7 +144,7 @@ def curate(
         cfg.model.workers,
         cfg.model.batch_size,
     )
-    run = run_dedup(paths, embedder, cache, opts, scan)  # ranks every kept image; the top N is cut below
+    run = run_dedup(paths, embedder, cache, opts, scan, cluster)  # ranks every kept image; the top N is cut below
     top = _selection_size(cfg, len(run.result.kept))
     opts = replace(opts, top=top)
     if top is not None and cfg.rank.method == "kcenter":  # the k-center order depends on N
@@ -166,11 +179,14 @@ def curate_dataset(
     manifest's ``command``, ``args`` and ``sources``) and ``curation.json`` + its report beside it. Returns the
     result and the report files; raises :class:`curate.core.writer.OutputError` when ``out`` is refused."""
     db = EmbeddingCache(cache) if cache is not None else None
+    cluster = open_cluster(cfg.executor.name, cfg.executor.address)
     try:
-        result = curate(cfg, base, out, build_embedder(cfg.model), db)
+        result = curate(cfg, base, out, build_embedder(cfg.model), db, cluster=cluster)
     finally:
         if db is not None:
             db.close()
+        if cluster is not None:
+            cluster.close()
     write_dataset(result.dataset, out, ("coco", "yolo"), cfg.images, overwrite=overwrite, **provenance)
     return result, write_outputs(result.run, result.document, out, CURATION_FILE)
 

@@ -31,6 +31,8 @@ from typing import Literal
 import numpy as np
 from numpy.typing import NDArray
 
+from curate.core.cluster import Cluster
+from curate.partition import AUTO_PARTITION_MIN, PARTITION, partitioned_pairs
 from curate.scan import ScannedImage
 from curate.search import Pairs, duplicate_pairs, grid_cells
 
@@ -109,13 +111,20 @@ def near_pairs(
     threshold: float,
     backend: str,
     crops: NDArray[np.float32] | None = None,
+    cluster: Cluster | None = None,
 ) -> Pairs:
     """Pairs (indices into ``images``) of ``candidates`` closer than ``threshold`` (unit ``vectors`` (N, D) and
-    centre views ``crops`` (N, D)); indexed in (sha256, path) order so the result ignores input order."""
+    centre views ``crops`` (N, D)); indexed in (sha256, path) order so the result ignores input order. Backend
+    ``partition`` (``auto`` above :data:`AUTO_PARTITION_MIN` candidates) searches by partitions
+    (:mod:`curate.partition`), on ``cluster`` when given."""
     order = sorted(candidates, key=lambda i: (images[i].facts.sha256, images[i].path))
     if len(order) < 2:
         return Pairs(np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros(0, np.float32))
-    local = duplicate_pairs(vectors[order], None if crops is None else crops[order], threshold, backend)
+    views = vectors[order], None if crops is None else crops[order]
+    if backend == PARTITION or (backend == "auto" and len(order) > AUTO_PARTITION_MIN):
+        local = partitioned_pairs(*views, threshold, cluster)
+    else:
+        local = duplicate_pairs(*views, threshold, backend)
     ids = np.asarray(order, np.int64)
     i, j = ids[local.i], ids[local.j]
     return Pairs(np.minimum(i, j), np.maximum(i, j), local.dist)
@@ -153,9 +162,10 @@ def find_duplicates(
     protect: Sequence[Path | str] = (),
     near: bool = True,
     crops: NDArray[np.float32] | None = None,
+    cluster: Cluster | None = None,
 ) -> DedupResult:
     """Exact then (with ``vectors`` (N, D) unit rows, optional centre views ``crops`` (N, D), and ``near``) near
-    duplicates; see the module docstring."""
+    duplicates; see the module docstring. ``cluster``: where a partitioned search runs (:func:`near_pairs`)."""
     if threshold < 0 or threshold > 2:
         raise ValueError(f"threshold is a Euclidean distance between unit vectors, 0..2; got {threshold}")
     protected = is_protected(images, protect)
@@ -165,7 +175,7 @@ def find_duplicates(
     pairs = None
     if near and vectors is not None:
         assert len(vectors) == len(images), "one vector per image"
-        pairs = near_pairs(images, vectors, survivors, threshold, backend, crops)
+        pairs = near_pairs(images, vectors, survivors, threshold, backend, crops, cluster)
         allowed = [i not in gone for i in range(len(images))]
         removed += greedy_keep(len(images), pairs, keeper_order(images, protected), allowed, protected)
     gone = {r.index for r in removed}

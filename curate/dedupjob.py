@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from curate.core.cluster import Cluster
 from curate.core.problems import Problem
 from curate.dedup import DEFAULT_THRESHOLD, DedupResult, find_duplicates
 from curate.embed import OnnxEmbedder
@@ -67,12 +68,15 @@ def run_dedup(
     cache: EmbeddingCache | None,
     opts: DedupOptions,
     scan: ScanResult | None = None,
+    cluster: Cluster | None = None,
 ) -> DedupRun:
-    """The whole job on ``paths`` (or on an existing ``scan`` of them)."""
+    """The whole job on ``paths`` (or on an existing ``scan`` of them). With a Ray ``cluster``, decoding and
+    embedding run on its workers (:mod:`curate.embedremote`), and so does a partitioned search
+    (:mod:`curate.partition`); grouping, keepers and ranking run here, as in a local run."""
     if scan is None:
-        scan = scan_images(paths, embedder, cache, workers=opts.workers, batch_size=opts.batch_size)
+        scan = scan_images(paths, embedder, cache, opts.workers, opts.batch_size, cluster)
     result = find_duplicates(
-        scan.images, scan.vectors, opts.threshold, opts.backend, opts.protect, opts.near, scan.crops
+        scan.images, scan.vectors, opts.threshold, opts.backend, opts.protect, opts.near, scan.crops, cluster
     )
     kept = result.kept
     order, scores = rank_order(

@@ -151,26 +151,50 @@ def export_lite0(path: Path, size: int) -> Path:
 
 
 class OnnxEmbedder:
-    """Runs an ONNX CNN on batches: ``embed(batch uint8 (N, S, S, 3)) -> (N, D) float32``."""
+    """Runs an ONNX CNN on batches: ``embed(batch uint8 (N, S, S, 3)) -> (N, D) float32``.
 
-    def __init__(self, model: Path | str, preprocess: Preprocess, output: str | None = None, threads: int = 1) -> None:
+    ``device`` (``auto | cpu | cuda | cuda:N``) picks onnxruntime's CUDA provider when it is installed (``auto``:
+    when present; ``notice`` says when a GPU was asked for and the CPU is used). The model's identity
+    (``model_id``: file name, content hash, output, preprocessing) does not depend on the device."""
+
+    def __init__(
+        self,
+        model: Path | str,
+        preprocess: Preprocess,
+        output: str | None = None,
+        threads: int = 1,
+        device: str = "cpu",
+        model_bytes: bytes | None = None,
+        model_id: str | None = None,
+    ) -> None:
+        """``model_bytes`` (with the ``model_id`` computed where the file was read): the model's content, on a
+        machine that does not have the file (a Ray worker)."""
         import onnxruntime as ort
 
+        from curate.core.device import onnx_providers
+
         self.path = Path(model)
-        if not self.path.is_file():
+        if model_bytes is None and not self.path.is_file():
             raise FileNotFoundError(f"{self.path}: ONNX model not found")
         opts = ort.SessionOptions()
         opts.intra_op_num_threads = threads  # 1: parallelism comes from concurrent run() calls (see scan.py)
         opts.inter_op_num_threads = 1
         opts.add_session_config_entry("session.intra_op.allow_spinning", "0")
-        self.session = ort.InferenceSession(str(self.path), opts, providers=["CPUExecutionProvider"])
+        providers, self.notice = onnx_providers(device)
+        source = model_bytes if model_bytes is not None else str(self.path)
+        self.session = ort.InferenceSession(source, opts, providers=providers)
+        self.device = device
         self.preprocess = preprocess
         self.input_name = self.session.get_inputs()[0].name
         names = [o.name for o in self.session.get_outputs()]
         if output is not None and output not in names:
             raise ValueError(f"{self.path}: no output {output!r}; outputs are {names}")
         self.output = output or names[0]
-        self.model_id = _model_id(self.path, preprocess, self.output)
+        self.model_id = model_id or _model_id(self.path, preprocess, self.output)
+
+    def on_gpu(self) -> bool:
+        """Whether onnxruntime runs this model with its CUDA provider."""
+        return "CUDAExecutionProvider" in self.session.get_providers()
 
     def embed(self, batch: NDArray[np.uint8]) -> NDArray[np.float32]:
         """(N, S, S, 3) uint8 images from ``preprocess.resize`` (or views) -> (N, D) float32 raw embeddings."""

@@ -20,6 +20,7 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
+from curate.core.cluster import Cluster
 from curate.core.imageio import ImageError, check_complete, decode_sized, is_image_file
 from curate.core.problems import Problem
 from curate.core.progress import progress
@@ -153,10 +154,13 @@ def scan_images(
     cache: EmbeddingCache | None = None,
     workers: int = 0,
     batch_size: int = 4,
+    cluster: Cluster | None = None,
 ) -> ScanResult:
     """Facts and normalised embeddings for ``paths`` (see :class:`ScanResult`); bad files become problems.
 
-    ``workers`` threads (0 = one per CPU core) decode and embed; ``batch_size`` images per onnxruntime call."""
+    ``workers`` threads (0 = one per CPU core) hash, decode and embed; ``batch_size`` images per onnxruntime
+    call. With a ``cluster``, decoding and embedding run on its Ray workers (:mod:`curate.embedremote`): the
+    same vectors, facts and problems."""
     workers = workers or os.cpu_count() or 2
     problems: list[Problem] = []
     with ThreadPoolExecutor(max_workers=workers) as pool:
@@ -167,7 +171,13 @@ def scan_images(
         vectors = cache.get_vectors(embedder.model_id, list(shas.values())) if cache else {}
         cached = sum(1 for s in shas.values() if s in facts and s in vectors)
         todo = [p for p, s in shas.items() if s not in facts or s not in vectors]
-        for path, item in _embed_misses(todo, embedder, cache, pool, batch_size, workers):
+        if cluster is None:
+            batches = bounded_map(lambda b: embed_batch(b, embedder), _batches(todo, batch_size), pool, 2 * workers)
+        else:
+            from curate.embedremote import embed_on_cluster
+
+            batches = embed_on_cluster(todo, embedder, cluster, batch_size)
+        for path, item in _saved(batches, len(todo), embedder.model_id, cache):
             if isinstance(item, Problem):
                 problems.append(item)
             else:
@@ -202,24 +212,27 @@ def embed_batch(
     return [(p, out[p]) for p in paths]
 
 
-def _embed_misses(
-    paths: Sequence[Path],
-    embedder: OnnxEmbedder,
+def _batches(paths: Sequence[Path], size: int) -> list[Sequence[Path]]:
+    return [paths[s : s + size] for s in range(0, len(paths), size)]
+
+
+def _saved(
+    batches: Iterable[list[tuple[Path, tuple[FileFacts, NDArray[np.float32]] | Problem]]],
+    total: int,
+    model_id: str,
     cache: EmbeddingCache | None,
-    pool: ThreadPoolExecutor,
-    batch_size: int,
-    workers: int,
 ) -> Iterator[tuple[Path, tuple[FileFacts, NDArray[np.float32]] | Problem]]:
-    """Each pool thread decodes and embeds whole batches (one thread per core keeps every core busy without
-    onnxruntime's spinning intra-op threads); yields (path, (facts, raw vector) or Problem), saving as it goes."""
-    batches = [paths[s : s + batch_size] for s in range(0, len(paths), batch_size)]
-    results = bounded_map(lambda b: embed_batch(b, embedder), batches, pool, ahead=2 * workers)
+    """Yield every (path, (facts, raw vector) or Problem) of ``batches`` (``total`` images in all, a progress
+    bar), storing the embedded ones in ``cache`` every :data:`_SAVE_EVERY` images and at the end (an interrupted
+    run resumes from there)."""
     unsaved: list[tuple[FileFacts, NDArray[np.float32]]] = []
-    for k, batch in enumerate(progress(results, total=len(batches), desc="embedding", unit="batch", min_items=20)):
-        for path, item in batch:
-            if not isinstance(item, Problem):
-                unsaved.append(item)
-            yield path, item
-        if cache is not None and unsaved and (len(unsaved) >= _SAVE_EVERY or k == len(batches) - 1):
-            cache.put(embedder.model_id, [u[0] for u in unsaved], np.stack([u[1] for u in unsaved]))
+    items = (entry for batch in batches for entry in batch)
+    for path, item in progress(items, total=total, desc="embedding", min_items=80):
+        if not isinstance(item, Problem):
+            unsaved.append(item)
+        yield path, item
+        if cache is not None and len(unsaved) >= _SAVE_EVERY:
+            cache.put(model_id, [u[0] for u in unsaved], np.stack([u[1] for u in unsaved]))
             unsaved = []
+    if cache is not None and unsaved:
+        cache.put(model_id, [u[0] for u in unsaved], np.stack([u[1] for u in unsaved]))

@@ -9,7 +9,8 @@ Every backend answers the same two questions about a base set of vectors (N, D):
 Backends (:data:`BACKENDS`): ``numpy`` (exact brute force, the reference), ``flat`` (faiss ``IndexFlatIP``,
 exact), ``ivf`` (faiss ``IndexIVFFlat``, approximate, for ~1M+ vectors), ``hnsw`` (faiss ``IndexHNSWFlat``,
 approximate; ``within`` = kNN with ``k = max_neighbors`` filtered by radius). ``auto`` = ``flat`` up to
-:data:`AUTO_EXACT_MAX` vectors, ``ivf`` above.
+:data:`AUTO_EXACT_MAX` vectors, ``ivf`` above. Duplicate pairs of very large sets come by partitions instead
+(backend ``partition``, :mod:`curate.partition`); its kNN questions (ranking, nearest distances) go to ``ivf``.
 """
 
 from __future__ import annotations
@@ -201,6 +202,8 @@ def build_index(base: NDArray[np.floating], backend: str = "auto") -> SearchInde
     """An index of the unit vectors ``base`` (N, D) with the named backend (see the module docstring)."""
     if backend == "auto":
         backend = "flat" if len(base) <= AUTO_EXACT_MAX else "ivf"
+    if backend == "partition":  # pairs come by partitions (curate.partition); its kNN questions go to ivf
+        backend = "ivf"
     if backend not in BACKENDS:
         raise ValueError(f"unknown search backend {backend!r}; choose auto or one of {', '.join(BACKENDS)}")
     return BACKENDS[backend](base)

@@ -7,8 +7,10 @@ import argparse
 import sys
 from pathlib import Path
 
+from curate.core.cluster import EXECUTOR_CHOICES, open_cluster
 from curate.core.commands import add_command
 from curate.dedup import DEFAULT_THRESHOLD
+from curate.partition import PARTITION
 from curate.rank import RANK_METHODS
 from curate.search import BACKENDS
 
@@ -40,6 +42,19 @@ def add_model_args(p: argparse.ArgumentParser) -> None:
     g.add_argument("--no-cache", action="store_true", help="do not read or write the embedding cache")
     g.add_argument("--workers", type=int, default=0, help="decode + embed threads (default 0 = one per core)")
     g.add_argument("--batch-size", type=int, default=4, help="images per onnxruntime call (default 4)")
+    g.add_argument(
+        "--device",
+        default="auto",
+        help="auto | cpu | cuda | cuda:N: onnxruntime's CUDA provider when installed (default auto: if present)",
+    )
+    g = p.add_argument_group("where it runs", "docs/scaling.md: decoding and embedding on a Ray cluster")
+    g.add_argument(
+        "--executor",
+        default="local",
+        choices=EXECUTOR_CHOICES,
+        help="local (default: a thread per core) or ray (Ray workers decode and embed; same results)",
+    )
+    g.add_argument("--address", help="with --executor ray: a running cluster (HOST:6379); default a local Ray")
 
 
 def load_model_from_args(args: argparse.Namespace):  # noqa: ANN201 - (OnnxEmbedder, EmbeddingCache | None)
@@ -52,26 +67,18 @@ def load_model_from_args(args: argparse.Namespace):  # noqa: ANN201 - (OnnxEmbed
             raise ValueError(
                 "preprocessing flags (--input-size --mean --std --bgr --nhwc --output --blur) need --model"
             )
-        embedder = load_embedder()
+        embedder = load_embedder(device=args.device)
     else:
         pre = Preprocess(args.input_size, args.mean, args.std, args.bgr, "nhwc" if args.nhwc else "nchw", args.blur)
-        embedder = load_embedder(args.model, pre, output=args.output)
+        embedder = load_embedder(args.model, pre, output=args.output, device=args.device)
+    if embedder.notice:
+        print(embedder.notice, file=sys.stderr)
     cache = None if args.no_cache else EmbeddingCache(args.cache or embedding_cache_path())
     return embedder, cache
 
 
 def cmd_dedup(args: argparse.Namespace) -> int:
-    from dataclasses import asdict
-
-    from curate.dedupjob import (
-        DedupOptions,
-        apply_selection,
-        check_apply_target,
-        dedup_document,
-        run_dedup,
-        unreadable_summary,
-        write_outputs,
-    )
+    from curate.dedupjob import check_apply_target
     from curate.scan import list_images_or_fail, scan_images
 
     if args.apply and not args.to:
@@ -80,11 +87,32 @@ def cmd_dedup(args: argparse.Namespace) -> int:
     if args.apply:
         check_apply_target(args.dirs, args.to, args.apply)
     embedder, cache = load_model_from_args(args)
+    cluster = open_cluster(args.executor, args.address)
     try:
-        scan = scan_images(paths, embedder, cache, args.workers, args.batch_size)
+        try:
+            scan = scan_images(paths, embedder, cache, args.workers, args.batch_size, cluster)
+        finally:
+            if cache is not None:
+                cache.close()
+        return _dedup_scanned(args, paths, embedder, scan, cluster)
     finally:
-        if cache is not None:
-            cache.close()
+        if cluster is not None:
+            cluster.close()
+
+
+def _dedup_scanned(args: argparse.Namespace, paths: list[Path], embedder, scan, cluster) -> int:  # noqa: ANN001
+    """Duplicates, ranking, outputs and ``--apply`` of a finished scan (``cluster``: a partitioned search's)."""
+    from dataclasses import asdict
+
+    from curate.dedupjob import (
+        DedupOptions,
+        apply_selection,
+        dedup_document,
+        run_dedup,
+        unreadable_summary,
+        write_outputs,
+    )
+
     if not scan.images:
         for problem in scan.problems:
             print(problem, file=sys.stderr)
@@ -108,7 +136,7 @@ def cmd_dedup(args: argparse.Namespace) -> int:
         args.workers,
         args.batch_size,
     )
-    run = run_dedup(paths, embedder, None, opts, scan)
+    run = run_dedup(paths, embedder, None, opts, scan, cluster)
     doc = dedup_document(run, opts, [str(Path(d).resolve()) for d in args.dirs])
     if calib is not None:
         doc["calibration"] = asdict(calib)
@@ -135,11 +163,14 @@ def cmd_leakage(args: argparse.Namespace) -> int:
 
     listed = [list_images_or_fail([d]) for d in (args.a, args.b)]
     embedder, cache = load_model_from_args(args)
+    cluster = open_cluster(args.executor, args.address)
     try:
-        scans = [scan_images(paths, embedder, cache, args.workers, args.batch_size) for paths in listed]
+        scans = [scan_images(paths, embedder, cache, args.workers, args.batch_size, cluster) for paths in listed]
     finally:
         if cache is not None:
             cache.close()
+        if cluster is not None:
+            cluster.close()
     leaks = find_leaks(scans[0], scans[1], args.threshold, args.backend)
     summary = leak_summary(scans[0], scans[1], leaks)
     for problem in scans[0].problems + scans[1].problems:
@@ -200,7 +231,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--seed", type=int, default=0, help="seed for --calibrate")
     p.add_argument("--exact-only", action="store_true", help="remove exact duplicates only")
     p.add_argument("--protect", action="append", default=[], type=Path, metavar="DIR", help="never remove images here")
-    p.add_argument("--backend", default="auto", choices=("auto", *BACKENDS), help="search backend (default auto)")
+    p.add_argument(
+        "--backend", default="auto", choices=("auto", *BACKENDS, PARTITION), help="search backend (default auto)"
+    )
     p.add_argument("--rank", default="score", choices=RANK_METHODS, help="diversity ranking (default score)")
     p.add_argument("--k", type=int, default=10, help="neighbours in the diversity score (default 10)")
     p.add_argument("--top", type=int, help="select only the N most diverse kept images")

@@ -1,0 +1,165 @@
+"""Near-duplicate pairs by partitions, for collections too large for one index on one node (the ``partition``
+search backend; SemDeDup-style).
+
+1. **Cells.** k-means (faiss, seeded sample) cuts the unit vectors (N, D) into ``cells`` of about
+   :data:`CELL_VECTORS` vectors; each vector's *home* is its nearest centroid.
+2. **Probes.** Each query (every whole-image vector, and every centre view when given) probes its ``nprobe``
+   nearest cells.
+3. **Tasks.** A task takes a run of cells (about :data:`TASK_VECTORS` home vectors in all) and searches exactly
+   (faiss ``IndexFlatIP``) the home vectors of each cell for the queries that probe it, within the radius. Tasks
+   run in this process one after another, or as Ray tasks on a :class:`~curate.core.cluster.Cluster`; each
+   carries only its own vectors, so a worker's memory is O(task) and the driver's is the vectors, their probes
+   and the pairs: O(N (D + nprobe)).
+
+A pair is found when one end's home is among the other's probed cells: the search is approximate, its recall
+against exact search is measured by ``bench/bench_search_partition.py``. The pairs it finds carry exact
+distances, and pairs are made canonical (:func:`curate.search.canonical_pairs`), so task order and the executor
+change nothing.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from curate.core.cluster import Cluster
+from curate.search import FlatIndex, Pairs, canonical_pairs
+
+PARTITION = "partition"  # the backend's name (``--backend partition``)
+#: ``auto`` searches by partitions above this many vectors: one flat or IVF index of 10 M x 320 float32 is 13 GB
+#: on one node, and its search one node's work.
+AUTO_PARTITION_MIN = 10_000_000
+CELL_VECTORS = 1000  # mean home vectors per cell
+NPROBE = 8  # cells each query searches
+TASK_VECTORS = 10_000  # home vectors per task (cells are grouped up to this): a task carries about
+# 2 nprobe TASK_VECTORS D float32 of queries (200 MB at D = 320 with centre views)
+KMEANS_SAMPLE = 64  # training vectors per centroid (faiss warns below 39)
+KMEANS_ITER = 10
+
+
+@dataclass(frozen=True)
+class CellTask:
+    """One task: ``cells`` runs of home vectors ``base[starts[c]:starts[c+1]]`` with global ids ``base_ids``,
+    searched by queries ``queries[qstarts[c]:qstarts[c+1]]`` with global ids ``query_ids``. Shapes: base (B, D),
+    queries (Q, D) float32; starts (C + 1,), qstarts (C + 1,) int64."""
+
+    base: NDArray[np.float32]
+    base_ids: NDArray[np.int64]
+    starts: NDArray[np.int64]
+    queries: NDArray[np.float32]
+    query_ids: NDArray[np.int64]
+    qstarts: NDArray[np.int64]
+
+
+def search_cells(task: CellTask, radius: float) -> tuple[NDArray[np.int64], NDArray[np.int64], NDArray[np.float32]]:
+    """Every (query id, base id, distance) closer than ``radius`` inside each cell of ``task`` (global ids)."""
+    qi, bi, ds = [], [], []
+    for c in range(len(task.starts) - 1):
+        b0, b1, q0, q1 = task.starts[c], task.starts[c + 1], task.qstarts[c], task.qstarts[c + 1]
+        if b1 == b0 or q1 == q0:
+            continue
+        q, b, d = FlatIndex(task.base[b0:b1]).within(task.queries[q0:q1], radius)
+        qi.append(task.query_ids[q0:q1][q])
+        bi.append(task.base_ids[b0:b1][b])
+        ds.append(d)
+    if not qi:
+        return np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros(0, np.float32)
+    return np.concatenate(qi), np.concatenate(bi), np.concatenate(ds)
+
+
+def train_cells(vectors: NDArray[np.float32], cells: int, seed: int) -> NDArray[np.float32]:
+    """(cells, D) unit centroids of spherical k-means on a seeded sample of ``vectors`` (N, D)."""
+    import faiss
+
+    n, d = vectors.shape
+    rng = np.random.default_rng(seed)
+    sample = vectors[np.sort(rng.choice(n, size=min(n, KMEANS_SAMPLE * cells), replace=False))]
+    kmeans = faiss.Kmeans(d, cells, niter=KMEANS_ITER, seed=seed, spherical=True, verbose=False)
+    kmeans.train(np.ascontiguousarray(sample, np.float32))
+    return np.ascontiguousarray(kmeans.centroids, np.float32)
+
+
+def nearest_cells(vectors: NDArray[np.float32], centroids: NDArray[np.float32], k: int) -> NDArray[np.int64]:
+    """(N, k) indices of each vector's ``k`` nearest centroids, nearest first."""
+    return FlatIndex(centroids).knn(vectors, min(k, len(centroids)))[1]
+
+
+def plan_tasks(
+    vectors: NDArray[np.float32],
+    crops: NDArray[np.float32] | None,
+    centroids: NDArray[np.float32],
+    nprobe: int,
+    task_vectors: int = TASK_VECTORS,
+) -> list[tuple[NDArray[np.int64], NDArray[np.int64], NDArray[np.int64], NDArray[np.int64]]]:
+    """Index plans of the tasks: (base ids, cell starts, query row ids, query cell starts) each, cells in order.
+    Query rows ``r >= N`` stand for centre view ``r - N``."""
+    cells = len(centroids)
+    home = nearest_cells(vectors, centroids, 1)[:, 0]
+    probes = [nearest_cells(vectors, centroids, nprobe)]
+    if crops is not None and len(crops):
+        probes.append(nearest_cells(crops, centroids, nprobe))
+    probe = np.concatenate(probes)  # (Q, nprobe), rows 0..N-1 whole views, then centre views
+    base_order = np.argsort(home, kind="stable")
+    base_starts = np.searchsorted(home[base_order], np.arange(cells + 1))
+    flat_cell = probe.ravel()
+    query_order = np.argsort(flat_cell, kind="stable")
+    query_rows = (query_order // probe.shape[1]).astype(np.int64)
+    query_starts = np.searchsorted(flat_cell[query_order], np.arange(cells + 1))
+    plans, first = [], 0
+    for c in range(cells):
+        if base_starts[c + 1] - base_starts[first] >= task_vectors or c == cells - 1:
+            b = base_starts[first : c + 2]
+            q = query_starts[first : c + 2]
+            plans.append((base_order[b[0] : b[-1]], b - b[0], query_rows[q[0] : q[-1]], q - q[0]))
+            first = c + 1
+    return plans
+
+
+def make_task(
+    plan: tuple[NDArray[np.int64], NDArray[np.int64], NDArray[np.int64], NDArray[np.int64]],
+    vectors: NDArray[np.float32],
+    crops: NDArray[np.float32] | None,
+) -> CellTask:
+    """The :class:`CellTask` of one plan: its vectors copied out of ``vectors`` (N, D) and ``crops``."""
+    base_ids, starts, rows, qstarts = plan
+    n = len(vectors)
+    whole = rows < n
+    queries = np.empty((len(rows), vectors.shape[1]), np.float32)
+    queries[whole] = vectors[rows[whole]]
+    if crops is not None and not whole.all():
+        queries[~whole] = crops[rows[~whole] - n]
+    return CellTask(vectors[base_ids], base_ids, starts, queries, np.where(whole, rows, rows - n), qstarts)
+
+
+def partitioned_pairs(
+    vectors: NDArray[np.floating],
+    crops: NDArray[np.floating] | None,
+    radius: float,
+    cluster: Cluster | None = None,
+    cells: int | None = None,
+    nprobe: int = NPROBE,
+    seed: int = 0,
+) -> Pairs:
+    """Pairs ``i < j`` whose two-view distance is below ``radius`` (as :func:`curate.search.duplicate_pairs`),
+    found by partitions (see the module docstring); ``cells`` default ``N / CELL_VECTORS``. Tasks run on
+    ``cluster`` when given, else here."""
+    from curate.core.progress import progress
+
+    vectors = np.ascontiguousarray(vectors, np.float32)
+    crops = None if crops is None else np.ascontiguousarray(crops, np.float32)
+    n = len(vectors)
+    if n < 2:
+        return canonical_pairs(*(np.zeros(0, np.int64),) * 2, np.zeros(0, np.float32), max(n, 1))
+    cells = min(n, cells or max(1, n // CELL_VECTORS))
+    centroids = train_cells(vectors, cells, seed)
+    plans = plan_tasks(vectors, crops, centroids, nprobe)
+    tasks = (make_task(plan, vectors, crops) for plan in plans)  # made as they are needed (bounded memory)
+    if cluster is None:
+        done = ((k, search_cells(task, radius)) for k, task in enumerate(tasks))
+    else:
+        done = cluster.map(search_cells, tasks, radius, num_cpus=1)
+    found = [r for _, r in progress(done, total=len(plans), desc="partitions", unit="task", min_items=4)]
+    qi, bi, ds = (np.concatenate([f[k] for f in found]) for k in range(3))
+    return canonical_pairs(qi, bi, ds, n)
