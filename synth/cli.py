@@ -8,6 +8,7 @@ import os
 from collections.abc import Callable, Sequence
 from pathlib import Path
 
+from curate.core.cluster import EXECUTOR_CHOICES, open_cluster
 from curate.core.commands import add_command
 from curate.core.options import Alias
 
@@ -172,7 +173,13 @@ def cmd_method1(args: argparse.Namespace) -> int:
     cfg = _built(args, Method1Config, METHOD1_ALIASES)
     if cfg is None:
         return 0
-    result = run_method1(cfg, build_library(cfg.flames), args.out, overwrite=args.overwrite, workers=_workers(args))
+    cluster = open_cluster(args.executor, args.address)
+    try:
+        library = build_library(cfg.flames)
+        result = run_method1(cfg, library, args.out, overwrite=args.overwrite, workers=_workers(args), cluster=cluster)
+    finally:
+        if cluster is not None:
+            cluster.close()
     print(f"wrote {args.out}: {cfg.n} images, {cfg.box_mode} boxes ({', '.join(result.files.values())})")
     return 0
 
@@ -184,7 +191,13 @@ def cmd_method2(args: argparse.Namespace) -> int:
     cfg = _built(args, Method2Config, METHOD2_ALIASES)
     if cfg is None:
         return 0
-    result = run_method2(cfg, build_library(cfg.flames), args.out, overwrite=args.overwrite, workers=_workers(args))
+    cluster = open_cluster(args.executor, args.address)
+    try:
+        library = build_library(cfg.flames)
+        result = run_method2(cfg, library, args.out, overwrite=args.overwrite, workers=_workers(args), cluster=cluster)
+    finally:
+        if cluster is not None:
+            cluster.close()
     print(f"wrote {args.out}: {cfg.n} images ({', '.join(result.files.values())})")
     return 0
 
@@ -429,6 +442,14 @@ def _dataset_arguments(
         default=0,
         help="image processes (default 0 = one per core; any number writes the same bytes)",
     )
+    p.add_argument(
+        "--executor",
+        default="local",
+        choices=EXECUTOR_CHOICES,
+        help="local (default: --workers processes) or ray (blocks of views as Ray tasks; the same bytes; --out on "
+        "storage every node sees)",
+    )
+    p.add_argument("--address", help="with --executor ray: a running cluster (HOST:6379); default a local Ray")
     add_config_options(p, schema, aliases, f"docs/config.md#{anchor}")
 
 

@@ -13,6 +13,7 @@ from typing import Any
 
 import cv2
 
+from curate.core.cluster import Cluster
 from curate.core.progress import progress
 from curate.core.writer import WriteResult, check_output_target
 from synth.flames.sprites import SpriteSequence
@@ -144,6 +145,45 @@ def _in_workers(job: Job, todo: Sequence[int], workers: int) -> dict[str, str]:
     return problems
 
 
+_RAY_VIEWS: dict[str, tuple[ViewCache, list[dict[str, str]]]] = {}  # a Ray worker's opened views, by job token
+
+
+def _ray_block(block: Sequence[int], job: Job, token: str) -> tuple[int, dict[str, str]]:
+    """A Ray task: make and stage the images of ``block``; the worker opens the job's views once (``token``) and
+    keeps them for its later blocks. Returns (images made, backgrounds skipped with reasons)."""
+    if token not in _RAY_VIEWS:
+        import atexit
+
+        cv2.setNumThreads(1)  # one image pipeline per reserved CPU
+        _RAY_VIEWS.clear()  # another job's views (and renderer) are not needed any more
+        stack = ExitStack()
+        _RAY_VIEWS[token] = stack.enter_context(opened_views(job))
+        atexit.register(stack.close)
+    views, problems = _RAY_VIEWS[token]
+    staging = Staging(job.out)
+    for i in block:
+        staging.save(i, *job.make_image(job.cfg, i, job.library, views))
+    return len(block), {k: v for found in problems for k, v in found.items()}
+
+
+def _on_cluster(job: Job, todo: Sequence[int], cluster: Cluster) -> dict[str, str]:
+    """Make and stage images ``todo`` on a Ray ``cluster``, one task per block (:func:`blocks`); the job goes
+    to the object store once. The staging folder must be on storage every node sees at the same path."""
+    import uuid
+
+    ref = cluster.put(job)
+    problems: dict[str, str] = {}
+
+    def images_done() -> Iterator[int]:
+        for _, (done, found) in cluster.map(_ray_block, blocks(job, todo), ref, uuid.uuid4().hex):
+            problems.update(found)
+            yield from range(done)
+
+    for _ in progress(images_done(), total=len(todo), desc=f"{job.method} images"):
+        pass
+    return problems
+
+
 def generate(
     method: str,
     cfg: Any,
@@ -153,6 +193,7 @@ def generate(
     overwrite: bool = False,
     platform: str | None = None,
     workers: int = 1,
+    cluster: Cluster | None = None,
 ) -> WriteResult:
     """Generate (or resume) ``cfg.n`` images with ``make_image(cfg, i, library, views)`` and write ``out``.
 
@@ -164,7 +205,8 @@ def generate(
     keeps the images it finished in the staging folder and says so (the same command resumes from them); one
     that finished none leaves nothing behind. ``workers`` > 1: images are made in up to that many processes (at
     least :data:`MIN_IMAGES_PER_WORKER` images each), each on whole blocks of views (:func:`blocks`); every image
-    depends only on (seed, index), so the dataset is byte-identical to one process's.
+    depends only on (seed, index), so the dataset is byte-identical to one process's. With a Ray ``cluster``
+    the blocks are its tasks instead (``workers`` is not used): the same bytes again, ``out`` on shared storage.
     """
     if not library or not all(seq.sprites for seq in library):
         raise ValueError("the flame library is empty")
@@ -191,7 +233,12 @@ def generate(
     try:
         todo = [i for i in range(cfg.n) if not staging.done(i)]
         workers = min(workers, len(todo) // MIN_IMAGES_PER_WORKER)
-        problems = _in_workers(job, todo, workers) if workers > 1 else _make_images(job, todo)
+        if cluster is not None:
+            problems = _on_cluster(job, todo, cluster) if todo else {}
+        elif workers > 1:
+            problems = _in_workers(job, todo, workers)
+        else:
+            problems = _make_images(job, todo)
         for path, reason in problems.items():
             print(f"{path}: skipped background ({reason})", file=sys.stderr)
         return finish(staging, out, cfg.n, f"synth:{method}", f"synth {method}", args, cfg.smoke_class, overwrite)

@@ -30,6 +30,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from curate.core.boxes import clip_xyxy, mask_to_xywh, points_to_xyxy, xyxy_to_xywh
+from curate.core.cluster import Cluster
 from synth.compose.effects import CameraConfig, Effects, apply_effects, expose, sample_effects
 from synth.flames.library import FlameLibraryConfig
 from synth.flames.sprites import Sprite, SpriteSequence, flatten_rgba
@@ -305,7 +306,8 @@ def run_method1(
     overwrite: bool = False,
     platform: str | None = None,
     workers: int = 1,
+    cluster: Cluster | None = None,
 ):
-    """Generate (or resume) ``cfg.n`` images and write the dataset to ``out`` (in ``workers`` processes: the
-    same bytes); returns the WriteResult."""
-    return generate("method1", cfg, make_image, library, out, overwrite, platform, workers)
+    """Generate (or resume) ``cfg.n`` images and write the dataset to ``out`` (in ``workers`` processes, or as
+    tasks on a Ray ``cluster``: the same bytes); returns the WriteResult."""
+    return generate("method1", cfg, make_image, library, out, overwrite, platform, workers, cluster)

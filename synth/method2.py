@@ -18,6 +18,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from curate.core.boxes import mask_to_xywh, xywh_overlaps_any
+from curate.core.cluster import Cluster
 from synth.compose.composite import BLEND_MODES, Placement, composite
 from synth.compose.effects import CameraConfig, Effects, apply_effects, expose, sample_effects, scale_light
 from synth.compose.metering import draw_radiance, flame_share, mean_linear_luma, metered_gain
@@ -308,7 +309,8 @@ def run_method2(
     overwrite: bool = False,
     platform: str | None = None,
     workers: int = 1,
+    cluster: Cluster | None = None,
 ):
-    """Generate (or resume) ``cfg.n`` images and write the dataset to ``out`` (in ``workers`` processes: the
-    same bytes); returns the WriteResult."""
-    return generate("method2", cfg, make_image, library, out, overwrite, platform, workers)
+    """Generate (or resume) ``cfg.n`` images and write the dataset to ``out`` (in ``workers`` processes, or as
+    tasks on a Ray ``cluster``: the same bytes); returns the WriteResult."""
+    return generate("method2", cfg, make_image, library, out, overwrite, platform, workers, cluster)
