@@ -113,6 +113,23 @@ def test_two_processes_write_the_bytes_of_one(tmp_path, flames):
         assert _files(one) == _files(two) and len(_files(one)) > cfg.n
 
 
+@pytest.mark.slow
+def test_a_ray_cluster_writes_the_bytes_of_one_process(tmp_path, flames, cluster):
+    """Method 2 (rooms and panoramas) and Method 1 with their blocks as tasks on a real Ray head (2 workers):
+    every file (images, masks, annotations, manifest) has the bytes of a one-process run."""
+    from synth.method1 import Method1Config, run_method1
+    from synth.method2 import Method2Config, run_method2
+
+    m2 = Method2Config(n=40, seed=3, width=96, height=72, scenes=2, environments=(_panoramas(tmp_path / "pano"),),
+                       images_per_view=2, negatives=0.0, min_box_px=2)  # fmt: skip
+    m1 = Method1Config(n=6, seed=5, width=96, height=72, scenes=2, negatives=0.0, min_box_px=2)
+    for run, cfg in ((run_method2, m2), (run_method1, m1)):
+        one, ray = tmp_path / f"{cfg.n}-one", tmp_path / f"{cfg.n}-ray"
+        run(cfg, flames, one)
+        run(cfg, flames, ray, cluster=cluster)
+        assert _files(one) == _files(ray) and len(_files(one)) > cfg.n
+
+
 def test_blocks_keep_an_environment_in_one_process_and_cover_every_image():
     cfg = TinyConfig(n=40, scenes=0, images_per_view=2)
     job = Job("method9", replace(cfg, scenes=0), _make_image, (), Path("x"), None, ("a", "b", "c"), (), (), ())

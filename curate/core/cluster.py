@@ -42,7 +42,13 @@ class Cluster:
             _join(ray, address)
         else:
             os.environ.setdefault("RAY_USAGE_STATS_ENABLED", "0")
-            ray.init(num_cpus=local_cpus, include_dashboard=False, ignore_reinit_error=True, logging_level="ERROR")
+            ray.init(  # "local": a new Ray of our own, even where a `ray start` cluster runs on this machine
+                address="local",
+                num_cpus=local_cpus,
+                include_dashboard=False,
+                ignore_reinit_error=True,
+                logging_level="ERROR",
+            )
 
     def __enter__(self) -> Cluster:
         return self

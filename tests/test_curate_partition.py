@@ -1,0 +1,83 @@
+"""Partitioned near-duplicate search: on planted vectors it finds >= 99 % of the exact pairs and nothing else,
+with exact distances; every vector is searched in its home cell; the pairs are the same in this process and on
+a real Ray head; a dedup with ``backend="partition"`` keeps what the exact search keeps."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from curate.core.cluster import Cluster
+from curate.embed import l2_normalize
+from curate.partition import make_task, partitioned_pairs, plan_tasks, train_cells
+from curate.search import duplicate_pairs
+
+RADIUS = 0.45
+
+
+def planted(n: int, dim: int, seed: int) -> tuple[np.ndarray, np.ndarray]:
+    """(n, dim) unit vectors around 50 themes, a tenth of them noisy copies of others, and (n, dim) "centre views"
+    (each vector nudged), as :func:`curate.search.duplicate_pairs` takes them."""
+    rng = np.random.default_rng(seed)
+    themes = rng.standard_normal((50, dim)).astype(np.float32)
+    x = themes[rng.integers(0, 50, n)] + 1.2 * rng.standard_normal((n, dim)).astype(np.float32)
+    k = n // 10
+    src = rng.integers(0, n - k, k)
+    x[n - k :] = x[src] + rng.uniform(0.05, 0.25, (k, 1)).astype(np.float32) * rng.standard_normal((k, dim))
+    crops = x + 0.2 * rng.standard_normal((n, dim)).astype(np.float32)
+    return l2_normalize(x), l2_normalize(crops)
+
+
+def test_partitions_find_the_exact_pairs_with_their_distances() -> None:
+    x, crops = planted(6000, 48, seed=0)
+    exact = duplicate_pairs(x, crops, RADIUS, "numpy")
+    found = partitioned_pairs(x, crops, RADIUS, cells=12)
+    truth = dict(zip(zip(exact.i.tolist(), exact.j.tolist()), exact.dist.tolist()))
+    got = dict(zip(zip(found.i.tolist(), found.j.tolist()), found.dist.tolist()))
+    assert len(truth) > 500
+    assert set(got) <= set(truth)  # nothing but true pairs
+    assert len(set(got) & set(truth)) / len(truth) >= 0.99
+    assert max(abs(got[p] - truth[p]) for p in got) < 1e-4  # exact distances (float32 rounding aside)
+
+
+def test_every_vector_has_one_home_and_every_query_its_probes() -> None:
+    x, crops = planted(3000, 32, seed=1)
+    centroids = train_cells(x, 9, seed=0)
+    plans = plan_tasks(x, crops, centroids, nprobe=3, task_vectors=700)
+    assert len(plans) > 1
+    homes = np.concatenate([p[0] for p in plans])
+    assert np.array_equal(np.sort(homes), np.arange(len(x)))  # each vector in exactly one cell
+    rows = np.concatenate([p[2] for p in plans])
+    assert np.array_equal(np.bincount(rows, minlength=2 * len(x)), np.full(2 * len(x), 3))  # nprobe per view
+    task = make_task(plans[0], x, crops)
+    whole = plans[0][2] < len(x)
+    assert np.array_equal(task.queries[whole], x[task.query_ids[whole]])
+    assert np.array_equal(task.queries[~whole], crops[task.query_ids[~whole]])
+    assert np.array_equal(task.base, x[task.base_ids])
+
+
+@pytest.mark.slow
+def test_a_ray_cluster_finds_the_same_pairs(cluster: Cluster) -> None:
+    x, crops = planted(4000, 32, seed=2)
+    here = partitioned_pairs(x, crops, RADIUS, cells=16)
+    there = partitioned_pairs(x, crops, RADIUS, cluster=cluster, cells=16)
+    for a, b in zip((here.i, here.j, here.dist), (there.i, there.j, there.dist)):
+        assert np.array_equal(a, b)
+
+
+def test_dedup_by_partitions_keeps_what_exact_search_keeps(monkeypatch: pytest.MonkeyPatch) -> None:
+    from curate import partition
+    from curate.dedup import find_duplicates
+    from curate.embedcache import FileFacts
+    from curate.scan import ScannedImage
+
+    x, crops = planted(1500, 32, seed=3)
+    images = [
+        ScannedImage(f"/img/{i:05d}.jpg", FileFacts(f"{i:064x}", 1000 + i, 640, 480, f"p{i}", float(i % 7)))
+        for i in range(len(x))
+    ]
+    monkeypatch.setattr(partition, "CELL_VECTORS", 100)  # 15 cells
+    exact = find_duplicates(images, x, RADIUS, "flat", crops=crops)
+    parted = find_duplicates(images, x, RADIUS, "partition", crops=crops)
+    assert len(exact.removed) > 100
+    assert parted.kept == exact.kept and parted.groups == exact.groups
