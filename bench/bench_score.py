@@ -1,8 +1,10 @@
 """Scoring speed at 320 px on CPU, and bootstrap speed.
 
-- ``score_*``: ``fuzzyfire score`` end to end (decode + letterbox in threads, onnxruntime, NMS, pycocotools)
+- ``score_*``: ``fuzzyfire score`` end to end (decode + letterbox in threads, onnxruntime, NMS, COCO metrics)
   on ../shared/data/fire-smoke-608 (all 979 images, 608x608 JPEGs) or on generated 640x480 JPEGs, with our detector
   (random weights: its many low-confidence boxes make NMS the worst case) exported by ``train/export.py``.
+- ``score_end_to_end`` / ``score_onnx_forward_alone`` / ``score_ratio_to_forward``: the same scoring against
+  onnxruntime's forward pass alone over the same letterboxed batches with the same session (target ratio >= 0.8).
 - ``onnx_vs_torch``: the same model's forward pass, onnxruntime vs torch eager, batch 16 (target >= 4x).
 - ``bootstrap_*``: image-level bootstrap resamples of AP on 1,000 images (target: 1,000 in seconds), with about
   6,000 detections, and with about 100,000 (``bootstrap_100k_*``: up to 200 low-confidence boxes per image,
@@ -24,6 +26,8 @@ import numpy as np
 from curate.core.cocoeval import run_cocoeval
 from curate.core.dataset import DatasetBuilder
 from curate.core.formats.registry import read_dataset
+from curate.core.imageio import read_image
+from curate.core.letterbox import letterbox_image, to_nchw_float
 from eval.onnx_model import OnnxDetector
 from eval.predict import PredictOptions
 from eval.score import score
@@ -59,12 +63,23 @@ def bench_scoring(tmp: Path) -> None:
     det = OnnxDetector(path)
     ds, what = _dataset(tmp)
     score(det, ds.filter_images(lambda img: img.id <= ds.images[8].id))  # warm-up
-    start = time.perf_counter()
-    result = score(det, ds, PredictOptions(batch=16))
-    elapsed = time.perf_counter() - start
-    per_image = result.metrics.detections / result.metrics.images
-    print(f"score_throughput: {result.metrics.images / elapsed:.0f} img/s ({what}, {SIZE} px, target >= 100)")
+    batches = _input_batches(det, ds, 16)
+    # Interleaved, best of two each: the forward pass alone over the same images (same batches, same session and
+    # threads), then `score` end to end; the ratio of the two is one run's.
+    forward_s, end_to_end_s = [], []
+    for _ in range(2):
+        forward_s.append(_forward_alone(det, batches))
+        start = time.perf_counter()
+        result = score(det, ds, PredictOptions(batch=16))
+        end_to_end_s.append(time.perf_counter() - start)
+    images = result.metrics.images
+    end_to_end, forward = images / min(end_to_end_s), images / min(forward_s)
+    per_image = result.metrics.detections / images
+    print(f"score_throughput: {end_to_end:.0f} img/s ({what}, {SIZE} px, target >= 100)")
     print(f"score_detections: {per_image:.0f} per image after NMS (an untrained model: NMS's worst case)")
+    print(f"score_end_to_end: {end_to_end:.1f} img/s (decode, onnxruntime, NMS, COCO metrics; batch 16)")
+    print(f"score_onnx_forward_alone: {forward:.1f} img/s (same model, images, batches and threads)")
+    print(f"score_ratio_to_forward: {end_to_end / forward:.2f} (target >= 0.8)")
     start = time.perf_counter()
     sparse = score(det, ds, PredictOptions(batch=16, conf=0.25))
     elapsed = time.perf_counter() - start
@@ -77,6 +92,27 @@ def bench_scoring(tmp: Path) -> None:
     print(f"onnx_forward: {16 / onnx_s:.0f} img/s (batch 16, {SIZE} px)")
     print(f"torch_forward: {16 / torch_s:.0f} img/s (eager, same model)")
     print(f"onnx_vs_torch: {torch_s / onnx_s:.1f} x (target >= 4)")
+
+
+def _input_batches(det: OnnxDetector, ds, size: int) -> list[list[np.ndarray]]:
+    """The letterboxed uint8 images ``score`` feeds the model, in its batches (converted to float when run)."""
+    spec = det.spec
+    boxed = [
+        letterbox_image(read_image(ds.image_path(img)), spec.input_width, spec.input_height, spec.pad_value)
+        for img in ds.images
+    ]
+    return [boxed[i : i + size] for i in range(0, len(boxed), size)]
+
+
+def _forward_alone(det: OnnxDetector, batches: list[list[np.ndarray]]) -> float:
+    """Seconds onnxruntime takes over every batch (the float conversion outside the clock)."""
+    total = 0.0
+    for images in batches:
+        x = to_nchw_float(images)
+        start = time.perf_counter()
+        det.raw(x)
+        total += time.perf_counter() - start
+    return total
 
 
 def _best_of(fn, repeats: int = 5) -> float:

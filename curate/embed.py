@@ -183,6 +183,10 @@ class OnnxEmbedder:
         providers, self.notice = onnx_providers(device)
         source = model_bytes if model_bytes is not None else str(self.path)
         self.session = ort.InferenceSession(source, opts, providers=providers)
+        if providers[0] != "CPUExecutionProvider" and not self.on_gpu():  # CUDA or cuDNN libraries failed to load
+            self.notice = (
+                f"notice: onnxruntime could not start its CUDA provider for {self.path.name}; embedding on the CPU"
+            )
         self.device = device
         self.preprocess = preprocess
         self.input_name = self.session.get_inputs()[0].name
