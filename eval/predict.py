@@ -28,7 +28,7 @@ from curate.core.problems import Problem
 from curate.core.progress import progress
 from eval.onnx_model import OnnxDetector
 
-Loaded = tuple[NDArray[np.uint8], tuple[int, int]] | ImageError
+Loaded = tuple[int, int] | ImageError  # an image's decoded (width, height), or why it could not be read
 
 
 @dataclass(frozen=True)
@@ -46,30 +46,39 @@ class PredictOptions:
     resize: str = "area"
 
 
-def _loader(width: int, height: int, pad: int, resize: str) -> Callable[[str], Loaded]:
-    def load(path: str) -> Loaded:
+def _loader(width: int, height: int, pad: int, resize: str) -> Callable[[str, NDArray[np.float32], int], Loaded]:
+    """``load(path, batch, slot)``: decode, letterbox and write the image into ``batch[slot]`` (3, H, W) as
+    :func:`curate.core.letterbox.to_nchw_float` would (float32, times 1 / 255), in the decoding thread."""
+
+    def load(path: str, batch: NDArray[np.float32], slot: int) -> Loaded:
         try:
             image = read_image(path)
         except ImageError as exc:
             return exc
-        return letterbox_image(image, width, height, pad, resize), (image.shape[1], image.shape[0])
+        boxed = letterbox_image(image, width, height, pad, resize).transpose(2, 0, 1)
+        np.multiply(boxed, np.float32(1.0 / 255.0), out=batch[slot])  # one pass; the same float32 product
+        return image.shape[1], image.shape[0]
 
     return load
 
 
 def _prefetched(
-    paths: Sequence[str], size: int, pool: ThreadPoolExecutor, load: Callable[[str], Loaded]
-) -> Iterator[list[Loaded]]:
-    """Batches of loaded images in order; the next batch decodes while the caller runs the current one."""
+    paths: Sequence[str], size: int, shape: tuple[int, int], pool: ThreadPoolExecutor, load: Callable
+) -> Iterator[tuple[NDArray[np.float32], list[Loaded]]]:
+    """Batches in order: a (B, 3, H, W) float32 input (``shape`` = (H, W)) the decoding threads filled and each
+    image's :data:`Loaded`; the next two batches decode while the caller runs the current one."""
     chunks = [paths[i : i + size] for i in range(0, len(paths), size)]
-    pending: deque[list[Future]] = deque()
-    for chunk in chunks[:2]:
-        pending.append([pool.submit(load, p) for p in chunk])
+
+    def submit(chunk: Sequence[str]) -> tuple[NDArray[np.float32], list[Future]]:
+        batch = np.empty((len(chunk), 3, *shape), dtype=np.float32)
+        return batch, [pool.submit(load, p, batch, j) for j, p in enumerate(chunk)]
+
+    pending = deque(submit(chunk) for chunk in chunks[:2])
     for nxt in range(2, len(chunks) + 2):
-        futures = pending.popleft()
+        batch, futures = pending.popleft()
         if nxt < len(chunks):
-            pending.append([pool.submit(load, p) for p in chunks[nxt]])
-        yield [f.result() for f in futures]
+            pending.append(submit(chunks[nxt]))
+        yield batch, [f.result() for f in futures]
 
 
 def _postprocess_one(
@@ -91,27 +100,24 @@ def predict_dataset(detector: OnnxDetector, dataset: Dataset, options: PredictOp
     load = _loader(spec.input_width, spec.input_height, spec.pad_value, opt.resize)
     done = 0
     pending: list[tuple[int, Future]] = []
+    post = partial(_postprocess_one, opt=opt, input_size=input_size)
     with ThreadPoolExecutor(max_workers=max(1, opt.workers)) as pool:
-        batches = _prefetched(paths, max(1, opt.batch), pool, load)
-        for loaded in progress(batches, total=-(-len(paths) // max(1, opt.batch)), desc="scoring", unit="batch"):
+        batches = _prefetched(paths, max(1, opt.batch), (spec.input_height, spec.input_width), pool, load)
+        for batch, loaded in progress(batches, total=-(-len(paths) // max(1, opt.batch)), desc="scoring", unit="batch"):
             records = images[done : done + len(loaded)]
             done += len(loaded)
-            good = [(rec, item) for rec, item in zip(records, loaded) if not isinstance(item, ImageError)]
+            good = [j for j, item in enumerate(loaded) if not isinstance(item, ImageError)]
             for rec, item in zip(records, loaded):
                 if isinstance(item, ImageError):
                     out.problems.append(Problem(item.path, f"skipped: {item.reason}"))
-                elif item[1] != (rec.width, rec.height):
-                    msg = f"decoded size {item[1][0]}x{item[1][1]} differs from the dataset's {rec.width}x{rec.height}"
+                elif item != (rec.width, rec.height):
+                    msg = f"decoded size {item[0]}x{item[1]} differs from the dataset's {rec.width}x{rec.height}"
                     out.problems.append(Problem(str(dataset.image_path(rec)), msg, "warning"))
             if not good:
                 continue
-            boxes, scores = detector(to_nchw_float([item[0] for _, item in good]))
-            sizes = [item[1] for _, item in good]
+            boxes, scores = detector(batch if len(good) == len(loaded) else batch[good])
             # NMS in the pool too (OpenCV releases the GIL), collected at the end: the next batch runs meanwhile.
-            post = partial(_postprocess_one, opt=opt, input_size=input_size)
-            pending += [
-                (rec.id, pool.submit(post, b, s, size)) for (rec, _), b, s, size in zip(good, boxes, scores, sizes)
-            ]
+            pending += [(records[j].id, pool.submit(post, b, s, loaded[j])) for j, b, s in zip(good, boxes, scores)]
         for image_id, future in pending:
             out.by_image[image_id] = future.result()
     return out

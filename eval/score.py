@@ -5,14 +5,16 @@ from __future__ import annotations
 import json
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from functools import cached_property
 from pathlib import Path
 from typing import Any, NamedTuple
 
 from pycocotools.cocoeval import COCOeval
 
-from curate.core.cocoeval import CocoMetrics, evaluate_predictions
+from curate.core.cocoeval import CocoMetrics, evaluate_detections
 from curate.core.dataset import Dataset
 from curate.core.detections import CONF_THRESHOLD, IOU_THRESHOLD, MAX_DETECTIONS, Predictions
+from curate.core.fast_cocoeval import CocoBoxes, boxes_to_records
 from curate.core.formats.registry import read_dataset
 from curate.core.holdout import held_out_images
 from curate.core.load import SplitError, pick_split
@@ -71,15 +73,20 @@ class ScoreError(ValueError):
 
 @dataclass
 class ScoreResult:
-    """Metrics of one (model, test set) pair, with what produced them."""
+    """Metrics of one (model, test set) pair, with what produced them: ``detections``, the evaluated detections
+    of the matched classes, and ``records``, the same as COCO result records (built on first use)."""
 
     metrics: CocoMetrics
     evaluation: COCOeval
-    records: list[dict[str, Any]]
+    detections: CocoBoxes
     predictions: Predictions
     spec: ModelSpec
     dataset: Dataset
     problems: list[Problem]
+
+    @cached_property
+    def records(self) -> list[dict[str, Any]]:
+        return boxes_to_records(self.detections)
 
 
 ALL_SPLITS = "all"  # --split all: every image of every split
@@ -153,8 +160,8 @@ def score(
     preds = predict_dataset(detector, dataset, options)
     if not preds.by_image:
         raise ScoreError(f"{dataset.root}: none of the {len(dataset.images)} images could be read")
-    metrics, ev, records = evaluate_predictions(dataset, preds)
-    return ScoreResult(metrics, ev, records, preds, detector.spec, dataset, [*problems, *preds.problems])
+    metrics, ev, detections = evaluate_detections(dataset, preds)
+    return ScoreResult(metrics, ev, detections, preds, detector.spec, dataset, [*problems, *preds.problems])
 
 
 def scored_images(result: ScoreResult) -> tuple[Dataset, list[int]]:

@@ -12,7 +12,7 @@ from curate.core.boxes import xyxy_to_xywh
 from curate.core.formats.registry import read_dataset
 from curate.core.imageio import read_image
 from eval.onnx_model import OnnxDetector
-from eval.predict import PredictOptions, detect_images, predict_dataset
+from eval.predict import PredictOptions, _loader, detect_images, predict_dataset
 
 
 @pytest.fixture(scope="module")
@@ -66,3 +66,17 @@ def test_decoded_images_get_the_detections_their_files_get(setup, batch):
         assert np.array_equal(got.boxes, want.boxes) and np.array_equal(got.scores, want.scores)
         assert np.array_equal(got.labels, want.labels)
     assert sum(len(d) for d in found) == sum(len(i.boxes) for i in IMAGES)  # NMS and conf applied alike
+
+
+def test_decoding_threads_fill_the_batch_exactly_as_to_nchw_float(setup):
+    from curate.core.letterbox import letterbox_image, to_nchw_float
+
+    ds, det = setup
+    spec = det.spec
+    paths = [str(ds.image_path(img)) for img in ds.images[:3]]
+    batch = np.full((len(paths), 3, spec.input_height, spec.input_width), np.nan, dtype=np.float32)
+    load = _loader(spec.input_width, spec.input_height, spec.pad_value, "area")
+    sizes = [load(p, batch, j) for j, p in enumerate(reversed(paths))]
+    boxed = [letterbox_image(read_image(p), spec.input_width, spec.input_height, spec.pad_value) for p in paths]
+    np.testing.assert_array_equal(batch[::-1], to_nchw_float(boxed))
+    assert sizes[::-1] == [(img.width, img.height) for img in ds.images[:3]]

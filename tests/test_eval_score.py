@@ -88,3 +88,70 @@ def test_score_settings_out_of_range_are_refused_before_any_work() -> None:
         with pytest.raises(ValueError, match="must be"):
             ScoreConfig(**bad)
     assert ScoreConfig(conf=0.0, iou=1.0).conf == 0.0
+
+
+def test_metrics_are_pycocotools_numbers_on_the_records_written(work):
+    """score() reports what pycocotools computes from the records it writes (the oracle's boxes, jittered
+    copies and noise at several scores, so AP is neither 0 nor 1)."""
+    import contextlib
+    import io
+
+    import numpy as np
+    from pycocotools.coco import COCO
+    from pycocotools.cocoeval import COCOeval
+
+    from curate.core.cocoeval import LOOSE_IOU, evaluate_predictions
+    from curate.core.detections import ImageDetections
+
+    _, test, det = work
+    ds = load_test_set(test).dataset
+    result = score(det, ds)
+    rng = np.random.default_rng(0)
+    noisy = {}
+    for image_id, d in result.predictions.by_image.items():
+        extra = rng.uniform(0, 40, (6, 4)) + np.array([0, 0, 20, 20])
+        boxes = np.concatenate([d.boxes, d.boxes + rng.normal(0, 4, d.boxes.shape), np.cumsum(extra, axis=1)])
+        scores = np.concatenate([d.scores, d.scores * 0.9, np.full(6, 0.3)])  # ties among the noise
+        labels = np.concatenate([d.labels, d.labels, rng.integers(0, 2, 6)])
+        order = np.argsort(-scores, kind="stable")
+        noisy[image_id] = ImageDetections(boxes[order], scores[order], labels[order])
+    preds = dataclasses.replace(result.predictions, by_image=noisy)
+    metrics, _, records = evaluate_predictions(ds, preds)
+    doc = ds.to_coco()
+    anns = [{**r, "id": i, "area": r["bbox"][2] * r["bbox"][3], "iscrowd": 0} for i, r in enumerate(records, 1)]
+    refs = []
+    for thresholds in (None, [LOOSE_IOU]):
+        gt, dt = COCO(), COCO()
+        gt.dataset, dt.dataset = doc, {"images": doc["images"], "categories": doc["categories"], "annotations": anns}
+        with contextlib.redirect_stdout(io.StringIO()):
+            gt.createIndex()
+            dt.createIndex()
+            ref = COCOeval(gt, dt, "bbox")
+            ref.params.catIds = sorted({r["category_id"] for r in records})
+            if thresholds:
+                ref.params.iouThrs = np.asarray(thresholds)
+            ref.evaluate()
+            ref.accumulate()
+            ref.summarize()
+        refs.append(ref)
+    names = ("AP", "AP50", "AP75", "AP_small", "AP_medium", "AP_large")
+    for name, value in zip(names, refs[0].stats):
+        assert (metrics.summary[name] is None and value == -1) or metrics.summary[name] == pytest.approx(
+            value, abs=1e-6
+        )
+    assert metrics.summary["AP25"] == pytest.approx(refs[1].stats[0], abs=1e-6)
+    assert 0.1 < metrics.summary["AP"] < 0.99
+    for k, cat in enumerate(refs[0].params.catIds):
+        name = next(c.name for c in ds.categories if c.id == cat)
+        precision = refs[0].eval["precision"][:, :, k, 0, -1]
+        assert metrics.per_class[name]["AP"] == pytest.approx(precision[precision > -1].mean(), abs=1e-6)
+
+
+def test_records_are_built_from_the_evaluated_detections(work):
+    from curate.core.cocoeval import evaluate_predictions
+
+    _, test, det = work
+    ds = load_test_set(test).dataset
+    result = score(det, ds)
+    assert result.records == evaluate_predictions(ds, result.predictions)[2]
+    assert len(result.records) == result.metrics.detections == len(result.detections) > 0

@@ -1,6 +1,7 @@
-"""COCO box metrics with pycocotools: AP, AP50, AP75, small/medium/large, AP25 and per class. The one COCO
-evaluation of the toolkit: training-time validation (best-epoch selection) and ``fuzzyfire score`` both call
-:func:`evaluate_predictions`.
+"""COCO box metrics: AP, AP50, AP75, small/medium/large, AP25 and per class. The one COCO evaluation of the
+toolkit: training-time validation (best-epoch selection) and ``fuzzyfire score`` both call
+:func:`evaluate_predictions`. The numbers are pycocotools' ``COCOeval``'s, computed by its vectorised numpy
+equal :class:`curate.core.fast_cocoeval.FastCOCOeval` (a ``COCOeval``; tested against pycocotools).
 
 AP25 is AP at IoU 0.25, beside COCO's numbers: fire and smoke have no crisp edge, and test sets box them
 differently (the flames, or the whole burning region), so a detector that finds the fire but draws its box
@@ -20,13 +21,20 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-from pycocotools.coco import COCO
-from pycocotools.cocoeval import COCOeval, Params
+from pycocotools.cocoeval import COCOeval
 
 from curate.core.boxes import xyxy_to_xywh
 from curate.core.classes import canonical_class
 from curate.core.dataset import Dataset
 from curate.core.detections import Predictions
+from curate.core.fast_cocoeval import (
+    CocoBoxes,
+    FastCOCOeval,
+    boxes_to_records,
+    detection_boxes,
+    ground_truth_boxes,
+    records_to_boxes,
+)
 
 #: ``COCOeval.stats`` entries we report, by index.
 _STATS = {"AP": 0, "AP50": 1, "AP75": 2, "AP_small": 3, "AP_medium": 4, "AP_large": 5}
@@ -77,27 +85,28 @@ def _quiet() -> Iterator[None]:
         yield
 
 
-def _coco_from_dict(doc: dict[str, Any]) -> COCO:
-    coco = COCO()
-    coco.dataset = doc
-    with _quiet():
-        coco.createIndex()
-    return coco
+def _detection_arrays(preds: Predictions, match: ClassMatch) -> CocoBoxes:
+    """The detections of the matched classes as :func:`detection_records` writes them (xywh rounded to 3
+    decimals, scores to 5), image by image in id order."""
+    items = sorted((i, d) for i, d in preds.by_image.items() if len(d))
+    if not items:
+        return detection_boxes(np.zeros(0), np.zeros(0), np.zeros((0, 4)), np.zeros(0))
+    lookup = np.full(max(match.label_to_cat, default=0) + 1, -1, dtype=np.int64)
+    for label, cat in match.label_to_cat.items():
+        lookup[label] = cat
+    labels = np.concatenate([d.labels for _, d in items]).astype(np.int64)
+    cats = np.where((labels >= 0) & (labels < len(lookup)), lookup[labels.clip(0, len(lookup) - 1)], -1)
+    keep = cats >= 0
+    image_ids = np.repeat([i for i, _ in items], [len(d) for _, d in items])
+    # Rounded image by image, in each image's dtype, as the records have always been written.
+    boxes = np.concatenate([np.round(xyxy_to_xywh(d.boxes), 3).reshape(-1, 4) for _, d in items])
+    scores = np.concatenate([np.round(d.scores, 5) for _, d in items])
+    return detection_boxes(image_ids[keep], cats[keep], boxes[keep], scores[keep])
 
 
 def detection_records(preds: Predictions, match: ClassMatch) -> list[dict[str, Any]]:
     """COCO result records ``{image_id, category_id, bbox: [x, y, w, h], score}`` of the matched classes."""
-    records = []
-    for image_id, det in sorted(preds.by_image.items()):
-        if not len(det):
-            continue
-        boxes = np.round(xyxy_to_xywh(det.boxes), 3).reshape(-1, 4).tolist()
-        scores = np.round(det.scores, 5).tolist()
-        for box, score, label in zip(boxes, scores, det.labels.tolist()):
-            cat = match.label_to_cat.get(label)
-            if cat is not None:
-                records.append({"image_id": int(image_id), "category_id": cat, "bbox": box, "score": score})
-    return records
+    return boxes_to_records(_detection_arrays(preds, match))
 
 
 def top_records(records: Sequence[dict[str, Any]], max_det: int) -> list[dict[str, Any]]:
@@ -119,29 +128,25 @@ def top_records(records: Sequence[dict[str, Any]], max_det: int) -> list[dict[st
 
 def run_cocoeval(
     dataset: Dataset,
-    records: Sequence[dict[str, Any]],
+    records: Sequence[dict[str, Any]] | CocoBoxes,
     cat_ids: Sequence[int],
     iou_thresholds: Sequence[float] | None = None,
 ) -> COCOeval:
-    """``COCOeval`` over every image of ``dataset`` and categories ``cat_ids``, evaluated and accumulated.
+    """pycocotools' ``COCOeval`` over every image of ``dataset`` and categories ``cat_ids``, evaluated and
+    accumulated (:class:`curate.core.fast_cocoeval.FastCOCOeval`: the same numbers, vectorised).
 
-    Results are loaded without ``COCO.loadRes`` so an empty list is a valid input (AP 0). Only the records
-    COCOeval can look at are loaded (:func:`top_records`), which gives the same numbers faster.
+    ``records`` are COCO results (or the same as :class:`CocoBoxes`); an empty list is a valid input (AP 0).
     ``iou_thresholds`` (default COCO's 0.5:0.95) limits the work when only some are needed (e.g. ``[0.5]``:
     ``stats[1]`` is AP50, the stats of other thresholds are -1)."""
-    gt_doc = dataset.to_coco()
-    gt = _coco_from_dict(gt_doc)
-    records = top_records(records, Params(iouType="bbox").maxDets[-1])
-    anns = [{**r, "id": i, "area": float(r["bbox"][2] * r["bbox"][3]), "iscrowd": 0} for i, r in enumerate(records, 1)]
-    dt = _coco_from_dict({"images": gt_doc["images"], "categories": gt_doc["categories"], "annotations": anns})
-    ev = COCOeval(gt, dt, "bbox")
+    dt = records if isinstance(records, CocoBoxes) else records_to_boxes(records)
+    ev = FastCOCOeval(ground_truth_boxes(dataset), dt)
     ev.params.imgIds = sorted(img.id for img in dataset.images)
     ev.params.catIds = sorted(cat_ids)
     if iou_thresholds is not None:
         ev.params.iouThrs = np.asarray(iou_thresholds, dtype=np.float64)
+    ev.evaluate()
+    ev.accumulate()
     with _quiet():
-        ev.evaluate()
-        ev.accumulate()
         ev.summarize()
     return ev
 
@@ -214,18 +219,25 @@ def loose_ap(dataset: Dataset, records: Sequence[dict[str, Any]], cat_ids: Seque
     return _stat(run_cocoeval(dataset, records, cat_ids, [LOOSE_IOU]).stats[0])
 
 
-def evaluate_predictions(dataset: Dataset, preds: Predictions) -> tuple[CocoMetrics, COCOeval, list[dict[str, Any]]]:
+def evaluate_detections(dataset: Dataset, preds: Predictions) -> tuple[CocoMetrics, COCOeval, CocoBoxes]:
     """Score ``preds`` against ``dataset`` over the images that were scored (unreadable ones are left out
-    and listed in ``preds.problems``). Returns metrics, the accumulated ``COCOeval`` and the records."""
+    and listed in ``preds.problems``). Returns metrics, the accumulated ``COCOeval`` and the detections of the
+    matched classes as evaluated (:func:`curate.core.fast_cocoeval.boxes_to_records` makes them COCO records)."""
     match = match_classes(preds.class_names, dataset)
     scored = dataset.filter_images(lambda img: img.id in preds.by_image)
-    records = detection_records(preds, match)
+    dt = _detection_arrays(preds, match)
     cat_ids = sorted(set(match.label_to_cat.values()))
-    ev = run_cocoeval(scored, records, cat_ids)
-    metrics = metrics_from_eval(ev, scored, len(records), run_cocoeval(scored, records, cat_ids, [LOOSE_IOU]))
+    ev = run_cocoeval(scored, dt, cat_ids)
+    metrics = metrics_from_eval(ev, scored, len(dt), run_cocoeval(scored, dt, cat_ids, [LOOSE_IOU]))
     metrics.extra["classes"] = {
         "evaluated": list(match.evaluated),
         "not_in_model": list(match.not_in_model),
         "not_in_test": list(match.not_in_test),
     }
-    return metrics, ev, records
+    return metrics, ev, dt
+
+
+def evaluate_predictions(dataset: Dataset, preds: Predictions) -> tuple[CocoMetrics, COCOeval, list[dict[str, Any]]]:
+    """:func:`evaluate_detections` with the detections as COCO result records."""
+    metrics, ev, dt = evaluate_detections(dataset, preds)
+    return metrics, ev, boxes_to_records(dt)
