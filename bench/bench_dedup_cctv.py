@@ -1,7 +1,10 @@
 """``fuzzyfire dedup`` end to end on ../shared/data/fire-cctv-416 (3,996 images): cold (empty embedding
-cache; the one-off ONNX export is done beforehand and timed apart), warm rerun, peak RSS of each run.
+cache; the one-off ONNX export is done beforehand and timed apart), warm rerun, peak RSS of each run; and its
+limit, decoding and embedding alone (the same batches in the same thread pool, nothing else), measured in the
+same run so the ratio holds on any machine.
 
-.venv/bin/python bench/bench_dedup_cctv.py [FOLDER]   # targets: >= 100 img/s cold, <= 5 s warm, <= 2 GB
+.venv/bin/python bench/bench_dedup_cctv.py [FOLDER]   # targets: cold >= 0.8 of decode+embed alone, <= 5 s warm,
+                                                      # <= 2 GB
 """
 
 from __future__ import annotations
@@ -30,6 +33,25 @@ def _run(args: list[str], env: dict[str, str]) -> tuple[float, float]:
     return seconds, max(peak, before) / 1024
 
 
+def decode_embed_alone(src: Path) -> tuple[int, float]:
+    """(images, seconds) of decoding and embedding every image of ``src`` and nothing else: no hashing, cache,
+    search, ranking or report (the thread pool and batches of ``fuzzyfire dedup``)."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    from curate.embed import load_embedder
+    from curate.scan import bounded_map, embed_batch, list_image_files
+
+    paths = list_image_files([src])
+    embedder = load_embedder()
+    workers = os.cpu_count() or 2
+    batches = [paths[s : s + 4] for s in range(0, len(paths), 4)]
+    with ThreadPoolExecutor(workers) as pool:
+        start = time.perf_counter()
+        for _ in bounded_map(lambda b: embed_batch(b, embedder), batches, pool, 2 * workers):
+            pass
+        return len(paths), time.perf_counter() - start
+
+
 def main() -> int:
     src = Path(sys.argv[1]) if len(sys.argv) > 1 else DEFAULT
     if not src.is_dir():
@@ -48,10 +70,14 @@ def main() -> int:
         cold_s, cold_rss = _run(["dedup", str(src), "--out", str(out)], env)
         doc = json.loads((out / "dedup.json").read_text())
         warm_s, warm_rss = _run(["dedup", str(src), "--out", str(out)], env)
+        os.environ["FUZZYFIRE_CACHE"] = env["FUZZYFIRE_CACHE"]
+        alone_n, alone_s = decode_embed_alone(src)
     n = doc["counts"]["images"]
     print(f"dedup_cctv_model_export: {export_s:.1f} s (once per install)")
     print(f"dedup_cctv_cold_seconds: {cold_s:.1f} s ({n} images)")
-    print(f"dedup_cctv_cold_throughput: {n / cold_s:.0f} img/s (target >= 100)")
+    print(f"dedup_cctv_cold_throughput: {n / cold_s:.0f} img/s")
+    print(f"dedup_cctv_decode_embed_alone: {alone_n / alone_s:.0f} img/s (the limit: decode + forward, nothing else)")
+    print(f"dedup_cctv_ratio_to_decode_embed: {n / cold_s / (alone_n / alone_s):.2f} (target >= 0.8)")
     print(f"dedup_cctv_warm_seconds: {warm_s:.2f} s (target <= 5)")
     print(f"dedup_cctv_peak_rss: {max(cold_rss, warm_rss):.0f} MB (target <= 2048)")
     print(f"dedup_cctv_kept: {doc['counts']['kept']} images (threshold {doc['threshold']})")
