@@ -23,6 +23,8 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
+from curate.core.device import onnx_providers
+
 LAYOUTS: tuple[str, ...] = ("fuzzyfire", "yolov5", "yolov8")
 FORMATS: tuple[str, ...] = ("auto", *LAYOUTS)
 
@@ -173,7 +175,7 @@ class OnnxDetector:
     ``fmt`` is ``auto`` or one of :data:`LAYOUTS`; ``names`` overrides the metadata's class names;
     ``image_size`` ``(width, height)`` is needed only when the model's input size is dynamic and its
     metadata does not say. ``threads`` = 0 lets onnxruntime use every core. ``device`` picks onnxruntime's
-    provider (:func:`execution_providers`); ``device_notice`` says when a GPU was asked for and the CPU is used.
+    provider (:func:`curate.core.device.onnx_providers`); ``device_notice`` says when a GPU was asked for and the CPU is used.
     """
 
     def __init__(
@@ -188,8 +190,12 @@ class OnnxDetector:
         if fmt not in FORMATS:
             raise ValueError(f"unknown model format {fmt!r}; choose one of {', '.join(FORMATS)}")
         self.path = Path(path)
-        providers, self.device_notice = execution_providers(device)
+        providers, self.device_notice = onnx_providers(device)
         self.session = _open_session(self.path, threads, providers)
+        if providers[0] != "CPUExecutionProvider" and "CUDAExecutionProvider" not in self.session.get_providers():
+            self.device_notice = (
+                f"notice: onnxruntime could not start its CUDA provider for {self.path.name}; scoring on the CPU"
+            )
         self._output = _detection_output(self.session, self.path)
         self.spec = self._build_spec(fmt, names, image_size)
         self._decode = DECODERS[self.spec.format]
@@ -257,27 +263,6 @@ class OnnxDetector:
     def __call__(self, batch: NDArray[np.float32]) -> tuple[NDArray[np.float32], NDArray[np.float32]]:
         """(B, 3, H, W) -> centre boxes (B, N, 4) in input pixels and class scores (B, N, C) in [0, 1]."""
         return self._decode(self.raw(batch))
-
-
-def execution_providers(device: str, available: Sequence[str] | None = None) -> tuple[list, str | None]:
-    """onnxruntime providers for ``device`` (``auto | cpu | cuda | cuda:N``) and a one-line notice when a GPU
-    was asked for but onnxruntime has no CUDA provider here (then the CPU is used). ``auto`` takes CUDA when the
-    provider is there (``pip install onnxruntime-gpu``), else the CPU without a word."""
-    from curate.core.device import parse_device
-
-    kind, index = parse_device(device)
-    if available is None:
-        import onnxruntime as ort
-
-        available = ort.get_available_providers()
-    cpu = ["CPUExecutionProvider"]
-    if kind == "cpu":
-        return cpu, None
-    if "CUDAExecutionProvider" in available:
-        return [("CUDAExecutionProvider", {"device_id": index or 0}), *cpu], None
-    if kind == "auto":
-        return cpu, None
-    return cpu, "notice: onnxruntime has no CUDA provider here (pip install onnxruntime-gpu); scoring on the CPU"
 
 
 def _open_session(path: Path, threads: int, providers: Sequence):  # -> onnxruntime.InferenceSession

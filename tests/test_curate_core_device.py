@@ -1,10 +1,10 @@
-"""Device strings: the syntax shared by training and scoring."""
+"""Device strings: the syntax shared by training, scoring and embedding, and the onnxruntime providers they give."""
 
 from __future__ import annotations
 
 import pytest
 
-from curate.core.device import DeviceError, parse_device
+from curate.core.device import DeviceError, onnx_providers, parse_device
 
 
 @pytest.mark.parametrize(
@@ -19,3 +19,16 @@ def test_parse(spec: str, parsed: tuple) -> None:
 def test_bad_strings_are_named(spec: str) -> None:
     with pytest.raises(DeviceError, match="expected auto | cpu | cuda | cuda:N"):
         parse_device(spec)
+
+
+def test_onnx_providers_fall_back_to_the_cpu_with_a_notice() -> None:
+    gpu = ["CUDAExecutionProvider", "CPUExecutionProvider"]
+    assert onnx_providers("cpu", gpu) == (["CPUExecutionProvider"], None)
+    assert onnx_providers("cuda:1", gpu) == (
+        [("CUDAExecutionProvider", {"device_id": 1}), "CPUExecutionProvider"],
+        None,
+    )
+    assert onnx_providers("auto", gpu)[0][0] == ("CUDAExecutionProvider", {"device_id": 0})
+    assert onnx_providers("auto", ["CPUExecutionProvider"]) == (["CPUExecutionProvider"], None)
+    providers, notice = onnx_providers("cuda", ["CPUExecutionProvider"])
+    assert providers == ["CPUExecutionProvider"] and "no CUDA provider" in notice and "\n" not in notice

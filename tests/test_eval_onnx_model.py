@@ -98,21 +98,6 @@ def test_fixed_batch_model_runs_any_batch(tmp_path):
     assert boxes.shape[0] == scores.shape[0] == 3
 
 
-def test_execution_providers_fall_back_to_the_cpu_with_a_notice() -> None:
-    from eval.onnx_model import execution_providers
-
-    gpu = ["CUDAExecutionProvider", "CPUExecutionProvider"]
-    assert execution_providers("cpu", gpu) == (["CPUExecutionProvider"], None)
-    assert execution_providers("cuda:1", gpu) == (
-        [("CUDAExecutionProvider", {"device_id": 1}), "CPUExecutionProvider"],
-        None,
-    )
-    assert execution_providers("auto", gpu)[0][0] == ("CUDAExecutionProvider", {"device_id": 0})
-    assert execution_providers("auto", ["CPUExecutionProvider"]) == (["CPUExecutionProvider"], None)
-    providers, notice = execution_providers("cuda", ["CPUExecutionProvider"])
-    assert providers == ["CPUExecutionProvider"] and "no CUDA provider" in notice and "\n" not in notice
-
-
 def test_a_forced_wrong_format_names_the_layout_shape_and_classes(tmp_path):
     model = oracle_model(tmp_path / "v5.onnx", layout="yolov5")
     with pytest.raises(ModelError) as info:
