@@ -38,8 +38,9 @@ def decode_embed_alone(src: Path) -> tuple[int, float]:
     search, ranking or report (the thread pool and batches of ``fuzzyfire dedup``)."""
     from concurrent.futures import ThreadPoolExecutor
 
+    from curate.decode import embed_batch
     from curate.embed import load_embedder
-    from curate.scan import bounded_map, embed_batch, list_image_files
+    from curate.scan import bounded_map, list_image_files
 
     paths = list_image_files([src])
     embedder = load_embedder()

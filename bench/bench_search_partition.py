@@ -20,6 +20,7 @@ import tracemalloc
 import numpy as np
 from bench_search_1m import COPIES, DIM, RADIUS, planted
 
+from curate.embed import l2_normalize
 from curate.partition import CELL_VECTORS, NPROBE, partitioned_pairs
 from curate.search import build_index
 
@@ -30,14 +31,31 @@ def driver_bytes(n: int, dim: int, nprobe: int = NPROBE) -> int:
     return n * dim * 4 + 2 * n * nprobe * 8 + 2 * n * 8 + int(0.05 * n) * 20
 
 
+def planted_dim(n: int, dim: int, rng: np.random.Generator) -> np.ndarray:
+    """:func:`bench_search_1m.planted` in ``dim`` dimensions, the copies' noise scaled to keep their distances."""
+    k = int(n * COPIES)
+    x = rng.standard_normal((n, dim), dtype=np.float32)
+    src = rng.integers(0, n - k, k)
+    noise = rng.uniform(0.1, 0.3, (k, 1)).astype(np.float32) * rng.standard_normal((k, dim), dtype=np.float32)
+    x[n - k :] = x[src] + noise
+    return l2_normalize(x)
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("n", nargs="?", type=float, default=200_000)
     parser.add_argument("--ray", type=int, default=0, help="run the tasks on a local Ray with this many CPUs")
+    parser.add_argument(
+        "--dim",
+        type=int,
+        default=DIM,
+        help=f"vector dimension (default {DIM}); a small one simulates a large N: what the search allocates beyond "
+        "the vectors depends on N, not on the dimension",
+    )
     args = parser.parse_args()
     n = int(args.n)
     rng = np.random.default_rng(0)
-    x = planted(n, rng)
+    x = planted(n, rng) if args.dim == DIM else planted_dim(n, args.dim, rng)
     base_rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     cluster = None
     if args.ray:
@@ -61,7 +79,9 @@ def main() -> int:
     recall = len(exact & found) / max(1, len(exact))
 
     where = f"ray{args.ray}" if args.ray else "local"
-    print(f"search_partition_n: {n} vectors x {DIM} d, {max(1, n // CELL_VECTORS)} cells, nprobe {NPROBE}, {where}")
+    print(
+        f"search_partition_n: {n} vectors x {args.dim} d, {max(1, n // CELL_VECTORS)} cells, nprobe {NPROBE}, {where}"
+    )
     print(f"search_partition_total_seconds: {total_s:.1f} s")
     print(f"search_partition_pairs: {len(pairs)} pairs within {RADIUS}")
     print(
@@ -71,7 +91,7 @@ def main() -> int:
           f"made {base_rss:.0f} MB before the search)")  # fmt: skip
     print(f"search_partition_driver_search_peak: {search_peak:.0f} MB allocated by the search beyond the vectors")
     print(
-        f"search_partition_driver_model: {driver_bytes(n, DIM) / 2**20:.0f} MB at {n} vectors (arrays the driver holds)"
+        f"search_partition_driver_model: {driver_bytes(n, args.dim) / 2**20:.0f} MB at {n} vectors (arrays the driver holds)"
     )
     print(f"search_partition_driver_model_10m: {driver_bytes(10_000_000, DIM) / 2**30:.1f} GB at 10M x {DIM} d, "
           f"{driver_bytes(10_000_000, 320) / 2**30:.1f} GB at 10M x 320 d (Lite0, whole views)")  # fmt: skip

@@ -29,9 +29,9 @@ from numpy.typing import NDArray
 
 from curate.core.cluster import Cluster
 from curate.core.problems import Problem
+from curate.decode import embed_batch
 from curate.embed import OnnxEmbedder, Preprocess
 from curate.embedcache import FileFacts
-from curate.scan import embed_batch
 
 SHARD_IMAGES = 256  # images per Ray task (rounded to whole batches)
 TASKS_PER_GPU = 4  # embedding tasks sharing one GPU (each decodes on its own CPU)

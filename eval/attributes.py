@@ -37,7 +37,7 @@ from curate.core.dataset import Annotation, Dataset
 from curate.core.imageio import ImageError, read_image
 from curate.core.progress import progress
 from curate.core.sky import sky_mask
-from curate.scan import sharpness
+from curate.decode import sharpness
 from curate.stats import LARGE_AREA, SMALL_AREA
 from eval.found import SIZES, bucket
 

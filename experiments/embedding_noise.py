@@ -1,6 +1,6 @@
 """How far the dedup embeddings move between runs that should agree: the noise a decision must not hang on.
 
-Embeds the same images (both views, :func:`curate.scan.decode_facts`) with the built-in Lite0 ONNX model
+Embeds the same images (both views, :func:`curate.decode.decode_facts`) with the built-in Lite0 ONNX model
 under settings that a different machine or build would change, and prints, per setting, the largest change of
 the two-view distance over every pair closer than 0.7 (the decision region of dedup at 0.45 and of the split
 groups at 0.6) and of any unit-vector component:
@@ -38,8 +38,8 @@ DECISION_REGION = 0.7
 
 def views(paths: list[Path]) -> np.ndarray:
     """(2 N, S, S, 3) uint8: whole and centre view of each image, as dedup feeds the model."""
+    from curate.decode import decode_facts
     from curate.embed import LITE0_PREPROCESS
-    from curate.scan import decode_facts
 
     return np.concatenate([decode_facts(p, LITE0_PREPROCESS)[1] for p in paths])
 

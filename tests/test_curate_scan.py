@@ -12,7 +12,7 @@ from factories import garbled_jpeg
 
 from curate.embed import OnnxEmbedder, load_embedder
 from curate.embedcache import EmbeddingCache
-from curate.scan import bounded_map, list_image_files, pixel_hash, scan_images
+from curate.scan import bounded_map, list_image_files, scan_images
 
 
 @pytest.fixture(scope="module")
@@ -92,13 +92,6 @@ def test_a_garbled_jpeg_cached_by_an_older_reader_is_still_refused(
     assert [(Path(p.path).name, p.reason.split(" (")[0]) for p in again.problems] == [
         ("garbled.jpg", "corrupt JPEG data")
     ]
-
-
-def test_pixel_hash_sees_pixels_not_bytes(tmp_path: Path) -> None:
-    img = scene(3)
-    assert pixel_hash(img) == pixel_hash(img.copy())
-    assert pixel_hash(img) != pixel_hash(img[:, ::-1])
-    assert pixel_hash(img) != pixel_hash(img.reshape(img.shape[1], img.shape[0], 3))
 
 
 def test_bounded_map_keeps_order() -> None:
