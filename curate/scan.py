@@ -1,8 +1,11 @@
 """Scan image files once: content hash, decoded-pixel hash, size, sharpness and embedding per file.
 
-A pool of threads (one per core) each decode, resize and embed whole batches: OpenCV, hashlib and
-onnxruntime (one intra-op thread per call) release the GIL, so the cores stay busy without oversubscription. Results are cached by content hash (:mod:`curate.embedcache`), so a rerun only reads
-and hashes the files and decodes the new ones. Unreadable files become :class:`Problem` records.
+A pool of threads (one per core) hashes every file, then each thread decodes, resizes and embeds whole batches
+(:func:`curate.decode.embed_batch`): OpenCV, hashlib and onnxruntime (one intra-op thread per call) release the GIL,
+so the cores stay busy without oversubscription. With a Ray cluster the batches are embedded on its workers
+instead (:mod:`curate.embedremote`), the same vectors. Results are cached by content hash
+(:mod:`curate.embedcache`), so a rerun only reads and hashes the files and decodes the new ones. Unreadable files
+become :class:`Problem` records.
 """
 
 from __future__ import annotations
