@@ -33,14 +33,17 @@ def split_folder(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 
 @pytest.fixture(scope="session")
-def ray_head(tmp_path_factory: pytest.TempPathFactory):
-    """A real Ray head on loopback with 2 worker CPUs (``ray start --head``, token authentication as Ray >= 2.59
-    sets it up), for the whole session; yields its address ``127.0.0.1:PORT`` and stops it at the end."""
+def ray_head():
+    """A real Ray head on loopback with 2 worker CPUs (``ray start --head --block``, token authentication as Ray
+    >= 2.59 sets it up), for the whole session; yields its address ``127.0.0.1:PORT``. The head runs in a session
+    of its own and that session is killed at the end, so a Ray that others run on this machine is left alone."""
     import os
     import shutil
+    import signal
     import socket
     import subprocess
     import sys
+    import time
 
     ray_bin = shutil.which("ray") or str(Path(sys.executable).with_name("ray"))
     with socket.socket() as sock:
@@ -48,18 +51,37 @@ def ray_head(tmp_path_factory: pytest.TempPathFactory):
         port = sock.getsockname()[1]
     env = {**os.environ, "RAY_USAGE_STATS_ENABLED": "0"}
     env.pop("RAY_AUTH_MODE", None)
-    head = [ray_bin, "start", "--head", f"--port={port}", "--num-cpus=2", "--include-dashboard=false"]
-    subprocess.run(
+    head = [ray_bin, "start", "--head", "--block", f"--port={port}", "--num-cpus=2", "--include-dashboard=false"]
+    proc = subprocess.Popen(
         [*head, "--node-ip-address=127.0.0.1", "--disable-usage-stats"],
-        check=True,
-        capture_output=True,
         env=env,
-        timeout=120,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+        start_new_session=True,
     )
     try:
+        deadline = time.monotonic() + 120
+        while True:
+            try:
+                socket.create_connection(("127.0.0.1", port), timeout=1).close()
+                break
+            except OSError:
+                if proc.poll() is not None or time.monotonic() > deadline:
+                    raise RuntimeError(f"ray start --head did not come up on port {port}") from None
+                time.sleep(0.5)
+        time.sleep(2)  # the raylet registers after the GCS port opens
         yield f"127.0.0.1:{port}"
     finally:
-        subprocess.run([ray_bin, "stop", "--force"], check=False, capture_output=True, timeout=120)
+        os.killpg(proc.pid, signal.SIGTERM)
+        try:
+            proc.wait(timeout=60)
+        except subprocess.TimeoutExpired:
+            os.killpg(proc.pid, signal.SIGKILL)
+        time.sleep(1)
+        try:
+            os.killpg(proc.pid, signal.SIGKILL)  # what the head left behind (raylet, workers)
+        except ProcessLookupError:
+            pass
 
 
 @pytest.fixture()

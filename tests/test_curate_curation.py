@@ -149,3 +149,25 @@ def test_shared_curation_survives_ten_times_the_cross_build_noise(shared_curatio
         assert _picked(again) == _picked(result)
         assert again.run.result.kept == result.run.result.kept
         assert again.run.result.groups == result.run.result.groups
+
+
+@pytest.mark.slow
+def test_curation_on_a_ray_cluster_writes_the_local_dataset(
+    sources: Path, embedder: OnnxEmbedder, ray_head: str, tmp_path: Path
+) -> None:
+    """``fuzzyfire curate`` with ``executor: {name: ray, address: ...}`` on a real Ray head: the same dataset
+    (annotations, images, splits) and curation.json as a local run."""
+    from fuzzyfire.cli import main
+
+    config = tmp_path / "curate.yaml"
+    config.write_text(
+        f"sources:\n  - {{path: {sources / 'src_a'}, name: a}}\n  - {{path: {sources / 'src_b'}, name: b}}\n"
+        "split: {sizes: {train: 20, valid: 4, test: 4}, seed: 3}\n"
+    )
+    ray = ["--set", "executor.name=ray", "--set", f"executor.address={ray_head}"]
+    assert main(["curate", str(config), "--out", str(tmp_path / "local"), "--no-cache"]) == 0
+    assert main(["curate", str(config), "--out", str(tmp_path / "ray"), "--no-cache", *ray]) == 0
+    for name in ("annotations.json", "curation.json"):
+        assert (tmp_path / "local" / name).read_bytes() == (tmp_path / "ray" / name).read_bytes(), name
+    images = sorted(p.name for p in (tmp_path / "local" / "images").rglob("*.jpg"))
+    assert len(images) == 28 and images == sorted(p.name for p in (tmp_path / "ray" / "images").rglob("*.jpg"))
