@@ -96,8 +96,8 @@ def plan_tasks(
     """Index plans of the tasks: (base ids, cell starts, query row ids, query cell starts) each, cells in order.
     Query rows ``r >= N`` stand for centre view ``r - N``."""
     cells = len(centroids)
-    home = nearest_cells(vectors, centroids, 1)[:, 0]
     probes = [nearest_cells(vectors, centroids, nprobe)]
+    home = probes[0][:, 0]  # the nearest cell
     if crops is not None and len(crops):
         probes.append(nearest_cells(crops, centroids, nprobe))
     probe = np.concatenate(probes)  # (Q, nprobe), rows 0..N-1 whole views, then centre views
