@@ -173,13 +173,7 @@ def cmd_method1(args: argparse.Namespace) -> int:
     cfg = _built(args, Method1Config, METHOD1_ALIASES)
     if cfg is None:
         return 0
-    cluster = open_cluster(args.executor, args.address)
-    try:
-        library = build_library(cfg.flames)
-        result = run_method1(cfg, library, args.out, overwrite=args.overwrite, workers=_workers(args), cluster=cluster)
-    finally:
-        if cluster is not None:
-            cluster.close()
+    result = _generate(args, run_method1, cfg, build_library(cfg.flames))
     print(f"wrote {args.out}: {cfg.n} images, {cfg.box_mode} boxes ({', '.join(result.files.values())})")
     return 0
 
@@ -191,15 +185,19 @@ def cmd_method2(args: argparse.Namespace) -> int:
     cfg = _built(args, Method2Config, METHOD2_ALIASES)
     if cfg is None:
         return 0
+    result = _generate(args, run_method2, cfg, build_library(cfg.flames))
+    print(f"wrote {args.out}: {cfg.n} images ({', '.join(result.files.values())})")
+    return 0
+
+
+def _generate(args: argparse.Namespace, run: Callable, cfg, library):  # noqa: ANN001, ANN202 - a WriteResult
+    """``run(cfg, library, --out)`` in ``--workers`` processes or on the Ray cluster of ``--executor ray``."""
     cluster = open_cluster(args.executor, args.address)
     try:
-        library = build_library(cfg.flames)
-        result = run_method2(cfg, library, args.out, overwrite=args.overwrite, workers=_workers(args), cluster=cluster)
+        return run(cfg, library, args.out, overwrite=args.overwrite, workers=_workers(args), cluster=cluster)
     finally:
         if cluster is not None:
             cluster.close()
-    print(f"wrote {args.out}: {cfg.n} images ({', '.join(result.files.values())})")
-    return 0
 
 
 def _workers(args: argparse.Namespace) -> int:

@@ -98,8 +98,9 @@ def _panoramas(root: Path) -> Path:
     return root
 
 
-def test_two_processes_write_the_bytes_of_one(tmp_path, flames):
-    """Method 2 on procedural rooms and panoramas, Method 1 on procedural rooms: workers=2 == workers=1."""
+def _same_bytes_as_one_process(tmp_path: Path, flames, **how) -> None:  # noqa: ANN001
+    """Method 2 on procedural rooms and panoramas, Method 1 on procedural rooms: a run with ``how`` (workers or a
+    cluster) writes every file of a one-process run with the same bytes."""
     from synth.method1 import Method1Config, run_method1
     from synth.method2 import Method2Config, run_method2
 
@@ -107,27 +108,20 @@ def test_two_processes_write_the_bytes_of_one(tmp_path, flames):
                        images_per_view=2, negatives=0.0, min_box_px=2)  # fmt: skip
     m1 = Method1Config(n=6, seed=5, width=96, height=72, scenes=2, negatives=0.0, min_box_px=2)
     for run, cfg in ((run_method2, m2), (run_method1, m1)):
-        one, two = tmp_path / f"{cfg.n}-one", tmp_path / f"{cfg.n}-two"
+        one, other = tmp_path / f"{cfg.n}-one", tmp_path / f"{cfg.n}-other"
         run(cfg, flames, one)
-        run(cfg, flames, two, workers=2)
-        assert _files(one) == _files(two) and len(_files(one)) > cfg.n
+        run(cfg, flames, other, **how)
+        assert _files(one) == _files(other) and len(_files(one)) > cfg.n
+
+
+def test_two_processes_write_the_bytes_of_one(tmp_path, flames):
+    _same_bytes_as_one_process(tmp_path, flames, workers=2)
 
 
 @pytest.mark.slow
 def test_a_ray_cluster_writes_the_bytes_of_one_process(tmp_path, flames, cluster):
-    """Method 2 (rooms and panoramas) and Method 1 with their blocks as tasks on a real Ray head (2 workers):
-    every file (images, masks, annotations, manifest) has the bytes of a one-process run."""
-    from synth.method1 import Method1Config, run_method1
-    from synth.method2 import Method2Config, run_method2
-
-    m2 = Method2Config(n=40, seed=3, width=96, height=72, scenes=2, environments=(_panoramas(tmp_path / "pano"),),
-                       images_per_view=2, negatives=0.0, min_box_px=2)  # fmt: skip
-    m1 = Method1Config(n=6, seed=5, width=96, height=72, scenes=2, negatives=0.0, min_box_px=2)
-    for run, cfg in ((run_method2, m2), (run_method1, m1)):
-        one, ray = tmp_path / f"{cfg.n}-one", tmp_path / f"{cfg.n}-ray"
-        run(cfg, flames, one)
-        run(cfg, flames, ray, cluster=cluster)
-        assert _files(one) == _files(ray) and len(_files(one)) > cfg.n
+    """The blocks as tasks on a real Ray head (2 workers)."""
+    _same_bytes_as_one_process(tmp_path, flames, cluster=cluster)
 
 
 def test_blocks_keep_an_environment_in_one_process_and_cover_every_image():
