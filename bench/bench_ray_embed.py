@@ -1,6 +1,6 @@
-"""Decode + embed throughput on ../shared/data/fire-cctv-416 (3,996 416-px frames, no embedding cache): local
-(one thread per core, and one thread) against Ray workers (:mod:`curate.embedremote`) on a local Ray of 1 and of
-2 CPUs, started beforehand (its start is timed apart: a cluster is started once for many commands). The Ray runs
+"""Hash + decode + embed throughput on ../shared/data/fire-cctv-416 (3,996 416-px frames, no embedding cache):
+local (one thread per core, and one thread) against Ray workers (:mod:`curate.embedremote`) on a local Ray of 1
+and of 2 CPUs, started beforehand (its start is timed apart: a cluster is started once for many commands). The Ray runs
 must give the local vectors bit for bit (the same onnxruntime batches).
 
 .venv/bin/python bench/bench_ray_embed.py [FOLDER] [--images N]   # target: Ray 2 workers >= 0.8 x local

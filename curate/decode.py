@@ -1,4 +1,5 @@
-"""One file's facts and model inputs: decode it once for its content hash, decoded-pixel hash, size and
+"""One file's facts and model inputs: its content hash (read whole, checked complete); decode it once for its
+content hash, decoded-pixel hash, size and
 sharpness and the two views the embedder takes; and a batch of files decoded and embedded in one onnxruntime call
 (what a scan thread or a Ray task does, :mod:`curate.scan`, :mod:`curate.embedremote`).
 """
@@ -13,10 +14,27 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from curate.core.imageio import ImageError, decode_sized
+from curate.core.imageio import ImageError, check_complete, decode_sized
 from curate.core.problems import Problem
 from curate.embed import OnnxEmbedder, Preprocess
 from curate.embedcache import FileFacts
+
+
+def hash_image_file(path: Path) -> tuple[int, str] | Problem:
+    """``(bytes, sha256 hex)`` of a file, or a Problem when it cannot be read or its bytes are truncated or
+    garbled (:func:`~curate.core.imageio.check_complete`: checked here too, so a file cached by a reader that
+    did not check it is not taken from the cache)."""
+    try:
+        data = path.read_bytes()
+    except OSError as exc:
+        return Problem(path.as_posix(), f"cannot read ({exc.strerror or exc})")
+    if not data:
+        return Problem(path.as_posix(), "empty file (0 bytes)")
+    try:
+        check_complete(data, path)
+    except ImageError as exc:
+        return Problem(path.as_posix(), exc.reason)
+    return len(data), hashlib.sha256(data).hexdigest()
 
 
 def pixel_hash(image: NDArray[np.uint8]) -> str:

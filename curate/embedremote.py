@@ -1,7 +1,8 @@
 """Decode and embed on Ray workers: the ``--executor ray`` half of :mod:`curate.scan`.
 
-**Design: tasks over file shards, one onnxruntime session per worker process.** The driver lists and hashes the
-files and reads the embedding cache as a local run does; the misses are cut into shards of
+**Design: tasks over file shards, one onnxruntime session per worker process.** The driver lists the files;
+Ray tasks hash them in shards of :data:`HASH_SHARD_FILES` (the driver reads no file); the driver reads the
+embedding cache as a local run does; the misses are cut into shards of
 :data:`SHARD_IMAGES` consecutive files (whole batches of ``batch_size``, so every onnxruntime call sees the same
 images as in a local run) and each shard is one Ray task reserving one CPU. A task decodes its files (they must
 be at the same path on every node: shared storage), embeds both views and returns the facts and raw vectors;
@@ -29,11 +30,13 @@ from numpy.typing import NDArray
 
 from curate.core.cluster import Cluster
 from curate.core.problems import Problem
-from curate.decode import embed_batch
+from curate.core.progress import progress
+from curate.decode import embed_batch, hash_image_file
 from curate.embed import OnnxEmbedder, Preprocess
 from curate.embedcache import FileFacts
 
 SHARD_IMAGES = 256  # images per Ray task (rounded to whole batches)
+HASH_SHARD_FILES = 2048  # files per hashing task
 TASKS_PER_GPU = 4  # embedding tasks sharing one GPU (each decodes on its own CPU)
 
 Embedded = tuple[FileFacts, NDArray[np.float32]]  # facts and raw [whole view, centre view] vector (2 D,)
@@ -80,6 +83,23 @@ def embed_shard(paths: Sequence[str], spec: EmbedSpec) -> list[tuple[str, Embedd
         batch = [Path(p) for p in paths[s : s + spec.batch_size]]
         out += [(p.as_posix(), item) for p, item in embed_batch(batch, embedder)]
     return out
+
+
+def hash_shard(paths: Sequence[str]) -> list[tuple[int, str] | Problem]:
+    """A Ray task: ``(bytes, sha256)`` or a Problem for each of ``paths``, in order
+    (:func:`curate.decode.hash_image_file`)."""
+    return [hash_image_file(Path(p)) for p in paths]
+
+
+def hash_on_cluster(paths: Sequence[Path], cluster: Cluster) -> list[tuple[int, str] | Problem]:
+    """:func:`curate.decode.hash_image_file` of every path, read on the cluster's workers (shards of
+    :data:`HASH_SHARD_FILES`): the driver then reads no file. In input order."""
+    shards = [[p.as_posix() for p in paths[s : s + HASH_SHARD_FILES]] for s in range(0, len(paths), HASH_SHARD_FILES)]
+    out: list[list[tuple[int, str] | Problem]] = [[] for _ in shards]
+    for k, hashed in progress(cluster.map(hash_shard, shards, num_cpus=1), total=len(shards), desc="hashing",
+                              unit="shard", min_items=8):  # fmt: skip
+        out[k] = hashed
+    return [h for shard in out for h in shard]
 
 
 def task_gpus(cluster: Cluster, device: str) -> float:

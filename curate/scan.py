@@ -10,7 +10,6 @@ become :class:`Problem` records.
 
 from __future__ import annotations
 
-import hashlib
 import os
 from collections import deque
 from collections.abc import Callable, Iterable, Iterator, Sequence
@@ -23,14 +22,14 @@ import numpy as np
 from numpy.typing import NDArray
 
 from curate.core.cluster import Cluster
-from curate.core.imageio import ImageError, check_complete, is_image_file
+from curate.core.imageio import is_image_file
 from curate.core.problems import Problem
 from curate.core.progress import progress
 from curate.core.walk import walk_files
-from curate.decode import embed_batch
+from curate.decode import embed_batch, hash_image_file
 from curate.embed import OnnxEmbedder, l2_normalize
 from curate.embedcache import EmbeddingCache, FileFacts
-from curate.embedremote import embed_on_cluster
+from curate.embedremote import embed_on_cluster, hash_on_cluster
 
 T = TypeVar("T")
 R = TypeVar("R")
@@ -96,23 +95,6 @@ def bounded_map(fn: Callable[[T], R], items: Sequence[T], pool: ThreadPoolExecut
         yield pending.popleft().result()
 
 
-def file_sha256(path: Path) -> tuple[int, str] | Problem:
-    """``(bytes, sha256 hex)`` of a file, or a Problem when it cannot be read or its bytes are truncated or
-    garbled (:func:`~curate.core.imageio.check_complete`: checked here too, so a file cached by a reader that
-    did not check it is not taken from the cache)."""
-    try:
-        data = path.read_bytes()
-    except OSError as exc:
-        return Problem(path.as_posix(), f"cannot read ({exc.strerror or exc})")
-    if not data:
-        return Problem(path.as_posix(), "empty file (0 bytes)")
-    try:
-        check_complete(data, path)
-    except ImageError as exc:
-        return Problem(path.as_posix(), exc.reason)
-    return len(data), hashlib.sha256(data).hexdigest()
-
-
 def scan_images(
     paths: Sequence[Path],
     embedder: OnnxEmbedder,
@@ -124,12 +106,15 @@ def scan_images(
     """Facts and normalised embeddings for ``paths`` (see :class:`ScanResult`); bad files become problems.
 
     ``workers`` threads (0 = one per CPU core) hash, decode and embed; ``batch_size`` images per onnxruntime
-    call. With a ``cluster``, decoding and embedding run on its Ray workers (:mod:`curate.embedremote`): the
-    same vectors, facts and problems."""
+    call. With a ``cluster``, hashing, decoding and embedding run on its Ray workers (:mod:`curate.embedremote`):
+    the same vectors, facts and problems."""
     workers = workers or os.cpu_count() or 2
     problems: list[Problem] = []
     with ThreadPoolExecutor(max_workers=workers) as pool:
-        hashed = list(progress(pool.map(file_sha256, paths), total=len(paths), desc="hashing"))
+        if cluster is None:
+            hashed = list(progress(pool.map(hash_image_file, paths), total=len(paths), desc="hashing"))
+        else:
+            hashed = hash_on_cluster(paths, cluster)
         shas = {p: h[1] for p, h in zip(paths, hashed) if not isinstance(h, Problem)}
         problems += [h for h in hashed if isinstance(h, Problem)]
         facts = cache.get_facts(list(shas.values())) if cache else {}
