@@ -178,10 +178,11 @@ def curate_dataset(
     ``cache`` (None: no cache), then the dataset in ``out`` (COCO + YOLO + manifest; ``provenance``: the
     manifest's ``command``, ``args`` and ``sources``) and ``curation.json`` + its report beside it. Returns the
     result and the report files; raises :class:`curate.core.writer.OutputError` when ``out`` is refused."""
-    db = EmbeddingCache(cache) if cache is not None else None
+    embedder = build_embedder(cfg.model)
     cluster = open_cluster(cfg.executor.name, cfg.executor.address)
+    db = EmbeddingCache(cache) if cache is not None else None
     try:
-        result = curate(cfg, base, out, build_embedder(cfg.model), db, cluster=cluster)
+        result = curate(cfg, base, out, embedder, db, cluster=cluster)
     finally:
         if db is not None:
             db.close()

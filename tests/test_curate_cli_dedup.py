@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import socket
 from pathlib import Path
 
 import pytest
@@ -89,6 +90,18 @@ def test_dedup_refuses_bad_arguments(folder: Path, tmp_path: Path, capsys) -> No
     assert main(["dedup", str(folder), "--out", str(tmp_path / "o"), "--apply", "copy", "--to", str(folder / "x")]) == 2
     err = capsys.readouterr().err
     assert "--to" in err and "need --model" in err and "no such file" in err
+    with socket.socket() as sock:
+        sock.bind(("127.0.0.1", 0))
+        port = sock.getsockname()[1]  # nothing listens there
+    for extra, message in (
+        (["--address", f"127.0.0.1:{port}"], "--address joins a Ray cluster: it needs --executor ray"),
+        (["--executor", "ray", "--address", f"127.0.0.1:{port}"], f"cannot join the Ray cluster at 127.0.0.1:{port}"),
+        (["--device", "tpu"], "device 'tpu': expected auto | cpu | cuda | cuda:N"),
+    ):
+        assert main(["dedup", str(folder), "--out", str(tmp_path / "o"), *extra]) == 2
+        err = capsys.readouterr().err
+        assert message in err and err.count("\n") == 1, err
+    assert not (tmp_path / "o").exists()
 
 
 def test_help_has_examples(capsys) -> None:

@@ -149,6 +149,7 @@ def test_what_can_be_checked_fails_in_one_line_before_rendering(tmp_path, capsys
         (["--overwrite", "--photo-share", "1.5"], "photo_share must be in 0..1, got 1.5"),
         (["--overwrite", "--set", "flames.rare=2"], "flames.rare must be in 0..1, got 2"),
         (["--overwrite", "--set", "flame_jitter=true"], "flame_jitter: unknown key"),
+        (["--overwrite", "--address", "127.0.0.1:6379"], "--address joins a Ray cluster: it needs --executor ray"),
     ]
     for extra, message in cases:
         assert main([*args, *extra]) == 2

@@ -9,6 +9,7 @@ from pathlib import Path
 
 from curate.core.cluster import EXECUTOR_CHOICES, open_cluster
 from curate.core.commands import add_command
+from curate.core.device import parse_device
 from curate.dedup import DEFAULT_THRESHOLD
 from curate.partition import PARTITION
 from curate.rank import RANK_METHODS
@@ -86,9 +87,10 @@ def cmd_dedup(args: argparse.Namespace) -> int:
     paths = list_images_or_fail(args.dirs)
     if args.apply:
         check_apply_target(args.dirs, args.to, args.apply)
-    embedder, cache = load_model_from_args(args)
+    parse_device(args.device)  # before a cluster starts
     cluster = open_cluster(args.executor, args.address)
     try:
+        embedder, cache = load_model_from_args(args)
         try:
             scan = scan_images(paths, embedder, cache, args.workers, args.batch_size, cluster)
         finally:
@@ -162,13 +164,16 @@ def cmd_leakage(args: argparse.Namespace) -> int:
     from curate.scan import list_images_or_fail, scan_images
 
     listed = [list_images_or_fail([d]) for d in (args.a, args.b)]
-    embedder, cache = load_model_from_args(args)
+    parse_device(args.device)  # before a cluster starts
     cluster = open_cluster(args.executor, args.address)
     try:
-        scans = [scan_images(paths, embedder, cache, args.workers, args.batch_size, cluster) for paths in listed]
+        embedder, cache = load_model_from_args(args)
+        try:
+            scans = [scan_images(paths, embedder, cache, args.workers, args.batch_size, cluster) for paths in listed]
+        finally:
+            if cache is not None:
+                cache.close()
     finally:
-        if cache is not None:
-            cache.close()
         if cluster is not None:
             cluster.close()
     leaks = find_leaks(scans[0], scans[1], args.threshold, args.backend)
