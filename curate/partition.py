@@ -25,6 +25,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from curate.core.cluster import Cluster
+from curate.core.progress import progress
 from curate.search import FlatIndex, Pairs, canonical_pairs
 
 PARTITION = "partition"  # the backend's name (``--backend partition``)
@@ -145,8 +146,6 @@ def partitioned_pairs(
     """Pairs ``i < j`` whose two-view distance is below ``radius`` (as :func:`curate.search.duplicate_pairs`),
     found by partitions (see the module docstring); ``cells`` default ``N / CELL_VECTORS``. Tasks run on
     ``cluster`` when given, else here."""
-    from curate.core.progress import progress
-
     vectors = np.ascontiguousarray(vectors, np.float32)
     crops = None if crops is None else np.ascontiguousarray(crops, np.float32)
     n = len(vectors)
