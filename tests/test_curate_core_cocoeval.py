@@ -98,11 +98,7 @@ def test_test_classes_the_model_lacks_are_not_scored(tmp_path):
 
 
 def test_records_cocoeval_never_reads_are_left_out_with_identical_results(tmp_path):
-    import contextlib
-    import io
-
-    from pycocotools.coco import COCO
-    from pycocotools.cocoeval import COCOeval
+    from factories_coco import reference
 
     from curate.core.cocoeval import top_records
 
@@ -121,17 +117,6 @@ def test_records_cocoeval_never_reads_are_left_out_with_identical_results(tmp_pa
     kept = top_records(records, 100)
     assert len(kept) < len(records) and all(r in records for r in kept)
     ours = run_cocoeval(ds, records, [1, 2])
-    doc = ds.to_coco()
-    gt, dt = COCO(), COCO()
-    anns = [{**r, "id": i, "area": r["bbox"][2] * r["bbox"][3], "iscrowd": 0} for i, r in enumerate(records, 1)]
-    gt.dataset, dt.dataset = doc, {"images": doc["images"], "categories": doc["categories"], "annotations": anns}
-    with contextlib.redirect_stdout(io.StringIO()):
-        gt.createIndex()
-        dt.createIndex()
-        ref = COCOeval(gt, dt, "bbox")
-        ref.params.catIds = [1, 2]
-        ref.evaluate()
-        ref.accumulate()
-        ref.summarize()
+    ref = reference(ds, records, [1, 2])
     np.testing.assert_array_equal(ours.stats, ref.stats)
     np.testing.assert_array_equal(ours.eval["precision"], ref.eval["precision"])

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from pycocotools.coco import COCO
+from factories_coco import reference
 from pycocotools.cocoeval import COCOeval
 
 from curate.core.cocoeval import LOOSE_IOU, run_cocoeval
@@ -17,26 +17,6 @@ from curate.core.dataset import DatasetBuilder
 from curate.core.fast_cocoeval import FastCOCOeval, ground_truth_boxes, pair_iou, records_to_boxes
 
 SHARED = Path(__file__).resolve().parents[2] / "shared" / "data"
-
-
-def reference(ds, records, cat_ids, iou_thresholds=None) -> COCOeval:
-    """pycocotools' COCOeval on the same inputs, loaded as run_cocoeval loads them (ids 1..N, area w * h)."""
-    doc = ds.to_coco()
-    gt, dt = COCO(), COCO()
-    anns = [{**r, "id": i, "area": r["bbox"][2] * r["bbox"][3], "iscrowd": 0} for i, r in enumerate(records, 1)]
-    gt.dataset, dt.dataset = doc, {"images": doc["images"], "categories": doc["categories"], "annotations": anns}
-    with contextlib.redirect_stdout(io.StringIO()):
-        gt.createIndex()
-        dt.createIndex()
-        ev = COCOeval(gt, dt, "bbox")
-        ev.params.imgIds = sorted(img.id for img in ds.images)
-        ev.params.catIds = sorted(cat_ids)
-        if iou_thresholds is not None:
-            ev.params.iouThrs = np.asarray(iou_thresholds, dtype=np.float64)
-        ev.evaluate()
-        ev.accumulate()
-        ev.summarize()
-    return ev
 
 
 def assert_same(ours: COCOeval, ref: COCOeval, tol: float = 1e-6) -> None:
