@@ -4,7 +4,7 @@ search backend; SemDeDup-style).
 1. **Cells.** k-means (faiss, seeded sample) cuts the unit vectors (N, D) into ``cells`` of about
    :data:`CELL_VECTORS` vectors; each vector's *home* is its nearest centroid.
 2. **Probes.** Each query (every whole-image vector, and every centre view when given) probes its ``nprobe``
-   nearest cells.
+   nearest cells (found in tasks of :data:`ASSIGN_ROWS` queries on a cluster: N x cells x D work).
 3. **Tasks.** A task takes a run of cells (about :data:`TASK_VECTORS` home vectors in all) and searches exactly
    (faiss ``IndexFlatIP``) the home vectors of each cell for the queries that probe it, within the radius. Tasks
    run in this process one after another, or as Ray tasks on a :class:`~curate.core.cluster.Cluster`; each
@@ -36,6 +36,7 @@ CELL_VECTORS = 1000  # mean home vectors per cell
 NPROBE = 8  # cells each query searches
 TASK_VECTORS = 10_000  # home vectors per task (cells are grouped up to this): a task carries about
 # 2 nprobe TASK_VECTORS D float32 of queries (200 MB at D = 320 with centre views)
+ASSIGN_ROWS = 200_000  # queries per task that finds their nearest cells (on a cluster)
 KMEANS_SAMPLE = 64  # training vectors per centroid (faiss warns below 39)
 KMEANS_ITER = 10
 
@@ -87,21 +88,32 @@ def nearest_cells(vectors: NDArray[np.float32], centroids: NDArray[np.float32], 
     return FlatIndex(centroids).knn(vectors, min(k, len(centroids)))[1]
 
 
-def plan_tasks(
+def probe_cells(
     vectors: NDArray[np.float32],
     crops: NDArray[np.float32] | None,
     centroids: NDArray[np.float32],
     nprobe: int,
-    task_vectors: int = TASK_VECTORS,
+    cluster: Cluster | None = None,
+) -> NDArray[np.int64]:
+    """(Q, nprobe) nearest cells of every query, nearest first: rows 0..N-1 the whole views, then the centre
+    views. On a ``cluster`` in tasks of :data:`ASSIGN_ROWS` rows (the centroids sent once)."""
+    views = [vectors] if crops is None or not len(crops) else [vectors, crops]
+    if cluster is None:
+        return np.concatenate([nearest_cells(v, centroids, nprobe) for v in views])
+    chunks = [v[s : s + ASSIGN_ROWS] for v in views for s in range(0, len(v), ASSIGN_ROWS)]
+    out: list[NDArray[np.int64]] = [np.zeros((0, nprobe), np.int64)] * len(chunks)
+    for k, found in cluster.map(nearest_cells, chunks, cluster.put(centroids), nprobe, num_cpus=1):
+        out[k] = found
+    return np.concatenate(out)
+
+
+def plan_tasks(
+    probe: NDArray[np.int64], n: int, cells: int, task_vectors: int = TASK_VECTORS
 ) -> list[tuple[NDArray[np.int64], NDArray[np.int64], NDArray[np.int64], NDArray[np.int64]]]:
-    """Index plans of the tasks: (base ids, cell starts, query row ids, query cell starts) each, cells in order.
-    Query rows ``r >= N`` stand for centre view ``r - N``."""
-    cells = len(centroids)
-    probes = [nearest_cells(vectors, centroids, nprobe)]
-    home = probes[0][:, 0]  # the nearest cell
-    if crops is not None and len(crops):
-        probes.append(nearest_cells(crops, centroids, nprobe))
-    probe = np.concatenate(probes)  # (Q, nprobe), rows 0..N-1 whole views, then centre views
+    """Index plans of the tasks for the probes ``probe`` (Q, nprobe) of :func:`probe_cells` (``n`` whole views,
+    each one's home its first probe): (base ids, cell starts, query row ids, query cell starts) each, cells in
+    order. Query rows ``r >= n`` stand for centre view ``r - n``."""
+    home = probe[:n, 0]
     base_order = np.argsort(home, kind="stable")
     base_starts = np.searchsorted(home[base_order], np.arange(cells + 1))
     flat_cell = probe.ravel()
@@ -153,7 +165,7 @@ def partitioned_pairs(
         return canonical_pairs(*(np.zeros(0, np.int64),) * 2, np.zeros(0, np.float32), max(n, 1))
     cells = min(n, cells or max(1, n // CELL_VECTORS))
     centroids = train_cells(vectors, cells, seed)
-    plans = plan_tasks(vectors, crops, centroids, nprobe)
+    plans = plan_tasks(probe_cells(vectors, crops, centroids, nprobe, cluster), n, cells)
     tasks = (make_task(plan, vectors, crops) for plan in plans)  # made as they are needed (bounded memory)
     if cluster is None:
         done = ((k, search_cells(task, radius)) for k, task in enumerate(tasks))

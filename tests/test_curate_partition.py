@@ -9,7 +9,7 @@ import pytest
 
 from curate.core.cluster import Cluster
 from curate.embed import l2_normalize
-from curate.partition import make_task, partitioned_pairs, plan_tasks, train_cells
+from curate.partition import make_task, nearest_cells, partitioned_pairs, plan_tasks, probe_cells, train_cells
 from curate.search import duplicate_pairs
 
 RADIUS = 0.45
@@ -43,7 +43,9 @@ def test_partitions_find_the_exact_pairs_with_their_distances() -> None:
 def test_every_vector_has_one_home_and_every_query_its_probes() -> None:
     x, crops = planted(3000, 32, seed=1)
     centroids = train_cells(x, 9, seed=0)
-    plans = plan_tasks(x, crops, centroids, nprobe=3, task_vectors=700)
+    probe = probe_cells(x, crops, centroids, nprobe=3)
+    assert probe.shape == (2 * len(x), 3) and np.array_equal(probe[: len(x), :1], nearest_cells(x, centroids, 1))
+    plans = plan_tasks(probe, len(x), 9, task_vectors=700)
     assert len(plans) > 1
     homes = np.concatenate([p[0] for p in plans])
     assert np.array_equal(np.sort(homes), np.arange(len(x)))  # each vector in exactly one cell
@@ -57,8 +59,11 @@ def test_every_vector_has_one_home_and_every_query_its_probes() -> None:
 
 
 @pytest.mark.slow
-def test_a_ray_cluster_finds_the_same_pairs(cluster: Cluster) -> None:
+def test_a_ray_cluster_finds_the_same_pairs(cluster: Cluster, monkeypatch: pytest.MonkeyPatch) -> None:
+    from curate import partition
+
     x, crops = planted(4000, 32, seed=2)
+    monkeypatch.setattr(partition, "ASSIGN_ROWS", 1000)  # 8 assignment tasks
     here = partitioned_pairs(x, crops, RADIUS, cells=16)
     there = partitioned_pairs(x, crops, RADIUS, cluster=cluster, cells=16)
     for a, b in zip((here.i, here.j, here.dist), (there.i, there.j, there.dist)):
