@@ -1,7 +1,7 @@
-"""One file's facts and model inputs: its content hash (read whole, checked complete); decode it once for its
-content hash, decoded-pixel hash, size and
-sharpness and the two views the embedder takes; and a batch of files decoded and embedded in one onnxruntime call
-(what a scan thread or a Ray task does, :mod:`curate.scan`, :mod:`curate.embedremote`).
+"""One file's facts and model inputs: its content hash (read whole, checked complete); one decode for its
+decoded-pixel hash, size, sharpness and the two views the embedder takes; and a batch of files decoded and
+embedded in one onnxruntime call (what a scan thread or a Ray task does: :mod:`curate.scan`,
+:mod:`curate.embedremote`).
 """
 
 from __future__ import annotations

@@ -94,10 +94,10 @@ def hash_shard(paths: Sequence[str]) -> list[tuple[int, str] | Problem]:
 def hash_on_cluster(paths: Sequence[Path], cluster: Cluster) -> list[tuple[int, str] | Problem]:
     """:func:`curate.decode.hash_image_file` of every path, read on the cluster's workers (shards of
     :data:`HASH_SHARD_FILES`): the driver then reads no file. In input order."""
-    shards = [[p.as_posix() for p in paths[s : s + HASH_SHARD_FILES]] for s in range(0, len(paths), HASH_SHARD_FILES)]
+    shards = _shards(paths, HASH_SHARD_FILES)
     out: list[list[tuple[int, str] | Problem]] = [[] for _ in shards]
-    for k, hashed in progress(cluster.map(hash_shard, shards, num_cpus=1), total=len(shards), desc="hashing",
-                              unit="shard", min_items=8):  # fmt: skip
+    done = cluster.map(hash_shard, shards, num_cpus=1)
+    for k, hashed in progress(done, total=len(shards), desc="hashing", unit="shard", min_items=8):
         out[k] = hashed
     return [h for shard in out for h in shard]
 
@@ -120,8 +120,7 @@ def embed_on_cluster(
     """Decode and embed ``paths`` on ``cluster``, one task per shard (see the module docstring), on the device
     the driver's ``embedder`` was asked for; yields each shard's (path, (facts, raw vector) or Problem) list as
     it finishes (shards in any order)."""
-    shard = max(batch_size, SHARD_IMAGES // batch_size * batch_size)
-    shards = [[p.as_posix() for p in paths[s : s + shard]] for s in range(0, len(paths), shard)]
+    shards = _shards(paths, max(batch_size, SHARD_IMAGES // batch_size * batch_size))
     gpus = task_gpus(cluster, embedder.device)
     spec = EmbedSpec(
         [cluster.put(embedder.path.read_bytes())],
@@ -134,3 +133,8 @@ def embed_on_cluster(
     )
     for _, results in cluster.map(embed_shard, shards, spec, num_cpus=1, num_gpus=gpus):
         yield [(Path(p), item) for p, item in results]
+
+
+def _shards(paths: Sequence[Path], size: int) -> list[list[str]]:
+    """``paths`` as absolute POSIX strings (what every node reads), cut into runs of ``size``."""
+    return [[p.as_posix() for p in paths[s : s + size]] for s in range(0, len(paths), size)]

@@ -224,8 +224,8 @@ def content_identity(cfg: Any) -> dict[str, Any]:
 
 def curate_stage(root: Path, cfg: Any, base: Path) -> tuple[Stage, DataRef]:
     """``fuzzyfire curate`` of ``cfg`` (a :class:`curate.curation.CurateConfig`; sources relative to ``base``)
-    with the user's embedding cache (on ``cfg.executor``, a Ray cluster if so configured). A finished curation is verified on reuse (a few seconds with the cache):
-    its contents must be what this environment curates."""
+    with the user's embedding cache (on ``cfg.executor``, a Ray cluster if so configured). A finished curation is
+    verified on reuse (a few seconds with the cache): its contents must be what this environment curates."""
     config = to_dict(cfg)
     del config["executor"], config["model"]["device"]  # where it runs, not what it makes: the same dataset
     for source in config["sources"]:

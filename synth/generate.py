@@ -108,14 +108,19 @@ def blocks(job: Job, todo: Sequence[int]) -> list[list[int]]:
 _WORKER: dict[str, Any] = {}  # a worker process's job, its views and their problems (set by _start_worker)
 
 
-def _start_worker(job: Job) -> None:
+def _start_worker(job: Job, token: str = "") -> None:
+    """Open ``job``'s views in this worker process (spawned, or a Ray worker; ``token`` names the job) for the
+    blocks it will make; a previous job's views and renderer are closed first."""
     import atexit
 
+    if "stack" in _WORKER:
+        _WORKER["stack"].close()
+    else:
+        atexit.register(lambda: _WORKER["stack"].close())
     cv2.setNumThreads(1)  # one image pipeline per core
     stack = ExitStack()
     views, problems = stack.enter_context(opened_views(job))
-    atexit.register(stack.close)
-    _WORKER.update(job=job, views=views, problems=problems, staging=Staging(job.out))
+    _WORKER.update(job=job, views=views, problems=problems, staging=Staging(job.out), stack=stack, token=token)
 
 
 def _work(block: Sequence[int]) -> tuple[int, dict[str, str]]:
@@ -125,45 +130,38 @@ def _work(block: Sequence[int]) -> tuple[int, dict[str, str]]:
     return len(block), {k: v for found in _WORKER["problems"] for k, v in found.items()}
 
 
+def _ray_block(block: Sequence[int], job: Job, token: str) -> tuple[int, dict[str, str]]:
+    """A Ray task: :func:`_work` on ``block``, the worker opening the job's views once (``token``) for all the
+    blocks of the job it is given."""
+    if _WORKER.get("token") != token:
+        _start_worker(job, token)
+    return _work(block)
+
+
+def _collected(done: Iterator[tuple[int, dict[str, str]]], job: Job, total: int) -> dict[str, str]:
+    """Wait for every block's ``(images made, backgrounds skipped with reasons)``, a progress bar over the
+    ``total`` images; the skipped backgrounds of all blocks."""
+    problems: dict[str, str] = {}
+
+    def images_done() -> Iterator[int]:  # one item per finished image, for the progress bar
+        for made, found in done:
+            problems.update(found)
+            yield from range(made)
+
+    for _ in progress(images_done(), total=total, desc=f"{job.method} images"):
+        pass
+    return problems
+
+
 def _in_workers(job: Job, todo: Sequence[int], workers: int) -> dict[str, str]:
     """Make and stage images ``todo`` in ``workers`` spawned processes, block by block (:func:`blocks`); the
     backgrounds skipped, with reasons. A failure in a process is raised here."""
     import multiprocessing
 
     chunks = blocks(job, todo)
-    problems: dict[str, str] = {}
     context = multiprocessing.get_context("spawn")  # no forked GL or torch state
     with context.Pool(min(workers, len(chunks)), _start_worker, (job,)) as pool:
-
-        def images_done() -> Iterator[int]:  # one item per finished image, for the progress bar
-            for done, found in pool.imap_unordered(_work, chunks):
-                problems.update(found)
-                yield from range(done)
-
-        for _ in progress(images_done(), total=len(todo), desc=f"{job.method} images"):
-            pass
-    return problems
-
-
-_RAY_VIEWS: dict[str, tuple[ViewCache, list[dict[str, str]]]] = {}  # a Ray worker's opened views, by job token
-
-
-def _ray_block(block: Sequence[int], job: Job, token: str) -> tuple[int, dict[str, str]]:
-    """A Ray task: make and stage the images of ``block``; the worker opens the job's views once (``token``) and
-    keeps them for its later blocks. Returns (images made, backgrounds skipped with reasons)."""
-    if token not in _RAY_VIEWS:
-        import atexit
-
-        cv2.setNumThreads(1)  # one image pipeline per reserved CPU
-        _RAY_VIEWS.clear()  # another job's views (and renderer) are not needed any more
-        stack = ExitStack()
-        _RAY_VIEWS[token] = stack.enter_context(opened_views(job))
-        atexit.register(stack.close)
-    views, problems = _RAY_VIEWS[token]
-    staging = Staging(job.out)
-    for i in block:
-        staging.save(i, *job.make_image(job.cfg, i, job.library, views))
-    return len(block), {k: v for found in problems for k, v in found.items()}
+        return _collected(pool.imap_unordered(_work, chunks), job, len(todo))
 
 
 def _on_cluster(job: Job, todo: Sequence[int], cluster: Cluster) -> dict[str, str]:
@@ -171,17 +169,8 @@ def _on_cluster(job: Job, todo: Sequence[int], cluster: Cluster) -> dict[str, st
     to the object store once. The staging folder must be on storage every node sees at the same path."""
     import uuid
 
-    ref = cluster.put(job)
-    problems: dict[str, str] = {}
-
-    def images_done() -> Iterator[int]:
-        for _, (done, found) in cluster.map(_ray_block, blocks(job, todo), ref, uuid.uuid4().hex):
-            problems.update(found)
-            yield from range(done)
-
-    for _ in progress(images_done(), total=len(todo), desc=f"{job.method} images"):
-        pass
-    return problems
+    done = cluster.map(_ray_block, blocks(job, todo), cluster.put(job), uuid.uuid4().hex)
+    return _collected((result for _, result in done), job, len(todo))
 
 
 def generate(

@@ -5,9 +5,12 @@ from __future__ import annotations
 
 import argparse
 import sys
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
+from typing import Any
 
-from curate.core.cluster import EXECUTOR_CHOICES, open_cluster
+from curate.core.cluster import EXECUTOR_CHOICES, Cluster, open_cluster
 from curate.core.commands import add_command
 from curate.core.device import parse_device
 from curate.dedup import DEFAULT_THRESHOLD
@@ -48,6 +51,10 @@ def add_model_args(p: argparse.ArgumentParser) -> None:
         default="auto",
         help="auto | cpu | cuda | cuda:N: onnxruntime's CUDA provider when installed (default auto: if present)",
     )
+
+
+def add_executor_args(p: argparse.ArgumentParser) -> None:
+    """Where hashing, decoding and embedding run (:func:`embedding_session`)."""
     g = p.add_argument_group("where it runs", "docs/scaling.md: decoding and embedding on a Ray cluster")
     g.add_argument(
         "--executor",
@@ -78,6 +85,24 @@ def load_model_from_args(args: argparse.Namespace):  # noqa: ANN201 - (OnnxEmbed
     return embedder, cache
 
 
+@contextmanager
+def embedding_session(args: argparse.Namespace) -> Iterator[tuple[Any, Any, Cluster | None]]:
+    """(embedder, cache or None, cluster or None) of :func:`add_model_args` and :func:`add_executor_args`: a bad
+    device or address fails before anything starts; the cache and the cluster are closed on exit."""
+    parse_device(args.device)
+    cluster = open_cluster(args.executor, args.address)
+    try:
+        embedder, cache = load_model_from_args(args)
+        try:
+            yield embedder, cache, cluster
+        finally:
+            if cache is not None:
+                cache.close()
+    finally:
+        if cluster is not None:
+            cluster.close()
+
+
 def cmd_dedup(args: argparse.Namespace) -> int:
     from curate.dedupjob import check_apply_target
     from curate.scan import list_images_or_fail, scan_images
@@ -87,19 +112,9 @@ def cmd_dedup(args: argparse.Namespace) -> int:
     paths = list_images_or_fail(args.dirs)
     if args.apply:
         check_apply_target(args.dirs, args.to, args.apply)
-    parse_device(args.device)  # before a cluster starts
-    cluster = open_cluster(args.executor, args.address)
-    try:
-        embedder, cache = load_model_from_args(args)
-        try:
-            scan = scan_images(paths, embedder, cache, args.workers, args.batch_size, cluster)
-        finally:
-            if cache is not None:
-                cache.close()
+    with embedding_session(args) as (embedder, cache, cluster):
+        scan = scan_images(paths, embedder, cache, args.workers, args.batch_size, cluster)
         return _dedup_scanned(args, paths, embedder, scan, cluster)
-    finally:
-        if cluster is not None:
-            cluster.close()
 
 
 def _dedup_scanned(args: argparse.Namespace, paths: list[Path], embedder, scan, cluster) -> int:  # noqa: ANN001
@@ -164,18 +179,8 @@ def cmd_leakage(args: argparse.Namespace) -> int:
     from curate.scan import list_images_or_fail, scan_images
 
     listed = [list_images_or_fail([d]) for d in (args.a, args.b)]
-    parse_device(args.device)  # before a cluster starts
-    cluster = open_cluster(args.executor, args.address)
-    try:
-        embedder, cache = load_model_from_args(args)
-        try:
-            scans = [scan_images(paths, embedder, cache, args.workers, args.batch_size, cluster) for paths in listed]
-        finally:
-            if cache is not None:
-                cache.close()
-    finally:
-        if cluster is not None:
-            cluster.close()
+    with embedding_session(args) as (embedder, cache, cluster):
+        scans = [scan_images(paths, embedder, cache, args.workers, args.batch_size, cluster) for paths in listed]
     leaks = find_leaks(scans[0], scans[1], args.threshold, args.backend)
     summary = leak_summary(scans[0], scans[1], leaks)
     for problem in scans[0].problems + scans[1].problems:
@@ -245,6 +250,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--apply", choices=("copy", "link"), help="materialise the selected images in --to")
     p.add_argument("--to", type=Path, help="target folder for --apply (new or empty)")
     add_model_args(p)
+    add_executor_args(p)
     p.set_defaults(func=cmd_dedup)
 
     p = add_command(
@@ -268,4 +274,5 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--json", type=Path, help="write every pair to this JSON file")
     p.add_argument("--show", type=int, default=20, help="pairs printed (default 20)")
     add_model_args(p)
+    add_executor_args(p)
     p.set_defaults(func=cmd_leakage)

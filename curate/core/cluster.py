@@ -37,7 +37,6 @@ class Cluster:
         except ImportError as exc:  # pragma: no cover - ray is a dependency
             raise ClusterError(f"running on Ray needs the ray package: {exc}") from exc
         self.ray = ray
-        self.address = address
         if address:
             _join(ray, address)
         else:
@@ -78,9 +77,6 @@ class Cluster:
         """``value`` in the object store (an ObjectRef): sent to each node once, not with every task."""
         return self.ray.put(value)
 
-    def get(self, ref: Any) -> Any:
-        return self.ray.get(ref)
-
     def map(
         self,
         fn: Callable[..., Any],
@@ -92,8 +88,8 @@ class Cluster:
         ahead: int | None = None,
     ) -> Iterator[tuple[int, Any]]:
         """``fn(item, *args)`` for each item as one Ray task each (items are taken as tasks are submitted), at
-        most ``ahead`` in flight (default: twice the
-        cluster's CPUs); yields ``(index into items, result)`` as tasks finish. A task's error is raised here
+        most ``ahead`` in flight (default: twice the cluster's CPUs); yields ``(index into items, result)`` as
+        tasks finish. A task's error is raised here
         (the remaining tasks are cancelled); a task whose worker died is run again up to ``retries`` times.
         ``fn`` must be a module-level function (workers import it); ObjectRefs among ``args`` arrive resolved."""
         ray = self.ray
@@ -136,14 +132,14 @@ def _token_mode() -> None:
     mode (``RAY_AUTH_MODE=token``; the token comes from ``RAY_AUTH_TOKEN``, ``RAY_AUTH_TOKEN_PATH`` or
     ``~/.ray/auth_token``). Switch token mode on when a token is at hand and the mode is not set (a cluster
     without authentication accepts it too). Ray reads the mode when it is first imported: this must run before."""
-    if "RAY_AUTH_MODE" not in os.environ and token_available() and "ray" not in sys.modules:
+    if "RAY_AUTH_MODE" not in os.environ and _token_available() and "ray" not in sys.modules:
         os.environ["RAY_AUTH_MODE"] = "token"
 
 
 def _join(ray: Any, address: str) -> None:
     """Join the cluster at ``address``; an unreachable or refusing cluster becomes one :class:`ClusterError`
     line instead of Ray's minutes of retries and its traceback."""
-    check_reachable(address)
+    _check_reachable(address)
     try:
         ray.init(address=address, ignore_reinit_error=True, logging_level="ERROR")
     except ConnectionError as exc:
@@ -151,11 +147,11 @@ def _join(ray: Any, address: str) -> None:
         raise ClusterError(
             f"cannot join the Ray cluster at {address} ({exc}); is it running (ray status)? Clusters with token "
             f"authentication need RAY_AUTH_MODE=token and the cluster's token in RAY_AUTH_TOKEN or ~/.ray/auth_token "
-            f"(here: RAY_AUTH_MODE={mode}, token {'found' if token_available() else 'not found'})"
+            f"(here: RAY_AUTH_MODE={mode}, token {'found' if _token_available() else 'not found'})"
         ) from None
 
 
-def check_reachable(address: str) -> None:
+def _check_reachable(address: str) -> None:
     """Raise :class:`ClusterError` at once when nothing accepts connections at ``address`` (``host:port`` or
     ``ray://host:port``); Ray itself would retry for minutes."""
     import socket
@@ -172,6 +168,6 @@ def check_reachable(address: str) -> None:
         ) from None
 
 
-def token_available() -> bool:
+def _token_available() -> bool:
     path = os.environ.get("RAY_AUTH_TOKEN_PATH") or str(Path.home() / ".ray" / "auth_token")
     return bool(os.environ.get("RAY_AUTH_TOKEN")) or Path(path).is_file()
