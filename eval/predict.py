@@ -23,7 +23,7 @@ from curate.core.detections import (
     to_original,
 )
 from curate.core.imageio import ImageError, read_image
-from curate.core.letterbox import letterbox_image, to_nchw_float
+from curate.core.letterbox import letterbox_image, to_chw_float, to_nchw_float
 from curate.core.problems import Problem
 from curate.core.progress import progress
 from eval.onnx_model import OnnxDetector
@@ -47,16 +47,15 @@ class PredictOptions:
 
 
 def _loader(width: int, height: int, pad: int, resize: str) -> Callable[[str, NDArray[np.float32], int], Loaded]:
-    """``load(path, batch, slot)``: decode, letterbox and write the image into ``batch[slot]`` (3, H, W) as
-    :func:`curate.core.letterbox.to_nchw_float` would (float32, times 1 / 255), in the decoding thread."""
+    """``load(path, batch, slot)``: decode, letterbox and write the image into ``batch[slot]`` (3, H, W)
+    (:func:`curate.core.letterbox.to_chw_float`), in the decoding thread."""
 
     def load(path: str, batch: NDArray[np.float32], slot: int) -> Loaded:
         try:
             image = read_image(path)
         except ImageError as exc:
             return exc
-        boxed = letterbox_image(image, width, height, pad, resize).transpose(2, 0, 1)
-        np.multiply(boxed, np.float32(1.0 / 255.0), out=batch[slot])  # one pass; the same float32 product
+        to_chw_float(letterbox_image(image, width, height, pad, resize), batch[slot])
         return image.shape[1], image.shape[0]
 
     return load

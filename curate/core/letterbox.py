@@ -38,6 +38,13 @@ def letterbox_image(
 
 def to_nchw_float(images: list[NDArray[np.uint8]]) -> NDArray[np.float32]:
     """A list of (H, W, 3) uint8 RGB images of one size -> (N, 3, H, W) float32 in [0, 1]."""
-    batch = np.ascontiguousarray(np.stack(images).transpose(0, 3, 1, 2), dtype=np.float32)  # one pass
-    batch *= 1.0 / 255.0
+    batch = np.empty((len(images), 3, *images[0].shape[:2]), np.float32)
+    for image, slot in zip(images, batch):
+        to_chw_float(image, slot)
     return batch
+
+
+def to_chw_float(image: NDArray[np.uint8], out: NDArray[np.float32]) -> NDArray[np.float32]:
+    """One (H, W, 3) uint8 RGB image -> ``out`` (3, H, W) float32 in [0, 1] (pixel x float32(1 / 255)), in one
+    pass: a decoding thread fills its slot of a batch."""
+    return np.multiply(image.transpose(2, 0, 1), np.float32(1.0 / 255.0), out=out)
