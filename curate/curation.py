@@ -86,7 +86,8 @@ class SplitConfig:
 class CurateConfig:
     sources: tuple[SourceConfig, ...]  # the labelled datasets to merge (each: path, format, name, aliases,
     # drop_classes)
-    classes: tuple[str, ...] = ("fire", "smoke")  # kept classes; other classes' boxes are dropped
+    classes: Optional[tuple[str, ...]] = None  # output classes; null = every class of the sources (fire and
+    # smoke first); a source class outside a given list is an error unless mapped (aliases) or dropped
     dedup: DedupConfig = DedupConfig()  # exact and near-duplicate removal
     rank: RankConfig = RankConfig()  # diversity ranking of the kept images
     split: SplitConfig = SplitConfig()  # group-aware split (no near-duplicate group across two splits)

@@ -10,6 +10,7 @@ from pathlib import Path
 from typing import Literal, Optional
 
 from curate.core.dataset import Dataset, merge
+from curate.core.load import data_classes
 from curate.core.formats.registry import read_dataset
 from curate.core.problems import Problem
 
@@ -31,7 +32,8 @@ class MergeConfig:
     """Several sources merged into one dataset with a fixed class list."""
 
     sources: tuple[SourceConfig, ...]  # the labelled datasets (each: path, format, name, names, aliases, drop_classes)
-    classes: tuple[str, ...] = ("fire", "smoke")  # output classes in YOLO id order
+    classes: Optional[tuple[str, ...]] = None  # output classes in YOLO id order; null = every class of the sources
+    # (fire and smoke first, then the others by name)
 
 
 def read_source(src: SourceConfig, base: Path) -> tuple[Dataset, list[Problem]]:
@@ -45,16 +47,21 @@ def read_source(src: SourceConfig, base: Path) -> tuple[Dataset, list[Problem]]:
 
 
 def merge_sources(cfg: MergeConfig, base: Path, out_root: Path) -> tuple[Dataset, list[Problem]]:
-    """Read every source and merge them; classes outside ``cfg.classes`` are an error, never dropped silently."""
+    """Read every source and merge them with the classes ``cfg.classes`` (null: every class of the sources,
+    :func:`curate.core.load.data_classes`); a class outside given ``cfg.classes`` is an error, never dropped
+    silently."""
     datasets, problems = [], []
     for src in cfg.sources:
         ds, found = read_source(src, base)
         problems += found
-        extra = [n for n in ds.category_names if n not in cfg.classes]
+        extra = [n for n in ds.category_names if cfg.classes is not None and n not in cfg.classes]
         if extra:
             raise ValueError(
-                f"{src.path}: classes {extra} are not in classes {list(cfg.classes)}; "
-                "add them, map them with aliases, or list them in drop_classes"
+                f"{src.path}: classes {extra} are not in classes {list(cfg.classes or ())}; "
+                "add them, map them with aliases, list them in drop_classes, or leave classes out (null: every "
+                "class of the sources)"
             )
         datasets.append(ds)
-    return merge(datasets, out_root, cfg.classes), problems
+    classes = cfg.classes if cfg.classes is not None else data_classes(*datasets)
+    unboxed = sorted({n for ds in datasets for n in ds.category_names} - set(classes))  # named, never boxed
+    return merge(datasets, out_root, (*classes, *unboxed)), problems

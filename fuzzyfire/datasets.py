@@ -12,13 +12,14 @@ from typing import Any
 from curate.core.dataset import Dataset
 from curate.core.formats.registry import read_dataset
 from curate.core.holdout import held_out_images
-from curate.core.load import load_split, prepare
+from curate.core.load import ClassChanges, class_changes, load_split, pick_split, prepare
 
 
 @dataclass(frozen=True)
 class DataRef:
     """A labelled dataset a run reads: ``path`` (folder or COCO .json) in ``format``, one ``split`` of it (None =
-    every image), classes renamed by ``aliases`` and ``drop`` removed, with ``holdout`` > 0 only the images
+    every image), classes renamed by ``aliases`` and ``drop`` removed (an image left with no box by the class rules
+leaves the set, or stays as a negative with ``emptied`` ``negatives``: :func:`curate.core.load.with_classes`), with ``holdout`` > 0 only the images
     :func:`curate.core.holdout.held_out` picks at that share, and without the images ``exclude`` names (their
     ``file_name``: test images that leak from the training data, :mod:`fuzzyfire.leakage`). ``identity``: what made it
     (hashable JSON; no absolute output paths, so two experiment folders give the same run identities)."""
@@ -32,6 +33,7 @@ class DataRef:
     standin: bool = False
     holdout: float = 0.0
     exclude: tuple[str, ...] = ()
+    emptied: str = "leave"
 
     def with_split(self, split: str | None) -> DataRef:
         return replace(self, split=split)
@@ -52,10 +54,14 @@ class Datasets:
     :meth:`read` gives a dataset as read (every split, its own classes), :meth:`get` one split of it with
     exactly ``classes`` (:func:`curate.core.load.prepare`). Both return shared immutable objects."""
 
-    def __init__(self, classes: Sequence[str]) -> None:
+    def __init__(self, classes: Sequence[str], read: dict[tuple, Dataset] | None = None) -> None:
         self.classes = tuple(classes)
-        self._read: dict[tuple, Dataset] = {}
+        self._read: dict[tuple, Dataset] = {} if read is None else read
         self._prepared: dict[tuple, Dataset] = {}
+
+    def for_classes(self, classes: Sequence[str]) -> Datasets:
+        """Datasets prepared with ``classes`` instead, sharing what this one has read (nothing is read again)."""
+        return Datasets(classes, self._read)
 
     def read(self, ref: DataRef) -> Dataset:
         """``ref``'s dataset as read, every split (read on first use)."""
@@ -67,11 +73,17 @@ class Datasets:
     def get(self, ref: DataRef) -> Dataset:
         """Split ``ref.split`` (None = every image) with exactly the experiment's classes, in their order.
         Raises ValueError when the split is missing or has no images."""
-        key = (ref.source(), ref.split, ref.drop, ref.holdout, ref.exclude)
+        key = (ref.source(), ref.split, ref.drop, ref.holdout, ref.exclude, ref.emptied)
         if key not in self._prepared:
-            ds = prepare(self.read(ref), ref.split, self.classes, ref.drop, ref.path)
+            ds = prepare(self.read(ref), ref.split, self.classes, ref.drop, ref.path, ref.emptied)  # type: ignore[arg-type]
             self._prepared[key] = _narrowed(ds, ref)
         return self._prepared[key]
+
+    def changes(self, ref: DataRef) -> ClassChanges:
+        """What the class rules remove from split ``ref.split`` (None = every image) of ``ref``'s dataset
+        (:func:`curate.core.load.class_changes`), before its hold-out and leaked images are taken out."""
+        chosen = pick_split(self.read(ref), ref.split, ref.path)
+        return class_changes(chosen, self.classes, ref.drop, ref.emptied)  # type: ignore[arg-type]
 
 
 def _narrowed(ds: Dataset, ref: DataRef) -> Dataset:
@@ -85,4 +97,5 @@ def _narrowed(ds: Dataset, ref: DataRef) -> Dataset:
 
 def load_data(ref: DataRef, classes: Sequence[str]) -> Dataset:
     """``ref``'s split with exactly ``classes``, read from disk now (a run outside an experiment)."""
-    return _narrowed(load_split(ref.path, ref.format, ref.split, classes, dict(ref.aliases), ref.drop), ref)
+    ds = load_split(ref.path, ref.format, ref.split, classes, dict(ref.aliases), ref.drop, ref.emptied)  # type: ignore[arg-type]
+    return _narrowed(ds, ref)

@@ -46,7 +46,16 @@ from fuzzyfire.leakage import (
     write_leaks,
 )
 from fuzzyfire.runs import EvalSet, RunSpec, RunTask, execute_task, finished, missing_evals, run_data
-from fuzzyfire.stages import Prepared, curate_stage, digest, folder_ref, label, standin_stage, synth_stage
+from fuzzyfire.stages import (
+    Prepared,
+    curate_stage,
+    digest,
+    folder_ref,
+    label,
+    standin_stage,
+    synth_stage,
+    with_class_rules,
+)
 from train.config import TrainConfig
 
 
@@ -61,9 +70,10 @@ def prepare_data(cfg: ExperimentConfig, base: Path, out: Path, methods: Sequence
     real = cfg.real
     kind = real.source()
     if kind == "path":
-        real_ref = folder_ref(real.path, base, real.format, real.aliases, real.drop_classes)
+        real_ref = folder_ref(real.path, base, real.format, real.aliases, real.drop_classes, emptied=real.emptied)
     elif kind == "curate":
-        real_ref = _stage("real (curated)", curate_stage, root, real.curate_config(), base)
+        curated = _stage("real (curated)", curate_stage, root, real.curate_config(), base)
+        real_ref = with_class_rules(curated, real.drop_classes, real.emptied)
     else:
         real_ref = _stage("real (stand-in)", standin_stage, root, "real-standin", real.standin)
     rare_ref = _test_ref(cfg.rare, "rare", "rare-standin", base, root) if cfg.rare is not None else None
@@ -87,7 +97,7 @@ def prepare_pools(cfg: ExperimentConfig, base: Path, out: Path, methods: Sequenc
 def _test_ref(t: EvalSetConfig, what: str, stage: str, base: Path, root: Path) -> DataRef:
     """A test set's data: its folder read in place, or its stand-in built as stage ``stage``."""
     if t.source() == "path":
-        return folder_ref(t.path, base, t.format, t.aliases, t.drop_classes, t.split, t.holdout)
+        return folder_ref(t.path, base, t.format, t.aliases, t.drop_classes, t.split, t.holdout, t.emptied)
     return _stage(f"{what} (stand-in)", standin_stage, root, stage, t.standin)
 
 
@@ -367,6 +377,23 @@ def check_data(cfg: ExperimentConfig, data: Prepared, datasets: Datasets, photos
     check_leakage(photos, {t.name: datasets.get(t.data) for t in every} if photos else {})
 
 
+def studied_classes(cfg: ExperimentConfig, data: Prepared, datasets: Datasets) -> tuple[ExperimentConfig, Datasets]:
+    """``cfg`` with its classes resolved (``classes: null`` = the classes the real data boxes, less
+    ``real.drop_classes``: :func:`curate.core.load.data_classes`) and ``datasets`` prepared with them; says which
+    classes are studied and what the class rules removed from each set (:class:`curate.core.load.ClassChanges`)."""
+    from curate.core.load import data_classes
+
+    classes, given = cfg.classes, cfg.classes is not None
+    if classes is None:
+        classes = data_classes(datasets.read(data.real), drop=cfg.real.drop_classes)
+        if not classes:
+            raise ExperimentConfigError(f"{data.real.path}: the real data has no boxes of any class: nothing to study")
+        cfg = replace(cfg, classes=classes)
+        datasets = datasets.for_classes(classes)
+    _say(f"data   classes studied: {', '.join(classes)} ({'config' if given else 'the classes the real data boxes'})")
+    return cfg, datasets
+
+
 def run_experiment(cfg: ExperimentConfig, base: Path, out: Path, executor=None) -> ExperimentResult:
     """The whole study (module docstring); ``base`` resolves relative paths of the config. Without an
     ``executor`` nothing is trained: the report covers the runs finished so far (``failed`` lists the others)."""
@@ -377,8 +404,8 @@ def run_experiment(cfg: ExperimentConfig, base: Path, out: Path, executor=None) 
     out.mkdir(parents=True, exist_ok=True)
     _say(f"env    {lock_summary(lock_status())}")
     grid = grid_entries(cfg)
-    datasets = Datasets(cfg.classes)
     data = prepare_data(cfg, base, out, ())  # the real and test sets, checked before any pool is built
+    cfg, datasets = studied_classes(cfg, data, Datasets(cfg.classes or ()))
     check_data(cfg, data, datasets, pool_photos(cfg.synth, needed_methods(grid), base))
     data = replace(data, leaks=check_test_leaks(cfg, data, datasets, base))
     write_leaks(out / LEAKS_FILE, data.leaks, cfg.leakage.threshold, cfg.leakage.action)

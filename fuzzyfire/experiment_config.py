@@ -39,7 +39,11 @@ class RealConfig:
     path: Optional[Path] = None  # dataset folder (any format the toolkit reads) or COCO .json
     format: Literal["auto", "coco", "yolo", "voc", "dfire"] = "auto"  # the folder's layout; auto: detected
     aliases: dict[str, str] = field(default_factory=dict)  # source class -> class, e.g. {flame: fire}
-    drop_classes: tuple[str, ...] = ()  # classes whose boxes are removed (their images stay)
+    drop_classes: tuple[str, ...] = ()  # classes whose boxes are removed (an image left without boxes leaves)
+    emptied: Literal["leave", "negatives"] = "leave"  # an image whose every box was removed (drop_classes, or
+    # a class not studied): leave = it leaves every split, counted on the answer's first screen | negatives = it
+    # stays as an image without the studied classes (only when such images really hold none, e.g. a
+    # 'default' box on frames without fire)
     curate: Optional[CurateConfig] = None  # `fuzzyfire curate` settings; sources: [] = curate ``path``
     standin: Optional[StandInConfig] = None  # a generated stand-in instead of real photos (configs/demo.yaml)
     train_split: str = "train"  # mixtures draw their real images from this split
@@ -62,12 +66,12 @@ class RealConfig:
         return "path"
 
     def curate_config(self) -> CurateConfig:
-        """``curate`` with its sources filled in from ``path`` when it lists none."""
+        """``curate`` with its sources filled in from ``path`` when it lists none (``drop_classes`` apply to the
+        curated set, as for a folder read in place: :func:`curate.core.load.with_classes`)."""
         assert self.curate is not None, "curate_config() without real.curate"
         if self.curate.sources:
             return self.curate
-        src = SourceConfig(self.path, self.format, aliases=self.aliases, drop_classes=self.drop_classes)
-        return replace(self.curate, sources=(src,))
+        return replace(self.curate, sources=(SourceConfig(self.path, self.format, aliases=self.aliases),))
 
 
 @dataclass(frozen=True)
@@ -82,7 +86,9 @@ class EvalSetConfig:
     # only; auto: detected
     split: Optional[str] = None  # null = every image of the folder
     aliases: dict[str, str] = field(default_factory=dict)  # source class -> class, e.g. {Fire: fire}
-    drop_classes: tuple[str, ...] = ()  # classes whose boxes are removed (their images stay, maybe as negatives)
+    drop_classes: tuple[str, ...] = ()  # classes whose boxes are removed (an image left without boxes leaves)
+    emptied: Literal["leave", "negatives"] = "leave"  # an image whose every box was removed: leave (counted) |
+    # negatives (it stays as an image without the studied classes)
     standin: Optional[StandInConfig] = None  # a generated stand-in set instead of a folder
     holdout: float = 0.0  # 0 = every image; 0 < share <= 1 = only the held-out share (chosen by content hash)
     name: Optional[str] = None  # label in tables and figures; null = the key under ``tests:``
@@ -174,7 +180,8 @@ class ExperimentConfig:
     real: RealConfig  # the real data: a folder read as is, a folder curated first, or a stand-in
     rare: Optional[RareConfig] = None  # the rare test set (never trained on); null = none
     tests: dict[str, EvalSetConfig] = field(default_factory=dict)  # more test sets, by name (scored, not trained on)
-    classes: tuple[str, ...] = ("fire",)  # trained and scored classes; other classes' boxes are dropped
+    classes: Optional[tuple[str, ...]] = None  # trained and scored classes; null = every class the real data
+    # boxes (synonyms mapped: Fire/flame -> fire), less real.drop_classes; other classes' boxes are removed
     synth: SynthConfig = field(default_factory=SynthConfig)  # the synthetic pools
     grid: GridConfig = field(default_factory=GridConfig)  # which mixtures and seeds are trained
     train: TrainConfig = field(default_factory=TrainConfig)  # each run's detector training (fuzzyfire train's settings)
@@ -203,8 +210,8 @@ class ExperimentConfig:
             )
         if not self.grid.mixtures and not self.grid.table1:
             raise ExperimentConfigError("grid.mixtures and grid.table1 are both empty: nothing to train")
-        if not self.classes:
-            raise ExperimentConfigError("classes is empty")
+        if self.classes is not None and not self.classes:
+            raise ExperimentConfigError("classes is empty (null: the classes of the real data)")
         if not 0.0 <= self.leakage.threshold <= 2.0:
             raise ExperimentConfigError(f"leakage.threshold must be in 0..2, got {self.leakage.threshold:g}")
         try:

@@ -143,17 +143,32 @@ def _absolute(path: Path, base: Path) -> Path:
 
 
 def folder_ref(
-    path: Path, base: Path, fmt: str, aliases, drop, split: str | None = None, holdout: float = 0.0
+    path: Path,
+    base: Path,
+    fmt: str,
+    aliases,
+    drop,
+    split: str | None = None,
+    holdout: float = 0.0,
+    emptied: str = "leave",
 ) -> DataRef:
     """A user's dataset read in place (identity = its resolved path and reading options; ``holdout``, the share
     of held-out photos it is cut to, only when set)."""
     where = _absolute(path, base)
     if not where.exists():
         raise FileNotFoundError(f"{where}: dataset not found")
-    identity = {"kind": "folder", "path": where.as_posix(), "format": fmt, "aliases": dict(aliases), "drop": list(drop)}
+    identity = {"kind": "folder", "path": where.as_posix(), "format": fmt, "aliases": dict(aliases)}
     if holdout:
         identity["holdout"] = holdout
-    return DataRef(where, identity, fmt, split, dict(aliases), tuple(drop), holdout=holdout)
+    ref = DataRef(where, identity, fmt, split, dict(aliases), holdout=holdout)
+    return with_class_rules(ref, drop, emptied)
+
+
+def with_class_rules(ref: DataRef, drop, emptied: str) -> DataRef:
+    """``ref`` with the classes ``drop`` removed and ``emptied`` as the fate of an image left without boxes
+    (:func:`curate.core.load.with_classes`), both in its identity."""
+    identity = {**ref.identity, "drop": list(drop), "emptied": emptied}
+    return replace(ref, identity=identity, drop=tuple(drop), emptied=emptied)
 
 
 def standin_stage(root: Path, name: str, cfg: Any) -> tuple[Stage, DataRef]:

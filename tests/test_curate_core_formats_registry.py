@@ -39,6 +39,10 @@ def test_drop_classes_silences_their_unknown_class_warning(tmp_path):
     assert dropped.dataset.category_names == ["fire"] and len(dropped.dataset.annotations) == 2
     assert not [p for p in dropped.problems if p.level == "warning"]
     assert any(p.reason == "dropped 1 boxes of class 'default' as asked" for p in dropped.problems)
+    assert not any("now images without boxes" in p.reason for p in dropped.problems)  # image a keeps its fire
+    no_fire = result.drop_classes(["fire"])  # image b had only a fire box: its new role is said
+    assert any(p.reason == "1 images had only boxes of fire and are now images without boxes (negatives)"
+               for p in no_fire.problems)  # fmt: skip
     assert result.drop_classes([]) is result and result.dataset.category_names == ["fire", "default"]
 
 

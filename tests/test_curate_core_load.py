@@ -6,7 +6,8 @@ from pathlib import Path
 
 import pytest
 
-from curate.core.load import SplitError, load_split, pick_split, with_classes
+from curate.core.dataset import Dataset, DatasetBuilder
+from curate.core.load import SplitError, class_changes, data_classes, load_split, pick_split, with_classes
 
 
 def test_pick_split_by_name_alias_or_default(split_folder: Path) -> None:
@@ -72,3 +73,38 @@ def test_a_drop_class_the_data_lacks_and_a_split_of_an_unsplit_set_are_named(spl
                            ds.annotations, ds.categories)  # fmt: skip
     with pytest.raises(SplitError, match=r"no split 'val' \(no splits: its 10 images are one set\)"):
         pick_split(unsplit, "val")
+
+
+def _fire_smoke() -> Dataset:
+    """Five images: 1 fire, 2 fire + smoke, 3 smoke only, 4 smoke + default, 5 no box (a negative)."""
+    b = DatasetBuilder(Path("/data"), ["smoke", "fire", "default"])
+    for i in range(1, 6):
+        b.add_image(f"{i}.jpg", 100, 100)
+    for image, name in ((1, "fire"), (2, "fire"), (2, "smoke"), (3, "smoke"), (3, "smoke"), (4, "smoke"), (4, "default")):
+        b.add_box(image, name, [10, 10, 20, 20])
+    return b.build()
+
+
+def test_an_image_whose_boxes_were_all_removed_leaves_unless_asked() -> None:
+    ds = _fire_smoke()
+    fire = with_classes(ds, ["fire"])
+    assert [img.file_name for img in fire.images] == ["1.jpg", "2.jpg", "5.jpg"]  # 3 and 4 had no fire: gone
+    assert fire.num_negatives() == 1  # the image that never had a box stays a negative
+    kept = with_classes(ds, ["fire"], emptied="negatives")
+    assert len(kept.images) == 5 and kept.num_negatives() == 3
+    changes = class_changes(ds, ["fire"])
+    assert changes.unstudied == {"smoke": 4, "default": 1} and changes.dropped == {} and changes.emptied == 2
+    assert "smoke 4 boxes not studied" in changes.text() and "2 images had only those boxes and left" in changes.text()
+    dropped = class_changes(ds, ["fire", "smoke"], drop=["Default"])
+    assert dropped.dropped == {"default": 1} and dropped.emptied == 0  # image 4 keeps its smoke box
+    assert len(with_classes(ds, ["fire", "smoke"], drop=["default"]).images) == 5
+    assert not class_changes(ds, ["smoke", "fire", "default"])  # nothing removed
+    with pytest.raises(ValueError, match="emptied must be one of leave, negatives"):
+        with_classes(ds, ["fire"], emptied="keep")  # type: ignore[arg-type]
+
+
+def test_the_data_classes_are_the_boxed_ones_known_first() -> None:
+    ds = _fire_smoke()
+    assert data_classes(ds) == ("fire", "smoke", "default")
+    assert data_classes(ds, drop=["DEFAULT"]) == ("fire", "smoke")
+    assert data_classes(ds.filter_images(lambda img: img.id == 5)) == ()  # no box, no class

@@ -61,7 +61,12 @@ class ReadResult:
         counts = Counter(ds.categories[a.category_id - 1].name for a in ds.annotations)
         problems = [p for p in self.problems if p.code not in {f"unknown-class:{n}" for n in drop}]
         problems += [Problem(where, f"dropped {counts[n]} boxes of class {n!r} as asked", "info") for n in sorted(drop)]
-        return ReadResult(ds.drop_categories(drop), problems, self.unlabelled, self.source_classes)
+        left = ds.drop_categories(drop)
+        emptied = len({a.image_id for a in ds.annotations}) - len({a.image_id for a in left.annotations})
+        if emptied:
+            problems.append(Problem(where, f"{emptied} images had only boxes of {', '.join(sorted(drop))} and are "
+                                           "now images without boxes (negatives)", "info"))  # fmt: skip
+        return ReadResult(left, problems, self.unlabelled, self.source_classes)
 
 
 def list_images(folder: Path) -> list[Path]:
