@@ -19,7 +19,7 @@ from curate.core.load import ClassChanges, class_changes, load_split, pick_split
 class DataRef:
     """A labelled dataset a run reads: ``path`` (folder or COCO .json) in ``format``, one ``split`` of it (None =
     every image), classes renamed by ``aliases`` and ``drop`` removed (an image left with no box by the class rules
-leaves the set, or stays as a negative with ``emptied`` ``negatives``: :func:`curate.core.load.with_classes`), with ``holdout`` > 0 only the images
+leaves the set unless every box it lost was of a class of ``negatives``: :func:`curate.core.load.with_classes`), with ``holdout`` > 0 only the images
     :func:`curate.core.holdout.held_out` picks at that share, and without the images ``exclude`` names (their
     ``file_name``: test images that leak from the training data, :mod:`fuzzyfire.leakage`). ``identity``: what made it
     (hashable JSON; no absolute output paths, so two experiment folders give the same run identities)."""
@@ -33,7 +33,7 @@ leaves the set, or stays as a negative with ``emptied`` ``negatives``: :func:`cu
     standin: bool = False
     holdout: float = 0.0
     exclude: tuple[str, ...] = ()
-    emptied: str = "leave"
+    negatives: tuple[str, ...] = ()
 
     def with_split(self, split: str | None) -> DataRef:
         return replace(self, split=split)
@@ -73,9 +73,9 @@ class Datasets:
     def get(self, ref: DataRef) -> Dataset:
         """Split ``ref.split`` (None = every image) with exactly the experiment's classes, in their order.
         Raises ValueError when the split is missing or has no images."""
-        key = (ref.source(), ref.split, ref.drop, ref.holdout, ref.exclude, ref.emptied)
+        key = (ref.source(), ref.split, ref.drop, ref.holdout, ref.exclude, ref.negatives)
         if key not in self._prepared:
-            ds = prepare(self.read(ref), ref.split, self.classes, ref.drop, ref.path, ref.emptied)  # type: ignore[arg-type]
+            ds = prepare(self.read(ref), ref.split, self.classes, ref.drop, ref.path, ref.negatives)
             self._prepared[key] = _narrowed(ds, ref)
         return self._prepared[key]
 
@@ -83,7 +83,7 @@ class Datasets:
         """What the class rules remove from split ``ref.split`` (None = every image) of ``ref``'s dataset
         (:func:`curate.core.load.class_changes`), before its hold-out and leaked images are taken out."""
         chosen = pick_split(self.read(ref), ref.split, ref.path)
-        return class_changes(chosen, self.classes, ref.drop, ref.emptied)  # type: ignore[arg-type]
+        return class_changes(chosen, self.classes, ref.drop, ref.negatives)
 
 
 def _narrowed(ds: Dataset, ref: DataRef) -> Dataset:
@@ -97,5 +97,5 @@ def _narrowed(ds: Dataset, ref: DataRef) -> Dataset:
 
 def load_data(ref: DataRef, classes: Sequence[str]) -> Dataset:
     """``ref``'s split with exactly ``classes``, read from disk now (a run outside an experiment)."""
-    ds = load_split(ref.path, ref.format, ref.split, classes, dict(ref.aliases), ref.drop, ref.emptied)  # type: ignore[arg-type]
+    ds = load_split(ref.path, ref.format, ref.split, classes, dict(ref.aliases), ref.drop, ref.negatives)
     return _narrowed(ds, ref)

@@ -70,10 +70,10 @@ def prepare_data(cfg: ExperimentConfig, base: Path, out: Path, methods: Sequence
     real = cfg.real
     kind = real.source()
     if kind == "path":
-        real_ref = folder_ref(real.path, base, real.format, real.aliases, real.drop_classes, emptied=real.emptied)
+        real_ref = folder_ref(real.path, base, real.format, real.aliases, real.drop_classes, negatives=real.negative_classes)
     elif kind == "curate":
         curated = _stage("real (curated)", curate_stage, root, real.curate_config(), base)
-        real_ref = with_class_rules(curated, real.drop_classes, real.emptied)
+        real_ref = with_class_rules(curated, real.drop_classes, real.negative_classes)
     else:
         real_ref = _stage("real (stand-in)", standin_stage, root, "real-standin", real.standin)
     rare_ref = _test_ref(cfg.rare, "rare", "rare-standin", base, root) if cfg.rare is not None else None
@@ -97,7 +97,7 @@ def prepare_pools(cfg: ExperimentConfig, base: Path, out: Path, methods: Sequenc
 def _test_ref(t: EvalSetConfig, what: str, stage: str, base: Path, root: Path) -> DataRef:
     """A test set's data: its folder read in place, or its stand-in built as stage ``stage``."""
     if t.source() == "path":
-        return folder_ref(t.path, base, t.format, t.aliases, t.drop_classes, t.split, t.holdout, t.emptied)
+        return folder_ref(t.path, base, t.format, t.aliases, t.drop_classes, t.split, t.holdout, t.negative_classes)
     return _stage(f"{what} (stand-in)", standin_stage, root, stage, t.standin)
 
 

@@ -40,10 +40,9 @@ class RealConfig:
     format: Literal["auto", "coco", "yolo", "voc", "dfire"] = "auto"  # the folder's layout; auto: detected
     aliases: dict[str, str] = field(default_factory=dict)  # source class -> class, e.g. {flame: fire}
     drop_classes: tuple[str, ...] = ()  # classes whose boxes are removed (an image left without boxes leaves)
-    emptied: Literal["leave", "negatives"] = "leave"  # an image whose every box was removed (drop_classes, or
-    # a class not studied): leave = it leaves every split, counted on the answer's first screen | negatives = it
-    # stays as an image without the studied classes (only when such images really hold none, e.g. a
-    # 'default' box on frames without fire)
+    negative_classes: tuple[str, ...] = ()  # classes whose boxes mark images without the studied classes (e.g.
+    # 'default', a near-full-frame box on frames without fire): removed, their images stay as negatives. An image
+    # whose every box was removed otherwise (drop_classes, a class not studied) leaves every split, counted
     curate: Optional[CurateConfig] = None  # `fuzzyfire curate` settings; sources: [] = curate ``path``
     standin: Optional[StandInConfig] = None  # a generated stand-in instead of real photos (configs/demo.yaml)
     train_split: str = "train"  # mixtures draw their real images from this split
@@ -87,8 +86,8 @@ class EvalSetConfig:
     split: Optional[str] = None  # null = every image of the folder
     aliases: dict[str, str] = field(default_factory=dict)  # source class -> class, e.g. {Fire: fire}
     drop_classes: tuple[str, ...] = ()  # classes whose boxes are removed (an image left without boxes leaves)
-    emptied: Literal["leave", "negatives"] = "leave"  # an image whose every box was removed: leave (counted) |
-    # negatives (it stays as an image without the studied classes)
+    negative_classes: tuple[str, ...] = ()  # classes whose boxes mark images without the studied classes:
+    # removed, their images stay as negatives (any other image left without boxes leaves the set, counted)
     standin: Optional[StandInConfig] = None  # a generated stand-in set instead of a folder
     holdout: float = 0.0  # 0 = every image; 0 < share <= 1 = only the held-out share (chosen by content hash)
     name: Optional[str] = None  # label in tables and figures; null = the key under ``tests:``

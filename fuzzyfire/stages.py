@@ -150,7 +150,7 @@ def folder_ref(
     drop,
     split: str | None = None,
     holdout: float = 0.0,
-    emptied: str = "leave",
+    negatives=(),
 ) -> DataRef:
     """A user's dataset read in place (identity = its resolved path and reading options; ``holdout``, the share
     of held-out photos it is cut to, only when set)."""
@@ -161,14 +161,14 @@ def folder_ref(
     if holdout:
         identity["holdout"] = holdout
     ref = DataRef(where, identity, fmt, split, dict(aliases), holdout=holdout)
-    return with_class_rules(ref, drop, emptied)
+    return with_class_rules(ref, drop, negatives)
 
 
-def with_class_rules(ref: DataRef, drop, emptied: str) -> DataRef:
-    """``ref`` with the classes ``drop`` removed and ``emptied`` as the fate of an image left without boxes
-    (:func:`curate.core.load.with_classes`), both in its identity."""
-    identity = {**ref.identity, "drop": list(drop), "emptied": emptied}
-    return replace(ref, identity=identity, drop=tuple(drop), emptied=emptied)
+def with_class_rules(ref: DataRef, drop, negatives) -> DataRef:
+    """``ref`` with the classes ``drop`` and ``negatives`` removed, images left without boxes leaving it unless
+    their boxes were all of ``negatives`` (:func:`curate.core.load.with_classes`), both in its identity."""
+    identity = {**ref.identity, "drop": list(drop), "negative_classes": list(negatives)}
+    return replace(ref, identity=identity, drop=tuple(drop), negatives=tuple(negatives))
 
 
 def standin_stage(root: Path, name: str, cfg: Any) -> tuple[Stage, DataRef]:

@@ -85,22 +85,31 @@ def _fire_smoke() -> Dataset:
     return b.build()
 
 
-def test_an_image_whose_boxes_were_all_removed_leaves_unless_asked() -> None:
+def test_an_image_whose_boxes_were_all_removed_leaves_unless_its_class_marks_a_negative() -> None:
     ds = _fire_smoke()
     fire = with_classes(ds, ["fire"])
     assert [img.file_name for img in fire.images] == ["1.jpg", "2.jpg", "5.jpg"]  # 3 and 4 had no fire: gone
     assert fire.num_negatives() == 1  # the image that never had a box stays a negative
-    kept = with_classes(ds, ["fire"], emptied="negatives")
-    assert len(kept.images) == 5 and kept.num_negatives() == 3
     changes = class_changes(ds, ["fire"])
     assert changes.unstudied == {"smoke": 4, "default": 1} and changes.dropped == {} and changes.emptied == 2
-    assert "smoke 4 boxes not studied" in changes.text() and "2 images had only those boxes and left" in changes.text()
+    assert changes.text() == "smoke: 4 boxes not studied; default: 1 boxes not studied; 2 images had only such " \
+        "boxes and left the set"  # fmt: skip
+    marked = with_classes(ds, ["fire", "smoke"], negatives=["Default"])  # 4 keeps its smoke box
+    assert len(marked.images) == 5 and marked.category_names == ["fire", "smoke"]
+    only = ds.filter_images(lambda img: img.id != 4)
+    b = DatasetBuilder(Path("/data"), ["default"])
+    b.add_box(b.add_image("6.jpg", 100, 100), "default", [0, 0, 100, 100])
+    from curate.core.dataset import merge
+
+    both = merge([only, b.build()], Path("/data"), ["smoke", "fire", "default"])
+    kept = with_classes(both, ["fire"], negatives=["default"])
+    assert [Path(img.file_name).name for img in kept.images] == ["1.jpg", "2.jpg", "5.jpg", "6.jpg"]  # 6: negative
+    assert kept.num_negatives() == 2
+    counted = class_changes(both, ["fire"], negatives=["default"])
+    assert (counted.negative, counted.negatives, counted.emptied) == ({"default": 1}, 1, 1)  # 3 left (smoke only)
     dropped = class_changes(ds, ["fire", "smoke"], drop=["Default"])
     assert dropped.dropped == {"default": 1} and dropped.emptied == 0  # image 4 keeps its smoke box
-    assert len(with_classes(ds, ["fire", "smoke"], drop=["default"]).images) == 5
     assert not class_changes(ds, ["smoke", "fire", "default"])  # nothing removed
-    with pytest.raises(ValueError, match="emptied must be one of leave, negatives"):
-        with_classes(ds, ["fire"], emptied="keep")  # type: ignore[arg-type]
 
 
 def test_the_data_classes_are_the_boxed_ones_known_first() -> None:

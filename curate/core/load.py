@@ -1,7 +1,7 @@
 """One split of a dataset with the classes a task wants: the one way every command and the experiment pick a
 split, drop classes and fix the category list (read, :func:`pick_split`, :func:`with_classes`; both:
 :func:`prepare`; read and prepare: :func:`load_split`). The class rules: an image whose every box was removed is
-not a negative unless asked (``emptied``), and :func:`class_changes` counts what the rules touched."""
+not a negative unless its class says so (``negatives``), and :func:`class_changes` counts what the rules touched."""
 
 from __future__ import annotations
 
@@ -9,7 +9,6 @@ from collections import Counter
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Literal
 
 from curate.core.classes import KNOWN_CLASSES, canonical_class
 from curate.core.dataset import Dataset
@@ -46,71 +45,93 @@ def splits_found(ds: Dataset) -> str:
     return "splits: " + ", ".join(repr(s) for s in named) + unsplit
 
 
-#: What becomes of an image whose every box was removed (a dropped class, or a class not studied): ``leave`` =
-#: it leaves the set (counted, :class:`ClassChanges`); ``negatives`` = it stays as an image without the classes.
-Emptied = Literal["leave", "negatives"]
-EMPTIED: tuple[str, ...] = ("leave", "negatives")
-
-
 @dataclass(frozen=True)
 class ClassChanges:
-    """What the class rules did to one set: boxes removed per source class (``dropped``: named in drop_classes;
-    ``unstudied``: not among the studied classes), the images left with no box (``emptied``) and whether they left
-    the set (``emptied_rule`` ``leave``) or stayed as negatives (``negatives``)."""
+    """What the class rules did to one set: boxes removed per class (``dropped``: named in drop_classes;
+    ``unstudied``: not among the studied classes; ``negative``: named in negative_classes, boxes that mark an image
+    without the studied classes), the images left with no box that left the set (``emptied``: every image that
+    lost a dropped or unstudied box and has none left) and those kept as negatives (``negatives``: every box it
+    lost was of a negative class)."""
 
     dropped: Mapping[str, int] = field(default_factory=dict)
     unstudied: Mapping[str, int] = field(default_factory=dict)
+    negative: Mapping[str, int] = field(default_factory=dict)
     emptied: int = 0
-    emptied_rule: str = "leave"
+    negatives: int = 0
 
     def __bool__(self) -> bool:
-        return bool(self.dropped or self.unstudied)
+        return bool(self.dropped or self.unstudied or self.negative)
 
     def to_dict(self) -> dict:
-        return {"dropped": dict(self.dropped), "unstudied": dict(self.unstudied), "emptied": self.emptied,
-                "emptied_rule": self.emptied_rule}  # fmt: skip
+        return {"dropped": dict(self.dropped), "unstudied": dict(self.unstudied), "negative": dict(self.negative),
+                "emptied": self.emptied, "negatives": self.negatives}  # fmt: skip
 
     def text(self) -> str:
-        """One clause: ``smoke 2,194 boxes not studied; 97 images had only those boxes and left the set``."""
-        parts = [f"{n} {c:,} boxes dropped (drop_classes)" for n, c in self.dropped.items()]
-        parts += [f"{n} {c:,} boxes not studied" for n, c in self.unstudied.items()]
+        """One clause: ``smoke: 2,194 boxes not studied; 97 images had only such boxes and left the set``."""
+        parts = [f"{n}: {c:,} boxes dropped (drop_classes)" for n, c in self.dropped.items()]
+        parts += [f"{n}: {c:,} boxes not studied" for n, c in self.unstudied.items()]
+        parts += [f"{n}: {c:,} boxes removed as marks of images without fire (negative_classes)"
+                  for n, c in self.negative.items()]  # fmt: skip
         if not parts:
             return "no class removed"
-        fate = "left the set" if self.emptied_rule == "leave" else "stayed as images without them (emptied: negatives)"
-        return "; ".join(parts) + f"; {self.emptied:,} images had only those boxes and {fate}"
+        fates = [f"{self.emptied:,} images had only such boxes and left the set"] if self.dropped or self.unstudied else []
+        fates += [f"{self.negatives:,} images stay as negatives"] if self.negative else []
+        return "; ".join(parts + fates)
 
 
-def class_changes(ds: Dataset, classes: Sequence[str], drop: Sequence[str] = (), emptied: Emptied = "leave") -> ClassChanges:
+def class_changes(
+    ds: Dataset, classes: Sequence[str], drop: Sequence[str] = (), negatives: Sequence[str] = ()
+) -> ClassChanges:
     """What :func:`with_classes` (same arguments) removes from ``ds``: boxes per class and the emptied images."""
-    drop = [canonical_class(n) for n in drop]
+    drop, negatives = [canonical_class(n) for n in drop], [canonical_class(n) for n in negatives]
     counts = Counter(ds.categories[a.category_id - 1].name for a in ds.annotations)
-    gone = _removed(ds, classes, drop)
-    kept = {a.image_id for a in ds.annotations if ds.categories[a.category_id - 1].name not in gone}
-    boxed = {a.image_id for a in ds.annotations}
+    gone = _removed(ds, classes, drop, negatives)
+    left, kept = _emptied(ds, gone, negatives)
     return ClassChanges(
         {n: counts[n] for n in ds.category_names if n in drop and counts[n]},
-        {n: counts[n] for n in ds.category_names if n in gone and n not in drop and counts[n]},
-        len(boxed - kept),
-        emptied,
+        {n: counts[n] for n in ds.category_names if n in gone and n not in drop and n not in negatives and counts[n]},
+        {n: counts[n] for n in ds.category_names if n in negatives and counts[n]},
+        len(left),
+        len(kept),
     )
 
 
-def _removed(ds: Dataset, classes: Sequence[str], drop: Sequence[str]) -> list[str]:
-    return [*drop, *(n for n in ds.category_names if n not in classes and n not in drop)]
+def _removed(ds: Dataset, classes: Sequence[str], drop: Sequence[str], negatives: Sequence[str]) -> list[str]:
+    named = [*drop, *negatives]
+    return [*named, *(n for n in ds.category_names if n not in classes and n not in named)]
 
 
-def with_classes(ds: Dataset, classes: Sequence[str], drop: Sequence[str] = (), emptied: Emptied = "leave") -> Dataset:
-    """``ds`` with exactly the categories ``classes``, in that order: boxes of ``drop`` and of every class not in
-    ``classes`` removed. An image left with no box by that leaves the set (``emptied`` ``leave``; count them with
-    :func:`class_changes`) or stays as a negative (``negatives``); images that had no box stay negatives."""
-    if emptied not in EMPTIED:
-        raise ValueError(f"emptied must be one of {', '.join(EMPTIED)}, got {emptied!r}")
-    gone = _removed(ds, classes, drop)
+def _emptied(ds: Dataset, gone: Sequence[str], negatives: Sequence[str]) -> tuple[set[int], set[int]]:
+    """The ids of the images that lose every box to ``gone``: (those that leave, those kept as negatives because
+    every box they lose is of a class in ``negatives``)."""
+    keeps, losses = set(), Counter()
+    marks = Counter()
+    for a in ds.annotations:
+        name = ds.categories[a.category_id - 1].name
+        if name not in gone:
+            keeps.add(a.image_id)
+        else:
+            losses[a.image_id] += 1
+            marks[a.image_id] += name in negatives
+    emptied = set(losses) - keeps
+    kept = {i for i in emptied if marks[i] == losses[i]}
+    return emptied - kept, kept
+
+
+def with_classes(
+    ds: Dataset, classes: Sequence[str], drop: Sequence[str] = (), negatives: Sequence[str] = ()
+) -> Dataset:
+    """``ds`` with exactly the categories ``classes``, in that order: boxes of ``drop``, of ``negatives`` and of
+    every class not in ``classes`` removed. An image left with no box leaves the set (count them with
+    :func:`class_changes`) unless every box it lost was of a class in ``negatives`` (boxes that mark an image
+    without the studied classes, such as a 'default' box): then it stays as a negative, as do images that had no
+    box."""
+    drop, negatives = [canonical_class(n) for n in drop], [canonical_class(n) for n in negatives]
+    gone = _removed(ds, classes, drop, negatives)
     out = ds.drop_categories(gone)
-    if emptied == "leave" and len(out.annotations) != len(ds.annotations):
-        boxed = {a.image_id for a in ds.annotations}
-        kept = {a.image_id for a in out.annotations}
-        out = out.filter_images(lambda img: img.id not in boxed or img.id in kept)
+    if len(out.annotations) != len(ds.annotations):
+        left, _ = _emptied(ds, gone, negatives)
+        out = out.filter_images(lambda img: img.id not in left)
     return out.with_categories(list(classes))
 
 
@@ -129,17 +150,18 @@ def prepare(
     classes: Sequence[str] | None = None,
     drop: Sequence[str] = (),
     where: Path | str = "",
-    emptied: Emptied = "leave",
+    negatives: Sequence[str] = (),
 ) -> Dataset:
     """Split ``split`` of ``ds`` (None = every image; :func:`pick_split`), then :func:`with_classes` (``classes``
-    None: only ``drop`` removed, images kept; ``emptied``: what becomes of an image left with no box). Raises :class:`SplitError` for a missing or empty split or no images and
+    None: only ``drop`` removed, images kept; ``negatives``: classes whose images stay as negatives). Raises :class:`SplitError` for a missing or empty split or no images and
     :class:`~curate.core.names.UnknownNameError` for a class of ``drop`` the dataset does not have."""
-    drop = [canonical_class(n) for n in drop]
+    drop, negatives = [canonical_class(n) for n in drop], [canonical_class(n) for n in negatives]
     check_names("class", drop, ds.category_names, str(where or ds.root), "classes", "drop_classes")
+    check_names("class", negatives, ds.category_names, str(where or ds.root), "classes", "negative_classes")
     chosen = pick_split(ds, split, where)
     if not chosen.images:
         raise SplitError(f"{where or ds.root}: no images")
-    return chosen.drop_categories(drop) if classes is None else with_classes(chosen, classes, drop, emptied)
+    return chosen.drop_categories(drop) if classes is None else with_classes(chosen, classes, drop, negatives)
 
 
 def load_split(
@@ -149,9 +171,9 @@ def load_split(
     classes: Sequence[str] | None = None,
     aliases: Mapping[str, str] | None = None,
     drop: Sequence[str] = (),
-    emptied: Emptied = "leave",
+    negatives: Sequence[str] = (),
 ) -> Dataset:
     """Read the dataset at ``path`` (:func:`curate.core.formats.registry.read_dataset`, class ``aliases``
     applied; an alias of a class the dataset does not have is an :class:`~curate.core.names.UnknownNameError`)
     and :func:`prepare` split ``split`` with ``classes``."""
-    return prepare(read_dataset(path, fmt, aliases=aliases or None).dataset, split, classes, drop, path, emptied)
+    return prepare(read_dataset(path, fmt, aliases=aliases or None).dataset, split, classes, drop, path, negatives)
