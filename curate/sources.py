@@ -10,8 +10,8 @@ from pathlib import Path
 from typing import Literal, Optional
 
 from curate.core.dataset import Dataset, merge
-from curate.core.load import data_classes
 from curate.core.formats.registry import read_dataset
+from curate.core.load import data_classes
 from curate.core.problems import Problem
 
 

@@ -70,7 +70,9 @@ def prepare_data(cfg: ExperimentConfig, base: Path, out: Path, methods: Sequence
     real = cfg.real
     kind = real.source()
     if kind == "path":
-        real_ref = folder_ref(real.path, base, real.format, real.aliases, real.drop_classes, negatives=real.negative_classes)
+        real_ref = folder_ref(
+            real.path, base, real.format, real.aliases, real.drop_classes, negatives=real.negative_classes
+        )
     elif kind == "curate":
         curated = _stage("real (curated)", curate_stage, root, real.curate_config(), base)
         real_ref = with_class_rules(curated, real.drop_classes, real.negative_classes)

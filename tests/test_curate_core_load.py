@@ -80,7 +80,15 @@ def _fire_smoke() -> Dataset:
     b = DatasetBuilder(Path("/data"), ["smoke", "fire", "default"])
     for i in range(1, 6):
         b.add_image(f"{i}.jpg", 100, 100)
-    for image, name in ((1, "fire"), (2, "fire"), (2, "smoke"), (3, "smoke"), (3, "smoke"), (4, "smoke"), (4, "default")):
+    for image, name in (
+        (1, "fire"),
+        (2, "fire"),
+        (2, "smoke"),
+        (3, "smoke"),
+        (3, "smoke"),
+        (4, "smoke"),
+        (4, "default"),
+    ):
         b.add_box(image, name, [10, 10, 20, 20])
     return b.build()
 

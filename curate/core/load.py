@@ -74,7 +74,9 @@ class ClassChanges:
                   for n, c in self.negative.items()]  # fmt: skip
         if not parts:
             return "no class removed"
-        fates = [f"{self.emptied:,} images had only such boxes and left the set"] if self.dropped or self.unstudied else []
+        fates = (
+            [f"{self.emptied:,} images had only such boxes and left the set"] if self.dropped or self.unstudied else []
+        )
         fates += [f"{self.negatives:,} images stay as negatives"] if self.negative else []
         return "; ".join(parts + fates)
 
