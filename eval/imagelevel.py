@@ -27,7 +27,7 @@ from numpy.typing import NDArray
 from curate.core.boxes import box_iou_xyxy, xywh_to_xyxy, xyxy_to_cxcywh
 from curate.core.dataset import Dataset
 from eval.operating import Alarms
-from eval.stats import PairedDelta, paired_delta, resample_weights
+from eval.stats import PairedDelta, paired_delta, resample_weights, resampled, seed_picks
 
 HIT_IOU = 0.1  # IoU with a fire box at which a detection hits it (or its centre inside the box)
 IMAGE_RECALL = "image_recall"  # result key: share of fire images detected at the operating threshold (0..1)
@@ -120,12 +120,14 @@ def paired_image_recall(
     budget: float = 10.0,
     mask: NDArray[np.bool_] | None = None,
     level: float = 0.95,
+    seeds: bool = False,
 ) -> PairedDelta:
     """Paired bootstrap of the image-recall difference ``b - a`` on the images of ``mask`` (I,) (default all):
     each resample draws those images and, independently, the images without fire of each run's
     :class:`eval.operating.Alarms`, and reads each run at the threshold that keeps its false-alarm images within
     ``budget`` per 100 on the drawn ones; a run given a float is read at that fixed confidence instead. Each side
-    may be several runs (seeds), averaged per resample; every run is scored on the same images."""
+    may be several runs (seeds), averaged per resample; every run is scored on the same images. ``seeds``: each
+    resample also draws the seeds (:func:`eval.stats.seed_picks`: run i of each side is seed i)."""
     runs = [*a, *b]
     if not a or not b:
         raise ValueError("paired bootstrap needs at least one run on each side")
@@ -135,17 +137,20 @@ def paired_image_recall(
     where = np.flatnonzero(keep)
     free = next((al.images for _, al in runs if isinstance(al, Alarms)), 0)
 
-    def mean_recall(side, w=None, wn=None) -> float:
+    def mean_recall(side, w=None, wn=None, pick=None) -> float:
+        chosen = side if pick is None else [side[i] for i in pick]
         return float(
-            np.mean([h.recall(al.threshold(budget, wn) if isinstance(al, Alarms) else al, w) for h, al in side])
+            np.mean([h.recall(al.threshold(budget, wn) if isinstance(al, Alarms) else al, w) for h, al in chosen])
         )
 
     full = keep.astype(np.float64)
     samples = np.empty(num_samples)
     drawn = resample_weights(len(where), num_samples, rng)
     negatives = resample_weights(free, num_samples, rng) if free else [None] * num_samples
+    picks = seed_picks(len(a), len(b), num_samples, rng, seeds)
     for s, (wd, wn) in enumerate(zip(drawn, negatives)):
         w = np.zeros(len(keep))
         w[where] = wd
-        samples[s] = mean_recall(b, w, wn) - mean_recall(a, w, wn)
-    return paired_delta(mean_recall(b, full) - mean_recall(a, full), samples, level)
+        pick = None if picks is None else picks[s]
+        samples[s] = mean_recall(b, w, wn, pick) - mean_recall(a, w, wn, pick)
+    return paired_delta(mean_recall(b, full) - mean_recall(a, full), samples, level, resampled(picks))

@@ -182,7 +182,8 @@ def errors_html(rows: Sequence[Mapping[str, Any]]) -> str:
 def comparisons_html(rows: Sequence[Mapping[str, Any]]) -> str:
     """Paired comparisons: rows with ``test_set``, ``mixture``, ``baseline``, ``metric`` and a
     :meth:`eval.stats.PairedDelta.to_dict` (``value``, ``low``, ``high``, ``p_value``), in AP (or recall) points."""
-    head = "<tr><th>test set</th><th>mixture</th><th>vs</th><th>metric</th><th>Δ</th><th>95% CI</th><th>p</th></tr>"
+    head = ("<tr><th>test set</th><th>mixture</th><th>vs</th><th>metric</th><th>Δ</th><th>95% CI</th><th>p</th>"
+            "<th>per seed</th><th>resampled</th></tr>")  # fmt: skip
     body = []
     for r in rows:
         d, metric = r["delta"], METRIC_LABELS.get(r["metric"], str(r["metric"]))
@@ -190,23 +191,32 @@ def comparisons_html(rows: Sequence[Mapping[str, Any]]) -> str:
             f"<tr><td>{html.escape(str(r['test_set']))}</td><td>{html.escape(str(r['mixture']))}</td>"
             f"<td>{html.escape(str(r['baseline']))}</td><td>{html.escape(metric)}</td>"
             f"<td>{100 * d['value']:+.1f}</td><td>[{100 * d['low']:+.1f}, {100 * d['high']:+.1f}]</td>"
-            f"<td>{d['p_value']:.3f}</td></tr>"
+            f"<td>{d['p_value']:.3f}</td><td>{html.escape(per_seed_text(r))}</td>"
+            f"<td>{html.escape(str(d.get('resampled', 'images')))}</td></tr>"
         )
     return f"<table>{head}{''.join(body)}</table>"
 
 
-COMPARISON_COLUMNS = ("test_set", "mixture", "baseline", "metric", "delta", "low", "high", "p_value")
+def per_seed_text(row: Mapping[str, Any]) -> str:
+    """A comparison's per-seed differences in points, ``seed 0 +3.8, seed 1 +5.1, seed 2 -2.7`` ("" for none)."""
+    return ", ".join(f"seed {s['seed']} {100 * s['delta']:+.1f}" for s in row.get("seeds", ()))
+
+
+COMPARISON_COLUMNS = ("test_set", "mixture", "baseline", "metric", "delta", "low", "high", "p_value", "resampled",
+                      "per_seed")  # fmt: skip
 
 
 def comparisons_csv(rows: Sequence[Mapping[str, Any]]) -> str:
     """The paired comparisons (:func:`comparisons_html` rows) as CSV: deltas and their 95 % interval in AP
-    points, the bootstrap p-value."""
+    points, the bootstrap p-value, what the bootstrap resampled (images, or images and seeds) and the per-seed
+    differences (``seed:delta`` in points, separated by spaces)."""
     lines = [",".join(COMPARISON_COLUMNS)]
     for r in rows:
         d = r["delta"]
         scaled = [f"{100 * d[k]:.2f}" for k in ("value", "low", "high")]
+        seeds = " ".join(f"{s['seed']}:{100 * s['delta']:+.2f}" for s in r.get("seeds", ()))
         lines.append(",".join([str(r["test_set"]), str(r["mixture"]), str(r["baseline"]), str(r["metric"]), *scaled,
-                               f"{d['p_value']:.4f}"]))  # fmt: skip
+                               f"{d['p_value']:.4f}", str(d.get("resampled", "images")), seeds]))  # fmt: skip
     return "\n".join(lines) + "\n"
 
 

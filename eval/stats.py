@@ -248,14 +248,37 @@ class PairedDelta:
 
     interval: Interval
     p_value: float
+    resampled: str = "images"  # what each resample draws: images | images and seeds (:func:`seed_picks`)
 
     def to_dict(self) -> dict[str, float]:
-        return {**self.interval.to_dict(), "p_value": self.p_value}
+        return {**self.interval.to_dict(), "p_value": self.p_value, "resampled": self.resampled}  # type: ignore[dict-item]
 
 
-def _mean_ap(tables: Sequence[MatchTable], weights: NDArray | None) -> dict[str, float]:
+#: With at least this many seeds on each side, paired by seed, a paired bootstrap resamples the seeds as well as
+#: the test images (two levels: :func:`seed_picks`), so its interval covers how another training would land.
+MIN_SEEDS_RESAMPLED = 3
+
+
+def seed_picks(
+    na: int, nb: int, num_samples: int, rng: np.random.Generator, seeds: bool = True
+) -> NDArray[np.int64] | None:
+    """The seeds each resample of a two-level bootstrap averages, (S, k) indices into both sides' runs (the same
+    for ``a`` and ``b``: run i of each is seed i), drawn with replacement; None when the bootstrap resamples the
+    images only: ``seeds`` false, sides of different lengths or fewer than :data:`MIN_SEEDS_RESAMPLED` runs."""
+    if not seeds or na != nb or na < MIN_SEEDS_RESAMPLED:
+        return None
+    return rng.integers(0, na, size=(num_samples, na))
+
+
+def resampled(picks: NDArray[np.int64] | None) -> str:
+    """What a bootstrap with these :func:`seed_picks` resamples, as :class:`PairedDelta` says it."""
+    return "images" if picks is None else "images and seeds"
+
+
+def _mean_ap(tables: Sequence[MatchTable], weights: NDArray | None, pick: NDArray | None = None) -> dict[str, float]:
     scores = [t.ap(weights) for t in tables]
-    return {key: float(np.mean([sc[key] for sc in scores])) for key in scores[0]}
+    chosen = scores if pick is None else [scores[i] for i in pick]
+    return {key: float(np.mean([sc[key] for sc in chosen])) for key in scores[0]}
 
 
 def paired_bootstrap(
@@ -265,12 +288,15 @@ def paired_bootstrap(
     num_samples: int = 1000,
     level: float = 0.95,
     keep: NDArray[np.bool_] | None = None,
+    seeds: bool = False,
 ) -> dict[str, PairedDelta]:
     """Paired image-level bootstrap of the AP and AP50 differences ``b - a``: each resample draws one set of
     test images and scores both on it. ``a`` and ``b`` may each be several runs (e.g. one per seed) whose
     AP is averaged per resample. Every table must cover the same image ids. ``keep`` (I,): only those images
     are drawn, the others weigh 0 (a slice; give tables :meth:`MatchTable.restricted` to it, whose AP50 is then
-    the AP at their one IoU threshold)."""
+    the AP at their one IoU threshold). ``seeds``: with as many runs on each side, run i of each being seed i,
+    and at least :data:`MIN_SEEDS_RESAMPLED` of them, each resample also draws the seeds (two levels: seeds, then
+    images; :func:`seed_picks`); the image draws are the same as without."""
     ta = [a] if isinstance(a, MatchTable) else list(a)
     tb = [b] if isinstance(b, MatchTable) else list(b)
     if not ta or not tb:
@@ -283,18 +309,24 @@ def paired_bootstrap(
         where = np.flatnonzero(keep)
         weights = np.zeros((num_samples, len(keep)), dtype=np.int64)
         weights[:, where] = resample_weights(len(where), num_samples, rng)
+    picks = seed_picks(len(ta), len(tb), num_samples, rng, seeds)
     pa, pb = _mean_ap(ta, None), _mean_ap(tb, None)
     deltas: dict[str, list[float]] = {key: [] for key in pa}
-    for w in weights:
-        sa, sb = _mean_ap(ta, w), _mean_ap(tb, w)
+    for s, w in enumerate(weights):
+        pick = None if picks is None else picks[s]
+        sa, sb = _mean_ap(ta, w, pick), _mean_ap(tb, w, pick)
         for key in deltas:
             deltas[key].append(sb[key] - sa[key])
-    return {key: paired_delta(pb[key] - pa[key], np.asarray(values), level) for key, values in deltas.items()}
+    how = resampled(picks)
+    return {key: paired_delta(pb[key] - pa[key], np.asarray(values), level, how) for key, values in deltas.items()}
 
 
-def paired_delta(point: float, samples: NDArray[np.float64], level: float = 0.95) -> PairedDelta:
+def paired_delta(
+    point: float, samples: NDArray[np.float64], level: float = 0.95, how: str = "images"
+) -> PairedDelta:
     """A paired difference ``point`` with its resampled differences ``samples`` (S,): the percentile interval and
-    the two-sided bootstrap p-value of :class:`PairedDelta` over the finite samples (NaN when none)."""
+    the two-sided bootstrap p-value of :class:`PairedDelta` over the finite samples (NaN when none); ``how``: what
+    was resampled (:func:`resampled`)."""
     finite = samples[np.isfinite(samples)]
     p = min(1.0, 2 * min(np.mean(finite <= 0), np.mean(finite >= 0))) if finite.size else math.nan
-    return PairedDelta(interval(point, samples, level), float(p))
+    return PairedDelta(interval(point, samples, level), float(p), how)

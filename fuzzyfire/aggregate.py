@@ -191,23 +191,45 @@ def comparisons(cfg: ExperimentConfig, rows: Sequence[dict]) -> list[dict]:
             for table in r["tables"]:
                 runs.setdefault((table, r["mixture"]), []).append(r)
         for table, base, base_label, name in pairs:
-            a, b = runs.get((table, base), []), runs.get(("table2", name), [])
+            a, b = _by_seed(runs.get((table, base), [])), _by_seed(runs.get(("table2", name), []))
             if not a or not b:
                 continue
+            paired = [r["seed"] for r in a] == [r["seed"] for r in b]  # the same seeds: resample them too
             deltas = {}
             if all(r.get("fire_images", enough) >= enough for r in a + b):
                 tables = [[matches(r["matches"]) for r in side] for side in (a, b)]
-                deltas = paired_bootstrap(*tables, rngs[table], cfg.report.bootstrap)
+                deltas = paired_bootstrap(*tables, rngs[table], cfg.report.bootstrap, seeds=paired)
             pa, pb = [r.get(OPERATING) for r in a], [r.get(OPERATING) for r in b]
             if None not in pa + pb:  # every run on both sides scored on the sets without fire
                 deltas[RECALL_AT_ALARMS] = paired_recall_bootstrap(pa, pb, at_budget, cfg.report.bootstrap)  # type: ignore[arg-type]
             ia, ib = [r.get(IMAGELEVEL) for r in a], [r.get(IMAGELEVEL) for r in b]
             if None not in ia + ib:
-                deltas[IMAGE_RECALL] = paired_image_recall(ia, ib, frames, cfg.report.bootstrap, ALARM_BUDGET)  # type: ignore[arg-type]
+                deltas[IMAGE_RECALL] = paired_image_recall(ia, ib, frames, cfg.report.bootstrap, ALARM_BUDGET,  # type: ignore[arg-type]
+                                                           seeds=paired)  # fmt: skip
             for metric, d in deltas.items():
                 out.append({"test_set": test, "mixture": name, "baseline": base_label, "metric": metric,
-                            "delta": d.to_dict()})  # fmt: skip
+                            "delta": d.to_dict(), "seeds": seed_deltas(a, b, metric)})  # fmt: skip
     return out
+
+
+def _by_seed(runs: Sequence[dict]) -> list[dict]:
+    return sorted(runs, key=lambda r: r["seed"])
+
+
+def seed_deltas(a: Sequence[dict], b: Sequence[dict], metric: str) -> list[dict]:
+    """The difference ``b - a`` of ``metric`` in each seed both sides trained (rows of :func:`result_rows`), as
+    ``{"seed", "delta"}`` (0..1), seeds in order; a seed whose metric is missing on a side is left out."""
+    first = {r["seed"]: r.get(metric) for r in a}
+    return [{"seed": r["seed"], "delta": r[metric] - first[r["seed"]]} for r in b
+            if r.get(metric) is not None and first.get(r["seed"]) is not None]  # fmt: skip
+
+
+def sign_agreement(comparison: Mapping) -> tuple[int, int]:
+    """(seeds whose difference has the sign of the comparison's point difference, seeds): how many of a
+    :func:`comparisons` row's per-seed differences agree with its headline (a zero agrees with nothing)."""
+    point = comparison["delta"]["value"]
+    deltas = [d["delta"] for d in comparison.get("seeds", ())]
+    return sum(1 for d in deltas if d * point > 0), len(deltas)
 
 
 def write_report(

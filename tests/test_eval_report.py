@@ -59,8 +59,10 @@ def test_write_study_report_writes_tables_figures_and_page(tmp_path):
         for t in ("common", "rare")
     ]
     methods = [dict(r, method=m) for r in results if r["mixture"] == "R0_S1000" for m in ("method1", "method2")]
-    delta = {"value": 0.05, "low": 0.01, "high": 0.09, "p_value": 0.02}
-    comparisons = [{"test_set": "rare", "mixture": "R500_S500", "baseline": "R1000_S0", "metric": "AP", "delta": delta}]
+    delta = {"value": 0.05, "low": 0.01, "high": 0.09, "p_value": 0.02, "resampled": "images and seeds"}
+    seeds = [{"seed": 0, "delta": 0.038}, {"seed": 1, "delta": 0.051}, {"seed": 2, "delta": -0.027}]
+    comparisons = [{"test_set": "rare", "mixture": "R500_S500", "baseline": "R1000_S0", "metric": "AP", "delta": delta,
+                    "seeds": seeds}]  # fmt: skip
     out = tmp_path / "study"
     page = write_study_report(
         out,
@@ -87,8 +89,8 @@ def test_write_study_report_writes_tables_figures_and_page(tmp_path):
     assert "**50.5 ± 0.7**" in (out / "tables" / "table2.md").read_text()
     csv = (out / "tables" / "comparisons.csv").read_text().splitlines()
     assert csv == [
-        "test_set,mixture,baseline,metric,delta,low,high,p_value",
-        "rare,R500_S500,R1000_S0,AP,5.00,1.00,9.00,0.0200",
+        "test_set,mixture,baseline,metric,delta,low,high,p_value,resampled,per_seed",
+        "rare,R500_S500,R1000_S0,AP,5.00,1.00,9.00,0.0200,images and seeds,0:+3.80 1:+5.10 2:-2.70",
     ]
     assert {p.name for p in (out / "figures").iterdir()} == {"figure5_AP.png", "figure5_AP50.png"}
     text = page.read_text()

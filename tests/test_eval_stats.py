@@ -153,3 +153,23 @@ def test_paired_bootstrap_averages_several_seeds(tmp_path):
     assert both.interval.point == pytest.approx(0.0, abs=1e-12) and both.p_value == 1.0
     one = paired_bootstrap(a[0], a[1], np.random.default_rng(0), num_samples=100)["AP"]
     assert one.interval.point == pytest.approx(a[1].ap()["AP"] - a[0].ap()["AP"])
+
+
+def test_seeds_that_disagree_in_sign_widen_the_two_level_interval(tmp_path):
+    """Three seeds per side: seed 0 and 1 of b beat a by a wide margin, seed 2 loses by more. Resampling images
+    alone averages the seeds in every draw (a tight interval around their mean); resampling the seeds too draws
+    resamples where the losing seed weighs more, so the interval is wider and says so."""
+    ds, records = make_case(tmp_path, seed=10, images=60)
+    gt = [{"image_id": a.image_id, "category_id": a.category_id, "bbox": list(a.bbox), "score": 0.9}
+          for a in ds.annotations]  # fmt: skip
+    none = [r | {"bbox": [r["bbox"][0] + 500, r["bbox"][1], *r["bbox"][2:]]} for r in records]  # all misses
+    noisy, perfect, blind = (MatchTable(run_cocoeval(ds, r, [1, 2])) for r in (records, gt, none))
+    a, b = [noisy, noisy, perfect], [perfect, perfect, blind]
+    images = paired_bootstrap(a, b, np.random.default_rng(0), num_samples=300)["AP50"]
+    both = paired_bootstrap(a, b, np.random.default_rng(0), num_samples=300, seeds=True)["AP50"]
+    assert images.resampled == "images" and both.resampled == "images and seeds"
+    assert both.interval.point == images.interval.point  # the same runs, the same point
+    assert both.interval.high - both.interval.low > 3 * (images.interval.high - images.interval.low)
+    assert both.interval.low < 0 < both.interval.high  # a sign the seeds do not agree on is not settled
+    two = paired_bootstrap(a[:2], b[:2], np.random.default_rng(0), num_samples=50, seeds=True)["AP50"]
+    assert two.resampled == "images"  # fewer than MIN_SEEDS_RESAMPLED seeds: images only, and it says so

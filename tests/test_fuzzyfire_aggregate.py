@@ -75,7 +75,7 @@ def test_a_named_set_without_fire_gives_alarm_rows_and_no_comparison(
     assert rows[2][ALARMS] == 25.0 and rows[2]["AP"] is None and not any(ALARMS in r for r in rows if r is not rows[2])
     loaded: list[str] = []
     monkeypatch.setattr(stats.MatchTable, "load", staticmethod(lambda path: loaded.append(Path(path).parent.name)))
-    monkeypatch.setattr(stats, "paired_bootstrap", lambda *a: {})
+    monkeypatch.setattr(stats, "paired_bootstrap", lambda *a, **k: {})
     assert comparisons(toy_config(mixtures=["R12_S0", "R6_S6"]), rows) == []
     assert sorted(set(loaded)) == ["common", "rare"]  # no AP on the set without fire: nothing to compare
 
@@ -177,7 +177,7 @@ def test_the_recall_at_the_alarm_budget_is_compared_when_every_run_has_it(
     }
     rows = result_rows(specs, [{"tests": tests}, {"tests": tests}], tmp_path, Loader())  # type: ignore[arg-type]
     monkeypatch.setattr(stats.MatchTable, "load", staticmethod(lambda path: path))
-    monkeypatch.setattr(stats, "paired_bootstrap", lambda *a: {})  # the AP comparisons: their own tests
+    monkeypatch.setattr(stats, "paired_bootstrap", lambda *a, **k: {})  # the AP comparisons: their own tests
     out = comparisons(toy_config(mixtures=["R12_S0", "R6_S6"]), rows)
     assert [(c["test_set"], c["mixture"], c["baseline"], c["metric"]) for c in out] == [
         ("common", "R6_S6", "R12_S0", RECALL_AT_ALARMS), ("common", "R6_S6", "R12_S0", "image_recall"),
