@@ -277,7 +277,7 @@ def write_study_report(
     if gaps:
         sections.append(("Realism gap of the synthetic pools", gaps_html(gaps)))
     if results:
-        alarms = (ALARMS,) if any(r.get(ALARMS) is not None for r in results) else ()
+        alarms = (ALARMS,) if any(ALARMS in r for r in results) else ()
         shown = ("AP", "AP50", *alarms, *(m for m in metrics if m == RECALL_AT_ALARMS))
         figures = [plot_figure5(results, out / "figures" / f"figure5_{m}.png", m) for m in shown]
         captions = [_figure5_caption(m) for m in shown]
@@ -445,7 +445,7 @@ def table_metrics(results: Sequence[Mapping[str, Any]]) -> tuple[str, ...]:
     the recall at 10 alarms per 100 images without fire (:mod:`eval.operating`; only studies with a set without
     fire have it) and the image recall (:mod:`eval.imagelevel`), each when every row of a set with fire has it; the sets without fire have their alarm column
     whatever this says."""
-    fire = [r for r in results if r.get(ALARMS) is None]
+    fire = [r for r in results if ALARMS not in r]
     extra = [m for m in ("AP25", RECALL_AT_ALARMS, IMAGE_RECALL) if fire and all(r.get(m) is not None for r in fire)]
     return ("AP", "AP50", *extra)
 

@@ -104,7 +104,7 @@ def _columns(results: Sequence[Mapping[str, Any]], test_sets, metrics) -> tuple[
     """Test set x ``metrics``; a set without fire (its results carry :data:`eval.errors.ALARMS`) has the alarm
     column alone."""
     sets = list(test_sets) if test_sets else list(dict.fromkeys(r["test_set"] for r in results))
-    negatives = {r["test_set"] for r in results if r.get(ALARMS) is not None}
+    negatives = {r["test_set"] for r in results if ALARMS in r}
     return tuple((s, m) for s in sets for m in ((ALARMS,) if s in negatives else [m for m in metrics if m != ALARMS]))
 
 
@@ -123,8 +123,21 @@ def table2(
     )
     cells = _collect(results, lambda r: r["mixture"], tuple(dict.fromkeys((*metrics, ALARMS))))
     return Table(
-        "Table 2: AP by training mixture (mean ± std over seeds)", groups, _columns(results, test_sets, metrics), cells
+        "Table 2: AP by training mixture (mean ± std over seeds)",
+        groups,
+        _columns(results, test_sets, metrics),
+        cells,
+        unlearned_labels(results),
     )
+
+
+UNLEARNED = "learning"  # a result's key: what is wrong with its run's training (None: it learned)
+UNLEARNED_MARK = " (not converged)"  # after the label of a row with such a run: its figures are not results
+
+
+def unlearned_labels(results: Sequence[Mapping[str, Any]]) -> dict[str, str]:
+    """Row labels of the mixtures with a run that did not learn (:data:`UNLEARNED`): ``R200_S0 (not converged)``."""
+    return {r["mixture"]: r["mixture"] + UNLEARNED_MARK for r in results if r.get(UNLEARNED)}
 
 
 def control_table(

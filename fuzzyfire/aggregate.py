@@ -31,6 +31,7 @@ from fuzzyfire.controls import CONTROL, CONTROL_TABLE, control_label
 from fuzzyfire.datasets import DataRef, Datasets
 from fuzzyfire.experiment_config import ExperimentConfig
 from fuzzyfire.kept import keep, kept
+from fuzzyfire.learning import LEARNING, run_flag
 from fuzzyfire.runs import EvalSet, RunSpec
 from fuzzyfire.slicing import run_hits
 from fuzzyfire.stages import Prepared, digest, label
@@ -73,6 +74,7 @@ def result_rows(
     raises at most :data:`eval.operating.ALARM_BUDGET` alarms per 100 of those images, and that
     ``threshold_at_alarms``."""
     rows = []
+    flags = {s.out: (f.text() if (f := run_flag(s.out)) else None) for s, r in zip(specs, results) if r}
     alarms = {} if datasets is None else {s.out: run_alarms(datasets, s, r) for s, r in zip(specs, results) if r}
     frames = {out: image_alarms(raised) for out, raised in alarms.items() if raised is not None}
     for spec, test, m, folder in _scored(specs, results):
@@ -96,9 +98,25 @@ def result_rows(
             **({RECALL_AT_ALARMS: point.recall, "threshold_at_alarms": point.threshold, OPERATING: operating}
                if point else {}), **images,
             "run": spec.out.relative_to(out).as_posix(), "tables": list(spec.tables),
-            "matches": (folder / "matches.npz").as_posix(),
+            "matches": (folder / "matches.npz").as_posix(), LEARNING: flags[spec.out],
         })  # fmt: skip
-    return rows
+    return silenced(rows)
+
+
+SILENT = "silent"  # a result row's key: True when its run detects nothing at ALARM_CONF on any of its test sets
+
+
+def silenced(rows: Sequence[dict]) -> list[dict]:
+    """``rows`` with the false alarms of a run that detects nothing at :data:`eval.errors.ALARM_CONF` on any of
+    its test sets (no fire image found there, no alarm raised) shown as not measured (None) and the run's rows
+    marked :data:`SILENT`: its 0.0 false alarms are silence, not a result."""
+    confident: dict[str, bool] = {}
+    for r in rows:
+        level = r.get(IMAGELEVEL)
+        found = level is not None and level[0].recall(ALARM_CONF) > 0
+        confident[r["run"]] = confident.get(r["run"], False) or found or bool(r.get(ALARMS))
+    return [{**r, SILENT: True, **({ALARMS: None} if ALARMS in r else {})} if not confident[r["run"]] else r
+            for r in rows]  # fmt: skip
 
 
 LOOSE_FILE = "ap25.json"  # AP25 of a run scored before AP25 existed, computed once from its predictions
