@@ -235,6 +235,7 @@ def write_study_report(
     notice: str = "",
     title: str = "fuzzyfire study",
     answer: Sequence[str] = (),
+    answer_details: Sequence[str] = (),
     slices: Sequence[Mapping[str, Any]] = (),
     slice_sets: Mapping[str, Sequence[Mapping[str, Any]]] | None = None,
     forests: Sequence[tuple[Path, str]] = (),
@@ -251,7 +252,8 @@ def write_study_report(
     ``out/tables/comparisons.csv``, :func:`comparisons_csv`); ``errors``: see :func:`errors_html`;
     ``samples``: datasets to show a few images of, by label; ``notice``: shown at the top of the page. Rows of sets
     with fire that carry :data:`eval.operating.OPERATING` also draw ``out/figures/operating_<test set>.png``
-    (:func:`operating_figures`). ``answer``: the study's answer in sentences, the page's first section;
+    (:func:`operating_figures`). ``answer``: the study's answer in sentences, the page's first section, and
+    ``answer_details`` the rest of it, folded below;
     ``slices``: the slice comparisons (:func:`slices_html`), ``slice_sets`` the slices of each test set
     (:func:`slice_sets_html`) and ``forests`` their forest plots with captions, the section after Table 2."""
     from eval.plots import plot_figure5
@@ -260,8 +262,11 @@ def write_study_report(
     parts = {"table1": method_results, "table2": results, "controls": controls}
     drop_stale_tables(out / "tables", [stem for stem, rows in parts.items() if rows], bool(comparisons))
     sections: list[tuple[str, str]] = []
-    if answer:
-        sections.append(("The answer", "<ul>" + "".join(f"<li>{html.escape(a)}</li>" for a in answer) + "</ul>"))
+    if answer or answer_details:
+        first = "<ul>" + "".join(f"<li>{html.escape(a)}</li>" for a in answer) + "</ul>"
+        more = "".join(f"<li>{html.escape(a)}</li>" for a in answer_details)
+        folded = f"<details><summary>Details: every comparison, slices, false alarms</summary><ul>{more}</ul></details>"
+        sections.append(("The answer", first + (folded if more else "")))
     if results:
         metrics = table_metrics(results)
         t2 = table2(results, metrics=metrics)

@@ -321,9 +321,7 @@ def paired_bootstrap(
     return {key: paired_delta(pb[key] - pa[key], np.asarray(values), level, how) for key, values in deltas.items()}
 
 
-def paired_delta(
-    point: float, samples: NDArray[np.float64], level: float = 0.95, how: str = "images"
-) -> PairedDelta:
+def paired_delta(point: float, samples: NDArray[np.float64], level: float = 0.95, how: str = "images") -> PairedDelta:
     """A paired difference ``point`` with its resampled differences ``samples`` (S,): the percentile interval and
     the two-sided bootstrap p-value of :class:`PairedDelta` over the finite samples (NaN when none); ``how``: what
     was resampled (:func:`resampled`)."""

@@ -259,8 +259,10 @@ def write_report(
     specs: Sequence[RunSpec] = (),
     results: Sequence[dict | None] = (),
     own: Mapping[tuple[str, str, int], DataRef] | None = None,
+    classes_from_data: bool = False,
 ) -> Path:
-    """The answer (:func:`fuzzyfire.answer.answer`, also written to ``out/answer.md``), tables, the slices
+    """The answer (its first screen, :func:`first_screen`, then :func:`fuzzyfire.answer.answer`'s details; also
+    written to ``out/answer.md``), tables, the slices
     (:func:`fuzzyfire.slicing.study_slices`, ``out/tables/slices.csv``, forest plots), Figure 5, comparisons,
     samples and the run list (:func:`eval.report.write_study_report`); the synthetic samples and gaps are those of
     :func:`report_pools` (``own``: the own cut-out pools by (mixture, method, seed),
@@ -294,14 +296,95 @@ def write_report(
     labelled = t2 + [{**r, "mixture": control_label(r["mixture"])} for r in controls]  # a control is its own row
     notes = [*leak_notes(data, cfg.leakage.action, rows, cfg.report.min_fire_images), *too_few_notes(sets)]
     said = answer(labelled, compared, sliced, notes)
-    (out / ANSWER_FILE).write_text("".join(f"- {line}\n" for line in said), encoding="utf-8")
+    first = first_screen(cfg, data, datasets, labelled, compared, specs, own or {}, classes_from_data)
+    (out / ANSWER_FILE).write_text(answer_markdown(first, said), encoding="utf-8")
     return write_study_report(
         out, t2, np.random.default_rng(0), method_results=t1, controls=controls,
         gaps=realism_gaps(cfg, data, datasets, out, pools),
         comparisons=compared, errors=error_rows(datasets, specs, results), samples=shown,
         run_columns=columns, notice=STANDIN_NOTICE if data.standin else "", title=title,
-        answer=said, slices=sliced, slice_sets=sets, forests=forest_figures(sliced, out / "figures"),
+        answer=first, answer_details=said, slices=sliced, slice_sets=sets,
+        forests=forest_figures(sliced, out / "figures"),
     )  # fmt: skip
+
+
+def answer_markdown(first: Sequence[str], details: Sequence[str]) -> str:
+    """``answer.md``: the first screen's lines, then the details (best per set, every comparison, slices, false
+    alarms, notes) under a heading."""
+    text = "".join(f"- {line}\n" for line in first)
+    return text + ("\n### Details\n\n" + "".join(f"- {line}\n" for line in details) if details else "")
+
+
+def first_screen(
+    cfg: ExperimentConfig,
+    data: Prepared,
+    datasets: Datasets,
+    rows: Sequence[dict],
+    compared: Sequence[dict],
+    specs: Sequence[RunSpec],
+    own: Mapping[tuple[str, str, int], DataRef],
+    from_data: bool = False,
+) -> list[str]:
+    """The answer's first lines (:mod:`fuzzyfire.first_screen`): a caveat for runs that did not converge, what
+    was compared, the headline per test set, how sure, and what the data became (``from_data``: the classes are
+    the real data's, the config named none)."""
+    from fuzzyfire import first_screen as fs
+    from fuzzyfire.answer import headline_metric
+
+    lines = [line for line in (fs.unlearned_line(rows),) if line]
+    lines.append(compared_line(cfg, data, specs, own))
+    baseline = next((c["baseline"] for c in compared if not c["baseline"].endswith(" copies")), cfg.report.baseline)
+    lines += fs.headline_lines(rows, compared, lambda test: headline_metric(rows, test), baseline)
+    lines.append(fs.how_sure_line(rows, compared, cfg.train.epochs))
+    lines += [line for line in (fs.silent_line(rows),) if line]
+    sets = {label(cfg.real.name, data.real.standin): data.real.with_split(None)}
+    if data.rare is not None:
+        sets[label(cfg.rare.name, data.rare.standin)] = data.rare
+    sets.update(data.tests)
+    changes = {name: datasets.changes(ref) for name, ref in sets.items()}
+    lines.append(fs.class_sentence(cfg.classes or (), not from_data, changes))
+    said = [fs.curation_sentence(data.real.path), fs.leak_sentence(data.leaks)]
+    free = _free_images(datasets, specs)
+    note = fs.free_images_note(free)
+    lines += [s[0].upper() + s[1:] + ("" if s.endswith(".") else ".") for s in (*said, note) if s]
+    return lines
+
+
+def _free_images(datasets: Datasets, specs: Sequence[RunSpec]) -> int:
+    """The images of the sets without fire the study's runs are scored on (the alarm budget's denominator)."""
+    if not specs:
+        return 0
+    sets = [t for t in specs[0].test_sets if not datasets.get(t.data).annotations]
+    return sum(len(datasets.get(t.data).images) for t in sets)
+
+
+def compared_line(
+    cfg: ExperimentConfig, data: Prepared, specs: Sequence[RunSpec], own: Mapping[tuple[str, str, int], DataRef]
+) -> str:
+    """``Compared over 3 seeds: R200_S0 = 200 real training images; R200_S200 = the same + 200 synthetic
+    (<pool sentence>); R200_S200 copies (control) = the same + 200 flame-free copies of them.``"""
+    from fuzzyfire.first_screen import pool_sentence
+
+    seeds = sorted({s.seed for s in specs})
+    parts = []
+    for mixture, method in dict.fromkeys((s.mixture, s.method) for s in specs if "table2" in s.tables or
+                                         CONTROL_TABLE in s.tables):  # fmt: skip
+        mix = parse_mixture(mixture)
+        if method is None:
+            parts.append(f"{mixture} = {mix.real} real training images")
+            continue
+        if method == CONTROL:
+            parts.append(f"{control_label(mixture)} (control) = the same {mix.real} + {mix.synth} flame-free copies "
+                         "of them")  # fmt: skip
+            continue
+        ref = own.get((mixture, method, seeds[0])) or data.pools.get(method)
+        flames = getattr(cfg.synth, method).flames.source
+        manifest = Path(ref.path) / "manifest.json" if ref is not None else None
+        what = (pool_sentence(manifest, flames, mix.synth) if manifest is not None and manifest.is_file()
+                else f"{method} pool")  # fmt: skip
+        real = f"the same {mix.real} + " if mix.real else ""
+        parts.append(f"{mixture} = {real}{mix.synth} synthetic from a pool of {what}")
+    return f"Compared over {len(seeds)} seed{'s' * (len(seeds) != 1)}: " + "; ".join(parts) + "."
 
 
 ANSWER_FILE = "answer.md"  # the answer's sentences, one per line, as the report's first section says them

@@ -12,6 +12,7 @@ from eval.errors import ALARMS
 from eval.imagelevel import IMAGE_RECALL
 from eval.stats import mean_std
 from eval.tables import METRIC_LABELS
+from fuzzyfire.first_screen import seeds_text, verdict
 
 FEW_SEEDS = 5  # fewer seeds than this: the intervals cover test images and these seeds' mean only
 SHOWN_SLICES = 4  # slices named per comparison and direction (the largest differences); the rest are counted
@@ -48,14 +49,6 @@ def _delta_text(d: Mapping[str, float]) -> str:
     return f"{_points(d['value'])} [{_points(d['low'])}, {_points(d['high'])}]"
 
 
-def _verdict(d: Mapping[str, float]) -> str:
-    if d["low"] > 0:
-        return "the interval excludes 0: it helps"
-    if d["high"] < 0:
-        return "the interval excludes 0: it hurts"
-    return "not distinguishable from 0"
-
-
 def answer(
     rows: Sequence[Mapping[str, Any]],
     comparisons: Sequence[Mapping[str, Any]],
@@ -77,12 +70,15 @@ def answer(
         )
         shown = "; ".join(_cell(rows, m, test, metric) for m in ranked)
         lines.append(f"Best on {test} by {_name(metric)}: {ranked[0]} ({shown}).")
+    unlearned = {r["mixture"] for r in rows if r.get("learning")}
     for c in comparisons:
         metric = headline_metric(rows, c["test_set"])
         if c["metric"] != metric:
             continue
+        sure = seeds_text(c)
         lines.append(f"On {c['test_set']}, {c['mixture']} against {c['baseline']}: {_name(metric)} "
-                     f"{_delta_text(c['delta'])} points, {_verdict(c['delta'])}.")  # fmt: skip
+                     f"{_delta_text(c['delta'])} points{', ' + sure if sure else ''}, "
+                     f"{verdict(c, bool({c['mixture'], c['baseline']} & unlearned))}.")  # fmt: skip
     lines += _slice_lines(slices)
     lines += _alarm_lines(rows, tests, mixtures)
     seeds = max((len({r["seed"] for r in rows if r["mixture"] == m}) for m in mixtures), default=0)

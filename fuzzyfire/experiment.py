@@ -407,6 +407,7 @@ def run_experiment(cfg: ExperimentConfig, base: Path, out: Path, executor=None) 
     _say(f"env    {lock_summary(lock_status())}")
     grid = grid_entries(cfg)
     data = prepare_data(cfg, base, out, ())  # the real and test sets, checked before any pool is built
+    from_data = cfg.classes is None
     cfg, datasets = studied_classes(cfg, data, Datasets(cfg.classes or ()))
     check_data(cfg, data, datasets, pool_photos(cfg.synth, needed_methods(grid), base))
     data = replace(data, leaks=check_test_leaks(cfg, data, datasets, base))
@@ -423,6 +424,6 @@ def run_experiment(cfg: ExperimentConfig, base: Path, out: Path, executor=None) 
     results = run_grid(specs, datasets, executor) if executor is not None else finished_runs(specs)
     rows = result_rows(specs, results, out, datasets, cfg.report.min_fire_images)
     write_summary(cfg, specs, results, rows, out, data.standin)
-    report = write_report(cfg, data, datasets, rows, out, specs, results, own)
+    report = write_report(cfg, data, datasets, rows, out, specs, results, own, from_data)
     failed = [s for s, r in zip(specs, results) if r is None]
     return ExperimentResult(report, rows, failed, data.standin)

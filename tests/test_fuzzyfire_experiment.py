@@ -101,7 +101,13 @@ def test_report_files_exist_and_say_stand_in(full_run: tuple[Path, str, Counter]
     assert figures == {"figure5_AP.png", "figure5_AP50.png", "figure5_alarms_per_100.png", *at_budget}
     page = (out / "report.html").read_text()
     answer = (out / "answer.md").read_text()  # the report's first section, and the command's last lines
-    assert page.index("<h2>The answer</h2>") < page.index("<h2>Table 2") and answer.startswith("- Best on common")
+    assert page.index("<h2>The answer</h2>") < page.index("<h2>Table 2") and answer.startswith(
+        "- Caveat first: 2 of 2 runs did not converge"
+    )
+    first = answer.split("### Details")[0]  # the first screen: what was compared, the classes, the leakage check
+    assert "Compared over 1 seed: R12_S0 = 12 real training images; R6_S6 = the same 6 + 6 synthetic" in first
+    assert "Classes studied: fire (as the config names them)" in first and "Leakage check" in first
+    assert "- Best on common" in answer.split("### Details")[1]
     assert "R6_S6 against R12_S0" in answer and answer.splitlines()[0][2:] in printed
     assert json.loads((out / "leakage.json").read_text())["action"] == "drop"
     assert "STAND-IN DATA" in page and "Paired comparisons" in page and "R6_S6" in page

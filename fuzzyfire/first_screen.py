@@ -1,0 +1,187 @@
+"""The answer's first screen: about ten lines that stand alone before any table. What was compared (each pool in
+one sentence of what its images are), the headline with its interval and the control's share, how sure (seeds
+that agree in sign, what the interval resamples, runs that did not learn) and what the data became (classes,
+curation, leakage). Built from the study's numbers and its data's own records (``curation.json``, each pool's
+``manifest.json``, :class:`curate.core.load.ClassChanges`, :class:`fuzzyfire.leakage.TestLeaks`)."""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+from curate.mix import parse_mixture
+from eval.tables import METRIC_LABELS
+
+MIN_FREE_IMAGES = 100  # fewer fire-free test images than this: the alarm budget's steps are coarse, said so
+
+
+def _name(metric: str) -> str:
+    return METRIC_LABELS.get(metric, metric)
+
+
+def _delta(d: Mapping[str, float]) -> str:
+    return f"{100 * d['value']:+.1f} [{100 * d['low']:+.1f}, {100 * d['high']:+.1f}]"
+
+
+def pool_sentence(manifest: Path, flames: str, size: int | None = None) -> str:
+    """What a Method 2 pool's images are, from its ``manifest.json`` (each image's metadata): how many carry
+    pasted flames on the user's labelled frames, on fire-free photos or on rendered places, how many are photos
+    left as they are (negatives), and whether the flames are simulated or cut out of the real images
+    (``flames``: the pool's ``flames.source``). ``size``: the images a mixture draws of it, when fewer."""
+    meta = json.loads(manifest.read_text(encoding="utf-8"))["args"].get("per_image", [])
+    kind = "cut-out flames (from the real training images)" if flames == "cutouts" else "simulated flames"
+    counts = {"frames": 0, "frames_plain": 0, "photos": 0, "photos_plain": 0, "places": 0, "places_plain": 0}
+    for m in meta:
+        where = "frames" if "frame_boxes" in m else "photos" if "photo" in m else "places"
+        counts[where if m.get("flames") else f"{where}_plain"] += 1
+    flames_n = sum(len(m.get("flames", ())) for m in meta)
+    parts = []
+    if counts["frames"] or counts["frames_plain"]:
+        parts.append(f"{counts['frames']} of the real training frames with pasted flames"
+                     + (f" and {counts['frames_plain']} left without" if counts["frames_plain"] else ""))  # fmt: skip
+    if counts["photos"]:
+        parts.append(f"{counts['photos']} fire-free photos with pasted flames")
+    if counts["photos_plain"]:
+        parts.append(f"{counts['photos_plain']} fire-free photos as they are (negatives)")
+    if counts["places"] or counts["places_plain"]:
+        parts.append(
+            f"{counts['places'] + counts['places_plain']} rendered places ({counts['places_plain']} without flames)"
+        )
+    drawn = f"; a mixture draws {size} of its {len(meta)}" if size is not None and size < len(meta) else ""
+    return f"{len(meta)} images: {', '.join(parts) or 'none'}; {flames_n} {kind}{drawn}"
+
+
+def curation_sentence(folder: Path) -> str | None:
+    """What curation made of the real images (``folder/curation.json``): read, duplicates dropped, split sizes;
+    None for a folder that was not curated."""
+    path = Path(folder) / "curation.json"
+    if not path.is_file():
+        return None
+    doc = json.loads(path.read_text(encoding="utf-8"))
+    c = doc.get("counts", {})
+    splits = " / ".join(f"{k} {v:,}" for k, v in doc.get("splits", {}).items())
+    return (f"curation read {c.get('images', 0):,} images, dropped {c.get('removed_exact', 0):,} exact and "
+            f"{c.get('removed_near', 0):,} near duplicates ({c.get('unreadable', 0)} unreadable), split {splits}")  # fmt: skip
+
+
+def class_sentence(classes: Sequence[str], given: bool, changes: Mapping[str, Any]) -> str:
+    """The classes studied (named by the config, or the real data's) and what the class rules removed from each
+    set (``changes``: :class:`curate.core.load.ClassChanges` by set label; sets it left alone are not named)."""
+    source = "as the config names them" if given else "every class the real data boxes"
+    touched = [f"{name}: {c.text()}" for name, c in changes.items() if c]
+    rules = "; ".join(touched) if touched else "No box removed from any set"
+    return f"Classes studied: {', '.join(classes)} ({source}). {rules}."
+
+
+def leak_sentence(leaks: Mapping[str, Any]) -> str | None:
+    """How many images of each test set the leakage check found in the training data (dropped before scoring)."""
+    if not leaks:
+        return None
+    parts = [f"{name} {len(t.leaked)} of {t.images}" for name, t in leaks.items()]
+    return f"Leakage check: test images found in the training data and dropped: {', '.join(parts)} (leakage.json)."
+
+
+def free_images_note(free: int) -> str | None:
+    """The alarm budget's resolution on ``free`` fire-free test images, a warning under :data:`MIN_FREE_IMAGES`."""
+    if not free:
+        return None
+    step = 100 / free
+    coarse = f"; fewer than {MIN_FREE_IMAGES}: image recall moves in coarse steps" if free < MIN_FREE_IMAGES else ""
+    return f"the alarm budget on {free} fire-free images allows {int(free * 0.1)} alarm images, one image = {step:.1f} per 100{coarse}"
+
+
+def seeds_text(row: Mapping[str, Any]) -> str:
+    """``seeds agree 2 of 3 (+3.8, +5.1, -2.7)`` from a comparison's per-seed differences ("" with one seed)."""
+    deltas = [d["delta"] for d in row.get("seeds", ())]
+    if len(deltas) < 2:
+        return ""
+    point = row["delta"]["value"]
+    agree = sum(1 for d in deltas if d * point > 0)
+    return f"seeds agree {agree} of {len(deltas)} ({', '.join(f'{100 * d:+.1f}' for d in deltas)})"
+
+
+def verdict(row: Mapping[str, Any], unlearned: bool) -> str:
+    """The verdict on one comparison: it helps (or hurts) only when the interval excludes 0 *and* every seed's
+    difference has that sign, and no run of it is flagged as not converged."""
+    if unlearned:
+        return "not read: a run in it did not converge"
+    d = row["delta"]
+    deltas = [s["delta"] for s in row.get("seeds", ())]
+    if d["low"] <= 0 <= d["high"]:
+        return "not distinguishable from 0"
+    sign = 1 if d["low"] > 0 else -1
+    against = sum(1 for x in deltas if x * sign <= 0)
+    if against:
+        return f"the interval excludes 0 but {against} of {len(deltas)} seeds disagree: not settled"
+    return "it helps" if sign > 0 else "it hurts"
+
+
+def headline_lines(
+    rows: Sequence[Mapping[str, Any]], comparisons: Sequence[Mapping[str, Any]], metric_of, baseline: str | None
+) -> list[str]:
+    """Per test set with a headline metric (``metric_of(test)``): each mixture with synthetic images against the
+    baseline, and, where it has a control, the flames' share beyond that control first."""
+    lines = []
+    unlearned = {r["mixture"] for r in rows if r.get("learning")}
+    for c in comparisons:
+        if c["metric"] != metric_of(c["test_set"]) or c["baseline"] != baseline or c["mixture"].endswith(" copies"):
+            continue
+        control = next((x for x in comparisons if x["test_set"] == c["test_set"] and x["metric"] == c["metric"]
+                        and x["mixture"] == c["mixture"] and x["baseline"] == f"{c['mixture']} copies"), None)  # fmt: skip
+        bad = bool({c["mixture"], baseline} & unlearned)
+        sure = seeds_text(c)
+        if control is not None:
+            bad_control = bad or f"{c['mixture']} copies" in unlearned
+            copies = c["delta"]["value"] - control["delta"]["value"]
+            lines.append(
+                f"On {c['test_set']}, the flames of {c['mixture']} add {_name(c['metric'])} {_delta(control['delta'])} "
+                f"points beyond flame-free copies of the same real images (the control; "
+                f"{seeds_text(control) or 'one seed'}): {verdict(control, bad_control)}. Against {baseline} the "
+                f"mixture gains {_delta(c['delta'])}, of which the extra images and steps alone give about "
+                f"{100 * copies:+.1f}."
+            )
+            continue
+        mix = parse_mixture(c["mixture"])
+        lines.append(
+            f"On {c['test_set']}, {mix.synth} synthetic images (flames and more images together) against none "
+            f"({c['mixture']} vs {baseline}): {_name(c['metric'])} {_delta(c['delta'])} points"
+            f"{'; ' + sure if sure else ''}: {verdict(c, bad)}. No control was trained, so the flames' share is "
+            "unknown: grid.control=true trains flame-free copies to separate them."
+        )
+    return lines
+
+
+def how_sure_line(rows: Sequence[Mapping[str, Any]], comparisons: Sequence[Mapping[str, Any]], epochs: int) -> str:
+    """Seeds per mixture, what the intervals resample, and the training length."""
+    mixtures = list(dict.fromkeys(r["mixture"] for r in rows))
+    seeds = max((len({r["seed"] for r in rows if r["mixture"] == m}) for m in mixtures), default=0)
+    how = {c["delta"].get("resampled", "images") for c in comparisons}
+    resampled = ("test images and seeds (a two-level paired bootstrap)" if how == {"images and seeds"}
+                 else "test images only (paired bootstrap): with fewer than 3 seeds they say nothing of how another "
+                 "training of the same mixture would land" if how else "nothing (no comparison)")  # fmt: skip
+    return (f"How sure: {seeds} seed{'s' * (seeds != 1)} per mixture, {epochs} epoch{'s' * (epochs != 1)} each; the "
+            f"95 % intervals resample {resampled}.")  # fmt: skip
+
+
+def unlearned_line(rows: Sequence[Mapping[str, Any]]) -> str | None:
+    """The first caveat when runs did not learn: which, why, and the key that fixes it."""
+    flagged = {(r["mixture"], r["seed"]): r["learning"] for r in rows if r.get("learning")}
+    if not flagged:
+        return None
+    runs = len({(r["mixture"], r["seed"]) for r in rows})
+    (mixture, seed), why = next(iter(flagged.items()))
+    return (f"Caveat first: {len(flagged)} of {runs} runs did not converge ({mixture} seed {seed} {why}); their "
+            "figures are not results and no verdict is drawn from them: train longer (train.epochs, e.g. "
+            "SET=\"train.epochs=40\").")  # fmt: skip
+
+
+def silent_line(rows: Sequence[Mapping[str, Any]]) -> str | None:
+    """Runs that detect nothing at confidence 0.25: their false alarms are not measured."""
+    silent = sorted({(r["mixture"], r["seed"]) for r in rows if r.get("silent")})
+    if not silent:
+        return None
+    named = ", ".join(f"{m} seed {s}" for m, s in silent[:4]) + (" and more" if len(silent) > 4 else "")
+    return (f"{len(silent)} runs detect nothing at confidence 0.25 on any test set ({named}): their false alarms "
+            "are shown as not measured (–), not as 0.")  # fmt: skip

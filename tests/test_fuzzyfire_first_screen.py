@@ -1,0 +1,71 @@
+"""The answer's first screen: a gain is the flames' only beyond a control, "it helps" needs the interval and
+every seed, runs that did not learn are not read, and each pool and class rule is said in plain words."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+from curate.core.load import ClassChanges
+from fuzzyfire import first_screen as fs
+
+
+def _cmp(mixture: str, baseline: str, value: float, low: float, high: float, seeds: list[float]) -> dict:
+    return {"test_set": "common", "mixture": mixture, "baseline": baseline, "metric": "AP50",
+            "delta": {"value": value, "low": low, "high": high, "p_value": 0.01, "resampled": "images and seeds"},
+            "seeds": [{"seed": i, "delta": d} for i, d in enumerate(seeds)]}  # fmt: skip
+
+
+def _rows(flagged: str | None = None) -> list[dict]:
+    return [{"mixture": m, "seed": s, "test_set": "common", "AP50": 0.3, "learning": "x" if m == flagged else None}
+            for m in ("R200_S0", "R200_S200", "R200_S200 copies") for s in range(3)]  # fmt: skip
+
+
+def test_it_helps_needs_the_interval_and_every_seed() -> None:
+    agree = _cmp("R200_S200", "R200_S0", 0.05, 0.02, 0.08, [0.04, 0.05, 0.06])
+    split = _cmp("R200_S200", "R200_S0", 0.021, 0.002, 0.04, [0.038, 0.051, -0.027])  # the issue's three seeds
+    assert fs.verdict(agree, False) == "it helps"
+    assert fs.verdict(split, False) == "the interval excludes 0 but 1 of 3 seeds disagree: not settled"
+    assert fs.seeds_text(split) == "seeds agree 2 of 3 (+3.8, +5.1, -2.7)"
+    assert fs.verdict(agree, True) == "not read: a run in it did not converge"
+    assert fs.verdict(_cmp("B", "A", 0.01, -0.01, 0.03, [0.01] * 3), False) == "not distinguishable from 0"
+
+
+def test_without_a_control_the_gain_is_worded_as_flames_and_more_images() -> None:
+    c = _cmp("R200_S200", "R200_S0", 0.148, 0.127, 0.178, [0.14, 0.15, 0.16])
+    (line,) = fs.headline_lines(_rows(), [c], lambda test: "AP50", "R200_S0")
+    assert line.startswith("On common, 200 synthetic images (flames and more images together) against none")
+    assert "No control was trained" in line and "grid.control=true" in line
+
+
+def test_with_a_control_the_flames_share_comes_first() -> None:
+    c = _cmp("R200_S200", "R200_S0", 0.148, 0.127, 0.178, [0.14, 0.15, 0.16])
+    ctrl = _cmp("R200_S200", "R200_S200 copies", 0.092, 0.06, 0.12, [0.08, 0.09, 0.1])
+    (line,) = fs.headline_lines(_rows(), [c, ctrl], lambda test: "AP50", "R200_S0")
+    assert line.startswith("On common, the flames of R200_S200 add AP50 +9.2 [+6.0, +12.0] points beyond flame-free")
+    assert "it helps" in line and "the extra images and steps alone give about +5.6" in line
+    (flagged,) = fs.headline_lines(_rows("R200_S200 copies"), [c, ctrl], lambda test: "AP50", "R200_S0")
+    assert "not read: a run in it did not converge" in flagged
+
+
+def test_a_pool_is_said_in_plain_words(tmp_path: Path) -> None:
+    per_image = [{"photo": "a.jpg", "frame_boxes": [[0, 0, 5, 5]], "flames": [{}, {}]}] * 87
+    per_image += [{"photo": "free.jpg", "flames": []}] * 113
+    (tmp_path / "manifest.json").write_text(json.dumps({"args": {"per_image": per_image}}))
+    said = fs.pool_sentence(tmp_path / "manifest.json", "cutouts")
+    assert said == ("200 images: 87 of the real training frames with pasted flames, 113 fire-free photos as they are "
+                    "(negatives); 174 cut-out flames (from the real training images)")  # fmt: skip
+
+
+def test_classes_curation_and_alarm_resolution_are_said(tmp_path: Path) -> None:
+    changes = {"common": ClassChanges(unstudied={"smoke": 2194}, emptied=342), "fire-free": ClassChanges()}
+    said = fs.class_sentence(["fire"], True, changes)
+    assert said == ("Classes studied: fire (as the config names them). common: smoke: 2,194 boxes not studied; 342 "
+                    "images had only such boxes and left the set.")  # fmt: skip
+    doc = {"counts": {"images": 2817, "removed_exact": 67, "removed_near": 32}, "splits": {"train": 1903, "test": 543}}
+    (tmp_path / "curation.json").write_text(json.dumps(doc))
+    assert fs.curation_sentence(tmp_path) == ("curation read 2,817 images, dropped 67 exact and 32 near duplicates (0 "
+                                              "unreadable), split train 1,903 / test 543")  # fmt: skip
+    assert fs.curation_sentence(tmp_path / "none") is None
+    assert "one image = 1.5 per 100; fewer than 100" in fs.free_images_note(68)  # type: ignore[operator]
+    assert "fewer than" not in fs.free_images_note(200)  # type: ignore[operator]
