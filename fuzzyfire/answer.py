@@ -12,7 +12,8 @@ from eval.errors import ALARMS
 from eval.imagelevel import IMAGE_RECALL
 from eval.stats import mean_std
 from eval.tables import METRIC_LABELS
-from fuzzyfire.first_screen import seeds_text, verdict
+from fuzzyfire.first_screen import seeds_text
+from fuzzyfire.first_screen import verdict as comparison_verdict
 
 FEW_SEEDS = 5  # fewer seeds than this: the intervals cover test images and these seeds' mean only
 SHOWN_SLICES = 4  # slices named per comparison and direction (the largest differences); the rest are counted
@@ -78,7 +79,7 @@ def answer(
         sure = seeds_text(c)
         lines.append(f"On {c['test_set']}, {c['mixture']} against {c['baseline']}: {_name(metric)} "
                      f"{_delta_text(c['delta'])} points{', ' + sure if sure else ''}, "
-                     f"{verdict(c, bool({c['mixture'], c['baseline']} & unlearned))}.")  # fmt: skip
+                     f"{comparison_verdict(c, bool({c['mixture'], c['baseline']} & unlearned))}.")  # fmt: skip
     lines += _slice_lines(slices)
     lines += _alarm_lines(rows, tests, mixtures)
     seeds = max((len({r["seed"] for r in rows if r["mixture"] == m}) for m in mixtures), default=0)
