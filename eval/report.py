@@ -220,6 +220,9 @@ def comparisons_csv(rows: Sequence[Mapping[str, Any]]) -> str:
     return "\n".join(lines) + "\n"
 
 
+FIRST_SAMPLES = "synthetic"  # samples whose label starts so follow the answer: the pools its first screen names
+
+
 def write_study_report(
     out: Path,
     results: Sequence[Mapping[str, Any]],
@@ -301,8 +304,14 @@ def write_study_report(
         (out / "tables" / COMPARISONS_FILE).write_text(comparisons_csv(comparisons), encoding="utf-8")
     if errors:
         sections.append(("Where AP50 goes (error breakdown)", errors_html(errors)))
+    under = 1 if sections and sections[0][0] == "The answer" else None
     for label, ds in (samples or {}).items():
-        sections.append((f"Samples: {label}", samples_html(ds, out / "samples" / _slug(label), out, rng)))
+        shown = (f"Samples: {label}", samples_html(ds, out / "samples" / _slug(label), out, rng))
+        if label.startswith(FIRST_SAMPLES) and under is not None:
+            sections.insert(under, shown)  # what a synthetic pool's images are: a row of them under the first screen
+            under += 1
+        else:
+            sections.append(shown)
     if results or method_results or controls:
         sections.append(("Runs", runs_html(_every_run(results, method_results, controls), run_columns)))
     page = out / "report.html"

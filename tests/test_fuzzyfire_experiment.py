@@ -120,6 +120,8 @@ def test_report_files_exist_and_say_stand_in(full_run: tuple[Path, str, Counter]
         head = (out / "tables" / table).read_text().splitlines()[2]
         assert "fire-free (stand-in) alarms/100" in head and "fire-free (stand-in) AP" not in head
     assert "fire-free (stand-in) alarms/100" in page and "Samples: fire-free (stand-in)" in page
+    pool = page.index("<h2>Samples: synthetic")  # the pools' thumbnails right under the answer's first screen
+    assert page.index("<h2>The answer</h2>") < pool < page.index("<h2>Table 2")
     summary = json.loads((out / "experiment.json").read_text())
     assert summary["standin"] is True and [r["status"] for r in summary["runs"]] == ["done"] * 4
     rows = [json.loads(line) for line in (out / "results.jsonl").read_text().splitlines()]
