@@ -22,6 +22,7 @@ from numpy.typing import NDArray
 
 from curate.core.imageio import ImageError, read_image
 from curate.embed import OnnxEmbedder, l2_normalize
+from curate.search import two_view_distances
 
 Image = NDArray[np.uint8]
 
@@ -140,14 +141,10 @@ def calibrate_threshold(
         raise ValueError("calibration needs at least 2 readable images")
     base, base_c = _embed(embedder, originals)
     aug, aug_c = _embed(embedder, [c for cs in copies for c in cs])
-    k = len(AUGMENTATIONS)
-    rep, rep_c = np.repeat(base, k, axis=0), np.repeat(base_c, k, axis=0)
-    pos = np.minimum.reduce(
-        [np.linalg.norm(aug - rep, axis=1), np.linalg.norm(aug - rep_c, axis=1), np.linalg.norm(aug_c - rep, axis=1)]
-    )
-    sims = np.maximum.reduce([base @ base.T, base_c @ base.T, base @ base_c.T])  # two-view rule, both ways
-    iu = np.triu_indices(len(base), 1)
-    neg = np.sqrt(np.maximum(2 - 2 * sims[iu], 0))
+    copy_of = np.repeat(np.arange(len(base)), len(AUGMENTATIONS))  # (copies,) the original of each copy
+    pos = two_view_distances(aug, aug_c, base, base_c, np.arange(len(aug)), copy_of)
+    i, j = np.triu_indices(len(base), 1)
+    neg = two_view_distances(base, base_c, base, base_c, i, j)  # float64, the same bits on any CPU
     t, p, r = threshold_at_precision(pos.astype(np.float32), neg.astype(np.float32), precision)
     return Calibration(t, p, r, precision, len(originals), len(pos), len(neg))
 

@@ -14,11 +14,13 @@ true duplicate of a kept one (no chaining through intermediate frames), and prot
 
 **Groups** are the connected components of the duplicate pairs (union-find), reported keeper first. Results do
 not depend on input order: vectors are indexed in (sha256, path) order and all choices follow the total order
-above. Nor do they hang on the last float bits where they need not: a removed image names the kept duplicate in
-the nearest :data:`curate.search.DISTANCE_GRID` cell (keeper order among equals), sharpness is compared to 10
-significant digits and ties go to content, not path. A distance within float noise of the threshold itself can
-still flip (any threshold has an edge); docs/findings.md ("Is the curated set the same on every machine?") measures how far the shared data's
-decisions are from it.
+above. Nor on the machine, for the same embeddings: every pair's distance is computed in float64 from the
+embeddings (:func:`curate.search.exact_pairs`), so the threshold decides the same on any CPU, thread count or
+executor. Nor on the last bits of the embeddings where they need not: a removed image names the kept duplicate
+in the nearest :data:`curate.search.DISTANCE_GRID` cell (keeper order among equals), sharpness is compared to
+10 significant digits and ties go to content, not path. Embeddings that differ (another onnxruntime build or
+kernel) can still move a distance across the threshold (any threshold has an edge); docs/findings.md ("Is the
+curated set the same on every machine?") measures how far the shared data's decisions are from it.
 """
 
 from __future__ import annotations
@@ -114,12 +116,13 @@ def near_pairs(
     cluster: Cluster | None = None,
 ) -> Pairs:
     """Pairs (indices into ``images``) of ``candidates`` closer than ``threshold`` (unit ``vectors`` (N, D) and
-    centre views ``crops`` (N, D)); indexed in (sha256, path) order so the result ignores input order. Backend
+    centre views ``crops`` (N, D)), with float64 distances decided as :func:`curate.search.exact_pairs` decides;
+    indexed in (sha256, path) order so the result ignores input order. Backend
     ``partition`` (``auto`` above :data:`AUTO_PARTITION_MIN` candidates) searches by partitions
     (:mod:`curate.partition`), on ``cluster`` when given."""
     order = sorted(candidates, key=lambda i: (images[i].facts.sha256, images[i].path))
     if len(order) < 2:
-        return Pairs(np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros(0, np.float32))
+        return Pairs(np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros(0, np.float64))
     views = vectors[order], None if crops is None else crops[order]
     if backend == PARTITION or (backend == "auto" and len(order) > AUTO_PARTITION_MIN):
         local = partitioned_pairs(*views, threshold, cluster)
@@ -230,7 +233,7 @@ class UnionFind:
         return sorted(sets.values(), key=lambda s: s[0])
 
 
-def _adjacency(n: int, pairs: Pairs) -> tuple[NDArray[np.int64], NDArray[np.int64], NDArray[np.float32]]:
+def _adjacency(n: int, pairs: Pairs) -> tuple[NDArray[np.int64], NDArray[np.int64], NDArray[np.float64]]:
     """CSR adjacency of the undirected pairs: neighbours of i are ``nbr[ptr[i]:ptr[i+1]]``."""
     src = np.concatenate([pairs.i, pairs.j])
     dst = np.concatenate([pairs.j, pairs.i])

@@ -2,7 +2,9 @@
 
 Exact = equal file bytes or equal decoded pixels (distance 0); near = unit embeddings closer than the
 threshold in the two-view distance of :func:`curate.search.duplicate_pairs` (whole vs whole, centre view vs
-whole, both ways). Searches indexes in batches (never an |A| x |B| matrix).
+whole, both ways). Searches indexes in batches (never an |A| x |B| matrix) for candidates; each candidate's
+distance is computed in float64 (:func:`curate.search.two_view_distances`) and decides, the same bits on any
+CPU or thread count.
 """
 
 from __future__ import annotations
@@ -10,8 +12,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Literal
 
+import numpy as np
+
 from curate.scan import ScanResult
-from curate.search import build_index
+from curate.search import build_index, search_radius, two_view_distances
 
 
 @dataclass(frozen=True)
@@ -33,17 +37,27 @@ def find_leaks(a: ScanResult, b: ScanResult, threshold: float, backend: str = "a
             for other in in_b.get(getattr(im.facts, attr), []):
                 leaks.setdefault((im.path, other), Leak(im.path, other, "exact", 0.0))
     if a.images and b.images and threshold > 0:
-        near: dict[tuple[int, int], float] = {}
-        index_b, index_a = build_index(b.vectors, backend), build_index(a.vectors, backend)
-        for queries, index, a_asks in ((a.vectors, index_b, True), (a.crops, index_b, True), (b.crops, index_a, False)):
-            qi, ti, dist = index.within(queries, threshold)
-            for q, t, d in zip(qi.tolist(), ti.tolist(), dist.tolist()):
-                key = (q, t) if a_asks else (t, q)
-                near[key] = min(d, near.get(key, d))
-        for (ia, ib), d in near.items():
-            key = (a.images[ia].path, b.images[ib].path)
-            leaks.setdefault(key, Leak(*key, "near", float(d)))
+        ia, ib, dist = _near(a, b, threshold, backend)
+        for i, j, d in zip(ia.tolist(), ib.tolist(), dist.tolist()):
+            key = (a.images[i].path, b.images[j].path)
+            leaks.setdefault(key, Leak(*key, "near", d))
     return sorted(leaks.values(), key=lambda x: (x.distance, x.a, x.b))
+
+
+def _near(a: ScanResult, b: ScanResult, threshold: float, backend: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Rows of A (E,) and of B (E,) int64 whose float64 two-view distance (E,) is below ``threshold``; candidates
+    from the float32 search within :func:`curate.search.search_radius` (A's whole and centre views against B's
+    whole views, B's centre views against A's whole views)."""
+    wide = search_radius(threshold, a.vectors.shape[1])
+    index_b, index_a = build_index(b.vectors, backend), build_index(a.vectors, backend)
+    whole_a, whole_b, _ = index_b.within(a.vectors, wide)
+    crop_a, of_b, _ = index_b.within(a.crops, wide)
+    crop_b, of_a, _ = index_a.within(b.crops, wide)
+    key = np.unique(np.concatenate([whole_a, crop_a, of_a]) * len(b.images) + np.concatenate([whole_b, of_b, crop_b]))
+    ia, ib = key // len(b.images), key % len(b.images)
+    dist = two_view_distances(a.vectors, a.crops, b.vectors, b.crops, ia, ib)
+    keep = dist < threshold
+    return ia[keep], ib[keep], dist[keep]
 
 
 def leak_summary(a: ScanResult, b: ScanResult, leaks: list[Leak]) -> dict[str, int]:

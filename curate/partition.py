@@ -12,9 +12,11 @@ search backend; SemDeDup-style).
    and the pairs: O(N (D + nprobe)).
 
 A pair is found when one end's home is among the other's probed cells: the search is approximate, its recall
-against exact search is measured by ``bench/bench_search_partition.py``. The pairs it finds carry exact
-distances, and pairs are made canonical (:func:`curate.search.canonical_pairs`), so task order and the executor
-change nothing.
+against exact search is measured by ``bench/bench_search_partition.py``. Tasks search within
+:func:`curate.search.search_radius` and return candidates only; the driver computes each candidate's two-view
+distance in float64 and applies the radius (:func:`curate.search.exact_pairs`), and a probe whose nearest or
+last cell is within float32 error of the next is settled exactly (:func:`nearest_cells`), so task order, batch
+sizes, thread counts and the executor change neither the pairs nor a bit of their distances.
 """
 
 from __future__ import annotations
@@ -26,7 +28,7 @@ from numpy.typing import NDArray
 
 from curate.core.cluster import Cluster
 from curate.core.progress import progress
-from curate.search import FlatIndex, Pairs, canonical_pairs
+from curate.search import FlatIndex, Pairs, exact_knn, exact_pairs, float32_slack, search_radius
 
 PARTITION = "partition"  # the backend's name (``--backend partition``)
 #: ``auto`` searches by partitions above this many vectors: one flat or IVF index of 10 M x 320 float32 is 13 GB
@@ -55,20 +57,20 @@ class CellTask:
     qstarts: NDArray[np.int64]
 
 
-def search_cells(task: CellTask, radius: float) -> tuple[NDArray[np.int64], NDArray[np.int64], NDArray[np.float32]]:
-    """Every (query id, base id, distance) closer than ``radius`` inside each cell of ``task`` (global ids)."""
-    qi, bi, ds = [], [], []
+def search_cells(task: CellTask, radius: float) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
+    """The candidates (query ids (E,), base ids (E,), global) closer than ``radius`` by the float32 search inside
+    each cell of ``task``; their distances are the driver's (:func:`curate.search.exact_pairs`)."""
+    qi, bi = [], []
     for c in range(len(task.starts) - 1):
         b0, b1, q0, q1 = task.starts[c], task.starts[c + 1], task.qstarts[c], task.qstarts[c + 1]
         if b1 == b0 or q1 == q0:
             continue
-        q, b, d = FlatIndex(task.base[b0:b1]).within(task.queries[q0:q1], radius)
+        q, b, _ = FlatIndex(task.base[b0:b1]).within(task.queries[q0:q1], radius)
         qi.append(task.query_ids[q0:q1][q])
         bi.append(task.base_ids[b0:b1][b])
-        ds.append(d)
     if not qi:
-        return np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros(0, np.float32)
-    return np.concatenate(qi), np.concatenate(bi), np.concatenate(ds)
+        return np.zeros(0, np.int64), np.zeros(0, np.int64)
+    return np.concatenate(qi), np.concatenate(bi)
 
 
 def train_cells(vectors: NDArray[np.float32], cells: int, seed: int) -> NDArray[np.float32]:
@@ -84,8 +86,24 @@ def train_cells(vectors: NDArray[np.float32], cells: int, seed: int) -> NDArray[
 
 
 def nearest_cells(vectors: NDArray[np.float32], centroids: NDArray[np.float32], k: int) -> NDArray[np.int64]:
-    """(N, k) indices of each vector's ``k`` nearest centroids, nearest first."""
-    return FlatIndex(centroids).knn(vectors, min(k, len(centroids)))[1]
+    """(N, k) int64 indices of each vector's ``k`` nearest centroids (D-dimensional unit rows), nearest first.
+
+    The nearest (the home) and the set of ``k`` are exact: a row whose first two or whose k-th and next float32
+    distances lie within twice :func:`curate.search.float32_slack` of each other is settled in float64
+    (:func:`curate.search.exact_knn`), so a probe does not depend on the CPU, the thread count or the batch."""
+    k = min(k, len(centroids))
+    index = FlatIndex(centroids)
+    dist, idx = index.knn(vectors, min(k + 1, len(centroids)))
+    sq, slack = dist.astype(np.float64) ** 2, 2 * float32_slack(centroids.shape[1])
+    close = np.zeros(len(vectors), bool)
+    if sq.shape[1] > 1:
+        close |= sq[:, 1] - sq[:, 0] <= slack
+    if sq.shape[1] > k:
+        close |= sq[:, k] - sq[:, k - 1] <= slack
+    rows = np.flatnonzero(close)
+    if len(rows):
+        idx[rows, :k] = exact_knn(index, vectors[rows], k)[1]
+    return idx[:, :k]
 
 
 def probe_cells(
@@ -155,22 +173,23 @@ def partitioned_pairs(
     nprobe: int = NPROBE,
     seed: int = 0,
 ) -> Pairs:
-    """Pairs ``i < j`` whose two-view distance is below ``radius`` (as :func:`curate.search.duplicate_pairs`),
-    found by partitions (see the module docstring); ``cells`` default ``N / CELL_VECTORS``. Tasks run on
-    ``cluster`` when given, else here."""
+    """Pairs ``i < j`` whose two-view distance is below ``radius`` (as :func:`curate.search.duplicate_pairs`, float64
+    distances), found by partitions (see the module docstring); ``cells`` default ``N / CELL_VECTORS``. Tasks
+    run on ``cluster`` when given, else here."""
     vectors = np.ascontiguousarray(vectors, np.float32)
     crops = None if crops is None else np.ascontiguousarray(crops, np.float32)
     n = len(vectors)
     if n < 2:
-        return canonical_pairs(*(np.zeros(0, np.int64),) * 2, np.zeros(0, np.float32), max(n, 1))
+        return exact_pairs(vectors, crops, np.zeros(0, np.int64), np.zeros(0, np.int64), radius)
     cells = min(n, cells or max(1, n // CELL_VECTORS))
     centroids = train_cells(vectors, cells, seed)
     plans = plan_tasks(probe_cells(vectors, crops, centroids, nprobe, cluster), n, cells)
     tasks = (make_task(plan, vectors, crops) for plan in plans)  # made as they are needed (bounded memory)
+    wide = search_radius(radius, vectors.shape[1])
     if cluster is None:
-        done = ((k, search_cells(task, radius)) for k, task in enumerate(tasks))
+        done = ((k, search_cells(task, wide)) for k, task in enumerate(tasks))
     else:
-        done = cluster.map(search_cells, tasks, radius, num_cpus=1)
+        done = cluster.map(search_cells, tasks, wide, num_cpus=1)
     found = [r for _, r in progress(done, total=len(plans), desc="partitions", unit="task", min_items=4)]
-    qi, bi, ds = (np.concatenate([f[k] for f in found]) for k in range(3))
-    return canonical_pairs(qi, bi, ds, n)
+    qi, bi = (np.concatenate([f[k] for f in found]) for k in range(2))
+    return exact_pairs(vectors, crops, qi, bi, radius)

@@ -1,7 +1,8 @@
 """Diversity ranking of kept images by their embeddings (unit vectors, Euclidean distance).
 
 - :func:`diversity_scores`: the mean distance to the ``k`` nearest other vectors ("relative distance to the
-  other samples" of the FiIW curation); a higher score = a more unusual image.
+  other samples" of the FiIW curation); a higher score = a more unusual image. The neighbours and their
+  distances are float64 (:func:`curate.search.exact_knn`), so a score has the same bits on any CPU.
 - :func:`k_center`: farthest-point selection (Gonzalez 1985): each pick maximises its distance to those already
   picked, a 2-approximation of the best covering of the set by ``n`` images.
 """
@@ -11,23 +12,28 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from curate.search import build_index, grid_cells
+from curate.search import build_index, exact_knn, grid_cells
 
 RANK_METHODS: tuple[str, ...] = ("score", "kcenter")
 
 
 def diversity_scores(vectors: NDArray[np.float32], k: int = 10, backend: str = "auto") -> NDArray[np.float32]:
-    """(N,) mean Euclidean distance of each unit vector (N, D) to its ``k`` nearest others (fewer if N <= k)."""
+    """(N,) float32 mean Euclidean distance of each unit vector (N, D) to its ``k`` nearest others (fewer if
+    N <= k, or where an approximate backend finds fewer), from float64 distances summed in a fixed order."""
     n = len(vectors)
     if n < 2:
         return np.zeros(n, np.float32)
     k_eff = min(k, n - 1)
-    dist, idx = build_index(vectors, backend).knn(vectors, k_eff + 1)
-    others = idx != np.arange(n)[:, None]
-    # drop self (normally column 0; with exact duplicates it may sit elsewhere)
-    dist = np.where(others, dist, np.nan)
-    dist = np.where(np.isfinite(dist), dist, np.nan)
-    return np.nan_to_num(np.nanmean(np.sort(dist, axis=1)[:, :k_eff], axis=1)).astype(np.float32)
+    dist, idx = exact_knn(build_index(vectors, backend), vectors, k_eff + 1)
+    # drop self (normally column 0; behind equally near copies it may sit elsewhere, or past the k + 1)
+    keep = idx != np.arange(n)[:, None]
+    keep[keep.all(axis=1), -1] = False
+    dist = dist[keep].reshape(n, k_eff)
+    found = np.isfinite(dist)
+    total = np.zeros(n)
+    for c in range(k_eff):  # ascending distances, summed left to right
+        total += np.where(found[:, c], dist[:, c], 0.0)
+    return (total / np.maximum(found.sum(axis=1), 1)).astype(np.float32)
 
 
 def k_center(vectors: NDArray[np.float32], n: int, first: int) -> list[int]:

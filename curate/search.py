@@ -6,6 +6,15 @@ Every backend answers the same two questions about a base set of vectors (N, D):
 - ``knn(queries (Q, D), k) -> (dist (Q, k) float32 ascending, idx (Q, k) int64, -1 when missing)``
 - ``within(queries (Q, D), radius) -> (qi (E,), bi (E,), dist (E,))``: every base vector closer than ``radius``.
 
+Those float32 answers depend on the CPU, the thread count and the batch (BLAS and faiss kernels sum in other
+orders): 33 of 423 pair distances differed by up to 4.6e-6 between a driver and its Ray workers. So a distance
+that decides (a threshold, a nearest neighbour) or is reported is never the search's own: the search finds
+candidates within :func:`search_radius` (the radius widened by the float32 error bound :func:`float32_slack`),
+and each candidate's distance is computed again in float64 from the float32 vectors (:func:`pair_distances`:
+exact products, summed in a fixed binary tree, no BLAS), the same bits on any x86 CPU, thread count or
+executor. Pairs (:func:`duplicate_pairs`, :func:`exact_pairs`) and neighbours (:func:`exact_knn`) are decided on
+those.
+
 Backends (:data:`BACKENDS`): ``numpy`` (exact brute force, the reference), ``flat`` (faiss ``IndexFlatIP``,
 exact), ``ivf`` (faiss ``IndexIVFFlat``, approximate, for ~1M+ vectors), ``hnsw`` (faiss ``IndexHNSWFlat``,
 approximate; ``within`` = kNN with ``k = max_neighbors`` filtered by radius). ``auto`` = ``flat`` up to
@@ -28,18 +37,22 @@ AUTO_EXACT_MAX = 200_000
 #: ``experiments/embedding_noise.py``) reorders nothing. Thresholds keep their exact meaning (``d < t``).
 DISTANCE_GRID = 1e-4
 _BLOCK_CELLS = 1 << 24  # query rows x base rows per similarity block (64 MB of float32)
+_EXACT_CELLS = 1 << 16  # pairs x D per block of float64 products (512 KB: in cache, 3x faster than 16 MB)
+KNN_SPARE = 4  # candidates fetched beyond k by exact_knn, so float32 misorder at the k-th rarely needs a refetch
 
 Idx = NDArray[np.int64]
 Vec = NDArray[np.float32]
+Dist = NDArray[np.float64]
 
 
 @dataclass(frozen=True)
 class Pairs:
-    """Pairs ``(i[e], j[e])`` at Euclidean distance ``dist[e]``; each array has shape (E,)."""
+    """Pairs ``(i[e], j[e])`` at Euclidean distance ``dist[e]`` (float64, :func:`pair_distances`); each array has
+    shape (E,)."""
 
     i: Idx
     j: Idx
-    dist: Vec
+    dist: Dist
 
     def __len__(self) -> int:
         return int(self.i.shape[0])
@@ -56,6 +69,72 @@ def sim_to_dist(sim: NDArray[np.floating]) -> Vec:
 
 def dist_to_sim(dist: float) -> float:
     return 1.0 - dist * dist / 2.0
+
+
+def float32_slack(dim: int) -> float:
+    """A bound on ``|d32^2 - d^2|``, a squared distance as a float32 search reports it against the exact one, for
+    unit vectors of length ``dim``: a float32 dot product is within ``dim * 2^-24`` of the exact one in any
+    summation order, with or without FMA (Higham, Accuracy and Stability, 3.1), so ``d^2 = 2 - 2 s`` within twice
+    that; doubled again, and a few units more for the conversions and the threshold's float32 rounding."""
+    return 4.0 * (dim + 16) * 2.0**-24
+
+
+def search_radius(radius: float, dim: int) -> float:
+    """The float32 search radius that finds every pair of unit vectors (length ``dim``) whose exact distance is
+    below ``radius``: ``sqrt(radius^2 + float32_slack(dim))`` (0.45 -> 0.45009 at D = 320)."""
+    return math.sqrt(radius * radius + float32_slack(dim))
+
+
+def pair_distances(a: NDArray[np.floating], b: NDArray[np.floating], i: Idx, j: Idx) -> Dist:
+    """(E,) float64 distances ``sqrt(max(2 - 2 <a[i[e]], b[j[e]]>, 0))`` of rows of ``a`` (N, D) and ``b`` (M, D)
+    (float32; other dtypes are rounded to float32 first). Each product of two float32 values is exact in float64
+    and the D products are summed in a fixed binary tree of float64 additions (no BLAS, no numpy reduction
+    loop), so the bits depend on neither the CPU nor the thread count nor how the pairs were batched."""
+    a, b = np.asarray(a, np.float32), np.asarray(b, np.float32)
+    i, j = np.asarray(i, np.int64), np.asarray(j, np.int64)
+    out = np.empty(len(i), np.float64)
+    rows = max(1, _EXACT_CELLS // max(1, a.shape[1]))
+    for s in range(0, len(i), rows):
+        dots = _tree_sum(a[i[s : s + rows]].astype(np.float64) * b[j[s : s + rows]])  # exact products
+        out[s : s + rows] = np.sqrt(np.maximum(2.0 - 2.0 * dots, 0.0))
+    return out
+
+
+def two_view_distances(
+    a: NDArray[np.floating],
+    a_crops: NDArray[np.floating] | None,
+    b: NDArray[np.floating],
+    b_crops: NDArray[np.floating] | None,
+    i: Idx,
+    j: Idx,
+) -> Dist:
+    """(E,) float64 two-view distances ``min(d(a_i, b_j), d(a'_i, b_j), d(a_i, b'_j))`` (:func:`pair_distances`)
+    of whole views ``a`` (N, D), ``b`` (M, D) and centre views ``a_crops`` (N, D), ``b_crops`` (M, D) (None:
+    that view left out). Within one set pass it twice: ``two_view_distances(v, c, v, c, i, j)``."""
+    dist = pair_distances(a, b, i, j)
+    if a_crops is not None and len(a_crops):
+        dist = np.minimum(dist, pair_distances(a_crops, b, i, j))
+    if b_crops is not None and len(b_crops):
+        dist = np.minimum(dist, pair_distances(a, b_crops, i, j))
+    return dist
+
+
+def _tree_sum(p: NDArray[np.float64]) -> Dist:
+    """(E, D) -> (E,) row sums in a fixed binary tree of elementwise additions (column c + w/2 onto column c, D
+    padded with zeros to a power of 2 w): the same bits on any CPU, unlike a BLAS dot product or numpy's
+    reduction (whose order follows the memory layout)."""
+    d = p.shape[1]
+    if d == 0:
+        return np.zeros(len(p))
+    width = 1 << (d - 1).bit_length()
+    if width != d:  # the first level, against the padding (x + 0 = x) without building it
+        half = width // 2
+        p, tail = p[:, :half].copy(), p[:, half:]
+        p[:, : d - half] += tail
+    while p.shape[1] > 1:
+        half = p.shape[1] // 2
+        p = p[:, :half] + p[:, half:]
+    return p[:, 0]
 
 
 class SearchIndex(ABC):
@@ -210,11 +289,12 @@ def build_index(base: NDArray[np.floating], backend: str = "auto") -> SearchInde
 
 
 def self_pairs(index: SearchIndex, radius: float) -> Pairs:
-    """Unordered pairs ``i < j`` of base vectors closer than ``radius``, sorted by (i, j).
+    """Unordered pairs ``i < j`` of base vectors closer than ``radius`` (exact float64 distances,
+    :func:`exact_pairs`), sorted by (i, j).
 
     A pair found from either end counts (approximate backends may see it from one side only)."""
-    qi, bi, dist = index.within(index.base, radius)
-    return canonical_pairs(qi, bi, dist, len(index.base))
+    qi, bi, _ = index.within(index.base, search_radius(radius, index.base.shape[1]))
+    return exact_pairs(index.base, None, qi, bi, radius)
 
 
 def duplicate_pairs(
@@ -222,24 +302,59 @@ def duplicate_pairs(
 ) -> Pairs:
     """Pairs ``i < j`` whose two-view distance ``min(d(v_i, v_j), d(c_i, v_j), d(v_i, c_j))`` is below
     ``radius``, for whole-image vectors ``vectors`` (N, D) and centre-view vectors ``crops`` (N, D) (a cropped
-    copy of an image matches that image's centre view). ``crops=None``: whole views only."""
+    copy of an image matches that image's centre view). ``crops=None``: whole views only. Candidates come from
+    the float32 search within :func:`search_radius`; the distances and the decision are :func:`exact_pairs`'."""
     index = build_index(vectors, backend)
-    qi, bi, dist = index.within(index.base, radius)
+    wide = search_radius(radius, index.base.shape[1])
+    qi, bi, _ = index.within(index.base, wide)
     if crops is not None and len(crops):
-        ci, cb, cd = index.within(crops, radius)
-        qi, bi, dist = np.concatenate([qi, ci]), np.concatenate([bi, cb]), np.concatenate([dist, cd])
-    return canonical_pairs(qi, bi, dist, len(vectors))
+        ci, cb, _ = index.within(crops, wide)
+        qi, bi = np.concatenate([qi, ci]), np.concatenate([bi, cb])
+    return exact_pairs(index.base, crops, qi, bi, radius)
 
 
-def canonical_pairs(qi: Idx, bi: Idx, dist: Vec, n: int) -> Pairs:
-    """Unordered pairs ``i < j`` (self pairs dropped), each once with its smallest distance, sorted by (i, j)."""
-    i, j = np.minimum(qi, bi), np.maximum(qi, bi)
-    keep = i != j
-    key, d = i[keep] * n + j[keep], dist[keep]
-    order = np.lexsort((d, key))
-    key, d = key[order], d[order]
-    key, first = np.unique(key, return_index=True)
-    return Pairs(key // n, key % n, d[first])
+def exact_pairs(
+    vectors: NDArray[np.floating], crops: NDArray[np.floating] | None, qi: Idx, bi: Idx, radius: float
+) -> Pairs:
+    """The candidate pairs ``(qi[e], bi[e])`` (E,) of rows of ``vectors`` (N, D), in either order and repeated
+    at will, as unordered pairs ``i < j`` (self pairs dropped) whose float64 two-view distance
+    (:func:`two_view_distances` with centre views ``crops`` (N, D) or None) is below ``radius``, sorted by (i, j):
+    the same pairs and bits however the candidates were found, as long as they include every such pair."""
+    n = max(1, len(vectors))
+    i, j = np.minimum(qi, bi).astype(np.int64), np.maximum(qi, bi).astype(np.int64)
+    key = np.unique(i[i != j] * n + j[i != j])
+    i, j = key // n, key % n
+    dist = two_view_distances(vectors, crops, vectors, crops, i, j)
+    keep = dist < radius
+    return Pairs(i[keep], j[keep], dist[keep])
+
+
+def exact_knn(index: SearchIndex, queries: NDArray[np.floating], k: int) -> tuple[Dist, Idx]:
+    """The ``k`` nearest base vectors of each query (Q, D) by float64 distance (:func:`pair_distances`): (Q, k)
+    float64 ascending (ties: lower index first; inf where missing) and (Q, k) int64 indices (-1 where missing).
+
+    The index's float32 kNN gives ``k +`` :data:`KNN_SPARE` candidates; they are settled exactly, and a row
+    whose k-th exact distance is not clear of its last candidate by :func:`float32_slack` (a vector not fetched
+    might be nearer) asks again with twice as many. With an exact index the answer is the exact kNN on any CPU;
+    with an approximate one, the exact order of what it finds."""
+    q = np.ascontiguousarray(queries, np.float32)
+    n, k_eff = len(index.base), min(k, len(index.base))
+    dist, idx = np.full((len(q), k), np.inf), np.full((len(q), k), -1, np.int64)
+    rows, fetch = np.arange(len(q)), min(n, k_eff + KNN_SPARE)
+    slack = float32_slack(index.base.shape[1])
+    while len(rows) and k_eff:
+        d32, cand = index.knn(q[rows], fetch)
+        found = cand >= 0
+        exact = np.full(cand.shape, np.inf)
+        r, c = np.nonzero(found)
+        exact[r, c] = pair_distances(q[rows], index.base, r, cand[r, c])
+        order = np.lexsort((np.where(found, cand, n), exact))[:, :k_eff]
+        best, best_idx = np.take_along_axis(exact, order, 1), np.take_along_axis(cand, order, 1)
+        last = d32[:, -1].astype(np.float64)
+        clear = (fetch >= n) | ~np.isfinite(last) | (best[:, -1] ** 2 < last**2 - slack)
+        dist[rows[clear], :k_eff], idx[rows[clear], :k_eff] = best[clear], best_idx[clear]
+        rows, fetch = rows[~clear], min(n, 2 * fetch)
+    return dist, idx
 
 
 def _cat(qi: list, bi: list, ds: list) -> tuple[Idx, Idx, Vec]:

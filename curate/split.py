@@ -42,7 +42,7 @@ def near_groups(
     vectors: NDArray[np.float32], threshold: float, backend: str = "auto", crops: NDArray[np.float32] | None = None
 ) -> list[list[int]]:
     """Connected components of the rows of unit ``vectors`` (N, D) (with centre views ``crops``) closer than
-    ``threshold`` (:func:`curate.search.duplicate_pairs`); singletons included."""
+    ``threshold`` (:func:`curate.search.duplicate_pairs`: float64 distances decide); singletons included."""
     uf = UnionFind(len(vectors))
     if len(vectors) > 1 and threshold > 0:
         pairs = duplicate_pairs(vectors, crops, threshold, backend)

@@ -1,6 +1,7 @@
 """Partitioned near-duplicate search: on planted vectors it finds >= 99 % of the exact pairs and nothing else,
-with exact distances; every vector is searched in its home cell; the pairs are the same in this process and on
-a real Ray head; a dedup with ``backend="partition"`` keeps what the exact search keeps."""
+with the exact search's float64 distances; every vector is searched in its home cell; the pairs and their bits
+are the same for any thread count and task size, in this process and on a real Ray head; a dedup with
+``backend="partition"`` keeps what the exact search keeps."""
 
 from __future__ import annotations
 
@@ -37,7 +38,7 @@ def test_partitions_find_the_exact_pairs_with_their_distances() -> None:
     assert len(truth) > 500
     assert set(got) <= set(truth)  # nothing but true pairs
     assert len(set(got) & set(truth)) / len(truth) >= 0.99
-    assert max(abs(got[p] - truth[p]) for p in got) < 1e-4  # exact distances (float32 rounding aside)
+    assert all(got[p] == truth[p] for p in got)  # the same float64 distances, bit for bit
 
 
 def test_every_vector_has_one_home_and_every_query_its_probes() -> None:
@@ -58,6 +59,24 @@ def test_every_vector_has_one_home_and_every_query_its_probes() -> None:
     assert np.array_equal(task.base, x[task.base_ids])
 
 
+def test_probes_are_the_exact_nearest_cells_ties_to_the_lower_cell() -> None:
+    from curate.search import pair_distances
+
+    x, _ = planted(2000, 32, seed=5)
+    centroids = train_cells(x, 40, seed=0)
+    probe = nearest_cells(x, centroids, 4)
+    rows, cells = np.repeat(np.arange(len(x)), 40), np.tile(np.arange(40), len(x))
+    exact = pair_distances(x, centroids, rows, cells).reshape(len(x), 40)
+    truth = np.lexsort((np.broadcast_to(np.arange(40), exact.shape), exact))[:, :4]
+    assert np.array_equal(probe[:, 0], truth[:, 0])  # the home
+    assert np.array_equal(np.sort(probe, axis=1), np.sort(truth, axis=1))  # the probed set
+    axes = np.eye(8, dtype=np.float32)
+    between = l2_normalize(np.array([[1, 1, 0, 0, 0, 0, 0, 0], [0, 0, 1, 1, 1, 0, 0, 0]], np.float32))
+    assert nearest_cells(between, axes, 1)[:, 0].tolist() == [0, 2]  # exact ties: the lower cell
+    assert nearest_cells(between, axes[::-1].copy(), 1)[:, 0].tolist() == [6, 3]
+    assert sorted(nearest_cells(between, axes, 3)[1].tolist()) == [2, 3, 4]
+
+
 @pytest.mark.slow
 def test_a_ray_cluster_finds_the_same_pairs(cluster: Cluster, monkeypatch: pytest.MonkeyPatch) -> None:
     from curate import partition
@@ -68,6 +87,47 @@ def test_a_ray_cluster_finds_the_same_pairs(cluster: Cluster, monkeypatch: pytes
     there = partitioned_pairs(x, crops, RADIUS, cluster=cluster, cells=16)
     for a, b in zip((here.i, here.j, here.dist), (there.i, there.j, there.dist)):
         assert np.array_equal(a, b)
+
+
+def test_the_same_pairs_and_bits_for_any_thread_count_and_task_size(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Probes found in one call or in tasks of 500 rows, cells searched in tasks of any size, faiss on 1 or 2
+    threads: the same pairs and float64 distances; a radius at a pair's distance leaves it out, the next float
+    up takes it in."""
+    import faiss
+
+    from curate import partition
+
+    x, crops = planted(4000, 32, seed=4)
+    ref = partitioned_pairs(x, crops, RADIUS, cells=16)
+    assert len(ref) > 300
+    before = faiss.omp_get_max_threads()
+    try:
+        for threads, task_vectors, assign_rows in ((1, 300, 500), (2, 10**6, 500), (1, 10**6, 10**6)):
+            faiss.omp_set_num_threads(threads)
+            monkeypatch.setattr(partition, "TASK_VECTORS", task_vectors)
+            monkeypatch.setattr(partition, "ASSIGN_ROWS", assign_rows)
+            got = partitioned_pairs(x, crops, RADIUS, cluster=_InProcess(), cells=16)
+            for a, b in zip((got.i, got.j, got.dist), (ref.i, ref.j, ref.dist)):
+                assert np.array_equal(a, b)
+    finally:
+        faiss.omp_set_num_threads(before)
+    k = len(ref) // 2
+    d, pair = float(ref.dist[k]), (ref.i[k], ref.j[k])
+    at = partitioned_pairs(x, crops, d, cells=16)
+    assert pair not in set(zip(at.i, at.j))
+    above = partitioned_pairs(x, crops, float(np.nextafter(d, 3.0)), cells=16)
+    assert pair in set(zip(above.i, above.j))
+
+
+class _InProcess:
+    """The part of :class:`curate.core.cluster.Cluster` the partitioned search uses, run here: probes in tasks of
+    ``ASSIGN_ROWS`` as on a cluster, results yielded last task first (a cluster yields them as they finish)."""
+
+    def put(self, value: object) -> object:
+        return value
+
+    def map(self, fn, items, *args, **_resources):  # noqa: ANN001, ANN201 - Cluster.map's shape
+        return reversed([(k, fn(item, *args)) for k, item in enumerate(items)])
 
 
 def test_dedup_by_partitions_keeps_what_exact_search_keeps(monkeypatch: pytest.MonkeyPatch) -> None:

@@ -63,3 +63,27 @@ def test_equal_scores_follow_the_keys() -> None:
         order, _ = rank_order(vectors, keys, "score", k=2)
         first, second = (0, 1) if keys[0] < keys[1] else (1, 0)
         assert order.index(first) < order.index(second)
+
+
+def test_scores_are_float64_means_the_same_bits_for_any_backend_and_thread_count() -> None:
+    """Each score is the mean of the k smallest exact distances (fsum reference) rounded to float32, whatever
+    computed the kNN; exact copies tie exactly, so self may sit behind them."""
+    import math
+
+    import faiss
+
+    rng = np.random.default_rng(4)
+    x = l2_normalize(rng.standard_normal((300, 48)) + np.repeat(rng.standard_normal((30, 48)), 10, axis=0))
+    x[1:4] = x[0]  # exact copies
+    ref = diversity_scores(x, k=5, backend="numpy")
+    before = faiss.omp_get_max_threads()
+    try:
+        for threads in (1, 2):
+            faiss.omp_set_num_threads(threads)
+            assert np.array_equal(diversity_scores(x, k=5, backend="flat"), ref)
+    finally:
+        faiss.omp_set_num_threads(before)
+    for row in (0, 2, 150):
+        dots = [math.fsum(float(a) * float(b) for a, b in zip(x[row], x[j])) for j in range(len(x)) if j != row]
+        nearest = sorted(math.sqrt(max(2 - 2 * s, 0.0)) for s in dots)[:5]
+        assert abs(float(ref[row]) - math.fsum(nearest) / 5) <= np.spacing(ref[row])
