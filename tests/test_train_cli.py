@@ -38,6 +38,22 @@ def test_bad_arguments_are_errors(folders, tmp_path: Path) -> None:
     assert main([*same[:4], str(folders[1]), "--out", str(tmp_path / "r"), "--imgsz", "100"]) == 2
 
 
+def test_a_missing_val_entry_of_data_yaml_is_named_when_train_falls_back(tmp_path: Path, capsys) -> None:
+    """data.yaml's val: names no folder: the refusal to validate on the training images names the file and key."""
+    from factories import write_image
+
+    root = tmp_path / "ds"
+    for k in range(2):
+        write_image(root / "images" / "train" / f"i{k}.jpg", 40, 30, seed=k)
+        (root / "labels" / "train").mkdir(parents=True, exist_ok=True)
+        (root / "labels" / "train" / f"i{k}.txt").write_text("0 0.5 0.5 0.5 0.5\n")
+    (root / "data.yaml").write_text("path: .\ntrain: images/train\nval: images/val\nnames: [fire]\n")
+    assert main(["train", "--train", str(root), "--val", str(root), "--out", str(tmp_path / "run")]) == 2
+    err = capsys.readouterr().err
+    assert f"{root / 'data.yaml'}: val: 'images/val' (no {root / 'images' / 'val'}) is not a folder" in err
+    assert not (tmp_path / "run").exists()
+
+
 def test_device_flag(folders, tmp_path: Path, capsys) -> None:
     import torch
 

@@ -112,7 +112,12 @@ def cmd_train(args: argparse.Namespace) -> int:
     train_ds, val_ds = _datasets(args)
     same = Path(args.train).resolve() == Path(args.val).resolve()
     if same and {i.split for i in train_ds.images} & {i.split for i in val_ds.images}:
-        raise ValueError(f"{args.train}: training and validation images are the same split; pass --val-split")
+        from curate.core.load import splits_found
+
+        raise ValueError(
+            f"{args.train}: training and validation images are the same split ({splits_found(val_ds)}); "
+            "pass --val-split"
+        )
     print(f"train {len(train_ds.images)} images, val {len(val_ds.images)} images, classes {train_ds.category_names}")
     try:
         results = fit(cfg, train_ds, val_ds, args.out)

@@ -120,24 +120,27 @@ class ClassResolver:
     """Maps a source's class names to canonical names; reports each class outside the known vocabulary once.
 
     ``aliases`` adds user synonyms (source name -> canonical name). Unknown classes are kept under their
-    normalised name (never silently dropped) and reported as a warning naming the source file.
+    normalised name (never silently dropped) and reported as a warning naming the source file (``where``) and,
+    when the names come from one key of it, that key (``key``, e.g. ``names``).
     """
 
-    def __init__(self, where: str, aliases: Mapping[str, str] | None = None) -> None:
+    def __init__(self, where: str, aliases: Mapping[str, str] | None = None, key: str = "") -> None:
         self.where = where
+        self.key = key
         self.aliases = dict(aliases or {})
         self._reported: set[str] = set()
         self.seen: dict[str, None] = {}  # the source's class names, as spelt, in the order met
 
-    def resolve(self, name: str, problems: list[Problem]) -> str:
+    def resolve(self, name: str, problems: list[Problem], where: str = "") -> str:
+        """The canonical name of the source's class ``name`` (found in ``where``, default the source file)."""
         self.seen.setdefault(str(name), None)
         canonical = canonical_class(name, self.aliases)
         if not is_known(canonical) and canonical not in self._reported:
             self._reported.add(canonical)
             problems.append(
                 Problem(
-                    self.where,
-                    f"class {name!r} is not a known class (fire, smoke): kept as {canonical!r}; "
+                    where or self.where,
+                    f"{self.key + ': ' if self.key else ''}class {name!r} is not a known class (fire, smoke): kept as {canonical!r}; "
                     "map it with --alias NAME=fire or drop it with --drop-class",
                     "warning",
                     code=f"unknown-class:{canonical}",
