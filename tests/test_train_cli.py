@@ -84,3 +84,45 @@ def test_a_name_that_matches_nothing_fails_before_training(folders, tmp_path: Pa
     argv = ["train", "--train", str(train), "--val", str(val), "--out", str(tmp_path / "run"), *extra]
     assert main(argv) == 2
     assert message in capsys.readouterr().err and not (tmp_path / "run").exists()
+
+
+ROW = "0 0.5 0.5 0.4 0.4\n"
+
+
+def _flawed_yolo(root: Path) -> Path:
+    """A YOLO folder (train/valid) whose training labels hold one box outside its image (an error: dropped) and
+    one reaching outside it (clipped, a warning)."""
+    from factories import write_image
+
+    for split, rows in (("train", "0 0.5 0.5 0.4 0.4\n0 1.5 1.5 0.2 0.2\n0 0.9 0.5 0.4 0.4\n"), ("valid", ROW)):
+        write_image(root / split / "images" / "a.jpg", 40, 30)
+        (root / split / "labels").mkdir(parents=True)
+        (root / split / "labels" / "a.txt").write_text(rows)
+    (root / "classes.txt").write_text("fire\n")
+    return root
+
+
+def test_data_with_errors_is_refused_in_one_line_before_training(tmp_path: Path, capsys, monkeypatch) -> None:
+    import train.loop
+
+    root = _flawed_yolo(tmp_path / "ds")
+    argv = ["train", "--train", str(root), "--val", str(root), "--out", str(tmp_path / "run")]
+    assert main(argv) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and err.startswith(f"error: train: 1 validation error in {root} (")
+    assert "lies outside the 40x30 image (dropped)" in err
+    assert err.endswith("; fix the data or pass --allow-errors (train key allow_errors) to train anyway")
+    assert not (tmp_path / "run").exists()
+
+    def fake_fit(cfg, train_ds, val_ds, out):
+        assert cfg.allow_errors and len(train_ds.annotations) == 2  # the dropped box left out, the clipped one kept
+        return {"selected": {"epoch": 1, "AP": 0.0, "AP50": 0.0, "fitness": 0.0}, "onnx": "best.onnx"}
+
+    monkeypatch.setattr(train.loop, "fit", fake_fit)
+    assert main([*argv, "--allow-errors"]) == 0
+    out, err = capsys.readouterr()
+    assert err.strip().startswith(f"train: 1 validation error in {root} (") and len(err.splitlines()) == 1
+    assert err.strip().endswith(": training anyway (allow_errors)")
+    assert f"; 1 box in {root} reached outside its image and was clipped to it" in out.splitlines()[0]
+    assert main(["train", "--allow-errors", "--print-config"]) == 0
+    assert "allow_errors: true" in capsys.readouterr().out

@@ -86,12 +86,16 @@ def probe_sizes(
         return list(progress(it, total=len(paths), desc=desc))
 
 
+#: The code of the warning on a box that reached outside its image and was clipped to it.
+CLIPPED = "clipped-box"
+
+
 def sanitize_box(
     xywh: Sequence[float], width: int, height: int, where: str, problems: list[Problem]
 ) -> tuple[float, float, float, float] | None:
     """The box clipped to the image, or ``None`` (with an error) when it is NaN/inf or has no area.
 
-    A box reaching outside the image is clipped and reported as a warning.
+    A box reaching outside the image is clipped and reported as a warning (code :data:`CLIPPED`).
     """
     if not all(math.isfinite(float(v)) for v in xywh):
         problems.append(Problem(where, f"box {_fmt(xywh)} has NaN or infinite values (dropped)"))
@@ -106,7 +110,7 @@ def sanitize_box(
             problems.append(Problem(where, f"box {_fmt(xywh)} lies outside the {width}x{height} image (dropped)"))
             return None
         problems.append(
-            Problem(where, f"box {_fmt(xywh)} reaches outside the {width}x{height} image (clipped)", "warning")
+            Problem(where, f"box {_fmt(xywh)} reaches outside the {width}x{height} image (clipped)", "warning", CLIPPED)
         )
         return (float(clipped[0]), float(clipped[1]), float(clipped[2]), float(clipped[3]))
     return (x, y, w, h)
