@@ -168,6 +168,41 @@ def _side(models: list[Path], results: list) -> dict:  # results: list[eval.scor
     return {"model": ",".join(str(m) for m in models), **mean, "runs": runs}
 
 
+def same_content(model_a: list[Path], model_b: list[Path]) -> list[dict]:
+    """The models that are one file's content more than once among both sides: per sha256 of the file contents
+    (in first-listed order), ``{"sha256", "A": [paths], "B": [paths]}``; only those listed twice or more."""
+    from curate.core.manifest import file_sha256
+
+    groups: dict[str, dict] = {}
+    for side, models in (("A", model_a), ("B", model_b)):
+        for model in models:
+            digest = file_sha256(model) if model.is_file() else f"missing:{model}"  # scoring names a missing file
+            groups.setdefault(digest, {"sha256": digest, "A": [], "B": []})[side].append(str(model))
+    return [g for g in groups.values() if len(g["A"]) + len(g["B"]) > 1 and not g["sha256"].startswith("missing:")]
+
+
+def same_content_lines(groups: list[dict], runs_a: int, runs_b: int) -> list[str]:
+    """What :func:`same_content` found, in words: a model both sides list (when the sides hold the same models
+    as often, the difference is 0 by construction), or one a side lists twice."""
+    zero = all(len(g["A"]) == len(g["B"]) for g in groups) and sum(len(g["A"]) for g in groups) == runs_a == runs_b
+    lines = []
+    for g in groups:
+        digest = f"same content, sha256 {g['sha256'][:12]}…"
+        if g["A"] and g["B"]:
+            a, b = ", ".join(g["A"]), ", ".join(g["B"])
+            lines.append(f"{a} and {b} are one model ({digest})" if zero and len(groups) == 1 else
+                         f"{a} (A) and {b} (B) are one model ({digest})")  # fmt: skip
+        else:
+            side = "A" if g["A"] else "B"
+            lines.append(f"{side} lists one model {len(g[side])} times ({', '.join(g[side])}; {digest}): its mean "
+                         f"counts it {len(g[side])} times")  # fmt: skip
+    if zero and len(groups) == 1:
+        lines[0] += ": the difference is 0 by construction"
+    elif zero and groups:
+        lines.append(f"A and B are the same {runs_a} models: the difference is 0 by construction")
+    return lines
+
+
 def cmd_compare(args: argparse.Namespace) -> int:
     import numpy as np
 
@@ -191,6 +226,7 @@ def cmd_compare(args: argparse.Namespace) -> int:
         print(f"error: {exc}", file=sys.stderr)
         return 2
     _report_problems(results[0][0])
+    same = same_content(args.model_a, args.model_b)
     tables = [[MatchTable(r.evaluation) for r in side] for side in results]
     if any(not np.array_equal(tables[0][0].image_ids, t.image_ids) for t in tables[0] + tables[1]):
         print("error: the models could not all be scored on the same images", file=sys.stderr)
@@ -203,6 +239,7 @@ def cmd_compare(args: argparse.Namespace) -> int:
         "delta": {k: d.to_dict() for k, d in deltas.items()},
         "samples": args.samples,
         "seed": args.seed,
+        "same_content": same,
     }
     free = points = None
     if args.negatives is not None:
@@ -222,6 +259,8 @@ def cmd_compare(args: argparse.Namespace) -> int:
     if args.json:
         print(json.dumps(doc, indent=1))
         return 0
+    for line in same_content_lines(same, len(args.model_a), len(args.model_b)):
+        print(line)
     for side in ("A", "B"):
         runs = doc[side]["runs"]
         for run in runs if len(runs) > 1 else []:

@@ -40,7 +40,7 @@ configs/demo.yaml needs no data: its 'real' and 'rare' sets are generated stand-
 
 
 def cmd_experiment(args: argparse.Namespace) -> int:
-    from curate.core.config import ConfigError, load_config
+    from curate.core.config import ConfigError, load_config, located
     from fuzzyfire.aggregate import STANDIN_NOTICE, answer_text, table_text
     from fuzzyfire.executors import ExecutorError, build_executor
     from fuzzyfire.experiment import run_experiment
@@ -60,7 +60,7 @@ def cmd_experiment(args: argparse.Namespace) -> int:
         options = {"address": e.address, "num_cpus": e.num_cpus, "num_gpus": e.num_gpus, "local_cpus": e.local_cpus}
         executor = None if args.report_only else build_executor(e.name, **(options if e.name == "ray" else {}))
     except (ConfigError, ExperimentConfigError, ExecutorError) as exc:
-        print(f"error: {args.config}: {exc}", file=sys.stderr)
+        print(f"error: {located(args.config, str(exc))}", file=sys.stderr)
         return 2
     out = args.out or Path("out") / Path(args.config).stem
     try:

@@ -71,17 +71,18 @@ def prepare_data(cfg: ExperimentConfig, base: Path, out: Path, methods: Sequence
     kind = real.source()
     if kind == "path":
         real_ref = folder_ref(
-            real.path, base, real.format, real.aliases, real.drop_classes, negatives=real.negative_classes
-        )
+            real.path, base, real.format, real.aliases, real.drop_classes, negatives=real.negative_classes,
+            key="real.path",
+        )  # fmt: skip
     elif kind == "curate":
         curated = _stage("real (curated)", curate_stage, root, real.curate_config(), base)
         real_ref = with_class_rules(curated, real.drop_classes, real.negative_classes)
     else:
         real_ref = _stage("real (stand-in)", standin_stage, root, "real-standin", real.standin)
-    rare_ref = _test_ref(cfg.rare, "rare", "rare-standin", base, root) if cfg.rare is not None else None
+    rare_ref = _test_ref(cfg.rare, "rare", "rare-standin", base, root, "rare") if cfg.rare is not None else None
     tests = {}
     for key, name in cfg.test_names().items():
-        ref = _test_ref(cfg.tests[key], f"test {key}", "test-standin", base, root)
+        ref = _test_ref(cfg.tests[key], f"test {key}", "test-standin", base, root, f"tests.{key}")
         tests[label(name, ref.standin)] = ref
     return Prepared(real_ref, rare_ref, prepare_pools(cfg, base, out, methods), tests)
 
@@ -96,10 +97,12 @@ def prepare_pools(cfg: ExperimentConfig, base: Path, out: Path, methods: Sequenc
     return pools
 
 
-def _test_ref(t: EvalSetConfig, what: str, stage: str, base: Path, root: Path) -> DataRef:
-    """A test set's data: its folder read in place, or its stand-in built as stage ``stage``."""
+def _test_ref(t: EvalSetConfig, what: str, stage: str, base: Path, root: Path, key: str) -> DataRef:
+    """A test set's data (config key ``key``): its folder read in place, or its stand-in built as stage ``stage``."""
     if t.source() == "path":
-        return folder_ref(t.path, base, t.format, t.aliases, t.drop_classes, t.split, t.holdout, t.negative_classes)
+        return folder_ref(
+            t.path, base, t.format, t.aliases, t.drop_classes, t.split, t.holdout, t.negative_classes, f"{key}.path"
+        )
     return _stage(f"{what} (stand-in)", standin_stage, root, stage, t.standin)
 
 

@@ -151,12 +151,14 @@ def folder_ref(
     split: str | None = None,
     holdout: float = 0.0,
     negatives=(),
+    key: str = "path",
 ) -> DataRef:
     """A user's dataset read in place (identity = its resolved path and reading options; ``holdout``, the share
-    of held-out photos it is cut to, only when set)."""
+    of held-out photos it is cut to, only when set). ``key``: the config key that gave ``path``, for the error
+    when it names nothing."""
     where = _absolute(path, base)
     if not where.exists():
-        raise FileNotFoundError(f"{where}: dataset not found")
+        raise FileNotFoundError(f"{key}: {str(path)!r}: dataset not found (no {where})")
     identity = {"kind": "folder", "path": where.as_posix(), "format": fmt, "aliases": dict(aliases)}
     if holdout:
         identity["holdout"] = holdout
@@ -243,10 +245,12 @@ def curate_stage(root: Path, cfg: Any, base: Path) -> tuple[Stage, DataRef]:
     verified on reuse (a few seconds with the cache): its contents must be what this environment curates."""
     config = to_dict(cfg)
     del config["executor"], config["model"]["device"]  # where it runs, not what it makes: the same dataset
-    for source in config["sources"]:
+    for i, source in enumerate(config["sources"]):
         where = _absolute(Path(source["path"]), base)
         if not where.exists():
-            raise FileNotFoundError(f"{where}: dataset to curate not found")
+            raise FileNotFoundError(
+                f"real.curate.sources[{i}].path: {source['path']!r}: dataset to curate not found (no {where})"
+            )
         source["path"] = where.as_posix()
     stage = cached_stage(
         root, "curated", {"kind": "curate", "config": config}, lambda out: _curate(cfg, base, out), verify=True

@@ -56,6 +56,7 @@ def test_a_bad_config_is_one_error_naming_the_file(
     assert load_config_or_report(str(path), Toy, overrides) is None
     err = capsys.readouterr().err
     assert err.startswith(f"error: {path}: ") and message in err and err.count("error: ") == 1
+    assert f"{path}: {path}" not in err and "<unicode string>" not in err  # named once, and in YAML's own mark
 
 
 def test_the_exit_code_of_a_command_with_a_bad_config_is_2(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:

@@ -78,9 +78,10 @@ def test_reads_foreign_coco_with_zero_ids_and_reports_problems(tmp_path):
     assert ds.annotations[1].bbox == (10.0, 10.0, 10.0, 10.0)  # clipped to 20x20
     text = "\n".join(str(p) for p in result.problems)
     assert "missing.jpg: unreadable image: file not found" in text
+    assert f"(file_name 'missing.jpg' of image id 2 in {path}; skipped with its boxes)" in text
     assert "category id 5 out of range" in text
     assert "unknown or unreadable image id 9" in text
-    assert "JSON says 21x20 but the image is 20x20" in text
+    assert f"width x height 21x20 of image id 1 in {tmp_path / 'ann.json'}, but the image is 20x20" in text
     assert "NaN" in text
 
 

@@ -60,7 +60,8 @@ def test_voc_to_coco_round_trip_exact(tmp_path):
 def test_voc_problems(tmp_path):
     root = tmp_path / "side"
     write_image(root / "a.jpg", 40, 30)
-    (root / "a.xml").write_text(_xml("a.jpg", 999, 999, [("fire", [0, 0, 50, 10], 0), ("fire", [5, 5, "x", 9], 0)]))
+    objects = [("fire", [0, 0, 50, 10], 0), ("fire", [5, 5, "x", 9], 0), ("sparks", [1, 1, 5, 5], 0)]
+    (root / "a.xml").write_text(_xml("a.jpg", 999, 999, objects))
     (root / "ghost.xml").write_text(_xml("ghost.jpg", 10, 10, []))
     (root / "broken.xml").write_text("<annotation><filename>")
     result = read_voc(root)
@@ -68,6 +69,7 @@ def test_voc_problems(tmp_path):
     assert "<size> says 999x999 but the image is 40x30" in text
     assert "reaches outside the 40x30 image (clipped)" in text
     assert "object 2: bndbox" in text and "not numeric" in text
-    assert "ghost.xml: annotation without an image" in text
+    assert "ghost.xml: annotation without an image (its <filename> 'ghost.jpg' not found)" in text
     assert "broken.xml: unreadable XML" in text
-    assert len(result.dataset.images) == 1 and len(result.dataset.annotations) == 1
+    assert f"{root / 'a.xml'} object 3: name: class 'sparks' is not a known class" in text  # the file and key
+    assert len(result.dataset.images) == 1 and len(result.dataset.annotations) == 2

@@ -1,11 +1,13 @@
 import os
 from pathlib import Path
 
+import pytest
 import yaml
-from factories import write_image
+from factories import write_image, write_yolo_dataset
 
 from curate.core.formats.yolo import read_yolo
 from curate.core.formats.yolo_layout import LabelLocator, last_image_folder
+from curate.core.load import SplitError, pick_split
 
 ROW = "0 0.5 0.5 0.5 0.5\n"
 
@@ -78,7 +80,7 @@ def test_data_yaml_list_valued_splits_and_image_lists(tmp_path):
     }
     assert len(result.dataset.annotations) == 4
     assert [p.reason for p in result.problems] == [
-        f"1 images below {root} are in none of its splits and are not read (e.g. images/extra/e.jpg)"
+        f"1 images below {root} are in none of its splits (train:, val:) and are not read (e.g. images/extra/e.jpg)"
     ]
 
 
@@ -116,3 +118,60 @@ def test_data_yaml_entries_may_point_outside_the_folder(tmp_path):
     }
     assert len(result.dataset.annotations) == 5 and not result.problems
     assert result.dataset.image_path(result.dataset.images[-1]).is_file()
+
+
+def test_a_split_entry_that_names_nothing_is_said_with_the_yaml_file_and_key(tmp_path):
+    """The dataset file (any name, its path: elsewhere) and the key, not only the folder, in the reader's line and
+    in the error of a command that asks for the split."""
+    root = tmp_path / "ds"
+    _dataset(root, "images/train", "labels/train", n=2)
+    spec = tmp_path / "specs" / "fires.yaml"
+    spec.parent.mkdir()
+    spec.write_text(yaml.safe_dump({"path": "../ds", "train": "images/train", "val": "images/val", "names": ["fire"]}))
+    result = read_yolo(spec)
+    assert {i.split for i in result.dataset.images} == {"train"}
+    [line] = [p for p in result.problems if p.code == "yaml-splits"]
+    assert line.level == "warning" and line.path == str(spec)
+    assert line.reason.startswith(f"val: 'images/val' (no {root / 'images' / 'val'}) is not a folder or image list")
+    assert line.reason.endswith(f"layout of {root}, which has no 'val' split (splits: 'train')")
+    with pytest.raises(SplitError) as err:
+        pick_split(result.dataset, "val", root)
+    assert f"{spec}: val: 'images/val' (no {root / 'images' / 'val'}) is not a folder or image list" in str(err.value)
+
+
+def test_roboflow_entries_that_point_nowhere_are_one_info_line(tmp_path):
+    write_yolo_dataset(tmp_path / "rf")
+    result = read_yolo(tmp_path / "rf")
+    [line] = [p for p in result.problems if p.code == "yaml-splits"]
+    assert line.level == "info" and line.path == str(tmp_path / "rf" / "data.yaml")
+    assert line.reason.startswith("train: '../train/images' (no ") and ", val: '../valid/images' (no " in line.reason
+    assert "are not folders or image lists here: splits taken from the folder layout" in line.reason
+    assert "split_notes" in result.dataset.info
+
+
+def test_a_listed_image_that_does_not_exist_names_the_list_line_and_key(tmp_path):
+    root = tmp_path / "y"
+    _dataset(root, "images/a", "labels/a", n=2)
+    (root / "val.txt").write_text("images/a/i0.jpg\nimages/a/gone.jpg\n")
+    (root / "data.yaml").write_text(yaml.safe_dump({"train": "images/a", "val": "val.txt", "names": ["fire"]}))
+    result = read_yolo(root)
+    [error] = [p for p in result.problems if p.level == "error"]
+    assert error.path == f"{root / 'val.txt'}:2"
+    assert error.reason == f"listed image 'images/a/gone.jpg' does not exist (val: in {root / 'data.yaml'})"
+    assert len(result.dataset.images) == 2
+
+
+def test_class_names_messages_name_the_yaml_and_its_keys(tmp_path):
+    root = tmp_path / "n"
+    _dataset(root, "images", "labels", n=1)
+    (root / "labels" / "i0.txt").write_text("0 0.5 0.5 0.5 0.5\n2 0.5 0.5 0.2 0.2\n")
+    (root / "data.yaml").write_text("nc: 3\nnames: {0: fire, 2: sparks}\n")
+    result = read_yolo(root)
+    assert result.dataset.category_names == ["fire", "1", "sparks"]  # id 2 keeps its name; the gap is named
+    reasons = [p.reason for p in result.problems if p.path == str(root / "data.yaml")]
+    assert any(r.startswith("names: ids must be 0..1, got [0, 2]") for r in reasons), reasons
+    assert any(r.startswith("names: class '1' is not a known class") for r in reasons), reasons
+    assert any(r.startswith("names: class 'sparks' is not a known class") for r in reasons), reasons
+    (root / "data.yaml").write_text("nc: 2\nnames: [fire]\n")
+    [nc] = [p for p in read_yolo(root).problems if p.reason.startswith("nc:")]
+    assert nc.path == str(root / "data.yaml") and nc.reason == "nc: 2 but names: lists 1 names (the names used)"

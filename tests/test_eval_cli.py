@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import contextlib
+import hashlib
 import io
 import json
 
@@ -150,8 +151,39 @@ def test_compare_gives_the_paired_delta(work, capsys):
     assert doc["A"]["AP"] == pytest.approx(1.0) and doc["B"]["AP"] < 1.0 and doc["images"] == 6
     assert doc["delta"]["AP"]["value"] == pytest.approx(doc["B"]["AP"] - doc["A"]["AP"])
     assert doc["delta"]["AP"]["low"] <= doc["delta"]["AP"]["value"] <= doc["delta"]["AP"]["high"] < 0
-    assert main(["compare", str(good), str(good), "--data", str(work["test"]), "--samples", "50"]) == 0
-    assert "B - A  AP +0.0 points, 95% CI [+0.0, +0.0], p = 1.000" in capsys.readouterr().out
+    assert doc["same_content"] == []
+    copy = work["root"] / "copy-of-good.onnx"
+    copy.write_bytes(good.read_bytes())
+    assert main(["compare", str(good), str(copy), "--data", str(work["test"]), "--samples", "50"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    digest = hashlib.sha256(good.read_bytes()).hexdigest()
+    assert lines[0] == (
+        f"{good} and {copy} are one model (same content, sha256 {digest[:12]}…): the difference is 0 by construction"
+    )  # first, then the table as always
+    assert any(line.startswith("B - A  AP +0.0 points, 95% CI [+0.0, +0.0], p = 1.000") for line in lines)
+
+
+def test_compare_names_the_models_both_sides_or_one_side_list_twice(tmp_path):
+    from eval.cli import same_content, same_content_lines
+
+    a0, a1, b1 = (tmp_path / n for n in ("a0.onnx", "a1.onnx", "b1.onnx"))
+    a0.write_bytes(b"seed 0")
+    a1.write_bytes(b"seed 1")
+    b1.write_bytes(b"seed 1")  # a copy of a1
+    h0, h1 = (hashlib.sha256(b).hexdigest()[:12] for b in (b"seed 0", b"seed 1"))
+    same = same_content([a0, a1], [a0, b1])
+    assert [(g["A"], g["B"]) for g in same] == [([str(a0)], [str(a0)]), ([str(a1)], [str(b1)])]
+    assert same_content_lines(same, 2, 2) == [
+        f"{a0} (A) and {a0} (B) are one model (same content, sha256 {h0}…)",
+        f"{a1} (A) and {b1} (B) are one model (same content, sha256 {h1}…)",
+        "A and B are the same 2 models: the difference is 0 by construction",
+    ]
+    assert same_content_lines(same_content([a0], [a0, b1]), 1, 2) == [
+        f"{a0} (A) and {a0} (B) are one model (same content, sha256 {h0}…)"  # one shared run: no zero claimed
+    ]
+    assert same_content_lines(same_content([a1, b1], [a0]), 2, 1) == [
+        f"A lists one model 2 times ({a1}, {b1}; same content, sha256 {h1}…): its mean counts it 2 times"
+    ]
 
 
 def test_compare_averages_several_runs_per_side(work, capsys):

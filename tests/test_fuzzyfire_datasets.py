@@ -66,6 +66,8 @@ def test_a_holdout_share_keeps_exactly_the_held_out_photos(tmp_path: Path) -> No
     folder = fire_free_photos(tmp_path / "photos", 10)
     ref = folder_ref(folder, tmp_path, "auto", {}, (), None, 0.5)
     assert ref.identity["holdout"] == 0.5 and "holdout" not in folder_ref(folder, tmp_path, "auto", {}, ()).identity
+    with pytest.raises(FileNotFoundError, match=r"^tests\.night\.path: 'gone': dataset not found \(no /"):
+        folder_ref(Path("gone"), tmp_path, "auto", {}, (), key="tests.night.path")  # the key, not only the folder
     assert ref.with_split(None).holdout == 0.5
     ds = Datasets(("fire",)).get(ref)
     expected = {p.name for p in folder.iterdir() if held_out(p, 0.5)}

@@ -128,7 +128,9 @@ def test_report_files_exist_and_say_stand_in(full_run: tuple[Path, str, Counter]
     sets = {"common (stand-in)", "rare (stand-in)", "fire-free (stand-in)"}
     assert len(rows) == 12 and {r["test_set"] for r in rows} == sets
     free = [r for r in rows if r["test_set"] == "fire-free (stand-in)"]
-    assert len(free) == 4 and all(r["AP"] is None and r[ALARMS] >= 0 for r in free)
+    assert len(free) == 4 and all(r["AP"] is None and ALARMS in r for r in free)
+    # a toy run that detects nothing at 0.25 anywhere has its false alarms not measured (None), never 0.0
+    assert all((r[ALARMS] is None) == bool(r.get("silent")) and (r[ALARMS] or 0) >= 0 for r in free)
     common = [r for r in rows if r["test_set"] == "common (stand-in)"]  # read at 10 alarms per 100 fire-free images
     assert len(common) == 4 and all(0 <= r["recall_at_10_alarms"] <= 1 and "operating" not in r for r in common)
     assert "common (stand-in) recall@10 alarms/100" in page and "Fire found against false alarms" in page

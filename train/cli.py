@@ -27,26 +27,62 @@ VAL_SPLITS = ("valid", "val", "validation")
 
 
 def _read(path: str, fmt: str):  # -> curate.core.formats.common.ReadResult
-    """The dataset at ``path``; the reader's errors go to stderr."""
-    from curate.core.commands import print_problems
+    """The dataset at ``path``."""
     from curate.core.formats.registry import read_dataset
 
-    result = read_dataset(path, fmt)
-    errors = [p for p in result.problems if p.level == "error"]
-    if errors:
-        print_problems(errors, sys.stderr, limit=20)
-    return result
+    return read_dataset(path, fmt)
 
 
-def _datasets(args: argparse.Namespace):  # -> (train, val) curate.core.dataset.Dataset
+def data_errors(reads: dict[str, object]) -> str:
+    """``N validation error(s) in PATH (first error)`` of the datasets ``reads`` (path -> ReadResult; a folder
+    read twice, as training and validation set, counts once); "" when none has an error."""
+    found: dict[Path, tuple[str, list]] = {}
+    for path, read in reads.items():
+        errors = [p for p in read.problems if p.level == "error"]  # type: ignore[attr-defined]
+        if errors:
+            found.setdefault(Path(path).resolve(), (path, errors))
+    if not found:
+        return ""
+    count = sum(len(errors) for _, errors in found.values())
+    where = " and ".join(f"{path} ({len(e)})" if len(found) > 1 else path for path, e in found.values())
+    first = next(iter(found.values()))[1][0]
+    listed = f"; fuzzyfire validate {next(iter(found.values()))[0]} lists them" if count > 1 else ""
+    return f"{count} validation error{'s' if count > 1 else ''} in {where} ({first}{listed})"
+
+
+def clipped_boxes(reads: dict[str, object]) -> str:
+    """``; N boxes in PATH reached outside their image and were clipped to it`` for the datasets ``reads`` (a
+    folder read twice counts once); "" when no box was clipped."""
+    from curate.core.formats.common import CLIPPED
+
+    counts: dict[Path, tuple[str, int]] = {}
+    for path, read in reads.items():
+        n = sum(p.code == CLIPPED for p in read.problems)  # type: ignore[attr-defined]
+        if n:
+            counts.setdefault(Path(path).resolve(), (path, n))
+    return "".join(f"; {n} box{'es' if n > 1 else ''} in {path} reached outside {'their' if n > 1 else 'its'} image "
+                   f"and {'were' if n > 1 else 'was'} clipped to it" for path, n in counts.values())  # fmt: skip
+
+
+def _datasets(args: argparse.Namespace, allow_errors: bool = False):  # -> (train, val, note)
     """The training and validation splits (default: the first of :data:`TRAIN_SPLITS` / :data:`VAL_SPLITS`
     each has, else every image) without the ``--drop-class`` boxes, the training set with the ``--classes``
-    list. Every class named must be a class of one of the two sets (:class:`~curate.core.names.UnknownNameError`)."""
+    list, and a note for the summary line (boxes clipped to their image). Every class named must be a class of
+    one of the two sets (:class:`~curate.core.names.UnknownNameError`). Data whose reading found errors raises
+    ValueError naming the first, unless ``allow_errors`` (then one line says so on stderr)."""
     from curate.core.classes import canonical_class
     from curate.core.load import pick_split
     from curate.core.names import check_names, split_names
 
     reads = [_read(args.train, args.train_format), _read(args.val, args.val_format)]
+    by_path = {args.train: reads[0], args.val: reads[1]} if args.train != args.val else {args.train: reads[0]}
+    errors = data_errors(by_path)
+    if errors and not allow_errors:
+        raise ValueError(
+            f"train: {errors}; fix the data or pass --allow-errors (train key allow_errors) to train anyway"
+        )
+    if errors:
+        print(f"train: {errors}: training anyway (allow_errors)", file=sys.stderr)
     known = list(dict.fromkeys(n for r in reads for n in r.dataset.category_names))
     where = f"{args.train} and {args.val}"
     check_names(
@@ -60,7 +96,7 @@ def _datasets(args: argparse.Namespace):  # -> (train, val) curate.core.dataset.
         kept = [*train_ds.category_names, *val_ds.category_names]
         check_names("class", classes, list(dict.fromkeys(kept)), where, "classes", "--classes")
         train_ds = train_ds.with_categories(classes)
-    return train_ds, val_ds
+    return train_ds, val_ds, clipped_boxes(by_path)
 
 
 #: Flags of ``fuzzyfire train``: aliases of TrainConfig keys (their defaults are the keys').
@@ -85,6 +121,8 @@ ALIASES: tuple[Alias, ...] = (
           {"type": int, "metavar": "N"}),
     Alias("--no-autoanchor", ("model.autoanchor",), "keep the default anchors even when they fit badly",
           {"action": "store_true"}, lambda _: {"model.autoanchor": False}),
+    Alias("--allow-errors", ("allow_errors",), "train on data whose reading found errors (they are left out)",
+          {"action": "store_true"}),
 )  # fmt: skip
 
 
@@ -109,11 +147,19 @@ def cmd_train(args: argparse.Namespace) -> int:
         return 0
     if args.train is None or args.val is None or args.out is None:
         raise ValueError("--train, --val and --out are required (unless --print-config)")
-    train_ds, val_ds = _datasets(args)
+    train_ds, val_ds, clipped = _datasets(args, cfg.allow_errors)
     same = Path(args.train).resolve() == Path(args.val).resolve()
     if same and {i.split for i in train_ds.images} & {i.split for i in val_ds.images}:
-        raise ValueError(f"{args.train}: training and validation images are the same split; pass --val-split")
-    print(f"train {len(train_ds.images)} images, val {len(val_ds.images)} images, classes {train_ds.category_names}")
+        from curate.core.load import splits_found
+
+        raise ValueError(
+            f"{args.train}: training and validation images are the same split ({splits_found(val_ds)}); "
+            "pass --val-split"
+        )
+    print(
+        f"train {len(train_ds.images)} images, val {len(val_ds.images)} images, classes {train_ds.category_names}"
+        + clipped
+    )
     try:
         results = fit(cfg, train_ds, val_ds, args.out)
     except ResumeError as exc:

@@ -100,6 +100,8 @@ class TrainConfig:
     feature_views: int = 20  # frozen features (model.freeze > 0): augmented views per image whose features are
     # computed once and reused (epoch e trains on view e mod views); 0 = a fresh view every epoch (train/features.py)
     feature_cache_gb: float = 4.0  # RAM for cached views; fewer views are kept when they would not fit
+    allow_errors: bool = False  # fuzzyfire train only (not read by the experiment): train on data whose reading
+    # found errors (their boxes or images left out); false = refuse before training, naming the first error
     model: ModelConfig = field(default_factory=ModelConfig)  # the detector
     optim: OptimConfig = field(default_factory=OptimConfig)  # optimizer and schedule
     loss: LossConfig = field(default_factory=LossConfig)  # loss gains

@@ -10,7 +10,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any, TextIO, TypeVar
 
-from curate.core.config import ConfigError, load_config, to_dict
+from curate.core.config import ConfigError, load_config, located, to_dict
 from curate.core.dataset import Dataset
 from curate.core.formats.common import ReadResult
 from curate.core.formats.registry import FORMATS, read_dataset
@@ -119,7 +119,7 @@ def load_config_or_report(path: Path | str, schema: type[T], overrides: Sequence
     try:
         return load_config(path, schema, overrides)
     except ConfigError as exc:
-        print(f"error: {path}: {exc}", file=sys.stderr)
+        print(f"error: {located(path, str(exc))}", file=sys.stderr)
         return None
 
 

@@ -39,8 +39,8 @@ def read_yaml(path: Path, seen: tuple[Path, ...] = ()) -> dict[str, Any]:
         raise ConfigError(f"{path}: extends itself through {' -> '.join(p.name for p in seen)}")
     try:
         raw = yaml.safe_load(path.read_text(encoding="utf-8"))
-    except yaml.YAMLError as exc:
-        raise ConfigError(f"{path}: invalid YAML: {exc}") from None
+    except yaml.YAMLError as exc:  # its mark names "<unicode string>": the file's name instead
+        raise ConfigError(f"{path}: invalid YAML: {str(exc).replace('<unicode string>', str(path))}") from None
     raw = {} if raw is None else raw
     if not isinstance(raw, dict):
         raise ConfigError(f"{path}: the top level must be a mapping of keys")
@@ -52,6 +52,11 @@ def read_yaml(path: Path, seen: tuple[Path, ...] = ()) -> dict[str, Any]:
     if not (path.parent / base).is_file():
         raise ConfigError(f"{path}: extends {base}: no such file in {path.parent}")
     return merged(read_yaml(path.parent / base, (*seen, path.resolve())), raw)
+
+
+def located(path: Path | str, message: str) -> str:
+    """``PATH: message``, or ``message`` when it names ``path`` first already (an error of :func:`read_yaml`)."""
+    return message if message.startswith(f"{path}:") else f"{path}: {message}"
 
 
 def merged(base: Mapping[str, Any], top: Mapping[str, Any]) -> dict[str, Any]:

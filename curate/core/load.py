@@ -37,12 +37,13 @@ def pick_split(ds: Dataset, split: str | None, where: Path | str = "", defaults:
 
 def splits_found(ds: Dataset) -> str:
     """What a dataset has for splits, for a message: ``splits: 'train', 'valid'``, or ``no splits: its 16
-    images are one set``."""
+    images are one set``; then the split entries of its dataset YAML that name nothing (file, key and value)."""
     named = [s for s in ds.splits if s]
+    notes = "".join(f"; {note}" for note in ds.info.get("split_notes") or ())  # a dataset YAML's unmet entries
     if not named:
-        return f"no splits: its {len(ds.images)} images are one set"
+        return f"no splits: its {len(ds.images)} images are one set{notes}"
     unsplit = " and images outside them" if "" in ds.splits else ""
-    return "splits: " + ", ".join(repr(s) for s in named) + unsplit
+    return "splits: " + ", ".join(repr(s) for s in named) + unsplit + notes
 
 
 @dataclass(frozen=True)

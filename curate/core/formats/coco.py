@@ -46,7 +46,7 @@ def read_coco(
     if not isinstance(doc, dict) or not isinstance(doc.get("images"), list):
         raise ValueError(f"{json_path}: not a COCO detection file (no 'images' list)")
     root = Path(image_root) if image_root else json_path.parent
-    resolver = ClassResolver(str(json_path), aliases)
+    resolver = ClassResolver(str(json_path), aliases, "categories")
     categories = _read_categories(doc, json_path, resolver, problems)
     builder = DatasetBuilder(root, list(dict.fromkeys(categories.values())))
     default_source = source_tag(json_path.parent, source)
@@ -112,8 +112,9 @@ def _read_images(
             problems.append(Problem(str(where), f"duplicate image id {entry['id']} (second entry ignored)"))
             continue
         seen.add(key)
+        named = f"file_name {entry['file_name']!r} of image id {entry['id']} in {where}"
         if isinstance(size, ImageError):
-            problems.append(Problem(str(path), f"unreadable image: {size.reason} (skipped with its boxes)"))
+            problems.append(Problem(str(path), f"unreadable image: {size.reason} ({named}; skipped with its boxes)"))
             continue
         width, height = size
         declared = (entry.get("width"), entry.get("height"))
@@ -121,7 +122,8 @@ def _read_images(
             problems.append(
                 Problem(
                     str(path),
-                    f"JSON says {declared[0]}x{declared[1]} but the image is {width}x{height} (image used)",
+                    f"width x height {declared[0]}x{declared[1]} of image id {entry['id']} in {where}, but the "
+                    f"image is {width}x{height} (image used)",
                     "warning",
                 )
             )

@@ -91,12 +91,16 @@ def probe_sizes(
         return list(progress(it, total=len(paths), desc=desc))
 
 
+#: The code of the warning on a box that reached outside its image and was clipped to it.
+CLIPPED = "clipped-box"
+
+
 def sanitize_box(
     xywh: Sequence[float], width: int, height: int, where: str, problems: list[Problem]
 ) -> tuple[float, float, float, float] | None:
     """The box clipped to the image, or ``None`` (with an error) when it is NaN/inf or has no area.
 
-    A box reaching outside the image is clipped and reported as a warning.
+    A box reaching outside the image is clipped and reported as a warning (code :data:`CLIPPED`).
     """
     if not all(math.isfinite(float(v)) for v in xywh):
         problems.append(Problem(where, f"box {_fmt(xywh)} has NaN or infinite values (dropped)"))
@@ -111,7 +115,7 @@ def sanitize_box(
             problems.append(Problem(where, f"box {_fmt(xywh)} lies outside the {width}x{height} image (dropped)"))
             return None
         problems.append(
-            Problem(where, f"box {_fmt(xywh)} reaches outside the {width}x{height} image (clipped)", "warning")
+            Problem(where, f"box {_fmt(xywh)} reaches outside the {width}x{height} image (clipped)", "warning", CLIPPED)
         )
         return (float(clipped[0]), float(clipped[1]), float(clipped[2]), float(clipped[3]))
     return (x, y, w, h)
@@ -125,24 +129,27 @@ class ClassResolver:
     """Maps a source's class names to canonical names; reports each class outside the known vocabulary once.
 
     ``aliases`` adds user synonyms (source name -> canonical name). Unknown classes are kept under their
-    normalised name (never silently dropped) and reported as a warning naming the source file.
+    normalised name (never silently dropped) and reported as a warning naming the source file (``where``) and,
+    when the names come from one key of it, that key (``key``, e.g. ``names``).
     """
 
-    def __init__(self, where: str, aliases: Mapping[str, str] | None = None) -> None:
+    def __init__(self, where: str, aliases: Mapping[str, str] | None = None, key: str = "") -> None:
         self.where = where
+        self.key = key
         self.aliases = dict(aliases or {})
         self._reported: set[str] = set()
         self.seen: dict[str, None] = {}  # the source's class names, as spelt, in the order met
 
-    def resolve(self, name: str, problems: list[Problem]) -> str:
+    def resolve(self, name: str, problems: list[Problem], where: str = "") -> str:
+        """The canonical name of the source's class ``name`` (found in ``where``, default the source file)."""
         self.seen.setdefault(str(name), None)
         canonical = canonical_class(name, self.aliases)
         if not is_known(canonical) and canonical not in self._reported:
             self._reported.add(canonical)
             problems.append(
                 Problem(
-                    self.where,
-                    f"class {name!r} is not a known class (fire, smoke): kept as {canonical!r}; "
+                    where or self.where,
+                    f"{self.key + ': ' if self.key else ''}class {name!r} is not a known class (fire, smoke): kept as {canonical!r}; "
                     "map it with --alias NAME=fire or drop it with --drop-class",
                     "warning",
                     code=f"unknown-class:{canonical}",

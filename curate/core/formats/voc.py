@@ -27,7 +27,7 @@ def read_voc(root: Path | str, source: str | None = None, aliases: Mapping[str, 
     if not root.is_dir():
         raise FileNotFoundError(f"{root}: not a folder")
     problems: list[Problem] = []
-    resolver = ClassResolver(str(root), aliases)
+    resolver = ClassResolver(str(root), aliases, "name")
     xmls = walk_files(root, lambda name: name.lower().endswith(".xml"))
     parsed = [(x, _parse_xml(x, problems)) for x in xmls]
     entries = []
@@ -37,7 +37,9 @@ def read_voc(root: Path | str, source: str | None = None, aliases: Mapping[str, 
             continue
         image = _find_image(root, xml_path, doc["filename"])
         if image is None:
-            problems.append(Problem(str(xml_path), f"annotation without an image ({doc['filename']!r} not found)"))
+            problems.append(
+                Problem(str(xml_path), f"annotation without an image (its <filename> {doc['filename']!r} not found)")
+            )
             continue
         if image in claimed:
             problems.append(Problem(str(xml_path), f"second annotation file for {image.name} (ignored)"))
@@ -72,11 +74,11 @@ def read_voc(root: Path | str, source: str | None = None, aliases: Mapping[str, 
                     "warning",
                 )
             )
-        for idx, (name, voc_box, difficult) in enumerate(doc["objects"]):
-            where = f"{xml_path} object {idx + 1}"
+        for number, name, voc_box, difficult in doc["objects"]:
+            where = f"{xml_path} object {number}"
             box = sanitize_box(boxes.voc_to_xywh(voc_box), width, height, where, problems)
             if box is not None:
-                builder.add_box(image_id, resolver.resolve(name, problems), box, iscrowd=int(difficult))
+                builder.add_box(image_id, resolver.resolve(name, problems, where), box, iscrowd=int(difficult))
     dataset = builder.build({"format": "voc", "source_root": str(root.resolve())})
     return ReadResult(dataset, problems, frozenset(unlabelled), tuple(resolver.seen))
 
@@ -109,7 +111,7 @@ def _parse_xml(path: Path, problems: list[Problem]) -> dict | None:
         if not name:
             problems.append(Problem(f"{path} object {i + 1}", "object without a <name> (dropped)"))
             continue
-        objects.append((name, voc_box, (obj.findtext("difficult") or "0").strip() in ("1", "true")))
+        objects.append((i + 1, name, voc_box, (obj.findtext("difficult") or "0").strip() in ("1", "true")))
     filename = (node.findtext("filename") or path.with_suffix(".jpg").name).strip()
     return {"filename": filename, "size": size, "objects": objects}
 

@@ -22,7 +22,14 @@ from curate.core.classes import DFIRE_NAMES
 from curate.core.dataset import Dataset, DatasetBuilder
 from curate.core.formats.common import ClassResolver, ReadResult, probe_sizes, sanitize_box, source_tag
 from curate.core.formats.images import negatives_only_note
-from curate.core.formats.yolo_layout import Pair, dataset_root, missing_label_problems, pair_images
+from curate.core.formats.yolo_layout import (
+    Pair,
+    dataset_root,
+    missing_label_problems,
+    pair_images,
+    unmet_split_entries,
+    unmet_text,
+)
 from curate.core.imageio import ImageError
 from curate.core.problems import Problem
 
@@ -37,12 +44,15 @@ def read_yolo(
     whose ``path:`` (absolute, or relative to the file's folder; the file's folder when absent or missing here)
     is the dataset folder. ``names`` overrides the class names found on disk."""
     problems: list[Problem] = []
-    root, doc = dataset_root(Path(root), problems)
-    if names is None:
-        names = _names_from_yaml(doc, root, problems) if doc and "names" in doc else find_class_names(root, problems)
-    resolver = ClassResolver(str(root), aliases)
+    root, doc, yaml_path = dataset_root(Path(root), problems)
+    names_from, key = root, ""  # where the class names come from: the caller, or the file and key below
+    if names is None and doc and "names" in doc:
+        names, names_from, key = _names_from_yaml(doc, yaml_path, problems), yaml_path, "names"
+    elif names is None:
+        names, names_from = find_class_names(root, problems)
+    resolver = ClassResolver(str(names_from), aliases, key)
     class_names = [resolver.resolve(n, problems) for n in names] if names else None
-    pairs = pair_images(root, doc, problems)
+    pairs = pair_images(root, doc, problems, yaml_path)
     sizes = probe_sizes([p.image for p in pairs])
     builder = DatasetBuilder(root, class_names or ())
     tag = source_tag(root, source)
@@ -64,7 +74,11 @@ def read_yolo(
     problems += missing_label_problems(root, readable)
     if readable and not any(p.labelled for p in readable):
         problems = _negatives_only(root, len(readable), problems)
-    dataset = builder.build({"format": "yolo", "source_root": str(root.resolve())})
+    info: dict[str, Any] = {"format": "yolo", "source_root": str(root.resolve())}
+    unmet = unmet_split_entries(root, doc) if doc else {}
+    if unmet:  # quoted when a split is missing (curate.core.load.splits_found)
+        info["split_notes"] = [unmet_text(yaml_path, unmet)]
+    dataset = builder.build(info)
     return ReadResult(dataset, problems, frozenset(unlabelled), tuple(resolver.seen))
 
 
@@ -83,8 +97,9 @@ def read_dfire(root: Path | str, source: str | None = None) -> ReadResult:
     return read_yolo(root, names=DFIRE_NAMES, source=source)
 
 
-def find_class_names(root: Path, problems: list[Problem]) -> list[str] | None:
-    """Class names from ``data.yaml`` (or another ``*.yaml`` with ``names``) or ``classes.txt`` in ``root``."""
+def find_class_names(root: Path, problems: list[Problem]) -> tuple[list[str] | None, Path]:
+    """(class names, the file they come from) from ``data.yaml`` (or another ``*.yaml`` with ``names``) or
+    ``classes.txt`` in ``root``; (None, ``root``) when none has them."""
     candidates = [root / "data.yaml", *sorted(p for p in root.glob("*.yaml") if p.name != "data.yaml")]
     for path in candidates:
         if not path.is_file():
@@ -96,10 +111,11 @@ def find_class_names(root: Path, problems: list[Problem]) -> list[str] | None:
                 problems.append(Problem(str(path), f"unreadable YAML ({exc.__class__.__name__})"))
             continue
         if isinstance(doc, dict) and "names" in doc:
-            return _names_from_yaml(doc, path, problems)
+            return _names_from_yaml(doc, path, problems), path
     classes_txt = root / "classes.txt"
     if classes_txt.is_file():
-        return [line.strip() for line in classes_txt.read_text(encoding="utf-8-sig").splitlines() if line.strip()]
+        lines = classes_txt.read_text(encoding="utf-8-sig").splitlines()
+        return [line.strip() for line in lines if line.strip()], classes_txt
     problems.append(
         Problem(
             str(root),
@@ -109,19 +125,34 @@ def find_class_names(root: Path, problems: list[Problem]) -> list[str] | None:
             code="no-class-names",
         )
     )
-    return None
+    return None, root
 
 
 def _names_from_yaml(doc: dict[str, Any], path: Path, problems: list[Problem]) -> list[str]:
-    """Class names of a dataset YAML ``doc`` (a list, or an id -> name mapping), checked against ``nc``."""
+    """Class names of the dataset YAML ``doc`` read from ``path``: its ``names`` (a list, or an id -> name
+    mapping with ids 0..n-1; a missing id is reported and named by its number, so later ids keep their
+    meaning), checked against ``nc``."""
     raw = doc["names"]
     if isinstance(raw, dict):
-        names = [str(raw[k]) for k in sorted(raw, key=int)]
-    else:
+        try:
+            by_id = {int(k): str(v) for k, v in raw.items()}
+        except (TypeError, ValueError):
+            problems.append(Problem(str(path), f"names: keys must be class ids 0, 1, ..., got {list(raw)} (the "
+                                               "names taken in the file's order)"))  # fmt: skip
+            by_id = dict(enumerate(str(v) for v in raw.values()))
+        gaps = [i for i in range(max(by_id, default=-1) + 1) if i not in by_id]
+        if gaps or min(by_id, default=0) < 0:
+            problems.append(Problem(str(path), f"names: ids must be 0..{len(by_id) - 1}, got {sorted(by_id)} "
+                                               "(a missing id is named by its number)"))  # fmt: skip
+        names = [by_id.get(i, str(i)) for i in range(max(by_id, default=-1) + 1)]
+    elif isinstance(raw, list):
         names = [str(n) for n in raw]
+    else:
+        problems.append(Problem(str(path), f"names: expected a list or an id -> name mapping, got {raw!r} (ignored)"))
+        return []
     nc = doc.get("nc")
-    if nc is not None and int(nc) != len(names):
-        problems.append(Problem(str(path), f"nc = {nc} but {len(names)} names are listed (names used)", "warning"))
+    if nc is not None and str(nc).strip() not in (str(len(names)), f"{len(names)}.0"):
+        problems.append(Problem(str(path), f"nc: {nc} but names: lists {len(names)} names (the names used)", "warning"))
     return names
 
 

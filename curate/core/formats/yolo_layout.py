@@ -27,6 +27,7 @@ from typing import Any
 
 import yaml
 
+from curate.core.dataset import SPLIT_ALIASES
 from curate.core.imageio import is_image_file
 from curate.core.problems import Problem
 from curate.core.walk import walk_files
@@ -86,20 +87,25 @@ class LabelLocator:
         return label, split
 
 
-def pair_images(root: Path, doc: Mapping[str, Any] | None, problems: list[Problem]) -> list[Pair]:
+def pair_images(
+    root: Path, doc: Mapping[str, Any] | None, problems: list[Problem], yaml_path: Path | None = None
+) -> list[Pair]:
     """Every image of the dataset with its label path and split, sorted by image path; duplicate stems (two
-    images claiming one label file) and unpaired label files are reported in ``problems``."""
+    images claiming one label file) and unpaired label files are reported in ``problems``. ``doc``: the dataset
+    YAML read from ``yaml_path`` (default ``root/data.yaml``), whose split entries decide when they all exist."""
+    yaml_path = yaml_path or root / "data.yaml"
     locator = LabelLocator(root)
     files = walk_files(root)  # one walk: the images, and the text files that may be labels
     found = [f for f in files if is_image_file(f.name)]
-    listed = yaml_splits(root, doc, problems) if doc else None
+    listed = yaml_splits(root, doc, problems, yaml_path) if doc else None
     images = listed if listed is not None else [(p, "") for p in found]
     if listed is not None and len(found) > len(listed):
         left = sorted(set(found) - {p for p, _ in listed})
+        keys = ", ".join(f"{k}:" for k in YAML_SPLITS if doc and doc.get(k))
         problems.append(
             Problem(
-                str(root / "data.yaml"),
-                f"{len(left)} images below {root} are in none of its splits and are not read "
+                str(yaml_path),
+                f"{len(left)} images below {root} are in none of its splits ({keys}) and are not read "
                 f"(e.g. {_rel(root, left[0])})",
                 "warning",
             )
@@ -115,46 +121,86 @@ def pair_images(root: Path, doc: Mapping[str, Any] | None, problems: list[Proble
             continue
         owner[label] = image
         pairs.append(Pair(image, label, yaml_split or split, label.is_file()))
+    unmet = unmet_split_entries(root, doc) if doc else {}
+    if unmet:
+        problems.append(_unmet_problem(root, yaml_path, unmet, {p.split for p in pairs}))
     problems += unpaired_labels(root, pairs, [f for f in files if _maybe_label(f.name)])
     return pairs
 
 
-def yaml_splits(root: Path, doc: Mapping[str, Any], problems: list[Problem]) -> list[tuple[Path, str]] | None:
-    """(image, split) for the images the split entries of a ``data.yaml`` name, when every entry resolves to an
-    existing folder or image-list file (relative entries against ``root``, absolute ones anywhere, as ultralytics
-    reads them); None (folder layout decides) otherwise, with an info line."""
+def unmet_split_entries(root: Path, doc: Mapping[str, Any]) -> dict[str, list[tuple[str, Path]]]:
+    """The split entries of a dataset YAML ``doc`` (``train``, ``val``, ...) that name no folder or ``.txt`` image
+    list here: key -> [(entry as written, the path it resolves to against ``root``)]."""
+    out: dict[str, list[tuple[str, Path]]] = {}
+    for key in YAML_SPLITS:
+        value = doc.get(key)
+        for entry in (value if isinstance(value, list) else [value]) if value else []:
+            target = _normal(root, Path(str(entry)))
+            if not (target.is_dir() or (target.is_file() and target.suffix.lower() == ".txt")):
+                out.setdefault(key, []).append((str(entry), target))
+    return out
+
+
+def unmet_text(yaml_path: Path, unmet: Mapping[str, list[tuple[str, Path]]]) -> str:
+    """``data.yaml: val: 'images/val' (no /abs/images/val) is not a folder or image list here``, for the entries
+    :func:`unmet_split_entries` found."""
+    named = [f"{key}: {entry!r} (no {target})" for key, entries in unmet.items() for entry, target in entries]
+    verb = "is not a folder or image list" if len(named) == 1 else "are not folders or image lists"
+    return f"{yaml_path}: {', '.join(named)} {verb} here"
+
+
+def _unmet_problem(
+    root: Path, yaml_path: Path, unmet: Mapping[str, list[tuple[str, Path]]], layout_splits: set[str]
+) -> Problem:
+    """One line on the split entries of a dataset YAML that name nothing here, after the folder layout gave the
+    splits ``layout_splits``: info when the layout has each of their splits (Roboflow's ``../train/images``),
+    a warning naming the splits it lacks otherwise."""
+    lacking = [k for k in unmet if not next((set(g) for g in SPLIT_ALIASES if k in g), {k}) & layout_splits]
+    reason = unmet_text(yaml_path, unmet).removeprefix(f"{yaml_path}: ")
+    reason += f": splits taken from the folder layout of {root}"
+    if not lacking:
+        return Problem(str(yaml_path), reason, "info", code="yaml-splits")
+    has = ", ".join(repr(s) for s in sorted(layout_splits) if s) or "none"
+    lacks = " or ".join(repr(k) for k in lacking)
+    return Problem(str(yaml_path), f"{reason}, which has no {lacks} split (splits: {has})", "warning", "yaml-splits")
+
+
+def yaml_splits(
+    root: Path, doc: Mapping[str, Any], problems: list[Problem], yaml_path: Path | None = None
+) -> list[tuple[Path, str]] | None:
+    """(image, split) for the images the split entries of the dataset YAML ``yaml_path`` (default
+    ``root/data.yaml``; parsed: ``doc``) name, when every entry resolves to an existing folder or image-list file
+    (relative entries against ``root``, absolute ones anywhere, as ultralytics reads them); None (folder layout
+    decides) otherwise. A listed image that does not exist is an error naming the list file, its line and the key,
+    and is left out."""
     entries = {k: doc[k] for k in YAML_SPLITS if doc.get(k)}
-    if not entries:
+    if not entries or unmet_split_entries(root, doc):
         return None
     out: dict[Path, str] = {}
     for split, value in entries.items():
         for entry in value if isinstance(value, list) else [value]:
-            images = _entry_images(root, str(entry))
-            if images is None:
-                problems.append(
-                    Problem(
-                        str(root / "data.yaml"),
-                        f"its {split}: {entry!r} is not a folder or image list here: splits taken from the "
-                        "folder layout",
-                        "info",
-                    )
-                )
-                return None
-            for image in images:
+            where = f"{split}: in {yaml_path or root / 'data.yaml'}"
+            for image in _entry_images(_normal(root, Path(str(entry))), where, problems):
                 out.setdefault(image, split)
     return sorted(out.items(), key=lambda kv: kv[0].as_posix())
 
 
-def _entry_images(root: Path, entry: str) -> list[Path] | None:
-    """The images of one split entry (folder or ``.txt`` list, relative to ``root`` unless absolute); paths below
-    ``root`` keep the route through ``root``. None when the entry does not exist."""
-    target = _normal(root, Path(entry))
+def _entry_images(target: Path, key: str, problems: list[Problem]) -> list[Path]:
+    """The images of one existing split entry ``target`` (folder, or ``.txt`` list whose relative lines resolve
+    against its folder); paths below the dataset folder keep the route through it. A listed image that does not
+    exist is reported (``key``: which entry listed the file) and left out."""
     if target.is_dir():
         return walk_files(target, is_image_file)
-    if target.is_file() and target.suffix.lower() == ".txt":
-        lines = target.read_text(encoding="utf-8-sig").splitlines()
-        return [_normal(target.parent, Path(s)) for s in map(str.strip, lines) if s]
-    return None
+    images = []
+    for lineno, line in enumerate(target.read_text(encoding="utf-8-sig").splitlines(), start=1):
+        if not line.strip():
+            continue
+        image = _normal(target.parent, Path(line.strip()))
+        if image.is_file():
+            images.append(image)
+        else:
+            problems.append(Problem(f"{target}:{lineno}", f"listed image {line.strip()!r} does not exist ({key})"))
+    return images
 
 
 def _normal(base: Path, path: Path) -> Path:
@@ -215,11 +261,11 @@ def _rel(root: Path, path: Path) -> str:
         return str(path)
 
 
-def dataset_root(path: Path, problems: list[Problem]) -> tuple[Path, dict[str, Any] | None]:
-    """(dataset folder, parsed dataset YAML or None) of a YOLO dataset given as a folder (its ``data.yaml``) or as
-    a dataset YAML file. Raises FileNotFoundError / ValueError when ``path`` is neither."""
+def dataset_root(path: Path, problems: list[Problem]) -> tuple[Path, dict[str, Any] | None, Path]:
+    """(dataset folder, parsed dataset YAML or None, the YAML's path) of a YOLO dataset given as a folder (its
+    ``data.yaml``) or as a dataset YAML file. Raises FileNotFoundError / ValueError when ``path`` is neither."""
     if path.is_dir():
-        return path, _data_yaml(path / "data.yaml", problems)
+        return path, _data_yaml(path / "data.yaml", problems), path / "data.yaml"
     if not path.is_file():
         raise FileNotFoundError(f"{path}: no such folder or dataset file")
     doc = _data_yaml(path, problems)
@@ -229,13 +275,15 @@ def dataset_root(path: Path, problems: list[Problem]) -> tuple[Path, dict[str, A
     if base:
         folder = _normal(path.parent, Path(str(base)))
         if folder.is_dir():
-            return folder, doc
-        problems.append(Problem(str(path), f"its path: {base!r} is not a folder here; {path.parent} used", "warning"))
-    return path.parent, doc
+            return folder, doc, path
+        problems.append(Problem(str(path), f"path: {base!r} is not a folder here (no {folder}); {path.parent} used",
+                                "warning"))  # fmt: skip
+    return path.parent, doc, path
 
 
 def _data_yaml(path: Path, problems: list[Problem]) -> dict[str, Any] | None:
-    """The parsed dataset YAML ``path`` (None when absent or unreadable, the latter reported)."""
+    """The parsed dataset YAML ``path`` (None when absent or unreadable, the latter reported, as is a file that
+    is not a mapping of keys)."""
     if not path.is_file():
         return None
     try:
@@ -243,6 +291,8 @@ def _data_yaml(path: Path, problems: list[Problem]) -> dict[str, Any] | None:
     except (yaml.YAMLError, UnicodeDecodeError) as exc:
         problems.append(Problem(str(path), f"unreadable YAML ({exc.__class__.__name__})"))
         return None
+    if doc is not None and not isinstance(doc, dict):
+        problems.append(Problem(str(path), f"not a mapping of keys (a YAML {type(doc).__name__}): ignored", "warning"))
     return doc if isinstance(doc, dict) else None
 
 
