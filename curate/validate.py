@@ -10,25 +10,27 @@ from pathlib import Path
 from curate.core.dataset import Dataset
 from curate.core.formats.common import ReadResult
 from curate.core.formats.registry import read_dataset
-from curate.core.imageio import ImageError, read_image
+from curate.core.imageio import ImageError, decode_image, jpeg_repaired, read_bytes
 from curate.core.problems import LEVELS, Problem
 from curate.core.progress import progress
 
 
 def decode_problems(ds: Dataset, workers: int = 4) -> list[Problem]:
-    """An error for every image of ``ds`` that does not fully decode."""
+    """An error for every image of ``ds`` that does not fully decode; a warning for each thing in a JPEG that
+    libjpeg skips with a warning of its own (:func:`~curate.core.imageio.jpeg_repaired`: the image decodes)."""
 
-    def check(path: Path) -> Problem | None:
+    def check(path: Path) -> list[Problem]:
         try:
-            read_image(path)
+            data, notes = jpeg_repaired(read_bytes(path))
+            decode_image(data, path)
         except ImageError as exc:
-            return Problem(str(path), f"unreadable image: {exc.reason}")
-        return None
+            return [Problem(str(path), f"unreadable image: {exc.reason}")]
+        return [Problem(str(path), f"{note}: skipped, the image decodes", "warning") for note in notes]
 
     paths = [ds.image_path(img) for img in ds.images]
     with ThreadPoolExecutor(max_workers=workers) as pool:
         found = list(progress(pool.map(check, paths), total=len(paths), desc="decoding images"))
-    return [p for p in found if p is not None]
+    return [p for problems in found for p in problems]
 
 
 def validate(

@@ -55,6 +55,15 @@ def garbled_jpeg(width: int = 160, height: int = 120, seed: int = 0) -> bytes:
     return bytes(data)
 
 
+def extraneous_jpeg(junk: bytes = b"\x00", before: bytes = b"\xff\xdb", seed: int = 0) -> tuple[bytes, bytes]:
+    """(a JPEG encoded by OpenCV, the same with ``junk`` inserted before its first ``before`` marker): libjpeg skips
+    the bytes, warning "Corrupt JPEG data: 1 extraneous bytes before marker 0xdb" on stderr, and decodes the same
+    pixels."""
+    clean = jpeg_bytes(64, 48, seed)
+    at = clean.index(before)
+    return clean, clean[:at] + junk + clean[at:]
+
+
 def write_yolo_dataset(root: Path, names: tuple[str, ...] = ("fire", "smoke")) -> dict[str, list[list[float]]]:
     """A Roboflow-style YOLO folder (train/valid, data.yaml) with known rows; returns label rows per stem."""
     rows = {

@@ -1,9 +1,11 @@
+import logging
+
 import numpy as np
 import pytest
-from factories import garbled_jpeg, jpeg_bytes, smooth_jpeg, write_image
+from factories import extraneous_jpeg, garbled_jpeg, jpeg_bytes, smooth_jpeg, write_image
 from PIL import Image
 
-from curate.core.imageio import ImageError, decode_image, image_size, read_image
+from curate.core.imageio import ImageError, check_complete, decode_image, image_size, jpeg_repaired, read_image
 
 
 def test_rgb_jpeg_reads_as_rgb_uint8(tmp_path):
@@ -218,3 +220,47 @@ def test_unit_to_u8_rounds_to_nearest_and_clips() -> None:
     assert out.tolist() == [[0, 0, 0, 2], [127, 128, 255, 255]]  # halves to even, as np.round
     grid = np.linspace(0.0, 1.0, 1001)
     assert np.abs(unit_to_u8(grid).astype(float) - grid * 255.0).max() <= 0.5
+
+
+@pytest.mark.parametrize(
+    ("junk", "before"),
+    [(b"\x00", b"\xff\xdb"), (b"\x12\x34\xff\x00\x56", b"\xff\xc0"), (b"\xff\x00", b"\xff\xda")],
+    ids=["one-byte-before-dqt", "stuffed-pair-before-sof", "ff00-before-sos"],
+)
+def test_extraneous_header_bytes_are_named_per_file_with_libjpegs_count(tmp_path, capfd, caplog, junk, before):
+    """libjpeg's nameless stderr line becomes a warning naming the file, with libjpeg's own count and marker; the
+    pixels are libjpeg's."""
+    import re
+
+    import cv2
+
+    clean, bad = extraneous_jpeg(junk, before)
+    cv2.imdecode(np.frombuffer(bad, np.uint8), cv2.IMREAD_COLOR)  # libjpeg's words, on fd 2
+    said = re.search(r"Corrupt JPEG data: (\d+) extraneous bytes before marker (0x[0-9a-f]{2})", capfd.readouterr().err)
+    assert said is not None
+    path = tmp_path / "bad.jpg"
+    path.write_bytes(bad)
+    with caplog.at_level(logging.WARNING, logger="curate.core.imageio"):
+        image = read_image(path)
+    np.testing.assert_array_equal(image, decode_image(clean))  # what libjpeg decodes from the file, too
+    assert "Corrupt JPEG" not in capfd.readouterr().err  # libjpeg never saw the bytes: no nameless line
+    assert [r.getMessage() for r in caplog.records] == [
+        f"{path}: corrupt JPEG data ({said[1]} extraneous bytes before marker {said[2]})"
+    ]
+    assert jpeg_repaired(clean) == (clean, []) and jpeg_repaired(bad)[0] == clean
+    check_complete(bad, path)  # complete: only the headers hold the bytes
+
+
+def test_decoding_threads_name_each_file_they_decode(tmp_path, caplog):
+    from concurrent.futures import ThreadPoolExecutor
+
+    paths = []
+    for k in range(8):
+        clean, bad = extraneous_jpeg(b"\x00" * (k % 3), seed=k)
+        paths.append(tmp_path / f"f{k}.jpg")
+        paths[-1].write_bytes(bad)
+    with caplog.at_level(logging.WARNING, logger="curate.core.imageio"), ThreadPoolExecutor(4) as pool:
+        list(pool.map(read_image, paths * 4))
+    named = {r.getMessage() for r in caplog.records}
+    assert named == {f"{p}: corrupt JPEG data ({k % 3} extraneous bytes before marker 0xdb)"
+                     for k, p in enumerate(paths) if k % 3}  # fmt: skip

@@ -43,3 +43,25 @@ def test_a_batch_keeps_input_order_and_names_the_unreadable(
     assert vector.shape == (2 * 320,) and np.isfinite(vector).all()
     alone = embed_batch([good[0]], embedder)[0][1][1]  # type: ignore[index]
     assert np.allclose(alone, vector, atol=1e-5)  # a file's vector does not depend on its batch
+
+
+def test_a_jpeg_with_extraneous_header_bytes_is_named_and_keeps_its_content_hash(tmp_path: Path, caplog) -> None:
+    """dedup's decoding threads: libjpeg's nameless warning becomes a line naming the file; the facts are those
+    of the file as it is (content hash) and of the pixels libjpeg decodes (pixel hash)."""
+    import hashlib
+    import logging
+
+    from factories import extraneous_jpeg
+
+    from curate.decode import decode_facts
+
+    clean, bad = extraneous_jpeg()
+    (tmp_path / "clean.jpg").write_bytes(clean)
+    (tmp_path / "bad.jpg").write_bytes(bad)
+    with caplog.at_level(logging.WARNING, logger="curate.core.imageio"):
+        facts = {name: decode_facts(tmp_path / name, None) for name in ("clean.jpg", "bad.jpg")}
+    assert [r.getMessage() for r in caplog.records] == [
+        f"{tmp_path / 'bad.jpg'}: corrupt JPEG data (1 extraneous bytes before marker 0xdb)"
+    ]
+    good, worse = facts["clean.jpg"][0], facts["bad.jpg"][0]  # type: ignore[index]
+    assert worse.sha256 == hashlib.sha256(bad).hexdigest() and worse.pixel_hash == good.pixel_hash

@@ -47,3 +47,17 @@ def test_clean_dataset_has_no_errors(tmp_path):
     write_yolo_dataset(tmp_path / "ds")
     problems = validate(tmp_path / "ds").problems
     assert {p.level for p in problems} == {"info"}  # d.png without label; data.yaml entries point elsewhere
+
+
+def test_extraneous_bytes_in_a_jpeg_are_a_warning_naming_the_image(tmp_path, capfd):
+    from factories import extraneous_jpeg
+
+    write_yolo_dataset(tmp_path / "ds")
+    img = tmp_path / "ds" / "train" / "images" / "b.jpg"
+    img.write_bytes(extraneous_jpeg()[1])  # libjpeg alone: "Corrupt JPEG data: 1 extraneous bytes ..." unnamed
+    problems = validate(tmp_path / "ds").problems
+    assert [str(p) for p in problems if p.level == "warning" and "JPEG" in p.reason] == [
+        f"{img}: corrupt JPEG data (1 extraneous bytes before marker 0xdb): skipped, the image decodes"
+    ]
+    assert not any(p.level == "error" for p in problems)
+    assert "Corrupt JPEG" not in capfd.readouterr().err

@@ -9,6 +9,11 @@
   chunk; zero padding and trailing bytes after the marker (phone exports, metadata tools) are fine. A JPEG whose
   scan data holds a stray marker (garbled bytes: libjpeg warns "Corrupt JPEG data: premature end of data
   segment" on stderr and OpenCV returns a mostly grey image) is refused as ``corrupt JPEG data``.
+- Bytes between a JPEG's header segments, which libjpeg skips with a nameless "Corrupt JPEG data: 1 extraneous
+  bytes before marker 0xdb" on stderr, are removed before decoding (the same pixels, no libjpeg line) and logged
+  as a warning naming the file (:func:`jpeg_repaired`; ``fuzzyfire validate`` lists them). Decoding threads stay
+  independent: nothing redirects the process's stderr. libjpeg's warnings that only its entropy decoder can
+  see (e.g. "bad Huffman code") still reach stderr unnamed.
 - Where only a small image is needed (embeddings, thumbnails), ``min_side`` decodes a JPEG at 1/2, 1/4 or 1/8
   of its size in the DCT domain (libjpeg scaling: 3-10x faster, a fraction of the memory).
 - Images over :data:`MAX_PIXELS` decoded pixels are refused with a clear error instead of decoding gigabytes.
@@ -17,9 +22,11 @@
 from __future__ import annotations
 
 import io
+import logging
 import os
 import re
 import warnings
+from dataclasses import dataclass
 from pathlib import Path
 
 import cv2
@@ -41,6 +48,7 @@ _BETWEEN_SCANS = frozenset({0xC4, 0xCC, 0xDB, 0xDC, 0xDD, *range(0xE0, 0xF0), 0x
 _DCT_FRAMES = frozenset({*range(0xC0, 0xC4), *range(0xC5, 0xC8), *range(0xC9, 0xCC), *range(0xCD, 0xD0)})  # SOFn
 _SCAN_MARKER = re.compile(rb"\xff[^\x00\xff]")  # a marker inside scan data (FF 00 is stuffing, FF FF fill)
 _EXIF_ORIENTATION = 274
+_LOG = logging.getLogger(__name__)
 _SWAPS_AXES = frozenset({5, 6, 7, 8})
 
 
@@ -69,7 +77,7 @@ def image_size(path: Path | str) -> tuple[int, int]:
     Also rejects JPEG/PNG files whose end marker is missing (truncated), which costs nothing more.
     """
     path = Path(path)
-    data = _read_bytes(path)
+    data = read_bytes(path)
     check_complete(data, path)
     return header_size(data, path)
 
@@ -98,7 +106,7 @@ def read_image(path: Path | str, min_side: int = 0) -> NDArray[np.uint8]:
 
     ``min_side`` > 0 allows a smaller decode (see :func:`decode_image`)."""
     path = Path(path)
-    return decode_image(_read_bytes(path), path, min_side)
+    return decode_image(read_bytes(path), path, min_side)
 
 
 def reduction(data: bytes, size: tuple[int, int], min_side: int) -> int:
@@ -122,7 +130,14 @@ def decode_image(data: bytes, path: Path | str = "<bytes>", min_side: int = 0) -
 def decode_sized(
     data: bytes, path: Path | str = "<bytes>", min_side: int = 0
 ) -> tuple[NDArray[np.uint8], tuple[int, int]]:
-    """:func:`decode_image` and the image's full ``(width, height)`` as displayed (the decode may be smaller)."""
+    """:func:`decode_image` and the image's full ``(width, height)`` as displayed (the decode may be smaller).
+
+    A JPEG with bytes libjpeg skips between its header segments (:func:`jpeg_repaired`) is decoded without them,
+    the same pixels, and each is a warning on the ``curate.core.imageio`` logger naming the file (stderr unless
+    logging is configured) instead of libjpeg's nameless line."""
+    data, notes = jpeg_repaired(data)
+    for note in notes:
+        _LOG.warning("%s: %s", path, note)
     check_complete(data, path)
     size = header_size(data, path)
     r = reduction(data, size, min_side)
@@ -140,7 +155,9 @@ def decode_sized(
     return _to_rgb8(_to_uint8(img), bgr=True), size
 
 
-def _read_bytes(path: Path) -> bytes:
+def read_bytes(path: Path | str) -> bytes:
+    """The bytes of the image file ``path``; :class:`ImageError` when it cannot be read or is empty."""
+    path = Path(path)
     try:
         data = path.read_bytes()
     except FileNotFoundError:
@@ -164,38 +181,100 @@ def check_complete(data: bytes, path: Path | str) -> None:
     (:func:`_check_scan_data`). PNG: the ``IEND`` chunk must be present. Bytes after either (zero padding,
     appended data) are allowed: every decoder and viewer ignores them."""
     if data[:3] == b"\xff\xd8\xff":
-        scan = _jpeg_scan_start(data)
-        if scan is None:
+        head = _jpeg_headers(data)
+        if head.scan is None:
             raise ImageError(path, "truncated JPEG (ends inside its headers)")
-        if data.rfind(b"\xff\xd9") < scan:
+        if data.rfind(b"\xff\xd9") < head.scan:
             raise ImageError(path, "truncated JPEG (no end-of-image marker)")
-        frame, interval = _frame_facts(data, scan) if scan else (0, 0)
-        if frame:  # a DCT JPEG (not JPEG-LS, whose scan data stuffs FF differently)
-            _check_scan_data(data, scan, interval, path)
+        if head.scan and head.frame:  # a DCT JPEG (not JPEG-LS, whose scan data stuffs FF differently)
+            _check_scan_data(data, head.scan, head.interval, path)
     elif data[:8] == b"\x89PNG\r\n\x1a\n":
         end = data.rfind(b"IEND")
         if end < 12 or data[end - 4 : end] != b"\x00\x00\x00\x00":
             raise ImageError(path, "truncated PNG (no IEND chunk)")
 
 
-def _jpeg_scan_start(data: bytes) -> int | None:
-    """Offset of the first start-of-scan marker (FF DA), walking the marker segments from the start; 0 when the
-    walk meets something that is not a marker (then an end marker anywhere will do, and the decoder judges);
-    None when the file ends inside its headers."""
-    pos, n = 2, len(data)
-    while pos + 4 <= n:
-        if data[pos] != 0xFF:
-            return 0
+@dataclass(frozen=True)
+class _JpegHeaders:
+    """What a walk of a JPEG's marker segments up to its first scan found (:func:`_jpeg_headers`)."""
+
+    scan: int | None  # offset of the first start-of-scan marker; 0: the walk got lost; None: ends inside headers
+    frame: int = 0  # the start-of-frame marker (0: none seen)
+    interval: int = 0  # the restart interval in MCUs (0: no DRI segment sets one)
+    extraneous: tuple[tuple[int, int, int, int], ...] = ()  # (start, end, bytes as libjpeg counts them, marker)
+
+
+def _jpeg_headers(data: bytes) -> _JpegHeaders:
+    """Walk the marker segments from the start to the first start-of-scan marker (FF DA) as libjpeg reads them:
+    bytes where a marker should be are skipped up to the next marker (libjpeg warns "Corrupt JPEG data: N
+    extraneous bytes before marker 0xXX" on stderr and decodes the image all the same). The walk gets lost (scan
+    0: an end marker anywhere will do, and the decoder judges) when no marker follows such bytes."""
+    pos, n, frame, interval, junk = 2, len(data), 0, 0, []
+    while pos + 2 <= n:
+        if data[pos] != 0xFF or data[pos + 1] == 0x00:  # FF 00 is no marker either
+            found = _next_marker(data, pos)
+            if found is None:
+                return _JpegHeaders(0, frame, interval, tuple(junk))
+            junk.append((pos, found[0], found[1], data[found[0] + 1]))
+            pos = found[0]
+            continue
         marker = data[pos + 1]
         if marker == 0xFF:  # fill byte
             pos += 1
-        elif marker == 0xDA:
-            return pos
+        elif marker in (0xDA, 0xD9):  # the first scan; or the end of the image before one: lost
+            return _JpegHeaders(pos if marker == 0xDA else 0, frame, interval, tuple(junk))
         elif marker in _JPEG_STANDALONE:
             pos += 2
+        elif pos + 4 > n:
+            break
         else:
+            if marker in _DCT_FRAMES:
+                frame = marker
+            elif marker == 0xDD and pos + 6 <= n:
+                interval = int.from_bytes(data[pos + 4 : pos + 6], "big")
             pos += 2 + int.from_bytes(data[pos + 2 : pos + 4], "big")
-    return None
+    return _JpegHeaders(None, frame, interval, tuple(junk))
+
+
+def _next_marker(data: bytes, pos: int) -> tuple[int, int] | None:
+    """libjpeg's ``next_marker`` from ``pos``: (offset of the FF just before the next marker's code, the bytes
+    it discards on the way as it counts them: each non-FF byte, 2 per FF 00 pair); None when no marker follows."""
+    counted, n = 0, len(data)
+    while True:
+        ff = data.find(b"\xff", pos)
+        if ff < 0:
+            return None
+        counted += ff - pos
+        code = ff + 1
+        while code < n and data[code] == 0xFF:
+            code += 1
+        if code >= n:
+            return None
+        if data[code] != 0x00:
+            return code - 1, counted
+        counted += 2
+        pos = code + 1
+
+
+def jpeg_repaired(data: bytes) -> tuple[bytes, list[str]]:
+    """``data`` without the bytes libjpeg would skip with a warning between the segments of a JPEG's headers (when
+    a walk of its segments reaches its first scan), and those warnings (``corrupt JPEG data (1 extraneous bytes before marker 0xdb)``, libjpeg's words); ``data`` and
+    [] for anything else. libjpeg decodes both the same, but prints its warning on stderr without the file's
+    name: decoding the repaired bytes keeps it quiet and lets the caller name the file."""
+    if data[:3] != b"\xff\xd8\xff":
+        return data, []
+    head = _jpeg_headers(data)
+    junk = head.extraneous
+    if not junk or not head.scan:  # no such bytes, or a walk that got lost: the decoder judges the file as it is
+        return data, []
+    parts, last = [], 0
+    for start, end, _, _ in junk:
+        parts += [data[last:start]]
+        last = end
+    notes = [
+        f"corrupt JPEG data ({counted} extraneous bytes before marker 0x{marker:02x})" for *_, counted, marker in junk
+    ]
+    return b"".join([*parts, data[last:]]), notes
 
 
 def _check_scan_data(data: bytes, pos: int, interval: int, path: Path | str) -> None:
@@ -249,23 +328,6 @@ def _end_of_scan(data: bytes, pos: int, interval: int, path: Path | str) -> int:
             )
         expected = (expected + 1) % 8
     raise ImageError(path, "corrupt JPEG data (no end-of-image marker after its image data)")
-
-
-def _frame_facts(data: bytes, scan: int) -> tuple[int, int]:
-    """The start-of-frame marker (0 when none) and the restart interval in MCUs (0 when no DRI segment sets one)
-    of the headers before the first scan, at ``scan`` (a walk :func:`_jpeg_scan_start` has made already)."""
-    pos, frame, interval = 2, 0, 0
-    while pos < scan:
-        marker = data[pos + 1]
-        if marker == 0xFF or marker in _JPEG_STANDALONE:
-            pos += 1 if marker == 0xFF else 2
-            continue
-        if marker in _DCT_FRAMES:
-            frame = marker
-        elif marker == 0xDD:
-            interval = int.from_bytes(data[pos + 4 : pos + 6], "big")
-        pos += 2 + int.from_bytes(data[pos + 2 : pos + 4], "big")
-    return frame, interval
 
 
 def _orientation(im: Image.Image) -> int:
