@@ -384,13 +384,13 @@ def check_data(cfg: ExperimentConfig, data: Prepared, datasets: Datasets, photos
 
 def studied_classes(cfg: ExperimentConfig, data: Prepared, datasets: Datasets) -> tuple[ExperimentConfig, Datasets]:
     """``cfg`` with its classes resolved (``classes: null`` = the classes the real data boxes, less
-    ``real.drop_classes``: :func:`curate.core.load.data_classes`) and ``datasets`` prepared with them; says which
+    ``real.drop_classes`` and ``real.negative_classes``: :func:`curate.core.load.data_classes`) and ``datasets`` prepared with them; says which
     classes are studied and what the class rules removed from each set (:class:`curate.core.load.ClassChanges`)."""
     from curate.core.load import data_classes
 
     classes, given = cfg.classes, cfg.classes is not None
     if classes is None:
-        classes = data_classes(datasets.read(data.real), drop=cfg.real.drop_classes)
+        classes = data_classes(datasets.read(data.real), drop=(*cfg.real.drop_classes, *cfg.real.negative_classes))
         if not classes:
             raise ExperimentConfigError(f"{data.real.path}: the real data has no boxes of any class: nothing to study")
         cfg = replace(cfg, classes=classes)

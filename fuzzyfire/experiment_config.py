@@ -180,7 +180,8 @@ class ExperimentConfig:
     rare: Optional[RareConfig] = None  # the rare test set (never trained on); null = none
     tests: dict[str, EvalSetConfig] = field(default_factory=dict)  # more test sets, by name (scored, not trained on)
     classes: Optional[tuple[str, ...]] = None  # trained and scored classes; null = every class the real data
-    # boxes (synonyms mapped: Fire/flame -> fire), less real.drop_classes; other classes' boxes are removed
+    # boxes (synonyms mapped: Fire/flame -> fire), less real.drop_classes and real.negative_classes; other
+    # classes' boxes are removed
     synth: SynthConfig = field(default_factory=SynthConfig)  # the synthetic pools
     grid: GridConfig = field(default_factory=GridConfig)  # which mixtures and seeds are trained
     train: TrainConfig = field(default_factory=TrainConfig)  # each run's detector training (fuzzyfire train's settings)
