@@ -58,3 +58,13 @@ def test_kept_boxes_lie_in_the_image_and_keep_enough_of_themselves(seed: int) ->
     for box in boxes:  # each kept box keeps MIN_KEPT of its area at least
         for _, _, w, h in crop_boxes([box], crop, 64, 48):
             assert w * h >= MIN_KEPT * scale * box[2] * box[3] - 1e-6
+
+
+def test_a_frame_without_fire_stays_a_frame(tmp_path: Path) -> None:
+    from factories import write_yolo_dataset
+
+    write_yolo_dataset(tmp_path / "ds")  # a: fire + smoke, b: fire, c: no box, d: no label file
+    only_smoke = tmp_path / "ds" / "train" / "labels" / "b.txt"
+    only_smoke.write_text("1 0.125 0.75 0.25 0.1\n")  # b now holds smoke alone
+    frames = {p.stem: boxes for p, boxes in load_frames([tmp_path / "ds"]).items()}
+    assert sorted(frames) == ["a", "b", "c", "d"] and frames["b"] == () and len(frames["a"]) == 1

@@ -40,7 +40,8 @@ def load_frames(paths: Iterable[Path | str], problems: list[Problem] | None = No
         result = read_dataset(path)
         if problems is not None:
             problems += [p for p in result.problems if p.reason.startswith(UNREADABLE)]
-        ds = prepare(result.dataset, None, [FIRE], where=path)
+        others = [n for n in result.dataset.category_names if n != FIRE]  # a frame without fire stays a frame
+        ds = prepare(result.dataset, None, [FIRE], where=path, negatives=others)
         boxes = ds.annotations_by_image()
         for img in ds.images:
             out[ds.image_path(img)] = tuple(tuple(float(v) for v in a.bbox) for a in boxes[img.id])  # type: ignore[misc]
@@ -51,9 +52,17 @@ def frame_fingerprints(paths: Iterable[Path | str]) -> list[dict[str, Any]]:
     """Each labelled dataset at ``paths`` by content (:func:`curate.core.fingerprint.fingerprint` of its fire
     boxes and image bytes): what a pool composited on it is made of, wherever the folder lies."""
     from curate.core.fingerprint import fingerprint
-    from curate.core.load import load_split
+    from curate.core.load import load_split, prepare
 
-    return [fingerprint(load_split(path, classes=[FIRE])).to_dict() for path in paths]
+    out = []
+    for path in paths:
+        ds = load_split(path)
+        out.append(
+            fingerprint(
+                prepare(ds, None, [FIRE], where=path, negatives=[n for n in ds.category_names if n != FIRE])
+            ).to_dict()
+        )
+    return out
 
 
 def crop_boxes(boxes: Sequence[Box], crop: Sequence[int], width: int, height: int) -> list[list[float]]:
