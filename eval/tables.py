@@ -153,7 +153,7 @@ def control_table(
         (("real + copies of the real", names),),
         _columns(results, test_sets, metrics),
         cells,
-        {n: f"{n} copies" for n in names},
+        {n: f"{n} copies" + (UNLEARNED_MARK if n in unlearned_labels(results) else "") for n in names},
     )
 
 

@@ -80,7 +80,7 @@ def answer(
         lines.append(f"On {c['test_set']}, {c['mixture']} against {c['baseline']}: {_name(metric)} "
                      f"{_delta_text(c['delta'])} points{', ' + sure if sure else ''}, "
                      f"{comparison_verdict(c, bool({c['mixture'], c['baseline']} & unlearned))}.")  # fmt: skip
-    lines += _slice_lines(slices)
+    lines += _slice_lines(slices, unlearned)
     lines += _alarm_lines(rows, tests, mixtures)
     seeds = max((len({r["seed"] for r in rows if r["mixture"] == m}) for m in mixtures), default=0)
     if 0 < seeds < FEW_SEEDS:
@@ -99,8 +99,9 @@ def _cell(rows: Sequence[Mapping[str, Any]], mixture: str, test: str, metric: st
     return f"{mixture} {100 * mean:.1f}{spread}"
 
 
-def _slice_lines(slices: Sequence[Mapping[str, Any]]) -> list[str]:
-    """Per (comparison, test set): the slices helped and hurt after Holm's correction, or that none is."""
+def _slice_lines(slices: Sequence[Mapping[str, Any]], unlearned: set[str] = frozenset()) -> list[str]:  # type: ignore[assignment]
+    """Per (comparison, test set): the slices helped and hurt after Holm's correction, or that none is; a
+    comparison with a mixture in ``unlearned`` (a run that did not converge) is said not to be read."""
     groups: dict[tuple[str, str, str], list[Mapping[str, Any]]] = {}
     for r in slices:
         groups.setdefault((r["test_set"], r["mixture"], r["baseline"]), []).append(r)
@@ -120,7 +121,8 @@ def _slice_lines(slices: Sequence[Mapping[str, Any]]) -> list[str]:
                              f"{_delta_text(r['delta'])}" for r in these[:SHOWN_SLICES])  # fmt: skip
             more = len(these) - SHOWN_SLICES
             rest = f"; and {more} more slice{'s' * (more > 1)} (tables/slices.csv)" if more > 0 else ""
-            lines.append(f"On {test}, {mixture} against {baseline} {verdict} on {text}{rest} (Holm-corrected).")
+            unread = "; not read: a run in it did not converge" if {mixture, baseline} & unlearned else ""
+            lines.append(f"On {test}, {mixture} against {baseline} {verdict} on {text}{rest} (Holm-corrected{unread}).")
     return lines
 
 

@@ -139,7 +139,7 @@ def headline_lines(
                 f"On {c['test_set']}, the flames of {c['mixture']} add {_name(c['metric'])} {_delta(control['delta'])} "
                 f"points beyond flame-free copies of the same real images (the control; "
                 f"{seeds_text(control) or 'one seed'}): {verdict(control, bad_control)}. Against {baseline} the "
-                f"mixture gains {_delta(c['delta'])}, of which the extra images and steps alone give about "
+                f"mixture reads {_delta(c['delta'])}; the flame-free copies alone (more images and steps) about "
                 f"{100 * copies:+.1f}."
             )
             continue

@@ -108,3 +108,15 @@ def test_table1_has_the_alarm_column_too():
 def test_a_column_with_one_row_has_no_mark():
     one = [r for r in results() if r["mixture"] == "R500_S500"]
     assert marks(table2(one)) == {} and "| R500_S500 | 55.0 ± 1.4 |" in to_markdown(table2(one))
+
+
+def test_a_mixture_with_a_run_that_did_not_converge_is_marked_in_every_format():
+    from eval.tables import control_table
+
+    rows = [dict(r, learning="still learning: …" if r["mixture"] == "R500_S0" and r["seed"] == 1 else None)
+            for r in results()]  # fmt: skip
+    t = table2(rows)
+    assert t.label("R500_S0") == "R500_S0 (not converged)" and t.label("R1000_S0") == "R1000_S0"
+    assert "| R500_S0 (not converged) |" in to_markdown(t) and "R500_S0 (not converged)" in to_csv(t)
+    copies = control_table([r for r in rows if r["mixture"] in ("R500_S0", "R1000_S0")])
+    assert copies.label("R500_S0") == "R500_S0 copies (not converged)" and copies.label("R1000_S0") == "R1000_S0 copies"
