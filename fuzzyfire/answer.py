@@ -10,12 +10,11 @@ from typing import Any
 
 from eval.errors import ALARMS
 from eval.imagelevel import IMAGE_RECALL
-from eval.stats import mean_std
+from eval.stats import MIN_SEEDS_RESAMPLED, mean_std
 from eval.tables import METRIC_LABELS
 from fuzzyfire.first_screen import seeds_text
 from fuzzyfire.first_screen import verdict as comparison_verdict
 
-FEW_SEEDS = 5  # fewer seeds than this: the intervals cover test images and these seeds' mean only
 SHOWN_SLICES = 4  # slices named per comparison and direction (the largest differences); the rest are counted
 
 
@@ -83,7 +82,7 @@ def answer(
     lines += _slice_lines(slices, unlearned)
     lines += _alarm_lines(rows, tests, mixtures)
     seeds = max((len({r["seed"] for r in rows if r["mixture"] == m}) for m in mixtures), default=0)
-    if 0 < seeds < FEW_SEEDS:
+    if 0 < seeds < MIN_SEEDS_RESAMPLED:
         lines.append(f"Caveat: {seeds} seed{'s' * (seeds != 1)} per mixture; the intervals cover the test images and "
                      "the mean of these seeds, not how another training of the same mixture would land.")  # fmt: skip
     return lines + list(notes)

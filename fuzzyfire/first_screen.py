@@ -157,10 +157,16 @@ def how_sure_line(rows: Sequence[Mapping[str, Any]], comparisons: Sequence[Mappi
     """Seeds per mixture, what the intervals resample, and the training length."""
     mixtures = list(dict.fromkeys(r["mixture"] for r in rows))
     seeds = max((len({r["seed"] for r in rows if r["mixture"] == m}) for m in mixtures), default=0)
-    how = {c["delta"].get("resampled", "images") for c in comparisons}
-    resampled = ("test images and seeds (a two-level paired bootstrap)" if how == {"images and seeds"}
-                 else "test images only (paired bootstrap): with fewer than 3 seeds they say nothing of how another "
-                 "training of the same mixture would land" if how else "nothing (no comparison)")  # fmt: skip
+    two = sorted({_name(c["metric"]) for c in comparisons if c["delta"].get("resampled") == "images and seeds"})
+    one = sorted({_name(c["metric"]) for c in comparisons if c["delta"].get("resampled", "images") == "images"})
+    if two:
+        resampled = "test images and seeds (a two-level paired bootstrap)"
+        resampled += f"; {', '.join(one)}: test images only" if one else ""
+    elif one:
+        resampled = ("test images only (paired bootstrap): with fewer than 3 seeds they say nothing of how another "
+                     "training of the same mixture would land")  # fmt: skip
+    else:
+        resampled = "nothing (no comparison)"
     return (f"How sure: {seeds} seed{'s' * (seeds != 1)} per mixture, {epochs} epoch{'s' * (epochs != 1)} each; the "
             f"95 % intervals resample {resampled}.")  # fmt: skip
 

@@ -69,3 +69,13 @@ def test_classes_curation_and_alarm_resolution_are_said(tmp_path: Path) -> None:
     assert fs.curation_sentence(tmp_path / "none") is None
     assert "one image = 1.5 per 100; fewer than 100" in fs.free_images_note(68)  # type: ignore[operator]
     assert "fewer than" not in fs.free_images_note(200)  # type: ignore[operator]
+
+
+def test_how_sure_says_what_each_interval_resamples() -> None:
+    two = _cmp("R200_S200", "R200_S0", 0.05, 0.02, 0.08, [0.04, 0.05, 0.06])
+    one = {**two, "metric": "recall_at_10_alarms", "delta": {**two["delta"], "resampled": "images"}}
+    said = fs.how_sure_line(_rows(), [two, one], 40)
+    assert said == ("How sure: 3 seeds per mixture, 40 epochs each; the 95 % intervals resample test images and "
+                    "seeds (a two-level paired bootstrap); recall@10 alarms/100: test images only.")  # fmt: skip
+    only = fs.how_sure_line(_rows(), [one], 1)
+    assert "1 epoch each" in only and "test images only (paired bootstrap): with fewer than 3 seeds" in only
