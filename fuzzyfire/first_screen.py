@@ -189,5 +189,6 @@ def silent_line(rows: Sequence[Mapping[str, Any]]) -> str | None:
     if not silent:
         return None
     named = ", ".join(f"{m} seed {s}" for m, s in silent[:4]) + (" and more" if len(silent) > 4 else "")
-    return (f"{len(silent)} runs detect nothing at confidence 0.25 on any test set ({named}): their false alarms "
-            "are shown as not measured (–), not as 0.")  # fmt: skip
+    runs = f"{len(silent)} runs detect" if len(silent) > 1 else "1 run detects"
+    return (f"{runs} nothing at confidence 0.25 on any test set ({named}): {'their' if len(silent) > 1 else 'its'} "
+            "false alarms are shown as not measured (–), not as 0.")  # fmt: skip

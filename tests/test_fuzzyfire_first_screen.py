@@ -79,3 +79,10 @@ def test_how_sure_says_what_each_interval_resamples() -> None:
                     "seeds (a two-level paired bootstrap); recall@10 alarms/100: test images only.")  # fmt: skip
     only = fs.how_sure_line(_rows(), [one], 1)
     assert "1 epoch each" in only and "test images only (paired bootstrap): with fewer than 3 seeds" in only
+
+
+def test_runs_that_detect_nothing_are_named() -> None:
+    rows = [{"mixture": "R200_S0", "seed": s, "silent": s == 0} for s in range(2)]
+    assert fs.silent_line(rows) == ("1 run detects nothing at confidence 0.25 on any test set (R200_S0 seed 0): its "
+                                    "false alarms are shown as not measured (–), not as 0.")  # fmt: skip
+    assert fs.silent_line([{**r, "silent": False} for r in rows]) is None
