@@ -242,14 +242,6 @@ def seed_deltas(a: Sequence[dict], b: Sequence[dict], metric: str) -> list[dict]
             if r.get(metric) is not None and first.get(r["seed"]) is not None]  # fmt: skip
 
 
-def sign_agreement(comparison: Mapping) -> tuple[int, int]:
-    """(seeds whose difference has the sign of the comparison's point difference, seeds): how many of a
-    :func:`comparisons` row's per-seed differences agree with its headline (a zero agrees with nothing)."""
-    point = comparison["delta"]["value"]
-    deltas = [d["delta"] for d in comparison.get("seeds", ())]
-    return sum(1 for d in deltas if d * point > 0), len(deltas)
-
-
 def write_report(
     cfg: ExperimentConfig,
     data: Prepared,

@@ -11,8 +11,7 @@ from typing import Any
 from eval.errors import ALARMS
 from eval.imagelevel import IMAGE_RECALL
 from eval.stats import MIN_SEEDS_RESAMPLED, mean_std
-from eval.tables import METRIC_LABELS
-from fuzzyfire.first_screen import seeds_text
+from fuzzyfire.first_screen import delta_text, metric_name, seeds_text, unlearned_mixtures
 from fuzzyfire.first_screen import verdict as comparison_verdict
 
 SHOWN_SLICES = 4  # slices named per comparison and direction (the largest differences); the rest are counted
@@ -36,19 +35,6 @@ def headline_metric(rows: Sequence[Mapping[str, Any]], test: str) -> str | None:
     return None
 
 
-def _name(metric: str) -> str:
-    """A metric as the tables head it (``image_recall`` -> ``image recall``)."""
-    return METRIC_LABELS.get(metric, metric)
-
-
-def _points(value: float, scale: float = 100.0) -> str:
-    return f"{scale * value:+.1f}"
-
-
-def _delta_text(d: Mapping[str, float]) -> str:
-    return f"{_points(d['value'])} [{_points(d['low'])}, {_points(d['high'])}]"
-
-
 def answer(
     rows: Sequence[Mapping[str, Any]],
     comparisons: Sequence[Mapping[str, Any]],
@@ -69,15 +55,15 @@ def answer(
             (m for m in mixtures if _has(rows, m, test, metric)), key=lambda m: -_mean(rows, m, test, metric)[0]
         )
         shown = "; ".join(_cell(rows, m, test, metric) for m in ranked)
-        lines.append(f"Best on {test} by {_name(metric)}: {ranked[0]} ({shown}).")
-    unlearned = {r["mixture"] for r in rows if r.get("learning")}
+        lines.append(f"Best on {test} by {metric_name(metric)}: {ranked[0]} ({shown}).")
+    unlearned = unlearned_mixtures(rows)
     for c in comparisons:
         metric = headline_metric(rows, c["test_set"])
         if c["metric"] != metric:
             continue
         sure = seeds_text(c)
-        lines.append(f"On {c['test_set']}, {c['mixture']} against {c['baseline']}: {_name(metric)} "
-                     f"{_delta_text(c['delta'])} points{', ' + sure if sure else ''}, "
+        lines.append(f"On {c['test_set']}, {c['mixture']} against {c['baseline']}: {metric_name(metric)} "
+                     f"{delta_text(c['delta'])} points{', ' + sure if sure else ''}, "
                      f"{comparison_verdict(c, bool({c['mixture'], c['baseline']} & unlearned))}.")  # fmt: skip
     lines += _slice_lines(slices, unlearned)
     lines += _alarm_lines(rows, tests, mixtures)
@@ -116,8 +102,8 @@ def _slice_lines(slices: Sequence[Mapping[str, Any]], unlearned: set[str] = froz
             these = _strongest([r for r in found if r["verdict"] == verdict])
             if not these:
                 continue
-            text = "; ".join(f"{r['slice']} ({r['fire_images']} fire images) {_name(r['metric'])} "
-                             f"{_delta_text(r['delta'])}" for r in these[:SHOWN_SLICES])  # fmt: skip
+            text = "; ".join(f"{r['slice']} ({r['fire_images']} fire images) {metric_name(r['metric'])} "
+                             f"{delta_text(r['delta'])}" for r in these[:SHOWN_SLICES])  # fmt: skip
             more = len(these) - SHOWN_SLICES
             rest = f"; and {more} more slice{'s' * (more > 1)} (tables/slices.csv)" if more > 0 else ""
             unread = "; not read: a run in it did not converge" if {mixture, baseline} & unlearned else ""

@@ -18,11 +18,12 @@ from curate.core.load import ClassChanges, class_changes, load_split, pick_split
 @dataclass(frozen=True)
 class DataRef:
     """A labelled dataset a run reads: ``path`` (folder or COCO .json) in ``format``, one ``split`` of it (None =
-        every image), classes renamed by ``aliases`` and ``drop`` removed (an image left with no box by the class rules
-    leaves the set unless every box it lost was of a class of ``negatives``: :func:`curate.core.load.with_classes`), with ``holdout`` > 0 only the images
-        :func:`curate.core.holdout.held_out` picks at that share, and without the images ``exclude`` names (their
-        ``file_name``: test images that leak from the training data, :mod:`fuzzyfire.leakage`). ``identity``: what made it
-        (hashable JSON; no absolute output paths, so two experiment folders give the same run identities)."""
+    every image), classes renamed by ``aliases`` and ``drop`` removed (an image left with no box by the class
+    rules leaves the set unless every box it lost was of a class of ``negatives``:
+    :func:`curate.core.load.with_classes`), with ``holdout`` > 0 only the images
+    :func:`curate.core.holdout.held_out` picks at that share, and without the images ``exclude`` names (their
+    ``file_name``: test images that leak from the training data, :mod:`fuzzyfire.leakage`). ``identity``: what made it
+    (hashable JSON; no absolute output paths, so two experiment folders give the same run identities)."""
 
     path: Path
     identity: Mapping[str, Any]

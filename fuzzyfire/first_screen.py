@@ -12,17 +12,25 @@ from pathlib import Path
 from typing import Any
 
 from curate.mix import parse_mixture
+from eval.operating import ALARM_BUDGET
 from eval.tables import METRIC_LABELS
 
 MIN_FREE_IMAGES = 100  # fewer fire-free test images than this: the alarm budget's steps are coarse, said so
 
 
-def _name(metric: str) -> str:
+def metric_name(metric: str) -> str:
+    """A metric as the tables head it (``image_recall`` -> ``image recall``)."""
     return METRIC_LABELS.get(metric, metric)
 
 
-def _delta(d: Mapping[str, float]) -> str:
+def delta_text(d: Mapping[str, float]) -> str:
+    """A paired difference in points with its interval: ``+3.0 [+0.5, +5.5]``."""
     return f"{100 * d['value']:+.1f} [{100 * d['low']:+.1f}, {100 * d['high']:+.1f}]"
+
+
+def unlearned_mixtures(rows: Sequence[Mapping[str, Any]]) -> set[str]:
+    """The mixtures (table labels) with a run that did not converge (:mod:`fuzzyfire.learning`)."""
+    return {r["mixture"] for r in rows if r.get("learning")}
 
 
 def pool_sentence(manifest: Path, flames: str, size: int | None = None) -> str:
@@ -89,7 +97,7 @@ def free_images_note(free: int) -> str | None:
         return None
     step = 100 / free
     coarse = f"; fewer than {MIN_FREE_IMAGES}: image recall moves in coarse steps" if free < MIN_FREE_IMAGES else ""
-    return f"the alarm budget on {free} fire-free images allows {int(free * 0.1)} alarm images, one image = {step:.1f} per 100{coarse}"
+    return f"the alarm budget on {free} fire-free images allows {int(free * ALARM_BUDGET / 100)} alarm images, one image = {step:.1f} per 100{coarse}"
 
 
 def seeds_text(row: Mapping[str, Any]) -> str:
@@ -124,7 +132,7 @@ def headline_lines(
     """Per test set with a headline metric (``metric_of(test)``): each mixture with synthetic images against the
     baseline, and, where it has a control, the flames' share beyond that control first."""
     lines = []
-    unlearned = {r["mixture"] for r in rows if r.get("learning")}
+    unlearned = unlearned_mixtures(rows)
     for c in comparisons:
         if c["metric"] != metric_of(c["test_set"]) or c["baseline"] != baseline or c["mixture"].endswith(" copies"):
             continue
@@ -136,17 +144,17 @@ def headline_lines(
             bad_control = bad or f"{c['mixture']} copies" in unlearned
             copies = c["delta"]["value"] - control["delta"]["value"]
             lines.append(
-                f"On {c['test_set']}, the flames of {c['mixture']} add {_name(c['metric'])} {_delta(control['delta'])} "
+                f"On {c['test_set']}, the flames of {c['mixture']} add {metric_name(c['metric'])} {delta_text(control['delta'])} "
                 f"points beyond flame-free copies of the same real images (the control; "
                 f"{seeds_text(control) or 'one seed'}): {verdict(control, bad_control)}. Against {baseline} the "
-                f"mixture reads {_delta(c['delta'])}; the flame-free copies alone (more images and steps) about "
+                f"mixture reads {delta_text(c['delta'])}; the flame-free copies alone (more images and steps) about "
                 f"{100 * copies:+.1f}."
             )
             continue
         mix = parse_mixture(c["mixture"])
         lines.append(
             f"On {c['test_set']}, {mix.synth} synthetic images (flames and more images together) against none "
-            f"({c['mixture']} vs {baseline}): {_name(c['metric'])} {_delta(c['delta'])} points"
+            f"({c['mixture']} vs {baseline}): {metric_name(c['metric'])} {delta_text(c['delta'])} points"
             f"{'; ' + sure if sure else ''}: {verdict(c, bad)}. No control was trained, so the flames' share is "
             "unknown: grid.control=true trains flame-free copies to separate them."
         )
@@ -157,8 +165,8 @@ def how_sure_line(rows: Sequence[Mapping[str, Any]], comparisons: Sequence[Mappi
     """Seeds per mixture, what the intervals resample, and the training length."""
     mixtures = list(dict.fromkeys(r["mixture"] for r in rows))
     seeds = max((len({r["seed"] for r in rows if r["mixture"] == m}) for m in mixtures), default=0)
-    two = sorted({_name(c["metric"]) for c in comparisons if c["delta"].get("resampled") == "images and seeds"})
-    one = sorted({_name(c["metric"]) for c in comparisons if c["delta"].get("resampled", "images") == "images"})
+    two = sorted({metric_name(c["metric"]) for c in comparisons if c["delta"].get("resampled") == "images and seeds"})
+    one = sorted({metric_name(c["metric"]) for c in comparisons if c["delta"].get("resampled", "images") == "images"})
     if two:
         resampled = "test images and seeds (a two-level paired bootstrap)"
         resampled += f"; {', '.join(one)}: test images only" if one else ""

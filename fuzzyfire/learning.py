@@ -31,7 +31,8 @@ CURVE = "train/metrics.jsonl"  # the curve in a run folder
 @dataclass(frozen=True)
 class Flag:
     """Why a run's figures are not results: ``kind`` (``still learning`` | ``below the floor``), its epochs, best
-    epoch (from 1) and validation AP50 at the best epoch and ``since`` epochs before the last."""
+    epoch (from 1), validation AP50 (0..1) at the best epoch and ``before`` the last :func:`tail_epochs` (below the
+    floor: at the first epoch)."""
 
     kind: str
     epochs: int

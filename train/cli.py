@@ -33,21 +33,28 @@ def _read(path: str, fmt: str):  # -> curate.core.formats.common.ReadResult
     return read_dataset(path, fmt)
 
 
+def _per_folder(reads: dict[str, object], keep) -> dict[Path, tuple[str, list]]:
+    """The problems ``keep`` picks of each dataset of ``reads`` (path -> ReadResult) that has any, by resolved
+    folder (a folder read twice, as training and validation set, counts once): ``{folder: (path, problems)}``."""
+    found: dict[Path, tuple[str, list]] = {}
+    for path, read in reads.items():
+        picked = [p for p in read.problems if keep(p)]  # type: ignore[attr-defined]
+        if picked:
+            found.setdefault(Path(path).resolve(), (path, picked))
+    return found
+
+
 def data_errors(reads: dict[str, object]) -> str:
     """``N validation error(s) in PATH (first error)`` of the datasets ``reads`` (path -> ReadResult; a folder
     read twice, as training and validation set, counts once); "" when none has an error."""
-    found: dict[Path, tuple[str, list]] = {}
-    for path, read in reads.items():
-        errors = [p for p in read.problems if p.level == "error"]  # type: ignore[attr-defined]
-        if errors:
-            found.setdefault(Path(path).resolve(), (path, errors))
+    found = _per_folder(reads, lambda p: p.level == "error")
     if not found:
         return ""
     count = sum(len(errors) for _, errors in found.values())
     where = " and ".join(f"{path} ({len(e)})" if len(found) > 1 else path for path, e in found.values())
-    first = next(iter(found.values()))[1][0]
-    listed = f"; fuzzyfire validate {next(iter(found.values()))[0]} lists them" if count > 1 else ""
-    return f"{count} validation error{'s' if count > 1 else ''} in {where} ({first}{listed})"
+    first_path, first_errors = next(iter(found.values()))
+    listed = f"; fuzzyfire validate {first_path} lists them" if count > 1 else ""
+    return f"{count} validation error{'s' if count > 1 else ''} in {where} ({first_errors[0]}{listed})"
 
 
 def clipped_boxes(reads: dict[str, object]) -> str:
@@ -55,13 +62,9 @@ def clipped_boxes(reads: dict[str, object]) -> str:
     folder read twice counts once); "" when no box was clipped."""
     from curate.core.formats.common import CLIPPED
 
-    counts: dict[Path, tuple[str, int]] = {}
-    for path, read in reads.items():
-        n = sum(p.code == CLIPPED for p in read.problems)  # type: ignore[attr-defined]
-        if n:
-            counts.setdefault(Path(path).resolve(), (path, n))
+    counts = {path: len(found) for path, found in _per_folder(reads, lambda p: p.code == CLIPPED).values()}
     return "".join(f"; {n} box{'es' if n > 1 else ''} in {path} reached outside {'their' if n > 1 else 'its'} image "
-                   f"and {'were' if n > 1 else 'was'} clipped to it" for path, n in counts.values())  # fmt: skip
+                   f"and {'were' if n > 1 else 'was'} clipped to it" for path, n in counts.items())  # fmt: skip
 
 
 def _datasets(args: argparse.Namespace, allow_errors: bool = False):  # -> (train, val, note)

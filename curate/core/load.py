@@ -63,10 +63,6 @@ class ClassChanges:
     def __bool__(self) -> bool:
         return bool(self.dropped or self.unstudied or self.negative)
 
-    def to_dict(self) -> dict:
-        return {"dropped": dict(self.dropped), "unstudied": dict(self.unstudied), "negative": dict(self.negative),
-                "emptied": self.emptied, "negatives": self.negatives}  # fmt: skip
-
     def text(self) -> str:
         """One clause: ``smoke: 2,194 boxes not studied; 97 images had only such boxes and left the set``."""
         parts = [f"{n}: {c:,} boxes dropped (drop_classes)" for n, c in self.dropped.items()]

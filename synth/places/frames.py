@@ -14,6 +14,7 @@ from collections.abc import Iterable, Sequence
 from pathlib import Path
 from typing import Any
 
+from curate.core.dataset import Dataset
 from curate.core.problems import Problem
 
 #: A box [x, y, w, h] in pixels of the image it is in.
@@ -33,15 +34,13 @@ def load_frames(paths: Iterable[Path | str], problems: list[Problem] | None = No
     none), in the datasets' order; ValueError when a dataset has no images. The images the reader skipped as
     unreadable are appended to ``problems`` (when given), as the reader names them."""
     from curate.core.formats.registry import read_dataset
-    from curate.core.load import prepare
 
     out: dict[Path, tuple[Box, ...]] = {}
     for path in paths:
         result = read_dataset(path)
         if problems is not None:
             problems += [p for p in result.problems if p.reason.startswith(UNREADABLE)]
-        others = [n for n in result.dataset.category_names if n != FIRE]  # a frame without fire stays a frame
-        ds = prepare(result.dataset, None, [FIRE], where=path, negatives=others)
+        ds = fire_only(result.dataset, path)
         boxes = ds.annotations_by_image()
         for img in ds.images:
             out[ds.image_path(img)] = tuple(tuple(float(v) for v in a.bbox) for a in boxes[img.id])  # type: ignore[misc]
@@ -52,17 +51,17 @@ def frame_fingerprints(paths: Iterable[Path | str]) -> list[dict[str, Any]]:
     """Each labelled dataset at ``paths`` by content (:func:`curate.core.fingerprint.fingerprint` of its fire
     boxes and image bytes): what a pool composited on it is made of, wherever the folder lies."""
     from curate.core.fingerprint import fingerprint
-    from curate.core.load import load_split, prepare
+    from curate.core.load import load_split
 
-    out = []
-    for path in paths:
-        ds = load_split(path)
-        out.append(
-            fingerprint(
-                prepare(ds, None, [FIRE], where=path, negatives=[n for n in ds.category_names if n != FIRE])
-            ).to_dict()
-        )
-    return out
+    return [fingerprint(fire_only(load_split(path), path)).to_dict() for path in paths]
+
+
+def fire_only(ds: Dataset, where: Path | str) -> Dataset:
+    """``ds`` (every image) with its fire boxes alone: a frame whose boxes are all of other classes stays a frame,
+    with none (their classes count as negatives, :func:`curate.core.load.with_classes`)."""
+    from curate.core.load import prepare
+
+    return prepare(ds, None, [FIRE], where=where, negatives=[n for n in ds.category_names if n != FIRE])
 
 
 def crop_boxes(boxes: Sequence[Box], crop: Sequence[int], width: int, height: int) -> list[list[float]]:
