@@ -65,7 +65,8 @@ def plot_bars(
 ) -> Path:
     """Grouped bars with error bars (Figure 5 of the paper): one group per x label (e.g. a mixture),
     one bar per series (e.g. a test set). ``series[name] = (means, stds)`` aligned with ``groups``;
-    NaN std draws no error bar."""
+    NaN std draws no error bar; a NaN mean draws no bar and says "not measured" where it would stand (an empty
+    place must not read as 0)."""
     from matplotlib.figure import Figure
 
     fig = Figure(figsize=(max(6.0, 0.6 * len(groups) * max(1, len(series))), 4.2), dpi=110)
@@ -76,6 +77,9 @@ def plot_bars(
         offset = (i - (len(series) - 1) / 2) * width
         err = np.nan_to_num(np.asarray(stds, dtype=float), nan=0.0)
         ax.bar(x + offset, means, width, yerr=err, capsize=3, label=name)
+        for at in x[np.isnan(np.asarray(means, dtype=float))] + offset:
+            ax.text(at, 0, "not\nmeasured", ha="center", va="bottom", fontsize=7, color="0.4")
+    ax.set_xlim(-0.5, len(groups) - 0.5)  # every group keeps its place, a bar missing or not
     ax.set_xticks(x, list(groups), rotation=30, ha="right")
     ax.set_ylabel(ylabel)
     ax.set_title(title)
@@ -106,7 +110,8 @@ def plot_figure5(results: Sequence[Mapping[str, object]], path: Path, metric: st
         series[test_set] = (means, stds)
     ylabel = "false alarms per 100 images" if metric == ALARMS else f"{METRIC_LABELS.get(metric, metric)} (%)"
     name = "false alarms" if metric == ALARMS else METRIC_LABELS.get(metric, metric)
-    return plot_bars(groups, series, path, ylabel=ylabel, title=title or f"{name} by training mixture")
+    labels = [table.label(row) for row in groups]  # a mixture with a run that did not converge says so
+    return plot_bars(labels, series, path, ylabel=ylabel, title=title or f"{name} by training mixture")
 
 
 def plot_operating_curves(
