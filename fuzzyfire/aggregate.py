@@ -369,13 +369,16 @@ def compared_line(
             parts.append(f"{control_label(mixture)} (control) = the same {mix.real} + {mix.synth} flame-free copies "
                          "of them")  # fmt: skip
             continue
-        ref = own.get((mixture, method, seeds[0])) or data.pools.get(method)
+        per_seed = (mixture, method, seeds[0]) in own  # each seed's mixture has a pool of its own
+        ref = own[(mixture, method, seeds[0])] if per_seed else data.pools.get(method)
         flames = getattr(cfg.synth, method).flames.source
         manifest = Path(ref.path) / "manifest.json" if ref is not None else None
         what = (pool_sentence(manifest, flames, mix.synth) if manifest is not None and manifest.is_file()
                 else f"{method} pool")  # fmt: skip
         real = f"the same {mix.real} + " if mix.real else ""
-        parts.append(f"{mixture} = {real}{mix.synth} synthetic from a pool of {what}")
+        pool = f"a pool of its own per seed (seed {seeds[0]}'s: {what})" if per_seed and len(seeds) > 1 else \
+            f"a pool of {what}"  # fmt: skip
+        parts.append(f"{mixture} = {real}{mix.synth} synthetic from {pool}")
     return f"Compared over {len(seeds)} seed{'s' * (len(seeds) != 1)}: " + "; ".join(parts) + "."
 
 
