@@ -11,7 +11,9 @@ Each image gets one value per attribute (None where it has none, e.g. the fire c
 - ``colour``: the colour of its fire, read from the brightest third of the pixels inside its fire boxes (hue
   in degrees, saturation 0..1 of OpenCV's HSV): ``chemical`` when most of them are neither red, orange nor yellow
   (hue 60-330 deg with saturation > 0.25: blue, green, violet flames), else ``yellow-white`` when they are pale or
-  yellow (median saturation < 0.35 or median hue >= 35 deg), else ``orange-red``.
+  yellow (median saturation < 0.35 or median hue >= 35 deg), else ``orange-red``. An image labelled at the image
+  level (no boxes: :attr:`curate.core.dataset.ImageRecord.labels`) is read over the whole image; its ``size``
+  and ``fires`` stay None.
 - ``sky``: ``sky`` when the sky (:func:`curate.core.sky.sky_mask`, at 160 px) covers at least 5 % of the image, else
   ``no sky`` (rooms, close-ups, streets between walls).
 - ``blur``: the variance of the Laplacian of the grey image at 256 px on the long side (:func:`curate.scan.
@@ -142,7 +144,10 @@ def dataset_attributes(ds: Dataset, workers: int = 0) -> Attributes:
             raise ValueError(f"{path}: cannot read it for its attributes ({exc})") from None
         pixels = _small(pixels, WORK_SIDE)
         scale = pixels.shape[1] / img.width
-        return image_attributes(pixels, _boxes(by_image.get(img.id, []), scale), img.source, scale)
+        out = image_attributes(pixels, _boxes(by_image.get(img.id, []), scale), img.source, scale)
+        if img.labels and out["colour"] is None:  # no box: the fire's colour is read over the whole image
+            out["colour"] = fire_colour(pixels, np.asarray([[0, 0, pixels.shape[1], pixels.shape[0]]], np.float64))
+        return out
 
     with ThreadPoolExecutor(max_workers=workers or None) as pool:
         values = list(progress(pool.map(one, ds.images), total=len(ds.images), desc="attributes"))

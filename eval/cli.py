@@ -7,12 +7,14 @@ import argparse
 import json
 import sys
 from pathlib import Path
+from typing import Any
 
 from curate.core.commands import add_command
+from curate.core.formats.images import IMAGE_LABELLED, NEGATIVES_ONLY
 from curate.core.formats.registry import FORMATS
 from eval.cli_options import add_model_args, build_detector
 from eval.errors import ALARM_CONF
-from eval.imagelevel import IMAGE_RECALL
+from eval.imagelevel import IMAGE_RECALL, IMAGE_RECALL_AT_CONF
 from eval.operating import ALARM_BUDGET, RECALL_AT_ALARMS
 
 
@@ -65,11 +67,14 @@ def _load(args: argparse.Namespace):  # -> eval.score.TestSet
     """The test set of ``--data`` / ``--split``; says on stderr which split is scored when none was named."""
     from eval.score import ALL_SPLITS, load_test_set
 
-    test = load_test_set(args.data, args.data_format, args.split, _aliases(args.alias), args.drop_class, args.holdout)
-    for note in (p for p in test.problems if p.code == "negatives-only"):
-        print(
-            f"{note.path}: {note.reason} (AP has no boxes to find: --errors counts its false alarms)", file=sys.stderr
-        )
+    test = load_test_set(
+        args.data, args.data_format, args.split, _aliases(args.alias), args.drop_class, args.holdout, args.label
+    )
+    for note in (p for p in test.problems if p.code == NEGATIVES_ONLY):
+        print(f"{note.path}: {note.reason} (AP has no boxes to find: --errors counts its false alarms; if its "
+              "images hold fire: --label fire, or fire/ and normal/ sub-folders)", file=sys.stderr)  # fmt: skip
+    for note in (p for p in test.problems if p.code == IMAGE_LABELLED):
+        print(f"{note.path}: {note.reason}", file=sys.stderr)
     if args.split is None and test.split != ALL_SPLITS:
         others = [s for s in test.splits if s != test.split]
         print(
@@ -92,7 +97,7 @@ def cmd_score(args: argparse.Namespace) -> int:
     from curate.core.cocoeval import ClassMatchError
     from curate.core.commands import print_problems
     from eval.onnx_model import ModelError
-    from eval.score import ScoreError, error_pictures, score_errors, score_found, write_outputs
+    from eval.score import ScoreError, error_pictures, score_errors, score_found, score_image_level, write_outputs
 
     try:
         test = _load(args)
@@ -113,15 +118,31 @@ def cmd_score(args: argparse.Namespace) -> int:
             if not_drawn:
                 print_problems(not_drawn, sys.stderr, limit=20)
         print(f"wrote {', '.join(str(p) for p in files.values())}", file=sys.stderr)
+    level = score_image_level(result, args.alarm_conf) if test.dataset.image_labelled else None
     if args.json:
         extra = {"errors": errors.to_dict(), "boxes_found": found.to_dict()} if errors and found else {}
+        extra |= {"image_level": level.to_dict()} if level else {}
         print(json.dumps({**result.metrics.to_dict(), **held, **intervals, **extra}, indent=1))
     else:
         _print_text(result, intervals, _split_label(test, args.holdout))
+        if level is not None:
+            _print_image_level(level)
         if errors is not None and found is not None:
             _print_errors(errors)
             _print_found(found)
     return 0
+
+
+def _print_image_level(level) -> None:  # level: eval.imagelevel.ImageLevel
+    """An image-labelled set's result: image recall at the confidence, and at the alarm budget of its own images
+    without fire when it has any."""
+    found = round(level.recall_at_conf * level.fire_images)
+    print(f"image  {found} of {level.fire_images} images holding fire detected at confidence >= {level.conf:g}: "
+          f"image recall {level.recall_at_conf:.3f} (no boxes: AP is -)")  # fmt: skip
+    if level.free_images:
+        print(f"       {round(level.alarm_share_at_conf * level.free_images)} of its {level.free_images} images without "
+              f"fire raise an alarm at {level.conf:g}; at most {level.budget:g} false-alarm images per 100 of them "
+              f"(threshold {level.budget_threshold:.3f}): image recall {level.budget_recall:.3f}")  # fmt: skip
 
 
 def _print_errors(errors) -> None:  # errors: eval.errors.ErrorBreakdown
@@ -164,7 +185,8 @@ def _models(text: str) -> list[Path]:
 def _side(models: list[Path], results: list) -> dict:  # results: list[eval.score.ScoreResult]
     """One side of the compare document: its models' AP and AP50 averaged (the bootstrap's point), and each run."""
     runs = [{"model": str(m), **{k: r.metrics.summary[k] for k in ("AP", "AP50")}} for m, r in zip(models, results)]
-    mean = {k: sum(run[k] for run in runs) / len(runs) for k in ("AP", "AP50")}
+    mean = {k: None if any(run[k] is None for run in runs) else sum(run[k] for run in runs) / len(runs)
+            for k in ("AP", "AP50")}  # fmt: skip
     return {"model": ",".join(str(m) for m in models), **mean, "runs": runs}
 
 
@@ -231,7 +253,8 @@ def cmd_compare(args: argparse.Namespace) -> int:
     if any(not np.array_equal(tables[0][0].image_ids, t.image_ids) for t in tables[0] + tables[1]):
         print("error: the models could not all be scored on the same images", file=sys.stderr)
         return 2
-    deltas = paired_bootstrap(tables[0], tables[1], np.random.default_rng(args.seed), args.samples)
+    labelled = test.dataset.image_labelled  # no boxes: image recall only
+    deltas = {} if labelled else paired_bootstrap(tables[0], tables[1], np.random.default_rng(args.seed), args.samples)
     doc = {
         "A": _side(args.model_a, results[0]),
         "B": _side(args.model_b, results[1]),
@@ -249,42 +272,66 @@ def cmd_compare(args: argparse.Namespace) -> int:
             print(f"error: {exc}", file=sys.stderr)
             return 2
         points = [[score_operating(r, n) for r, n in zip(side, neg)] for side, neg in zip(results, free)]
-        deltas[RECALL_AT_ALARMS] = _add_operating(doc, points, args)
-    levels = _image_levels(results, points)
+        if (delta := _add_operating(doc, points, args, boxes=not labelled)) is not None:
+            deltas[RECALL_AT_ALARMS] = delta
+    own = labelled and free is None and test.dataset.num_negatives() > 0  # its own images without fire
+    if own:
+        doc["own_negatives"] = test.dataset.num_negatives()
+    levels = _image_levels(results, points, own)
     deltas[IMAGE_RECALL] = paired_image_recall(levels[0], levels[1], np.random.default_rng(args.seed), args.samples,
                                                args.alarm_budget)  # fmt: skip
     doc["delta"][IMAGE_RECALL] = deltas[IMAGE_RECALL].to_dict()
+    for key, side_levels in zip(("A", "B"), levels):  # each run's image recall at ALARM_CONF, and each side's mean
+        for run, (hits, _) in zip(doc[key]["runs"], side_levels):
+            run[IMAGE_RECALL_AT_CONF] = hits.recall(ALARM_CONF)
+        doc[key][IMAGE_RECALL_AT_CONF] = float(np.mean([run[IMAGE_RECALL_AT_CONF] for run in doc[key]["runs"]]))
     if args.slices:
         doc["slices"] = _compare_slices(args, results, levels)
     if args.json:
         print(json.dumps(doc, indent=1))
         return 0
-    for line in same_content_lines(same, len(args.model_a), len(args.model_b)):
+    _print_compare(doc, deltas, args, labelled, free is not None or own)
+    return 0
+
+
+def _print_compare(doc: dict, deltas: dict, args: argparse.Namespace, labelled: bool, at_budget: bool) -> None:
+    """``compare``'s text: each side's runs and mean, what the alarms were counted on, and each difference
+    (``labelled``: an image-labelled test set, its image recall at the confidence per side; ``at_budget``: image
+    recall read at the alarm budget rather than at the confidence)."""
+    for line in same_content_lines(doc["same_content"], len(args.model_a), len(args.model_b)):
         print(line)
     for side in ("A", "B"):
         runs = doc[side]["runs"]
         for run in runs if len(runs) > 1 else []:
-            print(f"{side}      {run['model']}  AP {_fmt(run['AP'])}  AP50 {_fmt(run['AP50'])}{_at_budget(run)}")
+            print(f"{side}      {run['model']}  AP {_fmt(run['AP'])}  AP50 {_fmt(run['AP50'])}{_at_budget(run)}"
+                  f"{_image_recall(run, labelled)}")  # fmt: skip
         name = doc[side]["model"] if len(runs) == 1 else f"mean of {len(runs)} runs"
         print(
             f"{side}      {name}  AP {_fmt(doc[side]['AP'])}  AP50 {_fmt(doc[side]['AP50'])}{_at_budget(runs[0] if len(runs) == 1 else doc[side])}"
+            f"{_image_recall(doc[side], labelled)}"
         )
     if "negatives" in doc:
         neg = doc["negatives"]
         held = f", held out at {neg['holdout']:g}" if "holdout" in neg else ""
         print(f"alarms {neg['images']} images without fire ({neg['data']}{held}): each model read at the threshold where it "
               f"raises at most {neg['budget']:g} alarms per 100 of them")  # fmt: skip
+    if "own_negatives" in doc:
+        print(f"alarms the test set's {doc['own_negatives']} images without fire: each model read at the "
+              f"threshold where at most {args.alarm_budget:g} of 100 of them raise an alarm")  # fmt: skip
     for key, d in deltas.items():
         iv, images = d.interval, f"{doc['images']} images"
         name = {RECALL_AT_ALARMS: f"recall at {args.alarm_budget:g} alarms/100",
-                IMAGE_RECALL: f"image recall at {args.alarm_budget:g} false-alarm images/100" if free else
+                IMAGE_RECALL: f"image recall at {args.alarm_budget:g} false-alarm images/100" if at_budget else
                 f"image recall at confidence {ALARM_CONF:g}"}.get(key, key)  # fmt: skip
-        images += f" and {doc['negatives']['images']} without fire" if key != "AP" and key != "AP50" and free else ""
+        images += (
+            f" and {doc['negatives']['images']} without fire"
+            if key != "AP" and key != "AP50" and "negatives" in doc
+            else ""
+        )
         print(
             f"B - A  {name} {100 * iv.point:+.1f} points, 95% CI [{100 * iv.low:+.1f}, {100 * iv.high:+.1f}], "
             f"p = {d.p_value:.3f} ({args.samples} paired resamples of {images})"
         )
-    return 0
 
 
 def _negatives_scored(args: argparse.Namespace) -> list[list]:  # per side, per model: eval.score.ScoreResult
@@ -292,18 +339,20 @@ def _negatives_scored(args: argparse.Namespace) -> list[list]:  # per side, per 
     from eval.score import ALL_SPLITS, load_test_set
 
     negatives = load_test_set(args.negatives, "auto", ALL_SPLITS, holdout=args.negatives_holdout)
-    if negatives.dataset.annotations:
-        raise ValueError(f"{args.negatives}: --negatives takes images without fire; it has "
-                         f"{len(negatives.dataset.annotations)} boxes")  # fmt: skip
+    if negatives.dataset.annotations or negatives.dataset.image_labelled:
+        held = len(negatives.dataset.images) - negatives.dataset.num_negatives()
+        raise ValueError(f"{args.negatives}: --negatives takes images without fire; {held} of its images hold a "
+                         f"class ({len(negatives.dataset.annotations)} boxes)")  # fmt: skip
     return [[_score_model(m, args, negatives.dataset, negatives.problems) for m in models]
             for models in (args.model_a, args.model_b)]  # fmt: skip
 
 
-def _image_levels(results: list[list], points: list[list] | None) -> list[list]:
+def _image_levels(results: list[list], points: list[list] | None, own: bool = False) -> list[list]:
     """Per side, per model: (its :class:`eval.imagelevel.ImageHits` on the test set, its per-image alarms on
-    ``--negatives`` (from its operating data ``points``) or, without them, the confidence
-    :data:`eval.errors.ALARM_CONF` it is read at)."""
+    ``--negatives`` (from its operating data ``points``), with ``own`` on the test set's own images without fire,
+    or, without either, the confidence :data:`eval.errors.ALARM_CONF` it is read at)."""
     from eval.imagelevel import image_alarms, image_hits
+    from eval.operating import alarms_of
     from eval.score import scored_images
 
     out = []
@@ -311,8 +360,13 @@ def _image_levels(results: list[list], points: list[list] | None) -> list[list]:
         levels = []
         for j, r in enumerate(side):
             ds, cat_ids = scored_images(r)
-            read_at = ALARM_CONF if points is None else image_alarms(points[k][j][1])
-            levels.append((image_hits(ds, r.records, cat_ids), read_at))
+            hits = image_hits(ds, r.records, cat_ids)
+            read_at: Any = ALARM_CONF if points is None else image_alarms(points[k][j][1])
+            if own:
+                free = hits.image_ids[~hits.fire].tolist()
+                kept = set(free)
+                read_at = image_alarms(alarms_of([x for x in r.records if x["image_id"] in kept], free))
+            levels.append((hits, read_at))
         out.append(levels)
     return out
 
@@ -367,6 +421,11 @@ def _slice_cell(r: dict | None) -> str:
     return f"{text:<19}"
 
 
+def _image_recall(side: dict, labelled: bool) -> str:
+    """``"  image recall 0.500 at 0.25"`` of a compare side's run (or mean) on an image-labelled set; else empty."""
+    return f"  image recall {side[IMAGE_RECALL_AT_CONF]:.3f} at {ALARM_CONF:g}" if labelled else ""
+
+
 def _at_budget(side: dict) -> str:
     """``"  recall 0.306 at threshold 0.442"`` of a compare side's run read at the alarm budget (a side of several
     runs: their mean recall); empty without ``--negatives``."""
@@ -377,22 +436,25 @@ def _at_budget(side: dict) -> str:
     )
 
 
-def _add_operating(doc: dict, points: list[list], args: argparse.Namespace):  # -> eval.stats.PairedDelta
+def _add_operating(doc: dict, points: list[list], args: argparse.Namespace, boxes: bool = True):  # -> PairedDelta
     """Read every run at ``--alarm-budget`` into ``doc`` (each run's recall and threshold, each side's mean recall,
-    ``negatives``: the set and its size) and return the paired bootstrap of the recall difference B - A."""
+    ``negatives``: the set and its size) and return the paired bootstrap of the recall difference B - A; a test
+    set without boxes (``boxes`` False: image-labelled) has no box recall: only ``negatives``, and None."""
     import numpy as np
 
     from eval.operating import operating_point, paired_recall_bootstrap
 
+    images = points[0][0][1].images
+    doc["negatives"] = {"data": str(args.negatives), "images": images, "budget": args.alarm_budget}
+    if args.negatives_holdout:
+        doc["negatives"]["holdout"] = args.negatives_holdout
+    if not boxes:
+        return None
     for key, side in zip(("A", "B"), points):
         for run, (found, alarms) in zip(doc[key]["runs"], side):
             point = operating_point(found, alarms, args.alarm_budget)
             run.update({RECALL_AT_ALARMS: point.recall, "threshold": point.threshold})
         doc[key][RECALL_AT_ALARMS] = float(np.mean([run[RECALL_AT_ALARMS] for run in doc[key]["runs"]]))
-    images = points[0][0][1].images
-    doc["negatives"] = {"data": str(args.negatives), "images": images, "budget": args.alarm_budget}
-    if args.negatives_holdout:
-        doc["negatives"]["holdout"] = args.negatives_holdout
     delta = paired_recall_bootstrap(
         points[0], points[1], np.random.default_rng(args.seed), args.samples, args.alarm_budget
     )
@@ -442,6 +504,13 @@ def _add_scoring_args(p: argparse.ArgumentParser) -> None:
     )
     p.add_argument(
         "--drop-class", action="append", default=[], metavar="NAME", help="ignore a test-set class (repeatable or a,b)"
+    )
+    p.add_argument(
+        "--label",
+        metavar="CLASS",
+        help="every image of --data (a folder of images without label files) holds CLASS, e.g. fire: an "
+        "image-labelled set, judged by image recall (no AP); a classification layout (fire/ and normal/ "
+        "sub-folders) is read so without it (default: such a folder is negatives only)",
     )
     p.add_argument(
         "--holdout",

@@ -291,7 +291,7 @@ def _false_alarms(
 ) -> tuple[int, float | None, float | None]:
     """(negative images, detections >= ``conf`` per 100 of them, share of them with one or more)."""
     with_boxes = {a.image_id for a in dataset.annotations if a.category_id in cats and not a.iscrowd}
-    negatives = {img.id for img in dataset.images} - with_boxes
+    negatives = {img.id for img in dataset.images} - with_boxes - dataset.labelled_ids(cats)
     if not negatives:
         return 0, None, None
     alarms = [r["image_id"] for r in records if r["image_id"] in negatives and r["score"] >= conf]

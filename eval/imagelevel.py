@@ -3,7 +3,8 @@ judges a detector by, per image and per camera, and a measure that does not hang
 drew their boxes (whole burning regions or single flames).
 
 A fire image is **detected** at threshold ``t`` when a detection of a scored class with score >= ``t`` *hits* one
-of its fire boxes: IoU >= :data:`HIT_IOU` (0.1), or the detection's centre inside the box. The centre rule keeps a
+of its fire boxes: IoU >= :data:`HIT_IOU` (0.1), or the detection's centre inside the box. An image labelled with
+a scored class at the image level (an image-labelled set: no boxes) is detected by any detection of that class. The centre rule keeps a
 detection of one flame inside a box drawn round a whole burning building (IoU far below 0.1) a hit; the IoU
 rule keeps a detection drawn round a whole region holding a small box a hit. A **false-alarm image** is an image
 without fire with any detection >= ``t``; the alarm rate is false-alarm images per 100 images without fire.
@@ -26,18 +27,20 @@ from numpy.typing import NDArray
 
 from curate.core.boxes import box_iou_xyxy, xywh_to_xyxy, xyxy_to_cxcywh
 from curate.core.dataset import Dataset
-from eval.operating import Alarms
+from eval.operating import Alarms, alarms_of
 from eval.stats import PairedDelta, paired_delta, resample_weights, resampled, seed_picks
 
 HIT_IOU = 0.1  # IoU with a fire box at which a detection hits it (or its centre inside the box)
 IMAGE_RECALL = "image_recall"  # result key: share of fire images detected at the operating threshold (0..1)
+IMAGE_RECALL_AT_CONF = "image_recall_at_conf"  # result key: image recall at confidence ALARM_CONF (0..1)
+IMAGE_LABELLED = "image_labelled"  # result key: True for a set judged at the image level only (no boxes, no AP)
 IMAGELEVEL = "imagelevel"  # a study row's (ImageHits, per-image Alarms or a confidence): its image recall; not written
 
 
 @dataclass(frozen=True)
 class ImageHits:
     """The images of a scored set in the order of their ids: ``fire`` (I,) bool, the images with a fire box (not
-    crowd) of a scored class, and ``best`` (I,) float64 the best score of a detection that hits one of its boxes
+    crowd) or an image-level label of a scored class, and ``best`` (I,) float64 the best score of a detection that hits one of its boxes
     (-inf when none does, and for images without fire)."""
 
     image_ids: NDArray[np.int64]
@@ -62,16 +65,26 @@ def image_hits(dataset: Dataset, records: Sequence[dict[str, Any]], cat_ids: Seq
     for a in dataset.annotations:
         if not a.iscrowd and a.category_id in cats:
             gt.setdefault(a.image_id, []).append((a.category_id, list(a.bbox)))
+    labelled = _image_labels(dataset, cats)
     fire = np.zeros(len(ids), dtype=bool)
-    fire[[index[i] for i in gt]] = True
+    fire[[index[i] for i in (*gt, *labelled)]] = True
     best = np.full(len(ids), -np.inf)
     dets: dict[int, list[dict[str, Any]]] = {}
     for r in records:
-        if r["image_id"] in gt and r["category_id"] in cats:
+        if (r["image_id"] in gt or r["image_id"] in labelled) and r["category_id"] in cats:
             dets.setdefault(r["image_id"], []).append(r)
     for image_id, found in dets.items():
-        best[index[image_id]] = _best_hit(gt[image_id], found)
+        held = labelled.get(image_id, set())
+        best[index[image_id]] = max(_best_hit(gt.get(image_id, []), found),
+                                    max((float(d["score"]) for d in found if d["category_id"] in held), default=-np.inf))  # fmt: skip
     return ImageHits(ids, fire, best)
+
+
+def _image_labels(dataset: Dataset, cats: set[int]) -> dict[int, set[int]]:
+    """image id -> the category ids among ``cats`` it is labelled with at the image level (labelled images only)."""
+    ids = {c.name: c.id for c in dataset.categories}
+    held = {img.id: {ids[n] for n in img.labels if ids.get(n) in cats} for img in dataset.images if img.labels}
+    return {i: c for i, c in held.items() if c}
 
 
 def _best_hit(boxes: Sequence[tuple[int, list[float]]], dets: Sequence[dict[str, Any]]) -> float:
@@ -154,3 +167,41 @@ def paired_image_recall(
         pick = None if picks is None else picks[s]
         samples[s] = mean_recall(b, w, wn, pick) - mean_recall(a, w, wn, pick)
     return paired_delta(mean_recall(b, full) - mean_recall(a, full), samples, level, resampled(picks))
+
+
+@dataclass(frozen=True)
+class ImageLevel:
+    """One detector on an image-labelled set (or any set with fire), read per image: ``fire_images`` holding a
+    scored class and the share detected (0..1) at confidence ``conf``; its ``free_images`` holding none and the
+    share of them raising an alarm at ``conf``; with free images, ``budget_recall`` the image recall at the
+    threshold ``budget_threshold`` where at most ``budget`` of 100 of them raise one (None without)."""
+
+    fire_images: int
+    conf: float
+    recall_at_conf: float
+    free_images: int
+    alarm_share_at_conf: float | None
+    budget: float
+    budget_recall: float | None
+    budget_threshold: float | None
+
+    def to_dict(self) -> dict[str, Any]:
+        return {k: getattr(self, k) for k in self.__dataclass_fields__}
+
+
+def image_level(
+    dataset: Dataset, records: Sequence[dict[str, Any]], cat_ids: Sequence[int], conf: float, budget: float
+) -> ImageLevel:
+    """:class:`ImageLevel` of COCO result ``records`` on ``dataset`` over the categories ``cat_ids``; its images
+    without a scored class are its own images without fire (:func:`image_alarms`)."""
+    hits = image_hits(dataset, records, cat_ids)
+    free_ids = hits.image_ids[~hits.fire]
+    cats, free = set(cat_ids), set(free_ids.tolist())
+    on_free = [r for r in records if r["category_id"] in cats and r["image_id"] in free]
+    alarms = image_alarms(alarms_of(on_free, free_ids.tolist()))
+    threshold = alarms.threshold(budget) if len(free_ids) else None
+    return ImageLevel(
+        int(hits.fire.sum()), conf, hits.recall(conf), len(free_ids),
+        alarms.per_100(conf) / 100.0 if len(free_ids) else None, budget,
+        None if threshold is None else hits.recall(threshold), threshold,
+    )  # fmt: skip

@@ -16,7 +16,7 @@ from curate.core.dataset import Dataset
 from curate.core.imageio import ImageError, read_image
 from eval.draw import draw_boxes
 from eval.errors import ALARMS
-from eval.imagelevel import IMAGE_RECALL, IMAGELEVEL, image_operating_curve
+from eval.imagelevel import IMAGE_LABELLED, IMAGE_RECALL, IMAGELEVEL, image_operating_curve
 from eval.operating import ALARM_BUDGET, OPERATING, RECALL_AT_ALARMS, Alarms, curve_at_rates, recall_at_rates
 from eval.tables import METRIC_LABELS, Table, heading, marks, shown_scale, to_csv, to_latex, to_markdown
 
@@ -286,7 +286,8 @@ def write_study_report(
         sections.append(("Realism gap of the synthetic pools", gaps_html(gaps)))
     if results:
         alarms = (ALARMS,) if any(ALARMS in r for r in results) else ()
-        shown = ("AP", "AP50", *alarms, *(m for m in metrics if m == RECALL_AT_ALARMS))
+        labelled = (IMAGE_RECALL,) if any(r.get(IMAGE_LABELLED) for r in results) else ()  # broad fires per image
+        shown = ("AP", "AP50", *alarms, *(m for m in metrics if m == RECALL_AT_ALARMS), *labelled)
         figures = [plot_figure5(results, out / "figures" / f"figure5_{m}.png", m) for m in shown]
         captions = [_figure5_caption(m) for m in shown]
         sections.append(("Figure 5", "".join(figure_html(f, out, c) for f, c in zip(figures, captions))))
@@ -457,9 +458,10 @@ def image_operating_figures(results: Sequence[Mapping[str, Any]], folder: Path) 
 def table_metrics(results: Sequence[Mapping[str, Any]]) -> tuple[str, ...]:
     """The paper's AP and AP50, then AP25 (:mod:`curate.core.cocoeval`; runs scored before it existed lack it),
     the recall at 10 alarms per 100 images without fire (:mod:`eval.operating`; only studies with a set without
-    fire have it) and the image recall (:mod:`eval.imagelevel`), each when every row of a set with fire has it; the sets without fire have their alarm column
-    whatever this says."""
-    fire = [r for r in results if ALARMS not in r]
+    fire have it) and the image recall (:mod:`eval.imagelevel`), each when every row of a set with boxes has it;
+    the sets without fire have their alarm column and the image-labelled sets their image recall whatever this
+    says."""
+    fire = [r for r in results if ALARMS not in r and not r.get(IMAGE_LABELLED)]
     extra = [m for m in ("AP25", RECALL_AT_ALARMS, IMAGE_RECALL) if fire and all(r.get(m) is not None for r in fire)]
     return ("AP", "AP50", *extra)
 

@@ -22,8 +22,9 @@ from curate.core.problems import Problem
 from eval.error_pictures import WORST, write_error_pictures
 from eval.errors import ALARM_CONF, ErrorBreakdown, error_breakdown
 from eval.found import BoxesFound, boxes_found
+from eval.imagelevel import ImageLevel, image_level
 from eval.onnx_model import ModelSpec, OnnxDetector
-from eval.operating import Alarms, FoundScores, alarms_of, found_scores
+from eval.operating import ALARM_BUDGET, Alarms, FoundScores, alarms_of, found_scores
 from eval.plots import plot_pr_curves, pr_curves_from_eval
 from eval.predict import PredictOptions, predict_dataset
 from eval.stats import MatchTable
@@ -109,13 +110,20 @@ def load_test_set(
     aliases: Mapping[str, str] | None = None,
     drop: Sequence[str] = (),
     holdout: float = 0.0,
+    label: str | None = None,
 ) -> TestSet:
     """Read any dataset :func:`curate.core.formats.registry.read_dataset` reads (a folder, a COCO .json, a
     ``data.yaml``), one split of it (``val`` and ``valid`` are one name; None = :func:`default_split`;
     :data:`ALL_SPLITS` = every image), with class ``aliases`` (source name -> class) and the boxes of classes
     ``drop`` removed; with ``holdout`` > 0 only the images held out by content at that share
-    (:func:`curate.core.holdout.held_out`: the photos a Method 2 pool with ``background_holdout`` never shows)."""
-    result = read_dataset(path, fmt, aliases=aliases).drop_classes(drop)
+    (:func:`curate.core.holdout.held_out`: the photos a Method 2 pool with ``background_holdout`` never shows).
+    ``label``: the class every image of a folder without label files holds (an image-labelled set)."""
+    try:
+        result = read_dataset(path, fmt, aliases=aliases, label=label).drop_classes(drop)
+    except ValueError as exc:
+        if label is None:
+            raise
+        raise ScoreError(str(exc)) from None
     ds = result.dataset
     splits = ds.splits
     split = default_split(ds, path) if split is None else split
@@ -181,6 +189,13 @@ def score_found(result: ScoreResult, conf: float = ALARM_CONF) -> BoxesFound:
     classes it was scored on."""
     scored, cat_ids = scored_images(result)
     return boxes_found(scored, result.records, cat_ids, conf)
+
+
+def score_image_level(result: ScoreResult, conf: float = ALARM_CONF, budget: float = ALARM_BUDGET) -> ImageLevel:
+    """A scored result read per image (:func:`eval.imagelevel.image_level`): its images holding a scored class
+    detected at ``conf``, and at ``budget`` false-alarm images per 100 of its own images without one."""
+    scored, cat_ids = scored_images(result)
+    return image_level(scored, result.records, cat_ids, conf, budget)
 
 
 def score_operating(fire: ScoreResult, negatives: ScoreResult) -> tuple[FoundScores, Alarms]:

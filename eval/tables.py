@@ -21,7 +21,7 @@ from typing import Any
 
 from curate.mix import Mixture, parse_mixture
 from eval.errors import ALARMS
-from eval.imagelevel import IMAGE_RECALL
+from eval.imagelevel import IMAGE_LABELLED, IMAGE_RECALL
 from eval.operating import ALARM_BUDGET, RECALL_AT_ALARMS
 from eval.stats import MeanStd, mean_std
 
@@ -102,10 +102,17 @@ def strategy(mix: Mixture) -> str:
 
 def _columns(results: Sequence[Mapping[str, Any]], test_sets, metrics) -> tuple[tuple[str, str], ...]:
     """Test set x ``metrics``; a set without fire (its results carry :data:`eval.errors.ALARMS`) has the alarm
-    column alone."""
+    column alone, an image-labelled set (:data:`eval.imagelevel.IMAGE_LABELLED`: no boxes) its image recall."""
     sets = list(test_sets) if test_sets else list(dict.fromkeys(r["test_set"] for r in results))
     negatives = {r["test_set"] for r in results if ALARMS in r}
-    return tuple((s, m) for s in sets for m in ((ALARMS,) if s in negatives else [m for m in metrics if m != ALARMS]))
+    labelled = {r["test_set"] for r in results if r.get(IMAGE_LABELLED)}
+
+    def shown(s: str) -> Sequence[str]:
+        if s in negatives:
+            return (ALARMS,)
+        return [m for m in metrics if m != ALARMS and (s not in labelled or m == IMAGE_RECALL)]
+
+    return tuple((s, m) for s in sets for m in shown(s))
 
 
 def table2(

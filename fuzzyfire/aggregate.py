@@ -14,7 +14,7 @@ import numpy as np
 from curate.core.config import to_dict
 from curate.mix import parse_mixture
 from eval.errors import ALARM_CONF, ALARMS
-from eval.imagelevel import IMAGE_RECALL, IMAGELEVEL, image_alarms
+from eval.imagelevel import IMAGE_LABELLED, IMAGE_RECALL, IMAGE_RECALL_AT_CONF, IMAGELEVEL, image_alarms
 from eval.operating import (
     ALARM_BUDGET,
     OPERATING,
@@ -65,7 +65,9 @@ def result_rows(
     also :data:`eval.errors.ALARMS`, its false alarms per 100 images. Runs scored before AP25 existed get it
     from their predictions once (:func:`run_ap25`) when ``datasets`` is given, else None.
 
-    With ``datasets``, a set with boxes also carries ``fire_images`` and :data:`eval.imagelevel.IMAGE_RECALL`, the
+    With ``datasets``, a set with boxes (or image-level labels: :data:`eval.imagelevel.IMAGE_LABELLED`) also carries
+    ``fire_images``, :data:`eval.imagelevel.IMAGE_RECALL_AT_CONF` (at :data:`eval.errors.ALARM_CONF`) and
+    :data:`eval.imagelevel.IMAGE_RECALL`, the
     share of its fire images detected (:mod:`eval.imagelevel`) at the threshold where the run raises a false alarm
     on at most :data:`eval.operating.ALARM_BUDGET` of 100 images without fire (pooled; at confidence
     :data:`eval.errors.ALARM_CONF` when the run has no set without fire), its :data:`fuzzyfire.slicing.IMAGELEVEL`;
@@ -85,12 +87,14 @@ def result_rows(
             operating = (run_found(datasets, folder, test.data), raised)
             point = operating_point(*operating)
         ap, images = {"AP": m["AP"], "AP50": m["AP50"]}, {}
-        if datasets is not None and m.get("boxes"):
+        if datasets is not None and (m.get("boxes") or m.get(IMAGE_LABELLED)):
             hits = run_hits(datasets, folder, test.data)
             level = (hits, frames.get(spec.out) or ALARM_CONF)
             threshold = level[1].threshold(ALARM_BUDGET) if isinstance(level[1], Alarms) else level[1]
             fire = int(hits.fire.sum())
-            images = {"fire_images": fire, IMAGE_RECALL: hits.recall(threshold), IMAGELEVEL: level}
+            images = {"fire_images": fire, IMAGE_RECALL: hits.recall(threshold),
+                      IMAGE_RECALL_AT_CONF: hits.recall(ALARM_CONF), IMAGELEVEL: level,
+                      **({IMAGE_LABELLED: True} if m.get(IMAGE_LABELLED) else {})}  # fmt: skip
             ap = ap if fire >= min_fire_images else {"AP": None, "AP50": None}
         rows.append({
             "mixture": spec.mixture, "method": spec.method or "-", "seed": spec.seed, "test_set": test.name,
@@ -189,7 +193,7 @@ def comparisons(cfg: ExperimentConfig, rows: Sequence[dict]) -> list[dict]:
     """Paired image-level bootstrap of every pair of :func:`comparison_pairs`, per test set with boxes and metric
     (seeds averaged per resample): AP and AP50 (not on a set with too few fire images: their rows' AP is None),
     box recall at the alarm budget, and image recall (:func:`eval.imagelevel.paired_image_recall`); sets without
-    boxes have no AP to compare."""
+    boxes have no AP to compare (an image-labelled set: image recall only)."""
     from eval.imagelevel import paired_image_recall
     from eval.stats import MatchTable, paired_bootstrap
 
@@ -214,7 +218,7 @@ def comparisons(cfg: ExperimentConfig, rows: Sequence[dict]) -> list[dict]:
                 continue
             paired = [r["seed"] for r in a] == [r["seed"] for r in b]  # the same seeds: resample them too
             deltas = {}
-            if all(r.get("fire_images", enough) >= enough for r in a + b):
+            if not a[0].get(IMAGE_LABELLED) and all(r.get("fire_images", enough) >= enough for r in a + b):
                 tables = [[matches(r["matches"]) for r in side] for side in (a, b)]
                 deltas = paired_bootstrap(*tables, rngs[table], cfg.report.bootstrap, seeds=paired)
             pa, pb = [r.get(OPERATING) for r in a], [r.get(OPERATING) for r in b]
@@ -346,7 +350,7 @@ def _free_images(datasets: Datasets, specs: Sequence[RunSpec]) -> int:
     """The images of the sets without fire the study's runs are scored on (the alarm budget's denominator)."""
     if not specs:
         return 0
-    sets = [t for t in specs[0].test_sets if not datasets.get(t.data).annotations]
+    sets = [t for t in specs[0].test_sets if datasets.get(t.data).num_negatives() == len(datasets.get(t.data).images)]
     return sum(len(datasets.get(t.data).images) for t in sets)
 
 

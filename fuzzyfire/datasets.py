@@ -9,10 +9,12 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
+from curate.core.classes import canonical_class
 from curate.core.dataset import Dataset
+from curate.core.formats.images import IMAGE_LABELLED, NEGATIVES_ONLY
 from curate.core.formats.registry import read_dataset
 from curate.core.holdout import held_out_images
-from curate.core.load import ClassChanges, class_changes, load_split, pick_split, prepare
+from curate.core.load import ClassChanges, class_changes, pick_split, prepare
 
 
 @dataclass(frozen=True)
@@ -22,7 +24,9 @@ class DataRef:
     rules leaves the set unless every box it lost was of a class of ``negatives``:
     :func:`curate.core.load.with_classes`), with ``holdout`` > 0 only the images
     :func:`curate.core.holdout.held_out` picks at that share, and without the images ``exclude`` names (their
-    ``file_name``: test images that leak from the training data, :mod:`fuzzyfire.leakage`). ``identity``: what made it
+    ``file_name``: test images that leak from the training data, :mod:`fuzzyfire.leakage`). ``label``: the class
+    every image of a folder without label files holds (an image-labelled set; on a stand-in, its image-level
+    view: :meth:`curate.core.dataset.Dataset.at_image_level`). ``identity``: what made it
     (hashable JSON; no absolute output paths, so two experiment folders give the same run identities)."""
 
     path: Path
@@ -35,6 +39,7 @@ class DataRef:
     holdout: float = 0.0
     exclude: tuple[str, ...] = ()
     negatives: tuple[str, ...] = ()
+    label: str | None = None
 
     def with_split(self, split: str | None) -> DataRef:
         return replace(self, split=split)
@@ -44,9 +49,9 @@ class DataRef:
         left_out = {"exclude": sorted(self.exclude)} if self.exclude else {}
         return {"data": dict(self.identity), "split": self.split, **left_out}
 
-    def source(self) -> tuple[str, str, tuple[tuple[str, str], ...]]:
+    def source(self) -> tuple[str, str, tuple[tuple[str, str], ...], str | None]:
         """What is read from disk: the same for every split of one dataset."""
-        return (Path(self.path).as_posix(), self.format, tuple(sorted(self.aliases.items())))
+        return (Path(self.path).as_posix(), self.format, tuple(sorted(self.aliases.items())), self.label)
 
 
 class Datasets:
@@ -55,21 +60,30 @@ class Datasets:
     :meth:`read` gives a dataset as read (every split, its own classes), :meth:`get` one split of it with
     exactly ``classes`` (:func:`curate.core.load.prepare`). Both return shared immutable objects."""
 
-    def __init__(self, classes: Sequence[str], read: dict[tuple, Dataset] | None = None) -> None:
+    def __init__(
+        self, classes: Sequence[str], read: dict[tuple, Dataset] | None = None, notes: dict[tuple, str] | None = None
+    ) -> None:
         self.classes = tuple(classes)
         self._read: dict[tuple, Dataset] = {} if read is None else read
+        self._notes: dict[tuple, str] = {} if notes is None else notes
         self._prepared: dict[tuple, Dataset] = {}
 
     def for_classes(self, classes: Sequence[str]) -> Datasets:
         """Datasets prepared with ``classes`` instead, sharing what this one has read (nothing is read again)."""
-        return Datasets(classes, self._read)
+        return Datasets(classes, self._read, self._notes)
 
     def read(self, ref: DataRef) -> Dataset:
         """``ref``'s dataset as read, every split (read on first use)."""
         key = ref.source()
         if key not in self._read:
-            self._read[key] = read_dataset(ref.path, ref.format, aliases=dict(ref.aliases) or None).dataset
+            self._read[key], self._notes[key] = read_ref(ref)
         return self._read[key]
+
+    def reading(self, ref: DataRef) -> str:
+        """What ``ref``'s folder was read as when it holds no boxes ("a negatives-only set", "an image-labelled
+        set"), in the reader's words; "" for a set with boxes."""
+        self.read(ref)
+        return self._notes[ref.source()]
 
     def get(self, ref: DataRef) -> Dataset:
         """Split ``ref.split`` (None = every image) with exactly the experiment's classes, in their order.
@@ -87,6 +101,20 @@ class Datasets:
         return class_changes(chosen, self.classes, ref.drop, ref.negatives)
 
 
+def read_ref(ref: DataRef) -> tuple[Dataset, str]:
+    """``ref``'s dataset as read (every split; a stand-in with a ``label`` at the image level) and what its folder
+    was read as when it holds no boxes (the reader's info line: :data:`curate.core.formats.images.NEGATIVES_ONLY`,
+    :data:`curate.core.formats.images.IMAGE_LABELLED`; "" otherwise)."""
+    label = None if ref.standin else ref.label
+    result = read_dataset(ref.path, ref.format, aliases=dict(ref.aliases) or None, label=label)
+    ds = result.dataset
+    if ref.standin and ref.label:
+        ds = ds.at_image_level(canonical_class(ref.label))
+        return ds, f"a stand-in read at the image level: {len(ds.labelled_ids())} of {len(ds.images)} images hold {ref.label}"
+    said = [p.reason for p in result.problems if p.code in (NEGATIVES_ONLY, IMAGE_LABELLED)]
+    return ds, said[0] if said else ""
+
+
 def _narrowed(ds: Dataset, ref: DataRef) -> Dataset:
     """``ds`` (``ref``'s split, prepared) with only its held-out share and without the images ``ref`` excludes."""
     ds = held_out_images(ds, ref.holdout, ref.path) if ref.holdout else ds
@@ -98,5 +126,5 @@ def _narrowed(ds: Dataset, ref: DataRef) -> Dataset:
 
 def load_data(ref: DataRef, classes: Sequence[str]) -> Dataset:
     """``ref``'s split with exactly ``classes``, read from disk now (a run outside an experiment)."""
-    ds = load_split(ref.path, ref.format, ref.split, classes, dict(ref.aliases), ref.drop, ref.negatives)
+    ds = prepare(read_ref(ref)[0], ref.split, classes, ref.drop, ref.path, ref.negatives)
     return _narrowed(ds, ref)

@@ -101,9 +101,11 @@ def _test_ref(t: EvalSetConfig, what: str, stage: str, base: Path, root: Path, k
     """A test set's data (config key ``key``): its folder read in place, or its stand-in built as stage ``stage``."""
     if t.source() == "path":
         return folder_ref(
-            t.path, base, t.format, t.aliases, t.drop_classes, t.split, t.holdout, t.negative_classes, f"{key}.path"
-        )
-    return _stage(f"{what} (stand-in)", standin_stage, root, stage, t.standin)
+            t.path, base, t.format, t.aliases, t.drop_classes, t.split, t.holdout, t.negative_classes, f"{key}.path",
+            t.label,
+        )  # fmt: skip
+    ref = _stage(f"{what} (stand-in)", standin_stage, root, stage, t.standin)
+    return replace(ref, identity={**ref.identity, "label": t.label}, label=t.label) if t.label else ref
 
 
 def _stage(what: str, make, *args) -> DataRef:
@@ -366,7 +368,11 @@ def finished_runs(specs: Sequence[RunSpec]) -> list[dict[str, Any] | None]:
 
 def check_data(cfg: ExperimentConfig, data: Prepared, datasets: Datasets, photos: dict[str, list[Path]]) -> None:
     """Fail now, not after the first training: the real set must have its validation and test splits, and no
-    test set may hold a background photo of a pool (``photos``: :func:`fuzzyfire.leakage.pool_photos`)."""
+    test set may hold a background photo of a pool (``photos``: :func:`fuzzyfire.leakage.pool_photos`). An
+    image-labelled real set (no boxes to train on) is refused: such a set is a test set."""
+    if datasets.read(data.real).image_labelled:
+        raise ExperimentConfigError(f"real: {data.real.path} is labelled per image (class folders), not boxed: a "
+                                    "detector trains on boxes; give it as a test set under tests: instead")  # fmt: skip
     for split in (cfg.real.val_split, cfg.real.test_split):
         try:
             datasets.get(data.real.with_split(split))
@@ -396,7 +402,24 @@ def studied_classes(cfg: ExperimentConfig, data: Prepared, datasets: Datasets) -
         cfg = replace(cfg, classes=classes)
         datasets = datasets.for_classes(classes)
     _say(f"data   classes studied: {', '.join(classes)} ({'config' if given else 'the classes the real data boxes'})")
+    for line in reading_lines(cfg, data, datasets):
+        _say(line)
     return cfg, datasets
+
+
+def reading_lines(cfg: ExperimentConfig, data: Prepared, datasets: Datasets) -> list[str]:
+    """What each test set without boxes was read as, one line each: a negatives-only set (with how to declare
+    it image-labelled instead) or an image-labelled one (:meth:`fuzzyfire.datasets.Datasets.reading`)."""
+    sets = {**({cfg.rare.name: data.rare} if cfg.rare is not None and data.rare is not None else {}), **data.tests}
+    lines = []
+    for name, ref in sets.items():
+        said = datasets.reading(ref)
+        if said and datasets.read(ref).image_labelled:
+            lines.append(f"data   test {name}: {said}")
+        elif said:
+            lines.append(f"data   test {name}: {said} (its false alarms are counted; if its images hold fire, "
+                         f"declare it: label: fire, or fire/ and normal/ sub-folders)")  # fmt: skip
+    return lines
 
 
 def run_experiment(cfg: ExperimentConfig, base: Path, out: Path, executor=None) -> ExperimentResult:

@@ -77,18 +77,22 @@ class RealConfig:
 class EvalSetConfig:
     """A test set: a dataset folder (``path``, optionally one ``split``) or a generated stand-in (``standin``).
     A folder of images without labels is a negatives-only set (no AP: its false alarms per 100 images are
-    reported). ``holdout`` keeps only the images :func:`curate.core.holdout.held_out` picks at that share: the photos a
+    reported) unless ``label`` declares the class every image holds: an image-labelled set, judged by image recall
+    (no AP), as is a classification layout (``format: folders``: ``fire/`` and ``normal/`` sub-folders). ``holdout`` keeps only the images :func:`curate.core.holdout.held_out` picks at that share: the photos a
     Method 2 pool with the same ``background_holdout`` never composites on."""
 
     path: Optional[Path] = None  # dataset folder (any format) or a folder of unlabelled images
-    format: Literal["auto", "coco", "yolo", "voc", "dfire", "images"] = "auto"  # images: unlabelled, negatives
-    # only; auto: detected
+    format: Literal["auto", "coco", "yolo", "voc", "dfire", "images", "folders"] = "auto"  # images: unlabelled
+    # (negatives only, or every image `label`); folders: fire/ + normal/ sub-folders (image-labelled); auto: detected
     split: Optional[str] = None  # null = every image of the folder
     aliases: dict[str, str] = field(default_factory=dict)  # source class -> class, e.g. {Fire: fire}
     drop_classes: tuple[str, ...] = ()  # classes whose boxes are removed (an image left without boxes leaves)
     negative_classes: tuple[str, ...] = ()  # classes whose boxes mark images without the studied classes:
     # removed, their images stay as negatives (any other image left without boxes leaves the set, counted)
     standin: Optional[StandInConfig] = None  # a generated stand-in set instead of a folder
+    label: Optional[str] = None  # the class every image of a folder without label files holds (e.g. fire): an
+    # image-labelled set, judged by image recall, no AP (null = such a folder is negatives only); on a stand-in,
+    # its images are judged at the image level (those with a box of the class hold it, the others are negatives)
     holdout: float = 0.0  # 0 = every image; 0 < share <= 1 = only the held-out share (chosen by content hash)
     name: Optional[str] = None  # label in tables and figures; null = the key under ``tests:``
 

@@ -22,6 +22,7 @@ from typing import TYPE_CHECKING, Any, NamedTuple
 
 from curate.core.config import to_dict
 from eval.errors import ALARMS
+from eval.imagelevel import IMAGE_LABELLED
 from fuzzyfire.datasets import DataRef, load_data
 from fuzzyfire.engine import CommandJob, command_train
 from fuzzyfire.stages import digest
@@ -217,7 +218,9 @@ def score_run(
 def headline(m: CocoMetrics, errors: ErrorBreakdown, folder: str) -> dict[str, Any]:
     """What ``results.json`` keeps of one scoring: :data:`METRICS` (0..1, None when undefined), counts, per-class
     metrics and the scores folder; for a set without boxes (negatives only: AP undefined) also :data:`ALARMS`,
-    the breakdown's detections at ``errors.alarm_conf`` per 100 images (:mod:`eval.errors`)."""
+    the breakdown's detections at ``errors.alarm_conf`` per 100 images (:mod:`eval.errors`); for an
+    image-labelled set (no boxes, images holding a class: AP undefined, judged by image recall)
+    :data:`eval.imagelevel.IMAGE_LABELLED` True."""
     doc = {
         **{k: m.summary.get(k) for k in METRICS},
         "images": m.images,
@@ -226,8 +229,10 @@ def headline(m: CocoMetrics, errors: ErrorBreakdown, folder: str) -> dict[str, A
         "per_class": m.per_class,
         "scores": folder,
     }
-    if m.boxes == 0:
+    if m.boxes == 0 and m.negatives == m.images:
         doc[ALARMS] = errors.false_alarms_per_100
+    elif m.boxes == 0:
+        doc[IMAGE_LABELLED] = True
     return doc
 
 

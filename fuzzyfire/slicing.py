@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 
 from eval.attributes import Attributes, dataset_attributes, merged, read_attributes_csv
-from eval.imagelevel import IMAGELEVEL, ImageHits, image_hits
+from eval.imagelevel import IMAGE_LABELLED, IMAGE_RECALL, IMAGELEVEL, ImageHits, image_hits
 from eval.slices import METRICS, Side, compare_slices, make_slices, slice_table
 from eval.stats import MatchTable
 from fuzzyfire.datasets import DataRef, Datasets
@@ -100,12 +100,14 @@ def study_slices(
         if not scored:
             continue
         hits = scored[0][IMAGELEVEL][0]
+        boxed = not scored[0].get(IMAGE_LABELLED)  # an image-labelled set is sliced by image recall only
         metrics = METRICS if all(r["AP50"] is not None for r in scored) else tuple(m for m in METRICS if m != "AP50")
+        metrics = metrics if boxed else (IMAGE_RECALL,)
         attrs = set_attributes(datasets, ref, out, (user or {}).get(test))
         slices = make_slices(attrs, hits.image_ids, hits.fire)
         tables[test] = slice_table(slices)
         needed = {(table, base) for table, base, _, _ in pairs} | {("table2", name) for *_, name in pairs}
-        sides = _sides(scored, needed, datasets, ref)
+        sides = _sides(scored, needed, datasets, ref, boxed)
         for table, base, base_label, name in pairs:
             a, b = sides.get((table, base)), sides.get(("table2", name))
             if a is None or b is None:
@@ -116,10 +118,11 @@ def study_slices(
 
 
 def _sides(
-    rows: Sequence[Mapping[str, Any]], needed: set[tuple[str, str]], datasets: Datasets, ref: DataRef
+    rows: Sequence[Mapping[str, Any]], needed: set[tuple[str, str]], datasets: Datasets, ref: DataRef, boxed: bool
 ) -> dict[tuple[str, str], Side]:
     """The :class:`eval.slices.Side` of every (table, mixture) of ``needed`` among ``rows`` (one test set), its
-    seeds in order (the runs of Table 1 and other uncompared ones get no loose matches)."""
+    seeds in order (the runs of Table 1 and other uncompared ones get no loose matches; on a set without boxes,
+    ``boxed`` False, no run has matches)."""
     by: dict[tuple[str, str], list[Mapping[str, Any]]] = {}
     for r in rows:
         for table in r["tables"]:
@@ -130,8 +133,8 @@ def _sides(
         group = sorted(group, key=lambda r: r["seed"])
         folders = [Path(r["matches"]).parent for r in group]
         sides[key] = Side(
-            [MatchTable.load(Path(r["matches"])) for r in group],
-            [run_matches25(datasets, f, ref) for f in folders],
+            [MatchTable.load(Path(r["matches"])) for r in group] if boxed else [],
+            [run_matches25(datasets, f, ref) for f in folders] if boxed else [],
             [r[IMAGELEVEL] for r in group],
         )
     return sides

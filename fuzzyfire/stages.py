@@ -152,17 +152,20 @@ def folder_ref(
     holdout: float = 0.0,
     negatives=(),
     key: str = "path",
+    label: str | None = None,
 ) -> DataRef:
     """A user's dataset read in place (identity = its resolved path and reading options; ``holdout``, the share
-    of held-out photos it is cut to, only when set). ``key``: the config key that gave ``path``, for the error
-    when it names nothing."""
+    of held-out photos it is cut to, and ``label``, the class every image of a folder without labels holds, only
+    when set). ``key``: the config key that gave ``path``, for the error when it names nothing."""
     where = _absolute(path, base)
     if not where.exists():
         raise FileNotFoundError(f"{key}: {str(path)!r}: dataset not found (no {where})")
     identity = {"kind": "folder", "path": where.as_posix(), "format": fmt, "aliases": dict(aliases)}
     if holdout:
         identity["holdout"] = holdout
-    ref = DataRef(where, identity, fmt, split, dict(aliases), holdout=holdout)
+    if label:
+        identity["label"] = label
+    ref = DataRef(where, identity, fmt, split, dict(aliases), holdout=holdout, label=label)
     return with_class_rules(ref, drop, negatives)
 
 

@@ -158,3 +158,20 @@ def oracle_model(
     path.parent.mkdir(parents=True, exist_ok=True)
     onnx.save(model, str(path))
     return path
+
+
+def write_class_layout(root: Path, fire: tuple[int, ...], free: tuple[int, ...], fire_dir: str = "fire") -> Path:
+    """A classification layout in ``root``: ``fire_dir/`` with one flat 64x64 grey PNG per grey level of
+    ``fire`` and ``normal/`` with one per level of ``free`` (no label files)."""
+    for folder, greys in ((fire_dir, fire), ("normal", free)):
+        for grey in greys:
+            path = root / folder / f"g{grey:03d}.png"
+            path.parent.mkdir(parents=True, exist_ok=True)
+            Image.fromarray(np.full((SIZE, SIZE, 3), grey, dtype=np.uint8)).save(path)
+    return root
+
+
+def image_rows(greys: tuple[int, ...], score: float = 0.9, cls: str = "fire") -> list[tuple[int, list[float], int, float]]:
+    """Detection rows (:func:`rows_for`'s shape) of one centred 32x32 box of ``cls`` on each grey level of
+    ``greys``, at ``score``: a detector that fires on exactly those images."""
+    return [(grey, [32.0, 32.0, 32.0, 32.0], NAMES.index(cls), score) for grey in greys]

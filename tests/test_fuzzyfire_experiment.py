@@ -319,3 +319,41 @@ def test_real_finetune_reaches_only_the_runs_with_real_and_synthetic_images(tmp_
     for a, b in zip(before, after):
         assert (a.hash() == b.hash()) == (a.mixture not in mixed)
         assert b.train.real_finetune == (1 if a.mixture in mixed else 0)
+
+
+def test_image_labelled_test_sets_report_image_recall_and_an_undeclared_folder_says_negatives(
+    tmp_path: Path, capsys: pytest.CaptureFixture
+) -> None:
+    """A classification layout (fire/ + normal/) and a folder declared ``label: fire`` are image-labelled test
+    sets: no AP, image recall (the fake detector finds one box in every image: every fire image at 0.25) in the
+    rows, Table 2 and the comparisons (image recall only); an undeclared folder without label files is read as
+    negatives and the experiment says so."""
+    from detector_factories import write_class_layout
+    from factories_experiment import fire_free_photos
+
+    from eval.imagelevel import IMAGE_LABELLED, IMAGE_RECALL, IMAGE_RECALL_AT_CONF
+
+    write_class_layout(tmp_path / "layout", (40, 80, 120, 160), (200, 240))
+    fire_free_photos(tmp_path / "photos", 4)
+    cfg = _fake_yolo_study(
+        grid={"mixtures": ["R12_S0", "R6_S0"], "table1": [], "seeds": [0]},
+        report={"bootstrap": 20, "samples": False, "gap_draws": 0, "min_fire_images": 1},
+        tests={"broad": {"path": "layout"}, "declared": {"path": "layout/fire", "label": "fire"},
+               "photos": {"path": "photos"}},
+    )  # fmt: skip
+    done = run_experiment(cfg, tmp_path, tmp_path / "out", LocalExecutor())
+    printed = capsys.readouterr().out
+    assert "data   test broad: classification layout: fire/ 4 images (fire), normal/ 2 images (no class)" in printed
+    assert "data   test declared: 4 images, each declared 'fire' (label: fire): an image-labelled set" in printed
+    assert "data   test photos: 4 images, no label files: a negatives-only set" in printed and "label: fire" in printed
+    for name in ("broad", "declared"):
+        rows = [r for r in done.rows if r["test_set"] == name]
+        assert len(rows) == 2 and all(r["AP"] is None and r["AP50"] is None and r[IMAGE_LABELLED] for r in rows)
+        assert all(r["fire_images"] == 4 and r[IMAGE_RECALL_AT_CONF] == 1.0 for r in rows)
+        assert all(r[IMAGE_RECALL] is not None and ALARMS not in r for r in rows)
+    assert all(r[ALARMS] == 100.0 for r in done.rows if r["test_set"] == "photos")
+    compared = (tmp_path / "out" / "tables" / "comparisons.csv").read_text().splitlines()
+    for name in ("broad", "declared"):
+        assert [line.split(",")[3] for line in compared if line.startswith(f"{name},")] == [IMAGE_RECALL]
+    table = (tmp_path / "out" / "tables" / "table2.md").read_text()
+    assert "broad" in table and "declared" in table

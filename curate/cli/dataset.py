@@ -16,6 +16,7 @@ from curate.core.commands import (
     read_from_args,
     write_dataset_or_report,
 )
+from curate.core.formats.images import NEGATIVES_ONLY
 from curate.core.problems import count_levels, has_errors
 from curate.core.writer import IMAGE_MODES, OUTPUT_FORMATS
 from curate.stats import dataset_stats, plot_box_sizes
@@ -90,7 +91,7 @@ def cmd_stats(args: argparse.Namespace) -> int:
     print(f"crowding   {crowd}  (boxes in images that hold 1, 2, 3-4, 5+ boxes)")
     for split, entry in stats["per_split"].items():
         print(f"split {split:<8} " + "  ".join(f"{k} {v}" for k, v in entry.items()))
-    for note in (p for p in result.problems if p.code == "negatives-only"):
+    for note in (p for p in result.problems if p.code == NEGATIVES_ONLY):
         print(f"set        {note.reason}")
     if png is not None:
         print(f"histogram  {png}")

@@ -208,7 +208,7 @@ def metrics_from_eval(ev: COCOeval, dataset: Dataset, detections: int, loose: CO
         summary["AP25"] = _stat(loose.stats[0])
     boxes = sum(counts.get(c, 0) for c in ev.params.catIds)
     scored = set(ev.params.catIds)
-    with_boxes = {a.image_id for a in dataset.annotations if a.category_id in scored}
+    with_boxes = {a.image_id for a in dataset.annotations if a.category_id in scored} | dataset.labelled_ids(scored)
     negatives = sum(1 for i in ev.params.imgIds if i not in with_boxes)
     return CocoMetrics(summary, per_class, len(ev.params.imgIds), boxes, detections, negatives)
 

@@ -5,6 +5,8 @@
   (negatives) are kept.
 - Annotations carry ids >= 1 and ``bbox = (x, y, w, h)`` in pixels; ``area`` is ``w * h``.
 - Categories are identified by *name*; their ids are 1..K in list order (YOLO id = COCO id - 1).
+- An image may instead hold classes at the *image level* (``labels``: class names, no boxes): an image-labelled
+  test set (a classification layout, a folder declared ``label: fire``) is judged by image recall, never by AP.
 
 Instances are immutable: every transformation returns a new dataset.
 """
@@ -23,7 +25,8 @@ SPLIT_ALIASES: tuple[tuple[str, ...], ...] = (("val", "valid", "validation"),)
 
 @dataclass(frozen=True)
 class ImageRecord:
-    """One image. ``file_name`` is a POSIX path relative to :attr:`Dataset.root`, or absolute."""
+    """One image. ``file_name`` is a POSIX path relative to :attr:`Dataset.root`, or absolute. ``labels``: the
+    category names the whole image holds without boxes (an image-labelled set; empty for a boxed one)."""
 
     id: int
     file_name: str
@@ -31,6 +34,7 @@ class ImageRecord:
     height: int
     source: str = ""
     split: str = ""
+    labels: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -97,8 +101,19 @@ class Dataset:
         return list(dict.fromkeys(img.split for img in self.images))
 
     def num_negatives(self) -> int:
-        with_boxes = {a.image_id for a in self.annotations}
-        return sum(1 for img in self.images if img.id not in with_boxes)
+        """Images that hold no class: no box and no image-level label."""
+        holding = {a.image_id for a in self.annotations} | self.labelled_ids()
+        return sum(1 for img in self.images if img.id not in holding)
+
+    @property
+    def image_labelled(self) -> bool:
+        """True when some image holds a class at the image level (``labels``): an image-labelled set."""
+        return any(img.labels for img in self.images)
+
+    def labelled_ids(self, cat_ids: Iterable[int] | None = None) -> set[int]:
+        """Ids of the images labelled (at the image level) with a category of ``cat_ids`` (None = any)."""
+        names = None if cat_ids is None else {self.categories[c - 1].name for c in cat_ids}
+        return {img.id for img in self.images if img.labels and (names is None or names & set(img.labels))}
 
     # -- transformations -------------------------------------------------------------------------------
     def resolve_split(self, name: str) -> str | None:
@@ -133,14 +148,25 @@ class Dataset:
         return replace(self, annotations=anns, categories=cats)
 
     def drop_categories(self, names: Iterable[str]) -> Dataset:
-        """Remove the boxes of the named categories (their images stay, possibly as negatives)."""
+        """Remove the boxes and image-level labels of the named categories (their images stay, possibly as
+        negatives)."""
         drop = set(names)
         keep_names = [n for n in self.category_names if n not in drop]
         kept = replace(
             self,
+            images=tuple(replace(i, labels=tuple(n for n in i.labels if n not in drop)) if drop & set(i.labels)
+                         else i for i in self.images),  # fmt: skip
             annotations=tuple(a for a in self.annotations if self.categories[a.category_id - 1].name not in drop),
         )
         return _renumber_categories(kept, keep_names)
+
+    def at_image_level(self, name: str) -> Dataset:
+        """The image-level view of a boxed set: each image holding a box of category ``name`` is labelled
+        ``name`` (the others hold nothing), every box set aside; categories ``[name]``. KeyError when absent."""
+        cat = self.category_id(name)
+        holding = {a.image_id for a in self.annotations if a.category_id == cat and not a.iscrowd}
+        images = tuple(replace(i, labels=(name,) if i.id in holding else ()) for i in self.images)
+        return replace(self, images=images, annotations=(), categories=(Category(1, name),))
 
     def with_absolute_paths(self) -> Dataset:
         """Same dataset with every ``file_name`` absolute, so it can be written or merged anywhere."""
@@ -161,6 +187,7 @@ class Dataset:
                     "height": img.height,
                     "source": img.source,
                     "split": img.split,
+                    **({"labels": list(img.labels)} if img.labels else {}),
                 }
                 for img in self.images
             ],
@@ -204,9 +231,14 @@ class DatasetBuilder:
             self._cats[name] = len(self._cats) + 1
         return self._cats[name]
 
-    def add_image(self, file_name: str, width: int, height: int, source: str = "", split: str = "") -> int:
+    def add_image(
+        self, file_name: str, width: int, height: int, source: str = "", split: str = "", labels: Sequence[str] = ()
+    ) -> int:
+        """A new image (``labels``: category names it holds at the image level, created when new); its id."""
         image_id = len(self._images) + 1
-        self._images.append(ImageRecord(image_id, file_name, int(width), int(height), source, split))
+        for name in labels:
+            self.category(name)
+        self._images.append(ImageRecord(image_id, file_name, int(width), int(height), source, split, tuple(labels)))
         return image_id
 
     def add_box(self, image_id: int, category: str, bbox_xywh: Sequence[float], iscrowd: int = 0) -> int:
@@ -234,7 +266,7 @@ def merge(datasets: Sequence[Dataset], root: Path, category_names: Sequence[str]
             anns[a.image_id].append(a)
         for img in ds.images:
             new_id = builder.add_image(
-                ds.image_path(img).resolve().as_posix(), img.width, img.height, img.source, img.split
+                ds.image_path(img).resolve().as_posix(), img.width, img.height, img.source, img.split, img.labels
             )
             for a in anns[img.id]:
                 builder.add_box(new_id, names[a.category_id], a.bbox, a.iscrowd)

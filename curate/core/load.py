@@ -83,7 +83,7 @@ def class_changes(
 ) -> ClassChanges:
     """What :func:`with_classes` (same arguments) removes from ``ds``: boxes per class and the emptied images."""
     drop, negatives = [canonical_class(n) for n in drop], [canonical_class(n) for n in negatives]
-    counts = Counter(ds.categories[a.category_id - 1].name for a in ds.annotations)
+    counts = Counter(name for _, name in _holdings(ds))
     gone = _removed(ds, classes, drop, negatives)
     left, kept = _emptied(ds, gone, negatives)
     return ClassChanges(
@@ -105,16 +105,21 @@ def _emptied(ds: Dataset, gone: Sequence[str], negatives: Sequence[str]) -> tupl
     every box they lose is of a class in ``negatives``)."""
     keeps, losses = set(), Counter()
     marks = Counter()
-    for a in ds.annotations:
-        name = ds.categories[a.category_id - 1].name
+    for image_id, name in _holdings(ds):
         if name not in gone:
-            keeps.add(a.image_id)
+            keeps.add(image_id)
         else:
-            losses[a.image_id] += 1
-            marks[a.image_id] += name in negatives
+            losses[image_id] += 1
+            marks[image_id] += name in negatives
     emptied = set(losses) - keeps
     kept = {i for i in emptied if marks[i] == losses[i]}
     return emptied - kept, kept
+
+
+def _holdings(ds: Dataset) -> list[tuple[int, str]]:
+    """(image id, class name) of every box and every image-level label of ``ds``."""
+    boxes = [(a.image_id, ds.categories[a.category_id - 1].name) for a in ds.annotations]
+    return boxes + [(img.id, name) for img in ds.images for name in img.labels]
 
 
 def with_classes(
@@ -128,18 +133,18 @@ def with_classes(
     drop, negatives = [canonical_class(n) for n in drop], [canonical_class(n) for n in negatives]
     gone = _removed(ds, classes, drop, negatives)
     out = ds.drop_categories(gone)
-    if len(out.annotations) != len(ds.annotations):
+    if len(out.annotations) != len(ds.annotations) or out.images != ds.images:
         left, _ = _emptied(ds, gone, negatives)
         out = out.filter_images(lambda img: img.id not in left)
     return out.with_categories(list(classes))
 
 
 def data_classes(*datasets: Dataset, drop: Sequence[str] = ()) -> tuple[str, ...]:
-    """The classes a study of ``datasets`` studies when its config names none: every class that has a box in
-    one of them, less ``drop``; the known ones (:data:`~curate.core.classes.KNOWN_CLASSES`) first, then the
+    """The classes a study of ``datasets`` studies when its config names none: every class that has a box (or an
+    image-level label) in one of them, less ``drop``; the known ones (:data:`~curate.core.classes.KNOWN_CLASSES`) first, then the
     others by name."""
     gone = {canonical_class(n) for n in drop}
-    boxed = {ds.categories[a.category_id - 1].name for ds in datasets for a in ds.annotations} - gone
+    boxed = {name for ds in datasets for _, name in _holdings(ds)} - gone
     return tuple(n for n in KNOWN_CLASSES if n in boxed) + tuple(sorted(boxed - set(KNOWN_CLASSES)))
 
 

@@ -7,20 +7,25 @@ from pathlib import Path
 
 from curate.core.formats.coco import ANNOTATIONS_FILE, read_coco
 from curate.core.formats.common import ReadResult
+from curate.core.formats.folders import is_class_layout, read_folders
 from curate.core.formats.images import read_images
 from curate.core.formats.voc import read_voc
 from curate.core.formats.yolo import read_dfire, read_yolo
 from curate.core.imageio import is_image_file
 from curate.core.walk import walk
 
-#: ``images``: a folder of images without labels, read as a negatives-only set (:mod:`~curate.core.formats.images`).
-FORMATS: tuple[str, ...] = ("coco", "yolo", "voc", "dfire", "images")
+#: ``images``: a folder of images without labels, read as a negatives-only set, or every image holding the class a
+#: ``label`` declares (:mod:`~curate.core.formats.images`); ``folders``: a classification layout, one sub-folder per
+#: class (:mod:`~curate.core.formats.folders`).
+FORMATS: tuple[str, ...] = ("coco", "yolo", "voc", "dfire", "images", "folders")
 
 
 def detect_format(path: Path | str) -> str:
     """``coco`` for a .json file or a folder with ``annotations.json``; ``voc`` for ``Annotations/`` or XML files;
     ``yolo`` for a dataset YAML file or a folder with ``data.yaml``, a ``label(s)`` folder or ``.txt`` files;
-    ``images`` for a folder of images and none of these (a negatives-only set). Raises ValueError otherwise."""
+    ``folders`` for a classification layout (:func:`curate.core.formats.folders.is_class_layout`: ``fire/``,
+    ``normal/``); ``images`` for a folder of images and none of these (a negatives-only set). Raises ValueError
+    otherwise."""
     path = Path(path)
     if not path.exists():
         raise FileNotFoundError(f"{path}: no such file or folder")
@@ -45,7 +50,7 @@ def detect_format(path: Path | str) -> str:
     if xml:
         return "voc"
     if images:
-        return "images"
+        return "folders" if is_class_layout(path) else "images"
     raise ValueError(f"{path}: no images, labels or annotations found; pass --from {'|'.join(FORMATS)}")
 
 
@@ -57,17 +62,24 @@ def read_dataset(
     source: str | None = None,
     aliases: Mapping[str, str] | None = None,
     alias_option: str = "aliases",
+    label: str | None = None,
 ) -> ReadResult:
     """Read a dataset of format ``fmt`` (``auto`` detects it). ``names`` only applies to YOLO. An alias of a
     class the source does not have is an :class:`~curate.core.names.UnknownNameError` naming ``alias_option``
-    (the option or key that gave it: :meth:`~curate.core.formats.common.ReadResult.check_aliases`)."""
+    (the option or key that gave it: :meth:`~curate.core.formats.common.ReadResult.check_aliases`). ``label``
+    declares a folder of images without label files image-labelled (every image holds that class); a source
+    of any other format raises ValueError (its own labels say what its images hold)."""
     fmt = detect_format(path) if fmt == "auto" else fmt
+    if label is not None and fmt != "images":
+        raise ValueError(f"{path}: label: {label} declares a folder of images without label files, but it reads as "
+                         f"{fmt!r}{' (its folders name the classes)' if fmt == 'folders' else ' (it has labels)'}")  # fmt: skip
     readers: dict[str, Callable[[], ReadResult]] = {
         "coco": lambda: read_coco(path, source=source, aliases=aliases),
         "yolo": lambda: read_yolo(path, names=names, source=source, aliases=aliases),
         "voc": lambda: read_voc(path, source=source, aliases=aliases),
         "dfire": lambda: read_dfire(path, source=source),
-        "images": lambda: read_images(path, source=source),
+        "images": lambda: read_images(path, source=source, label=label),
+        "folders": lambda: read_folders(path, source=source, aliases=aliases),
     }
     if fmt not in readers:
         raise ValueError(f"unknown format {fmt!r}; choose one of {', '.join(FORMATS)}")

@@ -21,7 +21,7 @@ from curate.core import boxes
 from curate.core.classes import DFIRE_NAMES
 from curate.core.dataset import Dataset, DatasetBuilder
 from curate.core.formats.common import ClassResolver, ReadResult, probe_sizes, sanitize_box, source_tag
-from curate.core.formats.images import negatives_only_note
+from curate.core.formats.images import NEGATIVES_ONLY, negatives_only_note
 from curate.core.formats.yolo_layout import (
     Pair,
     dataset_root,
@@ -89,7 +89,7 @@ def _negatives_only(root: Path, count: int, problems: list[Problem]) -> list[Pro
     if any(p.code == "orphan-labels" for p in problems):
         return problems
     kept = [p for p in problems if p.code not in ("no-class-names", "no-labels")]
-    return [*kept, Problem(str(root), negatives_only_note(count), "info", code="negatives-only")]
+    return [*kept, Problem(str(root), negatives_only_note(count), "info", code=NEGATIVES_ONLY)]
 
 
 def read_dfire(root: Path | str, source: str | None = None) -> ReadResult:
