@@ -43,9 +43,11 @@ bench: $(STAMP)
 	@for script in bench/*.py; do echo "# $$script"; $(BIN)/python $$script || exit 1; done
 
 # The study: make experiment [CONFIG=...] [REAL=labelled/folder] [RARE=folder] [NEGATIVES=fire-free/photos]
-#   [OUT=folder] [SET="key=value key=value"]. Without REAL: configs/demo.yaml (stand-in data, offline); with REAL:
-#   configs/own-data.yaml (the recommended study of your data). NEGATIVES are your fire-free photos: the false-alarm
-#   test set (a quarter held out by content hash) and, the rest, backgrounds and hard negatives of the pools.
+#   [BROAD=fire/photos] [OUT=folder] [SET="key=value key=value"]. Without REAL: configs/demo.yaml (stand-in data,
+#   offline); with REAL: configs/own-data.yaml (the recommended study of your data). NEGATIVES are your fire-free
+#   photos: the false-alarm test set (a quarter held out by content hash) and, the rest, backgrounds and hard
+#   negatives of the pools. BROAD is a folder of fire photos without boxes (each holds fire): a test set judged per
+#   image (a fire/ + normal/ layout: SET="tests.broad={path: /abs/layout}").
 CONFIG ?= $(if $(REAL),configs/own-data.yaml,configs/demo.yaml)
 comma := ,
 experiment: $(STAMP)
@@ -55,6 +57,7 @@ experiment: $(STAMP)
 	  $(if $(NEGATIVES),--set 'tests={fire-free: {path: $(abspath $(NEGATIVES))$(comma) holdout: 0.25}}' \
 	    --set 'synth.method2.backgrounds=[$(abspath $(NEGATIVES))]' --set synth.method2.background_holdout=0.25 \
 	    --set synth.method2.photo_negatives=1.0) \
+	  $(if $(BROAD),--set 'tests.broad={path: $(abspath $(BROAD))$(comma) label: fire}') \
 	  $(foreach s,$(SET),--set '$(s)')
 
 # Regenerate docs/config.md and configs/synth-method*.yaml from the config dataclasses (a test checks them).

@@ -171,7 +171,9 @@ def write_class_layout(root: Path, fire: tuple[int, ...], free: tuple[int, ...],
     return root
 
 
-def image_rows(greys: tuple[int, ...], score: float = 0.9, cls: str = "fire") -> list[tuple[int, list[float], int, float]]:
+def image_rows(
+    greys: tuple[int, ...], score: float = 0.9, cls: str = "fire"
+) -> list[tuple[int, list[float], int, float]]:
     """Detection rows (:func:`rows_for`'s shape) of one centred 32x32 box of ``cls`` on each grey level of
     ``greys``, at ``score``: a detector that fires on exactly those images."""
     return [(grey, [32.0, 32.0, 32.0, 32.0], NAMES.index(cls), score) for grey in greys]

@@ -51,3 +51,35 @@ def test_select_split(tmp_path):
     ds = _ds(tmp_path, ["fire"], [("fire", (1, 1, 2, 2))])
     assert [i.file_name for i in ds.select_split("valid").images] == ["neg.jpg"]
     assert ds.select_split("valid").annotations == ()
+
+
+def _labelled(root: Path):
+    b = DatasetBuilder(root)
+    b.add_image("f.jpg", 10, 10, labels=("fire",))
+    b.add_image("s.jpg", 10, 10, labels=("smoke",))
+    b.add_image("n.jpg", 10, 10)
+    return b.build()
+
+
+def test_image_level_labels_hold_classes_without_boxes(tmp_path):
+    ds = _labelled(tmp_path)
+    assert ds.category_names == ["fire", "smoke"] and ds.image_labelled and not ds.annotations
+    assert ds.labelled_ids() == {1, 2} and ds.labelled_ids([1]) == {1} and ds.num_negatives() == 1
+    dropped = ds.drop_categories(["smoke"])
+    assert [i.labels for i in dropped.images] == [("fire",), (), ()] and dropped.category_names == ["fire"]
+    assert [i.labels for i in ds.with_categories(["smoke", "fire"]).images] == [("fire",), ("smoke",), ()]
+    merged = merge([ds, ds], tmp_path / "m")
+    assert [i.labels for i in merged.images] == [("fire",), ("smoke",), ()] * 2
+    assert ds.to_coco()["images"][0]["labels"] == ["fire"] and "labels" not in ds.to_coco()["images"][2]
+
+
+def test_the_image_level_view_of_a_boxed_set(tmp_path):
+    b = DatasetBuilder(tmp_path, ["fire", "smoke"])
+    b.add_box(b.add_image("a.jpg", 10, 10), "fire", (1, 1, 2, 2))
+    b.add_box(b.add_image("b.jpg", 10, 10), "smoke", (1, 1, 2, 2))
+    b.add_box(b.add_image("c.jpg", 10, 10), "fire", (1, 1, 2, 2), iscrowd=1)
+    view = b.build().at_image_level("fire")
+    assert [i.labels for i in view.images] == [("fire",), (), ()]
+    assert not view.annotations and view.category_names == ["fire"] and view.num_negatives() == 2
+    with pytest.raises(KeyError):
+        view.at_image_level("smoke")

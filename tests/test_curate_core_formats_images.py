@@ -35,3 +35,15 @@ def test_a_folder_without_images_is_refused(tmp_path: Path) -> None:
         read_images(tmp_path / "empty")
     with pytest.raises(FileNotFoundError):
         read_images(tmp_path / "missing")
+
+
+def test_a_declared_label_makes_every_image_hold_that_class(tmp_path: Path) -> None:
+    write_image(tmp_path / "fires" / "a.jpg", 40, 30, seed=1)
+    write_image(tmp_path / "fires" / "b.jpg", 40, 30, seed=2)
+    result = read_images(tmp_path / "fires", label="Flames")
+    ds = result.dataset
+    assert ds.category_names == ["fire"] and [i.labels for i in ds.images] == [("fire",), ("fire",)]
+    assert ds.num_negatives() == 0 and ds.image_labelled and not ds.annotations
+    assert result.problems[0].code == "image-labelled"
+    assert result.problems[0].reason == ("2 images, each declared 'fire' (label: fire): an image-labelled set "
+                                         "(image recall, no AP)")  # fmt: skip

@@ -71,3 +71,16 @@ def test_drop_classes_takes_comma_lists_and_refuses_names_that_match_nothing(tmp
         result.drop_classes(["default,smok"])
     kept = result.drop_classes(["smok"], missing_ok=True)  # the caller checked the name against other datasets
     assert kept is result
+
+
+def test_a_classification_layout_is_detected_and_a_label_only_declares_a_folder_without_labels(tmp_path):
+    write_image(tmp_path / "layout" / "fire" / "a.jpg", 5, 5)
+    write_image(tmp_path / "layout" / "normal" / "b.jpg", 5, 5, seed=1)
+    assert detect_format(tmp_path / "layout") == "folders"
+    assert [i.labels for i in read_dataset(tmp_path / "layout").dataset.images] == [("fire",), ()]
+    assert [i.labels for i in read_dataset(tmp_path / "layout" / "fire", label="fire").dataset.images] == [("fire",)]
+    with pytest.raises(ValueError, match="its folders name the classes"):
+        read_dataset(tmp_path / "layout", label="fire")
+    write_yolo_dataset(tmp_path / "yolo")
+    with pytest.raises(ValueError, match=r"label: fire declares a folder of images without label files.*has labels"):
+        read_dataset(tmp_path / "yolo", label="fire")

@@ -125,3 +125,19 @@ def test_the_data_classes_are_the_boxed_ones_known_first() -> None:
     assert data_classes(ds) == ("fire", "smoke", "default")
     assert data_classes(ds, drop=["DEFAULT"]) == ("fire", "smoke")
     assert data_classes(ds.filter_images(lambda img: img.id == 5)) == ()  # no box, no class
+
+
+def test_image_level_labels_follow_the_class_rules() -> None:
+    """An image labelled only with a class not studied leaves the set (counted), one labelled with a negative class
+    stays as a negative, an unlabelled one stays; the label classes count as the data's classes."""
+    b = DatasetBuilder(Path("/x"))
+    b.add_image("f.jpg", 10, 10, labels=("fire",))
+    b.add_image("s.jpg", 10, 10, labels=("smoke",))
+    b.add_image("d.jpg", 10, 10, labels=("default",))
+    b.add_image("n.jpg", 10, 10)
+    ds = b.build()
+    out = with_classes(ds, ["fire"], negatives=["default"])
+    assert [(i.file_name, i.labels) for i in out.images] == [("f.jpg", ("fire",)), ("d.jpg", ()), ("n.jpg", ())]
+    changes = class_changes(ds, ["fire"], negatives=["default"])
+    assert (changes.emptied, changes.negatives, dict(changes.unstudied)) == (1, 1, {"smoke": 1})
+    assert data_classes(ds, drop=["default"]) == ("fire", "smoke")

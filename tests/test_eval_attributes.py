@@ -124,3 +124,14 @@ def test_user_attributes_by_file_name_and_their_errors(tmp_path: Path) -> None:
         good.write_text(text, encoding="utf-8")
         with pytest.raises(AttributesError, match=match):
             read_attributes_csv(good, ds)
+
+
+def test_an_image_labelled_photo_gets_its_fire_colour_from_the_whole_image_and_no_size(tmp_path: Path) -> None:
+    b = DatasetBuilder(tmp_path, ["fire"])
+    cv2.imwrite(str(tmp_path / "blaze.png"), np.full((90, 120, 3), (10, 80, 250), np.uint8))  # BGR orange-red
+    b.add_image("blaze.png", 120, 90, labels=("fire",))
+    cv2.imwrite(str(tmp_path / "free.png"), np.full((90, 120, 3), (10, 80, 250), np.uint8))
+    b.add_image("free.png", 120, 90)
+    labelled, free = dataset_attributes(b.build()).values()
+    assert labelled["colour"] == "orange-red" and labelled["size"] is labelled["fires"] is None
+    assert free["colour"] is None  # no fire: no colour

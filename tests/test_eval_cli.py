@@ -399,3 +399,60 @@ def test_compare_slices_finds_the_fires_one_model_misses(tmp_path, capsys):
         ("light=day", m): "-" for m in ("AP50", "AP25", "image_recall")
     }
     assert main(["compare", str(a), str(b), "--data", str(test), "--forest", str(forest)]) == 2  # needs --slices
+
+
+@pytest.fixture(scope="module")
+def photos(tmp_path_factory):
+    """A classification layout (fire/: four grey levels, normal/: two) and two detectors: A fires on half the
+    fire photos only, B on three fire photos and one normal photo."""
+    from detector_factories import image_rows, write_class_layout
+
+    root = tmp_path_factory.mktemp("photos")
+    write_class_layout(root / "layout", (40, 80, 120, 160), (200, 240))
+    return {
+        "layout": root / "layout",
+        "a": oracle_model(root / "a.onnx", rows=image_rows((40, 80))),
+        "b": oracle_model(root / "b.onnx", rows=image_rows((40, 80, 120, 200))),
+    }
+
+
+def test_score_reads_a_classification_layout_and_a_declared_folder_by_image_recall(photos, capsys):
+    """A detector that fires on half the fire photos gets image recall 0.5, AP is undefined; the layout and the
+    declared folder say what they were read as; the same folder undeclared is negatives only."""
+    for argv in (["--data", photos["layout"]], ["--data", photos["layout"] / "fire", "--label", "fire"]):
+        doc = run_json(photos["a"], *argv)
+        level = doc["image_level"]
+        assert doc["AP"] is None and doc["AP50"] is None and doc["boxes"] == 0
+        assert (level["fire_images"], level["recall_at_conf"]) == (4, 0.5)
+    assert level["free_images"] == 0 and level["budget_recall"] is None
+    err = capsys.readouterr().err
+    assert "classification layout: fire/ 4 images (fire), normal/ 2 images (no class)" in err
+    assert "4 images, each declared 'fire' (label: fire): an image-labelled set" in err
+    assert main(["score", str(photos["b"]), "--data", str(photos["layout"])]) == 0
+    out = capsys.readouterr().out
+    assert "3 of 4 images holding fire detected at confidence >= 0.25: image recall 0.750" in out
+    assert "1 of its 2 images without fire raise an alarm" in out
+    undeclared = run_json(photos["a"], "--data", photos["layout"] / "fire")
+    assert "image_level" not in undeclared and "a negatives-only set" in capsys.readouterr().err
+
+
+def test_compare_on_image_labelled_sets_gives_the_image_recall_difference_only(photos, capsys):
+    """No AP difference on a set without boxes; image recall at the layout's own normal photos' alarm budget (B
+    alarms on one of the two: read above it, it finds nothing) or at --negatives; per side at 0.25."""
+    assert main(["compare", str(photos["a"]), str(photos["b"]), "--data", str(photos["layout"]), "--samples", "50",
+                 "--json"]) == 0  # fmt: skip
+    doc = json.loads(capsys.readouterr().out)
+    assert set(doc["delta"]) == {"image_recall"} and doc["own_negatives"] == 2
+    assert doc["delta"]["image_recall"]["value"] == pytest.approx(-0.5)
+    assert (doc["A"]["image_recall_at_conf"], doc["B"]["image_recall_at_conf"]) == (0.5, 0.75)
+    assert main(["compare", str(photos["a"]), str(photos["b"]), "--data", str(photos["layout"] / "fire"),
+                 "--label", "fire", "--negatives", str(photos["layout"] / "normal"), "--samples", "50"]) == 0  # fmt: skip
+    out = capsys.readouterr().out
+    assert "AP   -    AP50   -    image recall 0.500 at 0.25" in out
+    assert "B - A  image recall at 10 false-alarm images/100 -50.0 points" in out and "B - A  AP" not in out
+    assert main(["compare", str(photos["a"]), str(photos["b"]), "--data", str(photos["layout"] / "fire"),
+                 "--label", "fire", "--samples", "50"]) == 0  # fmt: skip
+    assert "B - A  image recall at confidence 0.25 +25.0 points" in capsys.readouterr().out
+    assert main(["compare", str(photos["a"]), str(photos["b"]), "--data", str(photos["layout"] / "fire"),
+                 "--negatives", str(photos["layout"])]) == 2  # fmt: skip
+    assert "--negatives takes images without fire; 4 of its images hold a class" in capsys.readouterr().err

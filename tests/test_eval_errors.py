@@ -116,3 +116,14 @@ def test_worst_errors_are_the_top_false_alarms_and_the_largest_misses(tmp_path):
     breakdown = error_breakdown(ds, records, [FIRE, SMOKE])
     assert len(everything["false_alarm"]) == breakdown.counts["background"] == 3
     assert len(everything["missed"]) == breakdown.counts["missed"] == 2  # the localised box is not missed
+
+
+def test_an_image_labelled_fire_photo_is_no_false_alarm(tmp_path):
+    """Detections on a photo labelled fire at the image level are not false alarms; on its unlabelled photos
+    they are."""
+    b = DatasetBuilder(tmp_path, ["fire"])
+    fire = b.add_image("fire.jpg", 50, 50, labels=("fire",))
+    free = b.add_image("free.jpg", 50, 50)
+    records = [{"image_id": i, "category_id": 1, "bbox": [1, 1, 5, 5], "score": 0.9} for i in (fire, free)]
+    out = error_breakdown(b.build(), records, [1])
+    assert out.ap50 is None and out.negatives == 1 and out.false_alarms_per_100 == 100.0

@@ -13,6 +13,7 @@ from eval.imagelevel import (
     ImageHits,
     image_alarms,
     image_hits,
+    image_level,
     image_operating_curve,
     paired_image_recall,
 )
@@ -78,3 +79,26 @@ def test_paired_recall_of_a_model_against_itself_is_zero_and_a_better_one_positi
     assert half.interval.point == pytest.approx(0.5)  # images 0..19: 10 of 20 against all 20
     with pytest.raises(ValueError, match="same images"):
         paired_image_recall([(weak, 0.5)], [(ImageHits(np.arange(3), fire[:3], weak.best[:3]), 0.5)], rng, 10)
+
+
+def _photos(tmp_path: Path):
+    """Four photos labelled fire at the image level (no boxes) and two without fire."""
+    b = DatasetBuilder(tmp_path, ["fire", "smoke"])
+    fires = [b.add_image(f"fire{i}.jpg", 100, 100, labels=("fire",)) for i in range(4)]
+    free = [b.add_image(f"free{i}.jpg", 100, 100) for i in range(2)]
+    return b.build(), fires, free
+
+
+def test_an_image_labelled_photo_is_detected_by_any_detection_of_its_class(tmp_path: Path) -> None:
+    ds, fires, free = _photos(tmp_path)
+    records = [_det(fires[0], [0, 0, 5, 5], 0.9), _det(fires[1], [50, 50, 5, 5], 0.3),
+               {**_det(fires[2], [0, 0, 5, 5], 0.95), "category_id": 2}, _det(free[0], [1, 1, 5, 5], 0.6)]  # fmt: skip
+    hits = image_hits(ds, records, [1])
+    assert hits.fire.tolist() == [True] * 4 + [False] * 2
+    assert hits.best[:4].tolist() == [0.9, 0.3, -np.inf, -np.inf]  # a smoke detection does not find fire
+    assert hits.recall(0.25) == 0.5
+    level = image_level(ds, records, [1], 0.25, 50.0)
+    assert (level.fire_images, level.recall_at_conf, level.free_images, level.alarm_share_at_conf) == (4, 0.5, 2, 0.5)
+    assert level.budget_recall == 0.5 and level.budget_threshold == 0.0  # one of two free images allowed
+    strict = image_level(ds, records, [1], 0.25, 10.0)  # no alarm allowed: read above the free photo's 0.6
+    assert strict.budget_recall == 0.25 and strict.budget_threshold > 0.6

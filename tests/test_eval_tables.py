@@ -120,3 +120,13 @@ def test_a_mixture_with_a_run_that_did_not_converge_is_marked_in_every_format():
     assert "| R500_S0 (not converged) |" in to_markdown(t) and "R500_S0 (not converged)" in to_csv(t)
     copies = control_table([r for r in rows if r["mixture"] in ("R500_S0", "R1000_S0")])
     assert copies.label("R500_S0") == "R500_S0 copies (not converged)" and copies.label("R1000_S0") == "R1000_S0 copies"
+
+
+def test_an_image_labelled_set_has_its_image_recall_column_alone():
+    from eval.imagelevel import IMAGE_LABELLED, IMAGE_RECALL
+
+    broad = [{**r, "test_set": "broad", "AP": None, "AP50": None, IMAGE_RECALL: 0.4, IMAGE_LABELLED: True}
+             for r in results() if r["test_set"] == "common"]  # fmt: skip
+    t = table2([*results(), *broad], metrics=("AP", "AP50", IMAGE_RECALL))
+    assert [c for c in t.columns if c[0] == "broad"] == [("broad", IMAGE_RECALL)]
+    assert ("common", "AP") in t.columns and "broad image recall" in to_markdown(t).splitlines()[2]

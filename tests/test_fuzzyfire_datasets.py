@@ -81,3 +81,33 @@ def test_a_holdout_share_keeps_exactly_the_held_out_photos(tmp_path: Path) -> No
 def test_the_shared_fire_free_photos_hold_out_68_at_a_quarter(shared_data: Path) -> None:
     ref = folder_ref(shared_data / "fire-free", shared_data, "auto", {}, (), None, 0.25)
     assert len(Datasets(("fire",)).get(ref).images) == 68  # of 295: the photos no pool with holdout 0.25 shows
+
+
+def test_a_label_declares_a_folder_image_labelled_and_a_stand_in_is_read_at_the_image_level(tmp_path: Path) -> None:
+    """``label`` enters the identity and the read; an undeclared folder is read as negatives only, and the
+    reading says which; a stand-in with a label is its image-level view."""
+    import json
+
+    from factories import write_image
+    from factories_experiment import fire_free_photos
+
+    from curate.core.dataset import DatasetBuilder
+
+    folder = fire_free_photos(tmp_path / "fires", 3)
+    declared = folder_ref(folder, tmp_path, "auto", {}, (), label="fire")
+    plain = folder_ref(folder, tmp_path, "auto", {}, ())
+    assert declared.identity["label"] == "fire" and "label" not in plain.identity
+    data = Datasets(("fire",))
+    assert data.get(declared).labelled_ids() == {1, 2, 3} and data.get(plain).num_negatives() == 3
+    assert data.reading(declared).startswith("3 images, each declared 'fire'")
+    assert data.reading(plain) == "3 images, no label files: a negatives-only set"
+    b = DatasetBuilder(tmp_path, ["fire"])
+    b.add_box(b.add_image("a.png", 8, 8), "fire", (1, 1, 2, 2))
+    b.add_image("b.png", 8, 8)
+    for name in ("a.png", "b.png"):
+        write_image(tmp_path / "standin" / name, 8, 8)
+    (tmp_path / "standin" / "annotations.json").write_text(json.dumps(b.build().to_coco()))
+    ref = DataRef(tmp_path / "standin", {"kind": "standin"}, "coco", standin=True, label="fire")
+    ds = Datasets(("fire",)).get(ref)
+    assert [i.labels for i in ds.images] == [("fire",), ()] and not ds.annotations
+    assert Datasets(("fire",)).reading(ref) == "a stand-in read at the image level: 1 of 2 images hold fire"
