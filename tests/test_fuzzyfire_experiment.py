@@ -329,7 +329,7 @@ def test_image_labelled_test_sets_report_image_recall_and_an_undeclared_folder_s
     rows, Table 2 and the comparisons (image recall only); an undeclared folder without label files is read as
     negatives and the experiment says so."""
     from detector_factories import write_class_layout
-    from factories_experiment import fire_free_photos
+    from factories_experiment import FLAMES, SIZE, fire_free_photos
 
     from eval.imagelevel import IMAGE_LABELLED, IMAGE_RECALL, IMAGE_RECALL_AT_CONF
 
@@ -339,17 +339,20 @@ def test_image_labelled_test_sets_report_image_recall_and_an_undeclared_folder_s
         grid={"mixtures": ["R12_S0", "R6_S0"], "table1": [], "seeds": [0]},
         report={"bootstrap": 20, "samples": False, "gap_draws": 0, "min_fire_images": 1},
         tests={"broad": {"path": "layout"}, "declared": {"path": "layout/fire", "label": "fire"},
-               "photos": {"path": "photos"}},
+               "photos": {"path": "photos"}, "stand": {"standin": {"splits": {"test": 6}, "seed": 3, "negatives": 0.5, **SIZE, **FLAMES},
+                         "label": "fire"}},
     )  # fmt: skip
     done = run_experiment(cfg, tmp_path, tmp_path / "out", LocalExecutor())
     printed = capsys.readouterr().out
     assert "data   test broad: classification layout: fire/ 4 images (fire), normal/ 2 images (no class)" in printed
     assert "data   test declared: 4 images, each declared 'fire' (label: fire): an image-labelled set" in printed
     assert "data   test photos: 4 images, no label files: a negatives-only set" in printed and "label: fire" in printed
-    for name in ("broad", "declared"):
+    assert "data   test stand (stand-in): a stand-in read at the image level: " in printed
+    for name in ("broad", "declared", "stand (stand-in)"):
         rows = [r for r in done.rows if r["test_set"] == name]
         assert len(rows) == 2 and all(r["AP"] is None and r["AP50"] is None and r[IMAGE_LABELLED] for r in rows)
-        assert all(r["fire_images"] == 4 and r[IMAGE_RECALL_AT_CONF] == 1.0 for r in rows)
+        assert all(r["fire_images"] == (4 if name != "stand (stand-in)" else rows[0]["fire_images"]) for r in rows)
+        assert all(0 < r["fire_images"] and r[IMAGE_RECALL_AT_CONF] == 1.0 for r in rows)
         assert all(r[IMAGE_RECALL] is not None and ALARMS not in r for r in rows)
     assert all(r[ALARMS] == 100.0 for r in done.rows if r["test_set"] == "photos")
     compared = (tmp_path / "out" / "tables" / "comparisons.csv").read_text().splitlines()
