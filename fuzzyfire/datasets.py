@@ -110,7 +110,10 @@ def read_ref(ref: DataRef) -> tuple[Dataset, str]:
     ds = result.dataset
     if ref.standin and ref.label:
         ds = ds.at_image_level(canonical_class(ref.label))
-        return ds, f"a stand-in read at the image level: {len(ds.labelled_ids())} of {len(ds.images)} images hold {ref.label}"
+        return (
+            ds,
+            f"a stand-in read at the image level: {len(ds.labelled_ids())} of {len(ds.images)} images hold {ref.label}",
+        )
     said = [p.reason for p in result.problems if p.code in (NEGATIVES_ONLY, IMAGE_LABELLED)]
     return ds, said[0] if said else ""
 

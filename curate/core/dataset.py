@@ -154,8 +154,10 @@ class Dataset:
         keep_names = [n for n in self.category_names if n not in drop]
         kept = replace(
             self,
-            images=tuple(replace(i, labels=tuple(n for n in i.labels if n not in drop)) if drop & set(i.labels)
-                         else i for i in self.images),  # fmt: skip
+            images=tuple(
+                replace(i, labels=tuple(n for n in i.labels if n not in drop)) if drop & set(i.labels) else i
+                for i in self.images
+            ),  # fmt: skip
             annotations=tuple(a for a in self.annotations if self.categories[a.category_id - 1].name not in drop),
         )
         return _renumber_categories(kept, keep_names)
