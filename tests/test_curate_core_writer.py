@@ -113,3 +113,22 @@ def test_unknown_format_and_mode(src, tmp_path):
         write_dataset(src, tmp_path / "o1", ["voc"])
     with pytest.raises(ValueError, match="unknown image mode"):
         write_dataset(src, tmp_path / "o2", ["coco"], images="teleport")
+
+
+def test_image_level_labels_survive_coco_and_are_refused_by_yolo(tmp_path):
+    """COCO keeps an image-labelled set's per-image classes (read back as they were); YOLO, which has no form for
+    them, refuses instead of writing its fire photos as negatives."""
+    from factories import write_image
+
+    from curate.core.formats.coco import read_coco
+    from curate.core.formats.folders import read_folders
+
+    write_image(tmp_path / "layout" / "fire" / "a.png", 8, 8)
+    write_image(tmp_path / "layout" / "normal" / "b.png", 8, 8, seed=1)
+    ds = read_folders(tmp_path / "layout").dataset
+    write_dataset(ds, tmp_path / "out", ("coco",))
+    back = read_coco(tmp_path / "out").dataset
+    assert [i.labels for i in back.images] == [("fire",), ()] and back.category_names == ["fire"]
+    with pytest.raises(ValueError, match="YOLO has no form for that"):
+        write_dataset(ds, tmp_path / "yolo", ("yolo",))
+    assert not (tmp_path / "yolo").exists()

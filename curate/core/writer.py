@@ -139,6 +139,9 @@ def write_dataset(
         raise ValueError(f"unknown output format(s) {unknown}; choose from {', '.join(OUTPUT_FORMATS)}")
     if "yolo" in formats and images == "reference":
         raise ValueError("YOLO needs labels beside the images: use --images copy, hardlink or symlink")
+    if "yolo" in formats and ds.image_labelled:
+        raise ValueError("the images hold classes per image, without boxes: YOLO has no form for that (its images "
+                         "would read as negatives); write coco (--to coco), which keeps them")  # fmt: skip
     check_output_folder(out, ds, overwrite)
     _clear_previous(out)
     out.mkdir(parents=True, exist_ok=True)

@@ -8,6 +8,7 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
+from curate.core.classes import canonical_class
 from curate.core.dataset import Dataset, DatasetBuilder
 from curate.core.formats.common import ClassResolver, ReadResult, probe_sizes, sanitize_box, source_tag
 from curate.core.imageio import ImageError
@@ -129,7 +130,10 @@ def _read_images(
             )
         rel = path.relative_to(root).as_posix() if path.is_relative_to(root) else path.resolve().as_posix()
         source = default_source if force_source else str(entry.get("source") or default_source)
-        new_id = builder.add_image(rel, width, height, source, str(entry.get("split") or ""))
+        labels = entry.get("labels") if isinstance(entry.get("labels"), list) else []  # image-level classes
+        new_id = builder.add_image(
+            rel, width, height, source, str(entry.get("split") or ""), [canonical_class(str(n)) for n in labels]
+        )
         new_ids[key] = (new_id, width, height)
     return new_ids
 
