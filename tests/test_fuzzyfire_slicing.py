@@ -119,3 +119,30 @@ def test_a_set_too_small_for_ap_has_no_ap50_per_slice(tmp_path: Path) -> None:
     sliced, _ = study_slices(rows, pairs, {"common": DataRef(tmp_path, {"kind": "x"})}, Loader(ds), tmp_path / "out",  # type: ignore[arg-type]
                              np.random.default_rng(0), 100)  # fmt: skip
     assert sliced and {r["metric"] for r in sliced} == {"AP25", "image_recall"}
+
+
+def test_an_image_labelled_set_is_sliced_by_image_recall_on_its_whole_photos(tmp_path: Path) -> None:
+    """Photos labelled fire per image (no boxes): slices by what needs no box (light, colour over the whole photo),
+    image recall only, and no run's loose matches are derived (no box to match)."""
+    from dataclasses import replace
+
+    from eval.imagelevel import IMAGE_LABELLED, image_hits
+
+    boxed = _night_and_day(tmp_path)
+    ds = replace(boxed, annotations=(), images=tuple(replace(i, labels=("fire",)) for i in boxed.images))
+
+    def hits(r: dict):
+        return image_hits(ds, json.loads((Path(r["matches"]).parent / "predictions.json").read_text()), [1])
+
+    rows = [{**r, "test_set": "photos", IMAGE_LABELLED: True, "AP50": None, IMAGELEVEL: (hits(r), 0.25)}
+            for r in _study_rows(tmp_path, boxed, None)]  # fmt: skip
+    for r in rows:  # the labelled set's own hits: every photo is a fire photo
+        assert r[IMAGELEVEL][0].fire.all()
+    pairs = [("table2", "R200_S0", "R200_S0", "R200_S200")]
+    sliced, sets = study_slices(rows, pairs, {"photos": DataRef(tmp_path, {"kind": "y"})}, Loader(ds), tmp_path / "out",  # type: ignore[arg-type]
+                                np.random.default_rng(0), 200)  # fmt: skip
+    assert {r["metric"] for r in sliced} == {"image_recall"} and not list(tmp_path.rglob("matches25.json"))
+    assert ("light=night", "helps") in {(r["slice"], r["verdict"]) for r in sliced}
+    assert not any(s["slice"].startswith("size=") for s in sets["photos"])
+    attrs = set_attributes(Loader(ds), DataRef(tmp_path, {"kind": "y"}), tmp_path / "out")  # type: ignore[arg-type]
+    assert all(a["colour"] is not None and a["size"] is None for a in attrs.values())  # read over the whole photo
