@@ -38,6 +38,10 @@ def _print_text(result, intervals: dict, split: str) -> None:  # result: eval.sc
     print(
         f"model  {spec.path} ({spec.format}, {spec.input_width}x{spec.input_height}, classes {list(spec.class_names)})"
     )
+    if result.dataset.image_labelled:  # no boxes: no AP table, the image recall follows
+        print(f"data   {split}: {m.images} images ({m.images - m.negatives} holding a class, {m.negatives} without), "
+              f"labelled per image (no boxes), {m.detections} detections")  # fmt: skip
+        return
     print(f"data   {split}: {m.images} images ({m.negatives} negatives), {m.boxes} boxes, {m.detections} detections")
     print("       " + "  ".join(f"{k} {_fmt(v)}" for k, v in m.summary.items()))
     for key, iv in intervals.items():

@@ -241,7 +241,7 @@ def test_compare_reads_both_models_at_the_alarm_budget_of_a_set_without_fire(wor
     assert "B - A  recall at 50 alarms/100 +0.0 points, 95% CI [+0.0, +0.0], p = 1.000" in text
     assert "of 6 images and 4 without fire" in text
     assert main(["compare", str(good), str(good), *data[:-1], str(work["test"])]) == 2  # a set with boxes
-    assert "--negatives takes images without fire; it has 6 boxes" in capsys.readouterr().err
+    assert "--negatives takes images without fire; 4 of its images hold a class (6 boxes)" in capsys.readouterr().err
     # held out by content: the two grey levels hash apart, so a share between them keeps one pair of photos
     fracs = sorted({content_fraction(p) for p in (tmp_path / "photos").iterdir()})
     share = 1.0 - (fracs[0] + fracs[1]) / 2
