@@ -151,14 +151,25 @@ def headline_lines(
                 f"{100 * copies:+.1f}."
             )
             continue
-        mix = parse_mixture(c["mixture"])
+        mix, base = parse_mixture(c["mixture"]), parse_mixture(baseline or c["mixture"])
+        synthetic = mix.synth > base.synth
         lines.append(
-            f"On {c['test_set']}, {mix.synth} synthetic images (flames and more images together) against none "
+            f"On {c['test_set']}, {added_text(mix.real - base.real, mix.synth - base.synth)} "
             f"({c['mixture']} vs {baseline}): {metric_name(c['metric'])} {delta_text(c['delta'])} points"
-            f"{'; ' + sure if sure else ''}: {verdict(c, bad)}. No control was trained, so the flames' share is "
-            "unknown: grid.control=true trains flame-free copies to separate them."
-        )
+            f"{'; ' + sure if sure else ''}: {verdict(c, bad)}."
+            + (" No control was trained, so the flames' share is unknown: grid.control=true trains flame-free copies "
+               "to separate them." if synthetic else "")
+        )  # fmt: skip
     return lines
+
+
+def added_text(real: int, synth: int) -> str:
+    """What a mixture adds to the baseline, ``real`` and ``synth`` images more (or fewer, negative):
+    ``200 synthetic images (flames and more images together) against none``, ``200 more real images``."""
+    parts = [f"{synth} synthetic images (flames and more images together) against none"] if synth > 0 else []
+    parts += [f"{abs(synth)} fewer synthetic images"] if synth < 0 else []
+    parts += [f"{real} more real images"] if real > 0 else [f"{-real} fewer real images"] if real < 0 else []
+    return " and ".join(parts) or "the same images"
 
 
 def how_sure_line(rows: Sequence[Mapping[str, Any]], comparisons: Sequence[Mapping[str, Any]], epochs: int) -> str:

@@ -36,6 +36,11 @@ def test_without_a_control_the_gain_is_worded_as_flames_and_more_images() -> Non
     (line,) = fs.headline_lines(_rows(), [c], lambda test: "AP50", "R200_S0")
     assert line.startswith("On common, 200 synthetic images (flames and more images together) against none")
     assert "No control was trained" in line and "grid.control=true" in line
+    more = _cmp("R400_S0", "R200_S0", 0.08, 0.05, 0.1, [0.07, 0.08, 0.09])  # a real-only mixture: more real images
+    (line,) = fs.headline_lines(_rows(), [more], lambda test: "AP50", "R200_S0")
+    assert line.startswith("On common, 200 more real images (R400_S0 vs R200_S0): AP50 +8.0") and "control" not in line
+    assert fs.added_text(-100, 300) == ("300 synthetic images (flames and more images together) against none and "
+                                        "100 fewer real images")  # fmt: skip
 
 
 def test_with_a_control_the_flames_share_comes_first() -> None:
