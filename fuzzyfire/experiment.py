@@ -29,6 +29,7 @@ from curate.core.load import SplitError
 from curate.core.lock import lock_status, lock_summary
 from curate.mix import mixture_dir, parse_mixture, write_mixture
 from eval.errors import ALARMS
+from eval.imagelevel import IMAGE_LABELLED
 from fuzzyfire.aggregate import STANDIN_NOTICE, result_rows, write_report, write_summary
 from fuzzyfire.controls import CONTROL, CONTROL_TABLE, control_pools, has_control
 from fuzzyfire.cutout_pools import cutout_pools, is_own, simulated
@@ -341,6 +342,8 @@ def _outcome_text(outcome: Outcome) -> str:
 def _scores_text(name: str, m: dict[str, Any]) -> str:
     if m.get(ALARMS) is not None:
         return f"{name} alarms/100 {m[ALARMS]:.1f}"
+    if m.get(IMAGE_LABELLED):
+        return f"{name} per image (image recall in the report)"
     return f"{name} AP {_pct(m['AP'])} AP50 {_pct(m['AP50'])}"
 
 
