@@ -355,8 +355,7 @@ def _image_levels(results: list[list], points: list[list] | None, own: bool = Fa
     """Per side, per model: (its :class:`eval.imagelevel.ImageHits` on the test set, its per-image alarms on
     ``--negatives`` (from its operating data ``points``), with ``own`` on the test set's own images without fire,
     or, without either, the confidence :data:`eval.errors.ALARM_CONF` it is read at)."""
-    from eval.imagelevel import image_alarms, image_hits
-    from eval.operating import alarms_of
+    from eval.imagelevel import free_alarms, image_alarms, image_hits
     from eval.score import scored_images
 
     out = []
@@ -366,11 +365,7 @@ def _image_levels(results: list[list], points: list[list] | None, own: bool = Fa
             ds, cat_ids = scored_images(r)
             hits = image_hits(ds, r.records, cat_ids)
             read_at: Any = ALARM_CONF if points is None else image_alarms(points[k][j][1])
-            if own:
-                free = hits.image_ids[~hits.fire].tolist()
-                kept = set(free)
-                read_at = image_alarms(alarms_of([x for x in r.records if x["image_id"] in kept], free))
-            levels.append((hits, read_at))
+            levels.append((hits, free_alarms(hits, r.records, cat_ids) if own else read_at))
         out.append(levels)
     return out
 

@@ -189,19 +189,24 @@ class ImageLevel:
         return {k: getattr(self, k) for k in self.__dataclass_fields__}
 
 
+def free_alarms(hits: ImageHits, records: Sequence[dict[str, Any]], cat_ids: Sequence[int]) -> Alarms:
+    """The per-image alarms (:func:`image_alarms`) that COCO result ``records`` of the categories ``cat_ids`` raise on
+    the images of ``hits`` without fire: a set's own images without a scored class."""
+    free_ids = hits.image_ids[~hits.fire].tolist()
+    cats, free = set(cat_ids), set(free_ids)
+    return image_alarms(alarms_of([r for r in records if r["category_id"] in cats and r["image_id"] in free], free_ids))
+
+
 def image_level(
     dataset: Dataset, records: Sequence[dict[str, Any]], cat_ids: Sequence[int], conf: float, budget: float
 ) -> ImageLevel:
     """:class:`ImageLevel` of COCO result ``records`` on ``dataset`` over the categories ``cat_ids``; its images
     without a scored class are its own images without fire (:func:`image_alarms`)."""
     hits = image_hits(dataset, records, cat_ids)
-    free_ids = hits.image_ids[~hits.fire]
-    cats, free = set(cat_ids), set(free_ids.tolist())
-    on_free = [r for r in records if r["category_id"] in cats and r["image_id"] in free]
-    alarms = image_alarms(alarms_of(on_free, free_ids.tolist()))
-    threshold = alarms.threshold(budget) if len(free_ids) else None
+    alarms = free_alarms(hits, records, cat_ids)
+    threshold = alarms.threshold(budget) if alarms.images else None
     return ImageLevel(
-        int(hits.fire.sum()), conf, hits.recall(conf), len(free_ids),
-        alarms.per_100(conf) / 100.0 if len(free_ids) else None, budget,
+        int(hits.fire.sum()), conf, hits.recall(conf), alarms.images,
+        alarms.per_100(conf) / 100.0 if alarms.images else None, budget,
         None if threshold is None else hits.recall(threshold), threshold,
     )  # fmt: skip
