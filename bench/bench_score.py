@@ -25,11 +25,12 @@ import numpy as np
 
 from curate.core.cocoeval import run_cocoeval
 from curate.core.dataset import DatasetBuilder
+from curate.core.detections import PostprocessConfig
 from curate.core.formats.registry import read_dataset
 from curate.core.imageio import read_image
 from curate.core.letterbox import letterbox_image, to_nchw_float
+from eval.config import InferenceConfig
 from eval.onnx_model import OnnxDetector
-from eval.predict import PredictOptions
 from eval.score import score
 from eval.stats import MatchTable, bootstrap_ap
 
@@ -70,7 +71,7 @@ def bench_scoring(tmp: Path) -> None:
     for _ in range(2):
         forward_s.append(_forward_alone(det, batches))
         start = time.perf_counter()
-        result = score(det, ds, PredictOptions(batch=16))
+        result = score(det, ds, InferenceConfig(batch=16))
         end_to_end_s.append(time.perf_counter() - start)
     images = result.metrics.images
     end_to_end, forward = images / min(end_to_end_s), images / min(forward_s)
@@ -81,7 +82,7 @@ def bench_scoring(tmp: Path) -> None:
     print(f"score_onnx_forward_alone: {forward:.1f} img/s (same model, images, batches and threads)")
     print(f"score_ratio_to_forward: {end_to_end / forward:.2f} (target >= 0.8)")
     start = time.perf_counter()
-    sparse = score(det, ds, PredictOptions(batch=16, conf=0.25))
+    sparse = score(det, ds, InferenceConfig(PostprocessConfig(conf=0.25), batch=16))
     elapsed = time.perf_counter() - start
     print(f"score_throughput_conf0.25: {sparse.metrics.images / elapsed:.0f} img/s (same, few boxes: decode+onnx+COCO)")
     x = np.random.default_rng(0).random((16, 3, SIZE, SIZE), dtype=np.float32)

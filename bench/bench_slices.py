@@ -22,9 +22,9 @@ from bench_score import SIZE, _dataset
 
 from curate.core.cocoeval import LOOSE_IOU, run_cocoeval
 from eval.attributes import dataset_attributes
+from eval.config import InferenceConfig
 from eval.imagelevel import image_hits
 from eval.onnx_model import OnnxDetector
-from eval.predict import PredictOptions
 from eval.score import score, scored_images
 from eval.slices import Side, compare_slices, make_slices
 from eval.stats import MatchTable
@@ -41,7 +41,7 @@ def main() -> None:
         det = OnnxDetector(export_onnx(Detector(1).eval(), Path(tmp) / "det.onnx", SIZE, ["fire"]))
         ds, what = _dataset(Path(tmp))
         start = time.perf_counter()
-        result = score(det, ds, PredictOptions(batch=16))
+        result = score(det, ds, InferenceConfig(batch=16))
         scoring = time.perf_counter() - start
         start = time.perf_counter()
         attrs = dataset_attributes(ds, workers=2)

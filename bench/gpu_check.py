@@ -312,7 +312,7 @@ def check_score(study: Study, device: str, model: Path) -> Outcome:
             problems.append(f"{dev}: onnxruntime runs on {provider} ({detector.device_notice or 'no notice'})")
         _warm_detector(detector, cfg.batch)
         start = time.perf_counter()
-        result = score(detector, study.test, cfg.predict_options())
+        result = score(detector, study.test, cfg)
         seconds = time.perf_counter() - start
         summaries[role] = result.metrics.summary
         n = len(study.test.images)

@@ -19,14 +19,17 @@ import json
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Literal, get_args
 
 import numpy as np
 from numpy.typing import NDArray
 
 from curate.core.device import onnx_providers
 
-LAYOUTS: tuple[str, ...] = ("fuzzyfire", "yolov5", "yolov8")
-FORMATS: tuple[str, ...] = ("auto", *LAYOUTS)
+#: A model's output layout (module docstring), or ``auto``: read from its metadata, else inferred.
+ModelFormat = Literal["auto", "fuzzyfire", "yolov5", "yolov8"]
+FORMATS: tuple[str, ...] = get_args(ModelFormat)
+LAYOUTS: tuple[str, ...] = FORMATS[1:]
 
 
 class ModelError(ValueError):

@@ -6,44 +6,21 @@ from __future__ import annotations
 from collections import deque
 from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import Future, ThreadPoolExecutor
-from dataclasses import dataclass
 from functools import partial
 
 import numpy as np
 from numpy.typing import NDArray
 
 from curate.core.dataset import Dataset, ImageRecord
-from curate.core.detections import (
-    CONF_THRESHOLD,
-    IOU_THRESHOLD,
-    MAX_DETECTIONS,
-    ImageDetections,
-    Predictions,
-    postprocess,
-    to_original,
-)
+from curate.core.detections import ImageDetections, Predictions, postprocess, to_original
 from curate.core.imageio import ImageError, read_image
 from curate.core.letterbox import letterbox_image, to_chw_float, to_nchw_float
 from curate.core.problems import Problem
 from curate.core.progress import progress
+from eval.config import InferenceConfig
 from eval.onnx_model import OnnxDetector
 
 Loaded = tuple[int, int] | ImageError  # an image's decoded (width, height), or why it could not be read
-
-
-@dataclass(frozen=True)
-class PredictOptions:
-    """Post-processing and batching: ``conf`` and ``iou`` thresholds, ``max_det`` per image, ``batch`` images
-    per onnxruntime call, ``workers`` decoding threads, ``resize`` how images are letterboxed
-    (:data:`curate.core.letterbox.RESIZE_MODES`: ``area`` ours and YOLOv5's, ``linear`` ultralytics 8.x's)."""
-
-    conf: float = CONF_THRESHOLD
-    iou: float = IOU_THRESHOLD
-    max_det: int = MAX_DETECTIONS
-    batch: int = 16
-    workers: int = 2
-    multi_label: bool = True
-    resize: str = "area"
 
 
 def _loader(width: int, height: int, pad: int, resize: str) -> Callable[[str, NDArray[np.float32], int], Loaded]:
@@ -81,16 +58,16 @@ def _prefetched(
 
 
 def _postprocess_one(
-    boxes: NDArray, scores: NDArray, size: tuple[int, int], opt: PredictOptions, input_size: tuple[int, int]
+    boxes: NDArray, scores: NDArray, size: tuple[int, int], opt: InferenceConfig, input_size: tuple[int, int]
 ) -> ImageDetections:
-    det = postprocess(boxes, scores, opt.conf, opt.iou, opt.max_det, opt.multi_label)
-    return to_original(det, size, input_size)
+    return to_original(postprocess(boxes, scores, opt.postprocess), size, input_size)
 
 
-def predict_dataset(detector: OnnxDetector, dataset: Dataset, options: PredictOptions | None = None) -> Predictions:
-    """Run ``detector`` on every image of ``dataset``. Unreadable images are skipped and reported;
+def predict_dataset(detector: OnnxDetector, dataset: Dataset, options: InferenceConfig | None = None) -> Predictions:
+    """Run ``detector`` on every image of ``dataset`` with the letterbox, batching and post-processing of
+    ``options`` (default: :class:`eval.config.InferenceConfig`'s). Unreadable images are skipped and reported;
     an image whose decoded size differs from its record is scored and reported as a warning."""
-    opt = options or PredictOptions()
+    opt = options or InferenceConfig()
     spec = detector.spec
     input_size = (spec.input_width, spec.input_height)
     images: list[ImageRecord] = list(dataset.images)
@@ -123,12 +100,12 @@ def predict_dataset(detector: OnnxDetector, dataset: Dataset, options: PredictOp
 
 
 def detect_images(
-    detector: OnnxDetector, images: Sequence[NDArray[np.uint8]], options: PredictOptions | None = None
+    detector: OnnxDetector, images: Sequence[NDArray[np.uint8]], options: InferenceConfig | None = None
 ) -> list[ImageDetections]:
     """Detections of decoded (H, W, 3) uint8 RGB ``images`` (e.g. video frames), one :class:`ImageDetections`
     per image with xyxy boxes in that image's pixels: the letterbox and post-processing of
     :func:`predict_dataset`, run in one onnxruntime call per ``options.batch`` images."""
-    opt = options or PredictOptions()
+    opt = options or InferenceConfig()
     spec = detector.spec
     input_size = (spec.input_width, spec.input_height)
     found: list[ImageDetections] = []

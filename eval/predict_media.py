@@ -31,9 +31,10 @@ from curate.core.imageio import ImageError, image_size, is_image_file, read_imag
 from curate.core.problems import Problem
 from curate.core.progress import progress
 from curate.core.walk import walk_files
+from eval.config import InferenceConfig
 from eval.draw import draw_detections
 from eval.onnx_model import OnnxDetector
-from eval.predict import PredictOptions, detect_images, predict_dataset
+from eval.predict import detect_images, predict_dataset
 from eval.video import VideoWriter, is_video_file, read_batches, video_info
 
 DETECTIONS_FILE = "detections.json"
@@ -157,7 +158,7 @@ def _draw_images(ds: Dataset, preds: Predictions, out: Path, workers: int) -> tu
 
 
 def predict_images(
-    detector: OnnxDetector, source: Path, out: Path, options: PredictOptions, labels: frozenset[int] | None = None
+    detector: OnnxDetector, source: Path, out: Path, options: InferenceConfig, labels: frozenset[int] | None = None
 ) -> MediaPredictions:
     """Run ``detector`` on the image ``source`` or every image below the folder ``source`` (``out`` excluded)
     and draw each into ``out`` at its relative path; detections of class indices ``labels`` only (None: all)."""
@@ -175,7 +176,7 @@ def predict_images(
 
 
 def predict_video(
-    detector: OnnxDetector, source: Path, out: Path, options: PredictOptions, labels: frozenset[int] | None = None
+    detector: OnnxDetector, source: Path, out: Path, options: InferenceConfig, labels: frozenset[int] | None = None
 ) -> MediaPredictions:
     """Run ``detector`` on every frame of the video ``source`` and write them drawn as ``out/<stem>.mp4`` (mp4v,
     the source's frame rate, its first frame's size); detections of class indices ``labels`` only (None: all).

@@ -13,12 +13,13 @@ from pycocotools.cocoeval import COCOeval
 
 from curate.core.cocoeval import CocoMetrics, evaluate_detections
 from curate.core.dataset import Dataset
-from curate.core.detections import CONF_THRESHOLD, IOU_THRESHOLD, MAX_DETECTIONS, Predictions
+from curate.core.detections import Predictions
 from curate.core.fast_cocoeval import CocoBoxes, boxes_to_records
 from curate.core.formats.registry import read_dataset
 from curate.core.holdout import held_out_images
 from curate.core.load import SplitError, pick_split
 from curate.core.problems import Problem
+from eval.config import InferenceConfig, TestSetConfig
 from eval.error_pictures import WORST, write_error_pictures
 from eval.errors import ALARM_CONF, ErrorBreakdown, error_breakdown
 from eval.found import BoxesFound, boxes_found
@@ -26,46 +27,8 @@ from eval.imagelevel import ImageLevel, image_level
 from eval.onnx_model import ModelSpec, OnnxDetector
 from eval.operating import ALARM_BUDGET, Alarms, FoundScores, alarms_of, found_scores
 from eval.plots import plot_pr_curves, pr_curves_from_eval
-from eval.predict import PredictOptions, predict_dataset
+from eval.predict import predict_dataset
 from eval.stats import MatchTable
-
-
-@dataclass(frozen=True)
-class ScoreConfig:
-    """How a model is scored (the ``score:`` section of an experiment; ``fuzzyfire score``'s flags)."""
-
-    conf: float = CONF_THRESHOLD  # score threshold before NMS, 0..1
-    iou: float = IOU_THRESHOLD  # NMS IoU threshold, 0..1
-    max_det: int = MAX_DETECTIONS  # detections kept per image
-    batch: int = 16  # images per onnxruntime call
-    workers: int = 2  # image decoding threads
-    threads: int = 0  # onnxruntime threads; 0 = every core the run may use
-    device: str = "auto"  # auto | cpu | cuda | cuda:N; auto = onnxruntime's CUDA provider when installed
-
-    def __post_init__(self) -> None:
-        if not 0.0 <= self.conf < 1.0 or not 0.0 < self.iou <= 1.0:
-            raise ValueError(f"conf must be in [0, 1) and iou in (0, 1], got conf {self.conf}, iou {self.iou}")
-        if self.max_det < 1 or self.batch < 1 or self.workers < 0 or self.threads < 0:
-            raise ValueError(
-                f"max_det and batch must be >= 1, workers and threads >= 0; got {self.max_det}, {self.batch}, "
-                f"{self.workers}, {self.threads}"
-            )
-
-    def predict_options(self, resize: str = "area") -> PredictOptions:
-        """The post-processing and batching options of :func:`eval.predict.predict_dataset`."""
-        return PredictOptions(
-            conf=self.conf, iou=self.iou, max_det=self.max_det, batch=self.batch, workers=self.workers, resize=resize
-        )
-
-    def detector(
-        self,
-        model: Path | str,
-        fmt: str = "auto",
-        names: Sequence[str] | None = None,
-        image_size: tuple[int, int] | None = None,
-    ) -> OnnxDetector:
-        """``model`` on this config's device with its threads (:class:`eval.onnx_model.OnnxDetector`)."""
-        return OnnxDetector(model, fmt, names, image_size, threads=self.threads, device=self.device)
 
 
 class ScoreError(ValueError):
@@ -103,38 +66,32 @@ class TestSet(NamedTuple):
     splits: list[str]
 
 
-def load_test_set(
-    path: Path | str,
-    fmt: str = "auto",
-    split: str | None = None,
-    aliases: Mapping[str, str] | None = None,
-    drop: Sequence[str] = (),
-    holdout: float = 0.0,
-    label: str | None = None,
-) -> TestSet:
+def load_test_set(path: Path | str, settings: TestSetConfig | None = None) -> TestSet:
     """Read any dataset :func:`curate.core.formats.registry.read_dataset` reads (a folder, a COCO .json, a
-    ``data.yaml``), one split of it (``val`` and ``valid`` are one name; None = :func:`default_split`;
-    :data:`ALL_SPLITS` = every image), with class ``aliases`` (source name -> class) and the boxes of classes
-    ``drop`` removed; with ``holdout`` > 0 only the images held out by content at that share
-    (:func:`curate.core.holdout.held_out`: the photos a Method 2 pool with ``background_holdout`` never shows).
-    ``label``: the class every image of a folder without label files holds (an image-labelled set)."""
+    ``data.yaml``) as ``settings`` say (default: :class:`eval.config.TestSetConfig`'s): one split of it (``val``
+    and ``valid`` are one name; None = :func:`default_split`; :data:`ALL_SPLITS` = every image), with its class
+    ``aliases`` (source name -> class) and the boxes of the classes ``drop_class`` removed; with ``holdout`` > 0
+    only the images held out by content at that share (:func:`curate.core.holdout.held_out`: the photos a Method 2
+    pool with ``background_holdout`` never shows). ``label``: the class every image of a folder without label
+    files holds (an image-labelled set)."""
+    cfg = settings or TestSetConfig()
     try:
-        result = read_dataset(path, fmt, aliases=aliases, label=label).drop_classes(drop)
+        result = read_dataset(path, cfg.format, aliases=cfg.aliases, label=cfg.label).drop_classes(cfg.drop_class)
     except ValueError as exc:
-        if label is None:
+        if cfg.label is None:
             raise
         raise ScoreError(str(exc)) from None
     ds = result.dataset
     splits = ds.splits
-    split = default_split(ds, path) if split is None else split
+    split = default_split(ds, path) if cfg.split is None else cfg.split
     if split != ALL_SPLITS:
         try:
             ds, split = pick_split(ds, split, path), ds.resolve_split(split) or split
         except SplitError as exc:
             raise ScoreError(f"{exc}; --split all for every image") from None
-    if holdout and ds.images:
+    if cfg.holdout and ds.images:
         try:
-            ds = held_out_images(ds, holdout, path)
+            ds = held_out_images(ds, cfg.holdout, path)
         except ValueError as exc:
             raise ScoreError(str(exc)) from None
     if not ds.images:
@@ -162,9 +119,10 @@ def _shown(ds: Dataset) -> str:
 
 
 def score(
-    detector: OnnxDetector, dataset: Dataset, options: PredictOptions | None = None, problems: Sequence[Problem] = ()
+    detector: OnnxDetector, dataset: Dataset, options: InferenceConfig | None = None, problems: Sequence[Problem] = ()
 ) -> ScoreResult:
-    """Run ``detector`` over ``dataset`` and compute COCO metrics over every readable image."""
+    """Run ``detector`` over ``dataset`` (as ``options`` say: :func:`eval.predict.predict_dataset`) and compute
+    COCO metrics over every readable image."""
     preds = predict_dataset(detector, dataset, options)
     if not preds.by_image:
         raise ScoreError(f"{dataset.root}: none of the {len(dataset.images)} images could be read")

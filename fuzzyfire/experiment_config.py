@@ -4,7 +4,7 @@ is generated from these classes by :mod:`fuzzyfire.reference`).
 
 Component configs are the packages' own: :class:`curate.curation.CurateConfig`, :class:`synth.method1.
 Method1Config`, :class:`synth.method2.Method2Config`, :class:`synth.standin.StandInConfig`,
-:class:`train.config.TrainConfig`, :class:`eval.score.ScoreConfig`. Relative paths resolve against the config
+:class:`train.config.TrainConfig`, :class:`eval.config.InferenceConfig`. Relative paths resolve against the config
 file's folder.
 """
 
@@ -17,7 +17,7 @@ from typing import Literal, Optional
 from curate.curation import CurateConfig
 from curate.dedup import DEFAULT_THRESHOLD
 from curate.sources import SourceConfig
-from eval.score import ScoreConfig
+from eval.config import InferenceConfig
 from fuzzyfire.engine import EngineConfig, EngineError
 from synth.method1 import Method1Config
 from synth.method2 import Method2Config
@@ -190,7 +190,8 @@ class ExperimentConfig:
     grid: GridConfig = field(default_factory=GridConfig)  # which mixtures and seeds are trained
     train: TrainConfig = field(default_factory=TrainConfig)  # each run's detector training (fuzzyfire train's settings)
     engine: EngineConfig = field(default_factory=EngineConfig)  # who trains: fuzzyfire or a command (engine.py)
-    score: ScoreConfig = field(default_factory=ScoreConfig)  # how each run is scored (fuzzyfire score's settings)
+    score: InferenceConfig = field(default_factory=InferenceConfig)  # how each run's model is scored (the inference
+    # settings of fuzzyfire score)
     executor: ExecutorConfig = field(default_factory=ExecutorConfig)  # where runs run: here, or on a Ray cluster
     leakage: LeakageConfig = field(default_factory=LeakageConfig)  # test images that are training images: dropped
     report: ReportConfig = field(default_factory=ReportConfig)  # tables, comparisons and report.html

@@ -13,6 +13,7 @@ def sections() -> list[tuple[str, str, type]]:
     """(heading, one paragraph, dataclass) of each settings section, in the order docs/config.md lists them."""
     from curate.curation import CurateConfig
     from curate.sources import MergeConfig
+    from eval.config import CompareConfig, PredictConfig, ScoreConfig
     from fuzzyfire.experiment_config import ExperimentConfig
     from synth.flames.library import FlameLibraryConfig
     from synth.method1 import Method1Config
@@ -34,6 +35,13 @@ def sections() -> list[tuple[str, str, type]]:
         ("curate", "`fuzzyfire curate CONFIG.yaml [--set KEY=VALUE]` and an experiment's `real.curate`.",
          CurateConfig),
         ("merge", "`fuzzyfire merge CONFIG.yaml [--set KEY=VALUE]`.", MergeConfig),
+        ("score", "`fuzzyfire score MODEL.onnx --data DATA [--config CONFIG.yaml] [--set KEY=VALUE]`. Its "
+         "`inference` section is an experiment's `score` (the post-processing is also training's: "
+         "`train.postprocess`).", ScoreConfig),
+        ("compare", "`fuzzyfire compare A.onnx B.onnx --data DATA [--config CONFIG.yaml] [--set KEY=VALUE]`.",
+         CompareConfig),
+        ("predict", "`fuzzyfire predict MODEL.onnx IMAGES|VIDEO --out DIR [--config CONFIG.yaml] [--set "
+         "KEY=VALUE]`: its confidence threshold is an alarm's, higher than scoring's.", PredictConfig),
     ]  # fmt: skip
 
 

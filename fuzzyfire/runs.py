@@ -30,8 +30,8 @@ from fuzzyfire.stages import digest
 if TYPE_CHECKING:
     from curate.core.cocoeval import CocoMetrics
     from curate.core.dataset import Dataset
+    from eval.config import InferenceConfig
     from eval.errors import ErrorBreakdown
-    from eval.score import ScoreConfig
     from fuzzyfire.engine import EngineConfig
     from train.config import TrainConfig
 
@@ -73,7 +73,7 @@ class RunSpec:
     tests: tuple[EvalSet, ...]
     classes: tuple[str, ...]
     train: TrainConfig
-    score: ScoreConfig
+    score: InferenceConfig
     root: Path
     engine: EngineConfig | None = None
     tables: tuple[str, ...] = ()
@@ -203,10 +203,9 @@ def score_run(
     detector = spec.score.detector(model)
     if detector.device_notice:
         print(detector.device_notice, flush=True)
-    options = spec.score.predict_options()
     out = {}
     for test in spec.test_sets if which is None else which:
-        result = score(detector, tests[test.name], options)
+        result = score(detector, tests[test.name], spec.score)
         folder = spec.out / "scores" / slug(test.name)
         write_outputs(result, folder)
         errors = score_errors(result)

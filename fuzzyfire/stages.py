@@ -30,7 +30,9 @@ STANDIN_LABEL = " (stand-in)"
 #: The version of what stages and runs mean, in every identity :func:`digest` hashes. Bump it when a config key
 #: is removed or changes meaning (every stage and run then rebuilds), instead of keeping old keys for old hashes.
 #: 2: the options measured not to help were deleted (docs/findings.md, "Retired designs").
-IDENTITY = 2
+#: 3: post-processing is one section, train.postprocess and score.postprocess (was train.val_conf, val_iou,
+#: max_det and score.conf, iou, max_det); score gained resize.
+IDENTITY = 3
 
 
 def digest(identity: Mapping[str, Any]) -> str:

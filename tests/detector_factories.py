@@ -177,3 +177,14 @@ def image_rows(
     """Detection rows (:func:`rows_for`'s shape) of one centred 32x32 box of ``cls`` on each grey level of
     ``greys``, at ``score``: a detector that fires on exactly those images."""
     return [(grey, [32.0, 32.0, 32.0, 32.0], NAMES.index(cls), score) for grey in greys]
+
+
+def layout_and_two_detectors(root: Path) -> dict[str, Path]:
+    """A classification layout in ``root/layout`` (fire/: four grey levels, normal/: two) and two detectors: ``a``
+    fires on half the fire photos only, ``b`` on three fire photos and one normal photo."""
+    write_class_layout(root / "layout", (40, 80, 120, 160), (200, 240))
+    return {
+        "layout": root / "layout",
+        "a": oracle_model(root / "a.onnx", rows=image_rows((40, 80))),
+        "b": oracle_model(root / "b.onnx", rows=image_rows((40, 80, 120, 200))),
+    }

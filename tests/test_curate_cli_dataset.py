@@ -76,6 +76,7 @@ def test_an_ultralytics_data_yaml_is_its_dataset_in_every_command(tmp_path, caps
     import yaml
     from factories import write_image
 
+    from eval.config import TestSetConfig
     from eval.score import load_test_set
 
     root = tmp_path / "ds"
@@ -93,7 +94,7 @@ def test_an_ultralytics_data_yaml_is_its_dataset_in_every_command(tmp_path, caps
     assert stats["images"] == 5 and set(stats["per_split"]) == {"train", "val"}
     assert main(["validate", str(data_yaml)]) == 0
     assert main(["convert", str(data_yaml), "--to", "coco", "--out", str(tmp_path / "c")]) == 0
-    test = load_test_set(data_yaml, split="valid")  # valid and val are one name
+    test = load_test_set(data_yaml, TestSetConfig(split="valid"))  # valid and val are one name
     assert test.split == "val" and len(test.dataset.images) == 2
     assert load_test_set(data_yaml).split == "val"  # no test split: the validation split, never train
 

@@ -62,6 +62,8 @@ def test_file_then_flags_then_set_later_wins(tmp_path: Path) -> None:
     assert _build(str(cfg), "--n", "7", "--set", "n=9").n == 9
     assert _build(str(cfg), "--deep").inner.depth == 1.0
     assert _build("--paths", "a", "b/c").paths == (Path("a"), Path("b/c"))
+    with pytest.raises(ConfigError, match="n must be >= 1, got 0"):  # a flag given 0 is given, not left out
+        _build(str(cfg), "--n", "0")
 
 
 def test_errors_name_the_file_and_the_key(tmp_path: Path) -> None:
@@ -88,6 +90,20 @@ def test_help_shows_each_flags_key_and_its_dataclass_default() -> None:
         key_default(Settings, "inner.deep")
 
 
+def test_the_file_may_be_an_option_for_a_command_whose_positionals_are_inputs(tmp_path: Path) -> None:
+    p = argparse.ArgumentParser()
+    p.add_argument("model")
+    add_config_options(p, Settings, ALIASES, "docs/config.md#settings", flag="--config")
+    cfg = tmp_path / "s.yaml"
+    cfg.write_text("n: 5\n")
+    for argv in (["m.onnx", "--config", str(cfg), "--n", "6"], ["--n", "6", "--config", str(cfg), "m.onnx"]):
+        args = p.parse_args(argv)
+        assert args.model == "m.onnx" and config_from_args(args, Settings, ALIASES) == Settings(n=6)
+    assert config_from_args(p.parse_args(["m.onnx"]), Settings, ALIASES) == Settings()
+    with pytest.raises(ConfigError, match=r"nope\.yaml: does not exist, not a settings file$"):
+        config_from_args(p.parse_args(["m.onnx", "--config", str(tmp_path / "nope.yaml")]), Settings, ALIASES)
+
+
 def test_printed_config_reads_back_as_the_same_settings(tmp_path: Path) -> None:
     cfg = _build("--n", "4", "--paths", "x", "--set", "inner.depth=0.25")
     out = io.StringIO()
@@ -98,6 +114,10 @@ def test_printed_config_reads_back_as_the_same_settings(tmp_path: Path) -> None:
 
 
 def _commands():
+    from eval.cli.compare import ALIASES as COMPARE_ALIASES
+    from eval.cli.predict import ALIASES as PREDICT_ALIASES
+    from eval.cli.score import ALIASES as SCORE_ALIASES
+    from eval.config import CompareConfig, PredictConfig, ScoreConfig
     from synth.cli import FLAME_ALIASES, METHOD1_ALIASES, METHOD2_ALIASES
     from synth.flames.library import FlameLibraryConfig
     from synth.method1 import Method1Config
@@ -110,6 +130,9 @@ def _commands():
         (Method1Config, METHOD1_ALIASES),
         (Method2Config, METHOD2_ALIASES),
         (TrainConfig, TRAIN_ALIASES),
+        (ScoreConfig, SCORE_ALIASES),
+        (CompareConfig, COMPARE_ALIASES),
+        (PredictConfig, PREDICT_ALIASES),
     ]
 
 

@@ -166,7 +166,15 @@ def test_unreadable_video_is_a_one_line_error(tmp_path, work, capsys):
     assert err.startswith("error: ") and "bad.mp4" in err and len(err.strip().splitlines()) == 1
 
 
-def test_help_shows_an_example(capsys):
+def test_help_shows_an_example_and_the_drawing_confidence(capsys):
     with pytest.raises(SystemExit):
         main(["predict", "--help"])
-    assert "example:" in capsys.readouterr().out
+    text = capsys.readouterr().out
+    assert "example:" in text and "[inference.postprocess.conf=0.25]" in " ".join(text.split())
+
+
+def test_out_is_required_unless_the_settings_are_printed(work, tmp_path, capsys):
+    assert main(["predict", str(work["model"]), str(work["folder"])]) == 2
+    assert "--out is required (unless --print-config)" in capsys.readouterr().err
+    assert main(["predict", str(work["model"]), str(work["folder"]), "--print-config", "--conf", "0.5"]) == 0
+    assert "conf: 0.5" in capsys.readouterr().out and not (tmp_path / "o").exists()

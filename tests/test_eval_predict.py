@@ -9,10 +9,12 @@ import pytest
 from detector_factories import IMAGES, oracle_model, write_test_set
 
 from curate.core.boxes import xyxy_to_xywh
+from curate.core.detections import PostprocessConfig
 from curate.core.formats.registry import read_dataset
 from curate.core.imageio import read_image
+from eval.config import InferenceConfig
 from eval.onnx_model import OnnxDetector
-from eval.predict import PredictOptions, _loader, detect_images, predict_dataset
+from eval.predict import _loader, detect_images, predict_dataset
 
 
 @pytest.fixture(scope="module")
@@ -25,7 +27,7 @@ def setup(tmp_path_factory):
 @pytest.mark.parametrize("batch", [1, 2, 4, 16])
 def test_boxes_come_back_in_original_pixels(setup, batch):
     ds, det = setup
-    preds = predict_dataset(det, ds, PredictOptions(batch=batch))
+    preds = predict_dataset(det, ds, InferenceConfig(batch=batch))
     assert preds.problems == [] and set(preds.by_image) == {img.id for img in ds.images}
     by_name = {img.file_name.split("/")[-1][:-4]: img.id for img in ds.images}
     for img in IMAGES:
@@ -57,7 +59,7 @@ def test_size_mismatch_is_a_warning(setup):
 @pytest.mark.parametrize("batch", [1, 4])
 def test_decoded_images_get_the_detections_their_files_get(setup, batch):
     ds, det = setup
-    opt = PredictOptions(batch=batch, conf=0.2)
+    opt = InferenceConfig(PostprocessConfig(conf=0.2), batch=batch)
     from_files = predict_dataset(det, ds, opt)
     found = detect_images(det, [read_image(ds.image_path(img)) for img in ds.images], opt)
     assert len(found) == len(ds.images)

@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 from factories_experiment import toy_config
 
-from eval.score import ScoreConfig
+from eval.config import InferenceConfig
 from fuzzyfire.aggregate import comparisons, result_rows
 from fuzzyfire.runs import EvalSet, RunSpec
 from fuzzyfire.stages import DataRef
@@ -20,7 +20,7 @@ def _spec(out: Path, mixture: str, method: str | None, seed: int = 0, tables: tu
     ref = DataRef(Path("/d"), {"kind": "x"})
     train = TrainConfig(seed=seed)
     tests = (EvalSet("common", ref), EvalSet("rare", ref))
-    return RunSpec(mixture, method, ref, ref, tests, ("fire",), train, ScoreConfig(), out, tables=tables)
+    return RunSpec(mixture, method, ref, ref, tests, ("fire",), train, InferenceConfig(), out, tables=tables)
 
 
 def _result(ap: float) -> dict:

@@ -9,8 +9,8 @@ from pathlib import Path
 
 import pytest
 
+from eval.config import InferenceConfig
 from eval.errors import ALARMS
-from eval.score import ScoreConfig
 from fuzzyfire.runs import (
     RESULTS_FILE,
     EvalSet,
@@ -32,7 +32,7 @@ def _spec(out: Path, seed: int = 0) -> RunSpec:
     val = DataRef(Path("/data/real"), {"kind": "folder"}, "coco", "valid")
     tests = (EvalSet("common", val.with_split("test")),)
     return RunSpec(
-        "R2_S2", "method2", data, val, tests, ("fire",), TrainConfig(epochs=1, seed=seed), ScoreConfig(), out
+        "R2_S2", "method2", data, val, tests, ("fire",), TrainConfig(epochs=1, seed=seed), InferenceConfig(), out
     )
 
 
@@ -108,7 +108,7 @@ def _fake_yolo_run(tmp_path: Path) -> RunSpec:
     mix = DataRef(tmp_path / "mix", {"kind": "mixture"}, "coco")
     engine = build_config(command_engine(), EngineConfig)
     train, tests = TrainConfig(epochs=1, imgsz=64), (EvalSet("common", real),)
-    return RunSpec("R4_S0", None, mix, real, tests, ("fire",), train, ScoreConfig(), tmp_path / "out", engine)
+    return RunSpec("R4_S0", None, mix, real, tests, ("fire",), train, InferenceConfig(), tmp_path / "out", engine)
 
 
 def test_a_named_test_set_added_later_is_scored_without_training(tmp_path: Path) -> None:

@@ -53,3 +53,13 @@ def test_real_finetune_is_at_most_the_epochs() -> None:
     for bad in (-1, 6):
         with pytest.raises(ValueError, match="real_finetune"):
             TrainConfig(epochs=5, real_finetune=bad)
+
+
+def test_validation_post_processing_is_scorings_one_section() -> None:
+    from curate.core.detections import PostprocessConfig
+
+    assert TrainConfig().postprocess == PostprocessConfig()
+    cfg = build_config({"postprocess": {"conf": 0.01}}, TrainConfig)
+    assert (cfg.postprocess.conf, cfg.postprocess.max_det) == (0.01, PostprocessConfig().max_det)
+    with pytest.raises(ValueError, match=r"postprocess\.iou must be in \(0, 1\]"):
+        build_config({"postprocess": {"iou": 0}}, TrainConfig)

@@ -9,6 +9,7 @@ import pytest
 import torch
 
 from curate.core.dataset import DatasetBuilder, ImageRecord
+from curate.core.detections import PostprocessConfig
 from train.validate import evaluate, fitness
 
 
@@ -45,18 +46,18 @@ def test_ground_truth_fed_back_scores_one(tmp_path: Path) -> None:
     ds = _dataset(tmp_path)
     # the two boxes in letterboxed input pixels (cx, cy, w, h), obj, p_fire, p_smoke
     rows = np.array([[20, 31, 20, 10, 0.9, 1.0, 0.0], [47.5, 31, 15, 20, 0.9, 0.0, 1.0]], np.float32)
-    metrics = evaluate(_FixedDetector(rows), _Inputs(ds.images[0]), ds, ["fire", "smoke"], 64, 0.001, 0.6, 300)
+    metrics = evaluate(_FixedDetector(rows), _Inputs(ds.images[0]), ds, ["fire", "smoke"], 64, PostprocessConfig())
     assert metrics["AP"] == pytest.approx(1.0) and metrics["AP50"] == pytest.approx(1.0)
     assert metrics["fitness"] == pytest.approx(1.0) and metrics["detections"] == 2.0
     shifted = rows + np.array([[6, 0, 0, 0, 0, 0, 0]], np.float32)
-    worse = evaluate(_FixedDetector(shifted), _Inputs(ds.images[0]), ds, ["fire", "smoke"], 64, 0.001, 0.6, 300)
+    worse = evaluate(_FixedDetector(shifted), _Inputs(ds.images[0]), ds, ["fire", "smoke"], 64, PostprocessConfig())
     assert worse["AP"] < 1.0
 
 
 def test_no_detection_scores_zero(tmp_path: Path) -> None:
     ds = _dataset(tmp_path)
     rows = np.array([[20, 31, 20, 10, 0.0, 1.0, 0.0]], np.float32)  # below every threshold
-    metrics = evaluate(_FixedDetector(rows), _Inputs(ds.images[0]), ds, ["fire", "smoke"], 64, 0.001, 0.6, 300)
+    metrics = evaluate(_FixedDetector(rows), _Inputs(ds.images[0]), ds, ["fire", "smoke"], 64, PostprocessConfig())
     assert metrics == {"AP": 0.0, "AP50": 0.0, "fitness": 0.0, "detections": 0.0}
 
 

@@ -18,6 +18,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Literal, Optional
 
+from curate.core.detections import PostprocessConfig
+
 #: Depth and width multiples of the YOLOv5 family (published values).
 MODEL_SIZES: dict[str, tuple[float, float]] = {"n": (0.33, 0.25), "s": (0.33, 0.50), "m": (0.67, 0.75)}
 
@@ -87,9 +89,6 @@ class TrainConfig:
     ema_decay: float = 0.99  # EMA decay, ramped as decay * (1 - exp(-updates / ema_tau)); 0.99 averages ~100 steps
     # (YOLOv5: 0.9999, made for 100k-step COCO runs)
     ema_tau: float = 100.0  # EMA ramp length, optimizer steps (YOLOv5: 2000)
-    val_conf: float = 0.001  # validation: score threshold before NMS
-    val_iou: float = 0.6  # validation: NMS IoU threshold
-    max_det: int = 300  # validation: detections kept per image
     select: Literal["best", "last"] = "best"  # exported weights: the EMA of the epoch with the best validation
     # fitness (YOLOv5's best.pt), or of the last epoch (steadier when the validation set is small)
     real_finetune: int = 0  # the last N epochs train only on the real images (not ``synth:``), and a real image's
@@ -106,19 +105,17 @@ class TrainConfig:
     optim: OptimConfig = field(default_factory=OptimConfig)  # optimizer and schedule
     loss: LossConfig = field(default_factory=LossConfig)  # loss gains
     augment: AugmentConfig = field(default_factory=AugmentConfig)  # augmentations
+    postprocess: PostprocessConfig = field(default_factory=PostprocessConfig)  # validation's confidence threshold,
+    # NMS and boxes per image (those of fuzzyfire score: the AP that picks the best epoch is scoring's)
 
     def __post_init__(self) -> None:
-        for name in ("epochs", "batch", "max_det"):
+        for name in ("epochs", "batch"):
             if getattr(self, name) < 1:
                 raise ValueError(f"train.{name} must be >= 1, got {getattr(self, name)}")
         if self.imgsz < 32 or self.imgsz % 32:
             raise ValueError(f"train.imgsz must be a positive multiple of 32, got {self.imgsz}")
         if not 0.0 <= self.ema_decay < 1.0 or self.ema_tau <= 0:
             raise ValueError(f"train.ema_decay must be in [0, 1) and ema_tau > 0, got {self.ema_decay}, {self.ema_tau}")
-        if not 0.0 <= self.val_conf < 1.0 or not 0.0 < self.val_iou <= 1.0:
-            raise ValueError(
-                f"train.val_conf must be in [0, 1) and val_iou in (0, 1], got {self.val_conf}, {self.val_iou}"
-            )
         if self.threads < 0 or self.feature_views < 0 or (self.workers is not None and self.workers < 0):
             raise ValueError("train.threads, feature_views and workers must be >= 0")
         if self.feature_cache_gb < 0:

@@ -250,8 +250,7 @@ def fit(cfg: TrainConfig, train_ds: Dataset, val_ds: Dataset, out: Path | str) -
     for epoch in range(first, cfg.epochs):
         record = {"epoch": epoch + 1, **train_one_epoch(t, epoch)}  # outputs count epochs from 1
         start = time.perf_counter()
-        args = (t.class_names, cfg.imgsz, cfg.val_conf, cfg.val_iou, cfg.max_det)
-        record.update(evaluate(t.ema.ema, val_inputs, val_ds, *args))
+        record.update(evaluate(t.ema.ema, val_inputs, val_ds, t.class_names, cfg.imgsz, cfg.postprocess))
         record["val_seconds"] = time.perf_counter() - start
         if record["fitness"] > best["fitness"]:
             best = _record_of(record)

@@ -13,7 +13,7 @@ import torch
 
 from curate.core.cocoeval import evaluate_predictions
 from curate.core.dataset import Dataset
-from curate.core.detections import Predictions, postprocess, to_original
+from curate.core.detections import PostprocessConfig, Predictions, postprocess, to_original
 from train.features import ValidationInputs
 
 
@@ -22,9 +22,7 @@ def predictions(
     inputs: ValidationInputs,
     class_names: Sequence[str],
     imgsz: int,
-    conf: float,
-    iou: float,
-    max_det: int,
+    settings: PostprocessConfig,
 ) -> Predictions:
     """Detections of ``model`` (a :class:`train.model.Detector`) on every validation image, boxes in original
     pixels; scores ``obj * p_c`` as in the exported model."""
@@ -35,7 +33,7 @@ def predictions(
             feats = tuple(f.contiguous(memory_format=torch.channels_last) for f in feats)
             decoded = model.predict_frozen(feats).float().cpu().numpy()
             for record, pred in zip(records, decoded):
-                det = postprocess(pred[:, :4], pred[:, 4:5] * pred[:, 5:], conf, iou, max_det)
+                det = postprocess(pred[:, :4], pred[:, 4:5] * pred[:, 5:], settings)
                 by_image[record.id] = to_original(det, (record.width, record.height), (imgsz, imgsz))
     return Predictions(tuple(class_names), by_image)
 
@@ -51,13 +49,11 @@ def evaluate(
     ground_truth: Dataset,
     class_names: Sequence[str],
     imgsz: int,
-    conf: float,
-    iou: float,
-    max_det: int,
+    settings: PostprocessConfig,
 ) -> dict[str, float]:
     """``{"AP", "AP50", "fitness", "detections"}`` of ``model`` on the validation images (AP 0 where COCO
     leaves it undefined, e.g. a validation set without boxes)."""
-    preds = predictions(model, inputs, class_names, imgsz, conf, iou, max_det)
+    preds = predictions(model, inputs, class_names, imgsz, settings)
     metrics, _, records = evaluate_predictions(ground_truth, preds)
     values = {k: float(np.nan_to_num(metrics.summary[k] or 0.0)) for k in ("AP", "AP50")}
     return {**values, "fitness": fitness(values), "detections": float(len(records))}

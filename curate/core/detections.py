@@ -16,12 +16,28 @@ from curate.core.boxes import clip_xyxy, cxcywh_to_xyxy, letterbox_to_image_xyxy
 from curate.core.nms import batched_nms_xyxy
 from curate.core.problems import Problem
 
-#: Scoring defaults (COCO-style evaluation keeps low-confidence boxes: they only add recall).
-CONF_THRESHOLD = 0.001
-IOU_THRESHOLD = 0.6
-MAX_DETECTIONS = 300
 #: Highest-scoring candidates passed to NMS per image (bounds the cost of an untrained model's noise).
 MAX_CANDIDATES = 30000
+
+
+@dataclass(frozen=True)
+class PostprocessConfig:
+    """How a detector's raw output becomes its detections (:func:`postprocess`): training's validation of every
+    epoch (``train.postprocess``), ``fuzzyfire score`` and ``compare`` and an experiment's scoring
+    (``postprocess`` of their ``inference``), and ``fuzzyfire predict`` (which draws boxes: a higher ``conf``)."""
+
+    conf: float = 0.001  # score threshold before NMS, [0, 1); COCO-style scoring keeps low scores (they only add
+    # recall)
+    iou: float = 0.6  # NMS IoU threshold, (0, 1]: a box overlapping a better one of its class more is dropped
+    max_det: int = 300  # detections kept per image, >= 1
+
+    def __post_init__(self) -> None:
+        if not 0.0 <= self.conf < 1.0:
+            raise ValueError(f"postprocess.conf must be in [0, 1), got {self.conf}")
+        if not 0.0 < self.iou <= 1.0:
+            raise ValueError(f"postprocess.iou must be in (0, 1], got {self.iou}")
+        if self.max_det < 1:
+            raise ValueError(f"postprocess.max_det must be >= 1, got {self.max_det}")
 
 
 @dataclass(frozen=True)
@@ -50,28 +66,28 @@ class Predictions:
 def postprocess(
     boxes_cxcywh: NDArray,
     scores: NDArray,
-    conf: float = CONF_THRESHOLD,
-    iou: float = IOU_THRESHOLD,
-    max_det: int = MAX_DETECTIONS,
+    settings: PostprocessConfig | None = None,
     multi_label: bool = True,
 ) -> ImageDetections:
-    """One image's raw head output -> its detections in input pixels.
+    """One image's raw head output -> its detections in input pixels, with the thresholds of ``settings``
+    (default: :class:`PostprocessConfig`'s).
 
     ``boxes_cxcywh`` (N, 4) centre boxes, ``scores`` (N, C). ``multi_label`` keeps every (box, class) pair
-    above ``conf`` (COCO-style evaluation), otherwise only each box's best class.
+    above the confidence threshold (COCO-style evaluation), otherwise only each box's best class.
     """
+    post = settings or PostprocessConfig()
     if multi_label:
-        rows, labels = np.nonzero(scores > conf)
+        rows, labels = np.nonzero(scores > post.conf)
     else:
         labels = np.argmax(scores, axis=1) if scores.size else np.zeros(0, dtype=np.int64)
-        rows = np.flatnonzero(scores[np.arange(len(labels)), labels] > conf) if scores.size else labels
+        rows = np.flatnonzero(scores[np.arange(len(labels)), labels] > post.conf) if scores.size else labels
         labels = labels[rows]
     picked = scores[rows, labels].astype(np.float64)
     if len(picked) > MAX_CANDIDATES:
         top = np.argsort(-picked, kind="stable")[:MAX_CANDIDATES]
         rows, labels, picked = rows[top], labels[top], picked[top]
     xyxy = cxcywh_to_xyxy(boxes_cxcywh[rows]) if len(rows) else np.zeros((0, 4))
-    keep = batched_nms_xyxy(xyxy, picked, labels, iou, max_det)
+    keep = batched_nms_xyxy(xyxy, picked, labels, post.iou, post.max_det)
     return ImageDetections(xyxy[keep], picked[keep], labels[keep].astype(np.int64))
 
 

@@ -6,6 +6,8 @@ The geometry and the mapping of boxes back to original pixels live in :mod:`cura
 
 from __future__ import annotations
 
+from typing import Literal, get_args
+
 import cv2
 import numpy as np
 from numpy.typing import NDArray
@@ -16,7 +18,8 @@ from curate.core.boxes import letterbox_params
 PAD_VALUE = 114
 #: How the image is resized: ``area`` = area averaging when shrinking, bilinear when enlarging (ours and
 #: YOLOv5's); ``linear`` = always bilinear (ultralytics 8.x).
-RESIZE_MODES = ("area", "linear")
+ResizeMode = Literal["area", "linear"]
+RESIZE_MODES: tuple[str, ...] = get_args(ResizeMode)
 
 
 def letterbox_image(

@@ -78,19 +78,26 @@ def add_config_options(
     aliases: Sequence[Alias],
     reference: str,
     required: bool = False,
+    flag: str | None = None,
 ) -> None:
     """The positional ``config`` (YAML of ``schema``; optional unless ``required``), ``--set KEY=VALUE``
     (repeatable), ``--print-config``, and the ``aliases`` in a group of their own, each help ending with its keys'
     defaults from ``schema``. ``schema`` may be a function that imports and returns the dataclass: the defaults are
     then read only when the help is printed (:class:`curate.core.commands.HelpFormatter` shows them), so building
-    the command line imports no generator. ``reference``: where every key is documented (``docs/config.md#...``)."""
+    the command line imports no generator. ``reference``: where every key is documented (``docs/config.md#...``).
+    ``flag`` (e.g. ``"--config"``): the file is that option instead of the positional, for a command whose
+    positionals are its inputs (argparse cannot take an optional positional after them once an option stands
+    between)."""
+    where = {"dest": "config", "required": required} if flag else {"nargs": None if required else "?"}
     p.add_argument(
-        "config",
+        flag or "config",
         type=Path,
-        nargs=None if required else "?",
         metavar="CONFIG.yaml",
         help=f"settings file (every key: {reference})" + ("" if required else "; default: the defaults shown here"),
+        **where,  # type: ignore[arg-type]
     )
+    if flag:
+        p.set_defaults(config_flag=flag)
     p.add_argument(
         "--set",
         action="append",
@@ -119,15 +126,21 @@ def config_from_args(args: argparse.Namespace, schema: type[T], aliases: Sequenc
     :class:`~curate.core.config.ConfigError` or ValueError names the file or key at fault."""
     if args.config is not None and not Path(args.config).is_file():
         what = "is a folder" if Path(args.config).is_dir() else "does not exist"
-        raise ConfigError(f"{args.config}: {what}, not a settings file (CONFIG.yaml is the optional first argument)")
+        hint = "" if getattr(args, "config_flag", None) else " (CONFIG.yaml is the optional first argument)"
+        raise ConfigError(f"{args.config}: {what}, not a settings file{hint}")
     raw: dict[str, Any] = read_yaml(args.config) if args.config is not None else {}
-    given = [f"{k}={flow(v)}" for a in aliases if getattr(args, a.dest, None) not in (None, False)
+    given = [f"{k}={flow(v)}" for a in aliases if _given(getattr(args, a.dest, None))
              for k, v in a.values(getattr(args, a.dest)).items()]  # fmt: skip
     where = f"{args.config}: " if args.config is not None else ""
     try:
         return build_config(apply_overrides(raw, [*given, *args.set]), schema)
     except (ConfigError, ValueError) as exc:
         raise ConfigError(f"{where}{exc}") from None
+
+
+def _given(value: Any) -> bool:
+    """Whether an alias flag was given: a value, 0 included (its default is None; a switch not given is None)."""
+    return value is not None and value is not False
 
 
 def print_config(cfg: Any, stream: Any = None) -> None:

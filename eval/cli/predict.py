@@ -9,14 +9,30 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from curate.core.commands import add_command
-from eval.cli_options import add_model_args, build_detector, parse_names
+from curate.core.options import Alias
+from eval.cli.options import MODEL_ALIASES, add_settings, open_detector, parse_names, settings
+
+#: Flags of ``fuzzyfire predict``: aliases of :class:`eval.config.PredictConfig` keys (their defaults are the keys').
+ALIASES: tuple[Alias, ...] = (
+    *MODEL_ALIASES,
+    Alias("--classes", ("classes",), "only these model classes, e.g. fire (null: every class)", {"type": parse_names}),
+)
+
+
+def _predict_config() -> type:
+    from eval.config import PredictConfig
+
+    return PredictConfig
+
 
 _DESCRIPTION = """Run a detector ONNX (ours, YOLOv5, YOLOv8/11 exports) on images or a video, with the letterbox
 and post-processing of `fuzzyfire score`, and draw its boxes with class and score. IMAGES|VIDEO is a folder of
 images (read recursively; unreadable files are named and skipped), one image, or a video (OpenCV reads it; the
 drawn frames are written as OUT/<name>.mp4, mp4v). OUT also gets detections.json: one COCO-style result per
 detection, {"file_name", "frame" (videos), "category", "bbox": [x, y, w, h] pixels of the original image,
-"score"}. OUT must be new or empty (--overwrite to write into it anyway).
+"score"}. OUT must be new or empty (--overwrite to write into it anyway). Settings: --config CONFIG.yaml
+(docs/config.md#predict), the options below, then --set KEY=VALUE. The confidence threshold (--conf) is higher
+than score's: the boxes drawn are those that would raise an alarm.
 
 example:
   fuzzyfire predict runs/R400_S0/best.onnx ../shared/data/fire-cctv-416/valid/images --out out/pred
@@ -54,16 +70,19 @@ def cmd_predict(args: argparse.Namespace) -> int:
     from eval.predict_media import SourceError, predict_images, predict_video, source_kind, write_records
     from eval.video import VideoError
 
+    cfg = settings(args, _predict_config(), ALIASES, required=("--out",))
+    if cfg is None:
+        return 0
     refused = check_output(args.out, args.source, args.overwrite)
     try:
         if refused:
             raise ValueError(refused)
         kind = source_kind(args.source)
-        detector, options = build_detector(args.model, args)
-        labels = class_labels(args.classes, detector.spec.class_names)
+        detector = open_detector(args.model, cfg.model, cfg.inference)
+        labels = class_labels(cfg.classes, detector.spec.class_names)
         args.out.mkdir(parents=True, exist_ok=True)
         run = predict_video if kind == "video" else predict_images
-        result = run(detector, args.source, args.out, options, labels)
+        result = run(detector, args.source, args.out, cfg.inference, labels)
     except (SourceError, ModelError, VideoError, ValueError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
@@ -72,7 +91,8 @@ def cmd_predict(args: argparse.Namespace) -> int:
     path = write_records(result.records, args.out)
     unit = "frames" if kind == "video" else "images"
     drawn = result.written[0] if kind == "video" else f"{len(result.written)} drawn images"
-    print(f"{result.inputs} {unit}, {len(result.records)} detections >= {args.conf:g}: {drawn}, {path}")
+    conf = cfg.inference.postprocess.conf
+    print(f"{result.inputs} {unit}, {len(result.records)} detections >= {conf:g}: {drawn}, {path}")
     return 0 if result.inputs else 1
 
 
@@ -84,10 +104,9 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="draw a detector ONNX's boxes on images or a video, and write its detections as JSON",
         description=_DESCRIPTION,
     )
-    p.add_argument("model", type=Path, help="detector .onnx file")
+    p.add_argument("model", type=Path, metavar="MODEL.onnx", help="detector .onnx file")
     p.add_argument("source", type=Path, metavar="IMAGES|VIDEO", help="image folder (recursive), image, or video")
-    p.add_argument("--out", type=Path, required=True, help="folder for the drawn pictures and detections.json")
-    p.add_argument("--classes", type=parse_names, help="only these model classes, e.g. fire (default: all)")
+    p.add_argument("--out", type=Path, help="folder for the drawn pictures and detections.json (required)")
     p.add_argument("--overwrite", action="store_true", help="write into a non-empty --out")
-    add_model_args(p, conf=0.25)
+    add_settings(p, _predict_config, ALIASES, "predict")
     p.set_defaults(func=cmd_predict)
