@@ -50,6 +50,11 @@ class Alias:
         return {self.keys[0]: _plain(value)}
 
 
+def one_of(values: Sequence[str]) -> dict[str, Any]:
+    """:attr:`Alias.kwargs` of a flag that takes one of ``values``, shown as ``a|b|c`` in the usage and help."""
+    return {"choices": tuple(values), "metavar": "|".join(values)}
+
+
 def _plain(value: Any) -> Any:
     if isinstance(value, Path):
         return value.as_posix()
@@ -78,19 +83,26 @@ def add_config_options(
     aliases: Sequence[Alias],
     reference: str,
     required: bool = False,
+    flag: str | None = None,
 ) -> None:
     """The positional ``config`` (YAML of ``schema``; optional unless ``required``), ``--set KEY=VALUE``
     (repeatable), ``--print-config``, and the ``aliases`` in a group of their own, each help ending with its keys'
     defaults from ``schema``. ``schema`` may be a function that imports and returns the dataclass: the defaults are
     then read only when the help is printed (:class:`curate.core.commands.HelpFormatter` shows them), so building
-    the command line imports no generator. ``reference``: where every key is documented (``docs/config.md#...``)."""
+    the command line imports no generator. ``reference``: where every key is documented (``docs/config.md#...``).
+    ``flag`` (e.g. ``"--config"``): the file is that option instead of the positional, for a command whose
+    positionals are its inputs (argparse cannot take an optional positional after them once an option stands
+    between)."""
+    where = {"dest": "config", "required": required} if flag else {"nargs": None if required else "?"}
     p.add_argument(
-        "config",
+        flag or "config",
         type=Path,
-        nargs=None if required else "?",
         metavar="CONFIG.yaml",
         help=f"settings file (every key: {reference})" + ("" if required else "; default: the defaults shown here"),
+        **where,  # type: ignore[arg-type]
     )
+    if flag:
+        p.set_defaults(config_flag=flag)
     p.add_argument(
         "--set",
         action="append",
@@ -99,7 +111,14 @@ def add_config_options(
         help="set any config key (dotted, the value in YAML), after CONFIG.yaml and the options; repeatable",
     )
     p.add_argument("--print-config", action="store_true", help="print the resolved settings as YAML and stop")
-    group = p.add_argument_group("settings (each an alias of a config key; defaults are the keys')")
+    add_aliases(
+        p.add_argument_group("settings (each an alias of a config key; defaults are the keys')"), schema, aliases
+    )
+
+
+def add_aliases(group: Any, schema: type | Callable[[], type], aliases: Sequence[Alias]) -> None:
+    """The flags of ``aliases`` in ``group`` (a parser or an argument group), each holding ``None`` until given and
+    its help ending with its keys' defaults in ``schema`` (as in :func:`add_config_options`)."""
     for a in aliases:
         kwargs = dict(a.kwargs)
         if kwargs.get("action") is None:
@@ -119,9 +138,10 @@ def config_from_args(args: argparse.Namespace, schema: type[T], aliases: Sequenc
     :class:`~curate.core.config.ConfigError` or ValueError names the file or key at fault."""
     if args.config is not None and not Path(args.config).is_file():
         what = "is a folder" if Path(args.config).is_dir() else "does not exist"
-        raise ConfigError(f"{args.config}: {what}, not a settings file (CONFIG.yaml is the optional first argument)")
+        hint = "" if getattr(args, "config_flag", None) else " (CONFIG.yaml is the optional first argument)"
+        raise ConfigError(f"{args.config}: {what}, not a settings file{hint}")
     raw: dict[str, Any] = read_yaml(args.config) if args.config is not None else {}
-    given = [f"{k}={flow(v)}" for a in aliases if getattr(args, a.dest, None) not in (None, False)
+    given = [f"{k}={flow(v)}" for a in aliases if _given(getattr(args, a.dest, None))
              for k, v in a.values(getattr(args, a.dest)).items()]  # fmt: skip
     where = f"{args.config}: " if args.config is not None else ""
     try:
@@ -130,6 +150,29 @@ def config_from_args(args: argparse.Namespace, schema: type[T], aliases: Sequenc
         raise ConfigError(f"{where}{exc}") from None
 
 
+def _given(value: Any) -> bool:
+    """Whether an alias flag was given: a value, 0 included (its default is None; a switch not given is None)."""
+    return value is not None and value is not False
+
+
 def print_config(cfg: Any, stream: Any = None) -> None:
     """``cfg`` as YAML (what ``--print-config`` shows): a file :func:`config_from_args` reads back unchanged."""
     yaml.safe_dump(to_dict(cfg), stream or sys.stdout, sort_keys=False, default_flow_style=None, width=100)
+
+
+def command_config(
+    args: argparse.Namespace, schema: type[T], aliases: Sequence[Alias], required: Mapping[str, Any] | None = None
+) -> T | None:
+    """A command's settings (:func:`config_from_args`), or ``None`` once ``--print-config`` has printed them (the
+    command then stops). Otherwise every input of ``required`` ({name as the user types it: its value}) must be
+    given: a ValueError names those that are not (they are not argparse-required, so ``--print-config`` needs
+    none)."""
+    cfg = config_from_args(args, schema, aliases)
+    if args.print_config:
+        print_config(cfg)
+        return None
+    missing = [name for name, value in (required or {}).items() if value is None or value == []]
+    if missing:
+        names = ", ".join(missing[:-1]) + " and " + missing[-1] if len(missing) > 1 else missing[0]
+        raise ValueError(f"{names} {'are' if len(missing) > 1 else 'is'} required (unless --print-config)")
+    return cfg
