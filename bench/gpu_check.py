@@ -354,14 +354,14 @@ def check_embed(paths: Sequence[Path], device: str, runs: dict[str, Any]) -> Out
     with each :class:`curate.dedupjob.DedupRun`."""
     import numpy as np
 
-    from curate.dedupjob import DedupOptions, run_dedup
+    from curate.dedupjob import dedup_options, run_dedup
     from curate.scan import scan_images
 
     for role, dev in (("cuda", device), ("cpu", "cpu")):
         embedder = _embedder(dev)
         scan_images(paths[:WARMUP_IMAGES], embedder)
         start = time.perf_counter()
-        runs[role] = run_dedup(paths, embedder, None, DedupOptions())
+        runs[role] = run_dedup(paths, embedder, None, dedup_options())
         seconds = time.perf_counter() - start
         provider = embedder.session.get_providers()[0]
         print(f"gpu_embed_{role}_throughput: {len(paths) / seconds:.1f} img/s ({provider}, decode, embed, dedup)")

@@ -13,7 +13,7 @@ from collections import Counter
 from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import Any, Literal, Optional
+from typing import Any
 
 import numpy as np
 
@@ -21,12 +21,12 @@ from curate.core.cluster import Cluster, open_cluster
 from curate.core.dataset import Dataset
 from curate.core.problems import Problem
 from curate.core.writer import write_dataset
-from curate.dedup import DEFAULT_THRESHOLD
-from curate.dedupjob import DedupOptions, DedupRun, dedup_document, run_dedup, tie_key, write_outputs
+from curate.dedupjob import DedupRun, dedup_document, dedup_options, run_dedup, tie_key, write_outputs
 from curate.embed import OnnxEmbedder, Preprocess, load_embedder
 from curate.embedcache import EmbeddingCache
 from curate.rank import rank_order
 from curate.scan import ScanResult
+from curate.settings import DuplicateSearchConfig, EmbedderConfig, ExecutorConfig, RankConfig
 from curate.sources import MergeConfig, SourceConfig, merge_sources
 from curate.split import near_groups, resolve_sizes, split_groups, straddling_groups
 
@@ -34,44 +34,8 @@ CURATION_FILE = "curation.json"  # what the curation did, beside the curated dat
 
 
 @dataclass(frozen=True)
-class ModelConfig:
-    """Embedding model: ``path: null`` = built-in EfficientNet-Lite0 (then leave the rest at defaults)."""
-
-    path: Optional[Path] = None  # ONNX file of your own CNN
-    input_size: int = 224  # pixels, square
-    mean: tuple[float, ...] = (127.0, 127.0, 127.0)  # per channel on 0..255
-    std: tuple[float, ...] = (128.0, 128.0, 128.0)  # user models only: divisor per channel on 0..255
-    bgr: bool = False  # user models only: BGR channel order
-    layout: Literal["nchw", "nhwc"] = "nchw"  # user models only: nchw | nhwc input layout
-    output: Optional[str] = None  # output name used as the embedding (default: first)
-    blur: float = 0.0  # Gaussian sigma in input pixels after resizing
-    batch_size: int = 4  # images per onnxruntime call
-    workers: int = 0  # decode + embed threads; 0 = one per CPU core
-    device: str = "auto"  # auto | cpu | cuda | cuda:N: onnxruntime's CUDA provider when installed (auto: if present)
-
-
-@dataclass(frozen=True)
-class ExecutorConfig:
-    """Where decoding, embedding and a partitioned search run (docs/scaling.md)."""
-
-    name: Literal["local", "ray"] = "local"  # local (this process, a thread per core) | ray (Ray workers)
-    address: Optional[str] = None  # ray: a running cluster (HOST:6379 or ray://HOST:10001); null = a local Ray
-
-
-@dataclass(frozen=True)
-class DedupConfig:
-    near: bool = True  # false: exact duplicates only
-    threshold: float = DEFAULT_THRESHOLD  # Euclidean distance of unit embeddings, 0..2
-    backend: Literal["auto", "numpy", "flat", "ivf", "hnsw", "partition"] = "auto"  # numpy | flat (exact faiss)
-    # | ivf | hnsw (approximate, beyond ~1M images) | partition (k-means cells, beyond ~10M); auto picks by size
+class DedupConfig(DuplicateSearchConfig):
     protect_sources: tuple[str, ...] = ()  # source names whose images are never removed
-
-
-@dataclass(frozen=True)
-class RankConfig:
-    method: Literal["score", "kcenter"] = "score"  # score = mean distance to k nearest kept images
-    k: int = 10  # neighbours in the score
-    top: Optional[int] = None  # keep the N most diverse; default: the sum of the split counts (or all)
 
 
 @dataclass(frozen=True)
@@ -83,16 +47,14 @@ class SplitConfig:
 
 
 @dataclass(frozen=True)
-class CurateConfig:
-    sources: tuple[SourceConfig, ...]  # the labelled datasets to merge (each: path, format, name, aliases,
-    # drop_classes)
-    classes: Optional[tuple[str, ...]] = None  # output classes; null = every class of the sources (fire and
-    # smoke first); a source class outside a given list is an error unless mapped (aliases) or dropped
+class CurateConfig(MergeConfig):
+    """The sources merged (:class:`~curate.sources.MergeConfig`: ``sources``, ``classes``, ``images``), then
+    deduplicated, ranked, cut to the top N and split."""
+
     dedup: DedupConfig = DedupConfig()  # exact and near-duplicate removal
     rank: RankConfig = RankConfig()  # diversity ranking of the kept images
     split: SplitConfig = SplitConfig()  # group-aware split (no near-duplicate group across two splits)
-    model: ModelConfig = ModelConfig()  # the embedding CNN (built-in ImageNet Lite0, or your ONNX)
-    images: Literal["copy", "hardlink", "symlink"] = "copy"  # how images reach the output folder
+    model: EmbedderConfig = EmbedderConfig()  # the embedding CNN (built-in ImageNet Lite0, or your ONNX)
     executor: ExecutorConfig = ExecutorConfig()  # where decoding and embedding run: here, or on a Ray cluster
 
 
@@ -104,7 +66,7 @@ class CurateResult:
     problems: list[Problem]
 
 
-def build_embedder(cfg: ModelConfig) -> OnnxEmbedder:
+def build_embedder(cfg: EmbedderConfig) -> OnnxEmbedder:
     if cfg.path is None:
         return load_embedder(device=cfg.device)
     pre = Preprocess(cfg.input_size, tuple(cfg.mean), tuple(cfg.std), cfg.bgr, cfg.layout, cfg.blur)  # type: ignore[arg-type]
@@ -131,20 +93,10 @@ def curate(
     """Run the pipeline (module docstring); relative source paths resolve against ``base``. ``scan``: the
     facts and embeddings of the merged images, when already computed (e.g. a previous result's ``run.scan``);
     ``cluster``: the Ray cluster that decodes and embeds (:func:`curate.dedupjob.run_dedup`)."""
-    merged, problems = merge_sources(MergeConfig(cfg.sources, cfg.classes), base, out)
+    merged, problems = merge_sources(cfg, base, out)
     protect = tuple(_source_path(s, base) for s in cfg.sources if s.name and s.name in cfg.dedup.protect_sources)
     paths = [Path(img.file_name) for img in merged.images]
-    opts = DedupOptions(
-        cfg.dedup.threshold,
-        cfg.dedup.near,
-        cfg.dedup.backend,
-        protect,
-        cfg.rank.method,
-        cfg.rank.k,
-        None,
-        cfg.model.workers,
-        cfg.model.batch_size,
-    )
+    opts = dedup_options(cfg.dedup, replace(cfg.rank, top=None), cfg.model, protect)
     run = run_dedup(paths, embedder, cache, opts, scan, cluster)  # ranks every kept image; the top N is cut below
     top = _selection_size(cfg, len(run.result.kept))
     opts = replace(opts, top=top)

@@ -19,13 +19,14 @@ from numpy.typing import NDArray
 
 from curate.core.cluster import Cluster
 from curate.core.problems import Problem
-from curate.dedup import DEFAULT_THRESHOLD, DedupResult, find_duplicates
+from curate.dedup import DedupResult, find_duplicates
 from curate.embed import OnnxEmbedder
 from curate.embedcache import EmbeddingCache
 from curate.rank import rank_order
 from curate.report import make_thumbs, write_histogram, write_html
 from curate.scan import ScannedImage, ScanResult, scan_images
 from curate.search import build_index
+from curate.settings import DuplicateSearchConfig, EmbedderConfig, RankConfig
 
 APPLY_MODES: tuple[str, ...] = ("copy", "link")
 REPORT_GROUPS = 100  # groups shown in report.html
@@ -36,15 +37,40 @@ UNREADABLE_SHOWN = 3  # unreadable files named in the summary line (all of them 
 
 @dataclass(frozen=True)
 class DedupOptions:
-    threshold: float = DEFAULT_THRESHOLD  # Euclidean distance between unit embeddings, 0..2
-    near: bool = True  # False: exact duplicates only
-    backend: str = "auto"  # search backend (curate.search.BACKENDS)
-    protect: tuple[Path, ...] = ()  # folders whose images are never removed
-    rank: str = "score"  # score | kcenter
-    k: int = 10  # neighbours in the diversity score
-    top: int | None = None  # keep only the N most diverse kept images
-    workers: int = 0  # decode + embed threads; 0 = one per CPU core
-    batch_size: int = 4  # images per onnxruntime call
+    """What a job does, in plain values (:func:`dedup_options` makes them from the settings sections)."""
+
+    threshold: float  # Euclidean distance between unit embeddings, 0..2
+    near: bool  # False: exact duplicates only
+    backend: str  # search backend (curate.search.BACKENDS, or partition)
+    protect: tuple[Path, ...]  # folders whose images are never removed
+    rank: str  # score | kcenter
+    k: int  # neighbours in the diversity score
+    top: int | None  # keep only the N most diverse kept images
+    workers: int  # decode + embed threads; 0 = one per CPU core
+    batch_size: int  # images per onnxruntime call
+
+
+def dedup_options(
+    search: DuplicateSearchConfig | None = None,
+    rank: RankConfig | None = None,
+    model: EmbedderConfig | None = None,
+    protect: tuple[Path, ...] = (),
+) -> DedupOptions:
+    """The options of a job with these settings (each section's defaults when not given): duplicates ``search``,
+    the ``rank`` of the kept images (its ``top`` included), ``model``'s workers and batch size, the ``protect``
+    folders."""
+    search, rank, model = search or DuplicateSearchConfig(), rank or RankConfig(), model or EmbedderConfig()
+    return DedupOptions(
+        search.threshold,
+        search.near,
+        search.backend,
+        protect,
+        rank.method,
+        rank.k,
+        rank.top,
+        model.workers,
+        model.batch_size,
+    )
 
 
 @dataclass

@@ -16,11 +16,12 @@ import re
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal, Optional
 
 import numpy as np
 
 from curate.core.dataset import Dataset, ImageRecord, merge
+from curate.core.formats.registry import DatasetFormat
 from curate.core.formats.yolo import ultralytics_val_folders
 from curate.core.writer import plan_image_names, write_dataset
 
@@ -32,6 +33,30 @@ MIXTURE_FILE = "mixture.json"
 
 class MixError(ValueError):
     """A mixture that cannot be drawn (bad name, more images asked than a source has)."""
+
+
+@dataclass(frozen=True)
+class MixConfig:
+    """``fuzzyfire mix``: which mixtures are drawn, with which seeds, from which split of each set, written how."""
+
+    mixtures: tuple[str, ...] = ()  # R<m>_S<n> names (m real + n synthetic images), e.g. [R1000_S0, R500_S500];
+    # empty: paper_grid
+    paper_grid: bool = False  # the paper's strategies instead: R<step>..R<total>_S0, the constant-total mixtures,
+    # R0_S<step>..R0_S<total>
+    total: int = 1000  # paper_grid: images per mixture
+    step: int = 250  # paper_grid: step between sizes
+    seeds: tuple[int, ...] = (0,)  # one folder per seed and mixture (flag: 0, 0-4 or 0,3,7)
+    split: Optional[str] = None  # split drawn from in both sets unless real_split / synth_split say otherwise;
+    # null: train when present, else every image
+    real_split: Optional[str] = None  # split of the real set; null: split
+    synth_split: Optional[str] = None  # split of the synthetic set; null: split
+    real_format: DatasetFormat = "auto"  # format of the real set (auto: detect)
+    synth_format: DatasetFormat = "auto"  # format of the synthetic set (auto: detect)
+    val_split: Optional[str] = None  # split of the validation set (--val); null: val or valid when present, else all
+    val_format: DatasetFormat = "auto"  # format of the validation set (auto: detect)
+    classes: tuple[str, ...] = ()  # class names in YOLO id order; empty: the real set's classes, then the synthetic's
+    images: Literal["symlink", "hardlink", "copy"] = "symlink"  # how images reach a mixture (symlink: referenced,
+    # not copied)
 
 
 @dataclass(frozen=True)

@@ -33,7 +33,9 @@ class MergeConfig:
 
     sources: tuple[SourceConfig, ...]  # the labelled datasets (each: path, format, name, names, aliases, drop_classes)
     classes: Optional[tuple[str, ...]] = None  # output classes in YOLO id order; null = every class of the sources
-    # (fire and smoke first, then the others by name)
+    # (fire and smoke first, then the others by name); a source class outside a given list is an error unless
+    # mapped (aliases) or dropped (drop_classes)
+    images: Literal["copy", "hardlink", "symlink"] = "copy"  # how images reach the output folder
 
 
 def read_source(src: SourceConfig, base: Path) -> tuple[Dataset, list[Problem]]:

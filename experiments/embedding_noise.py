@@ -139,7 +139,7 @@ def perturbation_sweep(folder: Path) -> None:
 
     from curate.core.config import load_config
     from curate.curation import assign_splits
-    from curate.dedupjob import DedupOptions, run_dedup
+    from curate.dedupjob import dedup_options, run_dedup
     from curate.embed import embedding_cache_path, l2_normalize, load_embedder
     from curate.embedcache import EmbeddingCache
     from fuzzyfire.experiment_config import ExperimentConfig
@@ -147,7 +147,7 @@ def perturbation_sweep(folder: Path) -> None:
     cfg = load_config(REPO / "configs" / "shared-data.yaml", ExperimentConfig).real.curate_config()
     embedder = load_embedder()
     paths = list_images(folder)
-    opts = DedupOptions(cfg.dedup.threshold, True, "auto", (), cfg.rank.method, cfg.rank.k, None, 0, 4)
+    opts = dedup_options(replace(cfg.dedup, near=True, backend="auto"), replace(cfg.rank, top=None))
     with EmbeddingCache(embedding_cache_path()) as cache:
         scan = run_dedup(paths, embedder, cache, opts).scan
 

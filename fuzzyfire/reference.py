@@ -12,6 +12,8 @@ from pathlib import Path
 def sections() -> list[tuple[str, str, type]]:
     """(heading, one paragraph, dataclass) of each settings section, in the order docs/config.md lists them."""
     from curate.curation import CurateConfig
+    from curate.mix import MixConfig
+    from curate.settings import DedupJobConfig, LeakageJobConfig
     from curate.sources import MergeConfig
     from eval.config import CompareConfig, PredictConfig, ScoreConfig
     from fuzzyfire.experiment_config import ExperimentConfig
@@ -32,9 +34,8 @@ def sections() -> list[tuple[str, str, type]]:
          FlameLibraryConfig),
         ("train", "`fuzzyfire train [CONFIG.yaml] --train DATASET --val VAL [--set KEY=VALUE]` and an experiment's `train`.",
          TrainConfig),
-        ("curate", "`fuzzyfire curate CONFIG.yaml [--set KEY=VALUE]` and an experiment's `real.curate`.",
+        ("curate", "`fuzzyfire curate CONFIG.yaml --out OUT [--set KEY=VALUE]` and an experiment's `real.curate`.",
          CurateConfig),
-        ("merge", "`fuzzyfire merge CONFIG.yaml [--set KEY=VALUE]`.", MergeConfig),
         ("score", "`fuzzyfire score MODEL.onnx --data DATA [--config CONFIG.yaml] [--set KEY=VALUE]`. Its "
          "`inference` section is an experiment's `score` (the post-processing is also training's: "
          "`train.postprocess`).", ScoreConfig),
@@ -42,6 +43,11 @@ def sections() -> list[tuple[str, str, type]]:
          CompareConfig),
         ("predict", "`fuzzyfire predict MODEL.onnx IMAGES|VIDEO --out DIR [--config CONFIG.yaml] [--set "
          "KEY=VALUE]`: its confidence threshold is an alarm's, higher than scoring's.", PredictConfig),
+        ("merge", "`fuzzyfire merge CONFIG.yaml --out OUT [--set KEY=VALUE]`.", MergeConfig),
+        ("dedup", "`fuzzyfire dedup DIR... --out OUT [--config CONFIG.yaml] [--set KEY=VALUE]`; its `dedup`, `rank`, "
+         "`model` and `executor` sections are curate's.", DedupJobConfig),
+        ("leakage", "`fuzzyfire leakage A B [--config CONFIG.yaml] [--set KEY=VALUE]`.", LeakageJobConfig),
+        ("mix", "`fuzzyfire mix [CONFIG.yaml] --real R --synth S --out OUT [--set KEY=VALUE]`.", MixConfig),
     ]  # fmt: skip
 
 

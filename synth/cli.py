@@ -238,7 +238,7 @@ def cmd_gap(args: argparse.Namespace) -> int:
 
     import numpy as np
 
-    from curate.cli.dedup import load_model_from_args
+    from curate.cli.dedup import load_model_from_args, model_from_args
     from curate.core.commands import print_problems
     from synth.gap import (
         dataset_boxes,
@@ -270,7 +270,8 @@ def cmd_gap(args: argparse.Namespace) -> int:
     else:
         images = [dataset_images(path, split, fmt) for path, split, fmt in sides]
         embedder, cache = load_model_from_args(args)
-        synthetic, real = (embed_set(str(s[0]), p, embedder, cache, args.workers) for s, p in zip(sides, images))
+        workers = model_from_args(args).workers
+        synthetic, real = (embed_set(str(s[0]), p, embedder, cache, workers) for s, p in zip(sides, images))
     problems = [*synthetic.problems, *real.problems]
     if problems:
         print_problems(problems, sys.stderr, limit=20)

@@ -124,3 +124,32 @@ def test_leakage_hints_at_the_json_file_that_holds_every_pair(folder: Path, tmp_
     assert main(["leakage", str(folder), str(folder / "sub"), "--show", "1", "--json", str(tmp_path / "l.json")]) == 1
     assert f"more (see {tmp_path / 'l.json'})" in capsys.readouterr().out
     assert len(json.loads((tmp_path / "l.json").read_text())["leaks"]) >= 2
+
+
+def test_settings_print_and_read_back_without_any_image(tmp_path: Path, capsys) -> None:
+    assert main(["dedup", "--print-config", "--top", "3", "--exact-only", "--nhwc", "--executor", "ray"]) == 0
+    (tmp_path / "d.yaml").write_text(capsys.readouterr().out)
+    assert main(["dedup", "--config", str(tmp_path / "d.yaml"), "--print-config"]) == 0
+    text = capsys.readouterr().out
+    assert (tmp_path / "d.yaml").read_text() == text
+    assert "top: 3" in text and "near: false" in text and "layout: nhwc" in text and "name: ray" in text
+    assert main(["dedup", "--config", str(tmp_path / "d.yaml"), "--print-config", "--top", "0", "--seed", "0"]) == 0
+    assert "top: 0" in capsys.readouterr().out  # a flag given as 0 overrides the file
+    assert main(["dedup", "--out", str(tmp_path / "o")]) == 2
+    assert "DIR is required (unless --print-config)" in capsys.readouterr().err
+    assert main(["leakage", str(tmp_path), "--config", str(tmp_path / "nope.yaml")]) == 2
+    assert capsys.readouterr().err == f"error: {tmp_path / 'nope.yaml'}: does not exist, not a settings file\n"
+
+
+def test_the_embedding_flags_of_a_command_without_settings_hold_no_defaults() -> None:
+    import argparse
+
+    from curate.cli.dedup import add_model_args, model_from_args
+    from curate.settings import EmbedderConfig
+
+    p = argparse.ArgumentParser()
+    add_model_args(p)  # synth gap's
+    assert all(a.default is None for a in p._actions if a.dest.startswith("alias_"))
+    assert model_from_args(p.parse_args([])) == EmbedderConfig()
+    given = model_from_args(p.parse_args(["--nhwc", "--mean", "1,2,3", "--workers", "2"]))
+    assert given == EmbedderConfig(layout="nhwc", mean=(1.0, 2.0, 3.0), workers=2)

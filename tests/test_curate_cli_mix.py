@@ -119,3 +119,20 @@ def test_a_folder_of_images_without_labels_mixes_as_negatives(pools, tmp_path: P
     boxed = {a["image_id"] for a in doc["annotations"]}
     real = [i for i in doc["images"] if i["source"].startswith("real:")]
     assert len(real) == 4 and not boxed & {i["id"] for i in real}
+
+
+def test_a_settings_file_names_the_mixtures_and_the_flags_override_it(pools, tmp_path: Path, capsys) -> None:
+    real, synth = _split_pools(pools, tmp_path)
+    (tmp_path / "m.yaml").write_text("mixtures: [R5_S5, R10_S0]\nseeds: [1]\nimages: copy\n")
+    args = ["mix", str(tmp_path / "m.yaml"), "--real", str(real), "--synth", str(synth)]
+    assert main([*args, "--print-config", "--seeds", "2-3"]) == 0  # no --out needed to print
+    assert "seeds: [2, 3]" in capsys.readouterr().out
+    assert main([*args, "--out", str(tmp_path / "o")]) == 0
+    made = sorted(p.relative_to(tmp_path / "o").as_posix() for p in (tmp_path / "o").glob("*/*"))
+    assert made == ["seed1/R10_S0", "seed1/R5_S5"]
+    manifest = json.loads((tmp_path / "o" / "seed1" / "R5_S5" / "manifest.json").read_text())
+    recorded = manifest["args"]
+    assert recorded["images"] == "copy" and recorded["mixtures"] == ["R5_S5", "R10_S0"] and recorded["seed"] == 1
+    assert recorded["real"] == str(real) and not any(k.startswith("alias_") or k == "set" for k in recorded)
+    images = [p for p in (tmp_path / "o" / "seed1" / "R5_S5" / "images").rglob("*") if p.suffix]
+    assert len(images) == 10 and not any(p.is_symlink() for p in images)  # images: copy

@@ -1,5 +1,5 @@
-"""The helpers every package's commands share: a config loaded or ``error: PATH: message`` (the command returns
-2), a dataset written with its provenance or ``error: message``, the reader options, problems one per line."""
+"""The helpers every package's commands share: a bad config is ``error: PATH: message`` (the command returns 2), a
+dataset written with its provenance or ``error: message``, the reader options, problems one per line."""
 
 from __future__ import annotations
 
@@ -15,7 +15,6 @@ from curate.core.commands import (
     add_command,
     add_reader_args,
     command_args,
-    load_config_or_report,
     parse_aliases,
     print_problems,
     write_dataset_or_report,
@@ -31,31 +30,25 @@ class Toy:
     epochs: int = 3
 
 
-def test_a_good_config_loads_with_its_overrides(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    path = tmp_path / "toy.yaml"
-    path.write_text("name: fire  # the run's name\n")
-    assert load_config_or_report(path, Toy) == Toy("fire", 3)
-    assert load_config_or_report(str(path), Toy, ["epochs=7"]) == Toy("fire", 7)
-    assert capsys.readouterr().err == ""
-
-
 @pytest.mark.parametrize(
     ("text", "overrides", "message"),
     [
-        ("name: fire\nepoch: 3\n", [], "epoch: unknown key (known: name, epochs)"),
-        ("epochs: 3\n", [], "name: required key is missing"),
-        ("name: fire\n", ["epochs=many"], "epochs: expected an integer, got 'many'"),
-        ("name: [fire\n", [], "invalid YAML"),
+        ("sources: []\nclass: [fire]\n", [], "class: unknown key (known: sources, classes, images)"),
+        ("classes: [fire]\n", [], "sources: required key is missing"),
+        ("sources: []\n", ["--set", "images=many"], "images: 'many' is not one of ['copy', 'hardlink', 'symlink']"),
+        ("sources: [fire\n", [], "invalid YAML"),
     ],
 )
 def test_a_bad_config_is_one_error_naming_the_file(
     tmp_path: Path, capsys: pytest.CaptureFixture[str], text: str, overrides: list[str], message: str
 ) -> None:
-    path = tmp_path / "toy.yaml"
+    from fuzzyfire.cli import main
+
+    path = tmp_path / "m.yaml"
     path.write_text(text)
-    assert load_config_or_report(str(path), Toy, overrides) is None
+    assert main(["merge", str(path), "--out", str(tmp_path / "out"), *overrides]) == 2
     err = capsys.readouterr().err
-    assert err.startswith(f"error: {path}: ") and message in err and err.count("error: ") == 1
+    assert err.startswith(f"error: {path}: ") and message in err and err.count("error: ") == 1, err
     assert f"{path}: {path}" not in err and "<unicode string>" not in err  # named once, and in YAML's own mark
 
 
@@ -64,7 +57,10 @@ def test_the_exit_code_of_a_command_with_a_bad_config_is_2(tmp_path: Path, capsy
 
     (tmp_path / "m.yaml").write_text("classes: [fire]\nsources: []\nunknown: 1\n")
     assert main(["merge", str(tmp_path / "m.yaml"), "--out", str(tmp_path / "out")]) == 2
-    assert capsys.readouterr().err == f"error: {tmp_path / 'm.yaml'}: unknown: unknown key (known: sources, classes)\n"
+    assert (
+        capsys.readouterr().err
+        == f"error: {tmp_path / 'm.yaml'}: unknown: unknown key (known: sources, classes, images)\n"
+    )
     assert not (tmp_path / "out").exists()
 
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import io
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -114,6 +115,14 @@ def test_printed_config_reads_back_as_the_same_settings(tmp_path: Path) -> None:
 
 
 def _commands():
+    from curate.cli.curate import ALIASES as CURATE_ALIASES
+    from curate.cli.dataset import MERGE_ALIASES
+    from curate.cli.dedup import DEDUP_ALIASES, LEAKAGE_ALIASES
+    from curate.cli.mix import ALIASES as MIX_ALIASES
+    from curate.curation import CurateConfig
+    from curate.mix import MixConfig
+    from curate.settings import DedupJobConfig, LeakageJobConfig
+    from curate.sources import MergeConfig
     from eval.cli.compare import ALIASES as COMPARE_ALIASES
     from eval.cli.predict import ALIASES as PREDICT_ALIASES
     from eval.cli.score import ALIASES as SCORE_ALIASES
@@ -133,6 +142,11 @@ def _commands():
         (ScoreConfig, SCORE_ALIASES),
         (CompareConfig, COMPARE_ALIASES),
         (PredictConfig, PREDICT_ALIASES),
+        (DedupJobConfig, DEDUP_ALIASES),
+        (LeakageJobConfig, LEAKAGE_ALIASES),
+        (MixConfig, MIX_ALIASES),
+        (CurateConfig, CURATE_ALIASES),
+        (MergeConfig, MERGE_ALIASES),
     ]
 
 
@@ -146,4 +160,7 @@ def test_every_flag_of_every_command_is_a_key_of_its_config_with_that_default() 
             for key in a.keys:
                 key_default(schema, key)  # raises for a key the dataclass does not have
             assert p.get_default(a.dest) is None, a.flag
-        assert config_from_args(p.parse_args([]), schema, aliases) == schema(), schema.__name__
+        required = [f.name for f in dataclasses.fields(schema) if f.default is f.default_factory is dataclasses.MISSING]
+        argv = [arg for name in required for arg in ("--set", f"{name}=[]")]  # merge's and curate's sources
+        built = config_from_args(p.parse_args(argv), schema, aliases)
+        assert built == schema(**dict.fromkeys(required, ())), schema.__name__

@@ -8,9 +8,10 @@ import pytest
 from curate_helpers import save, scene, transformed, use_session_cache
 
 from curate.core.problems import Problem
-from curate.dedupjob import DedupOptions, apply_selection, dedup_document, run_dedup, unreadable_summary
+from curate.dedupjob import apply_selection, dedup_document, dedup_options, run_dedup, unreadable_summary
 from curate.embed import load_embedder
 from curate.scan import list_image_files
+from curate.settings import RankConfig
 
 
 def test_document_counts_and_selection(tmp_path: Path, tmp_path_factory: pytest.TempPathFactory) -> None:
@@ -18,7 +19,7 @@ def test_document_counts_and_selection(tmp_path: Path, tmp_path_factory: pytest.
     for i in range(5):
         save(scene(40 + i), tmp_path / "in" / f"x{i}.jpg")
     save(transformed(scene(40), "crop"), tmp_path / "in" / "x0_crop.jpg")
-    opts = DedupOptions(top=2, rank="kcenter")
+    opts = dedup_options(rank=RankConfig("kcenter", top=2))
     run = run_dedup(list_image_files([tmp_path / "in"]), load_embedder(), None, opts)
     doc = dedup_document(run, opts, [str(tmp_path / "in")])
     assert doc["counts"] == {

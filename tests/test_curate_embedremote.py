@@ -17,7 +17,7 @@ from curate_helpers import save, scene, transformed, use_session_cache
 
 from curate import embedremote
 from curate.core.cluster import Cluster, ClusterError
-from curate.dedupjob import DedupOptions, run_dedup
+from curate.dedupjob import dedup_options, run_dedup
 from curate.embed import OnnxEmbedder, load_embedder
 from curate.embedremote import TASKS_PER_GPU, task_gpus
 from curate.scan import list_image_files, scan_images
@@ -58,8 +58,8 @@ def _summary(run) -> dict:  # noqa: ANN001 - a DedupRun
 
 def test_ray_embeds_the_vectors_of_a_local_run(folder: Path, embedder: OnnxEmbedder, cluster: Cluster) -> None:
     paths = list_image_files([folder])
-    local = run_dedup(paths, embedder, None, DedupOptions())
-    remote = run_dedup(paths, embedder, None, DedupOptions(), cluster=cluster)
+    local = run_dedup(paths, embedder, None, dedup_options())
+    remote = run_dedup(paths, embedder, None, dedup_options(), cluster=cluster)
     assert np.array_equal(local.scan.vectors, remote.scan.vectors)  # the same onnxruntime batches
     assert np.array_equal(local.scan.crops, remote.scan.crops)
     assert [im.facts for im in local.scan.images] == [im.facts for im in remote.scan.images]

@@ -6,29 +6,39 @@ import argparse
 import sys
 from pathlib import Path
 
+from curate.cli.dataset import IMAGES_ALIAS
+from curate.cli.dedup import EXECUTOR_ALIASES, SEARCH_ALIASES, add_cache_args, embedding_run_aliases
 from curate.core.commands import add_command
+from curate.core.options import Alias
+from curate.curation import CurateConfig
+
+#: Flags of ``fuzzyfire curate``: aliases of :class:`curate.curation.CurateConfig` keys (their defaults are the keys').
+ALIASES: tuple[Alias, ...] = (
+    *SEARCH_ALIASES,
+    Alias("--seed", ("split.seed",), "seed of the split", {"type": int}),
+    IMAGES_ALIAS,
+    *embedding_run_aliases(),
+    *EXECUTOR_ALIASES,
+)
 
 
 def cmd_curate(args: argparse.Namespace) -> int:
-    from curate.core.commands import config_provenance, load_config_or_report, print_problems
+    from curate.core.commands import config_provenance, print_problems
     from curate.core.dataset import Dataset
-    from curate.core.writer import OutputError, check_output_folder
-    from curate.curation import CurateConfig, curate_dataset
+    from curate.core.options import command_config
+    from curate.core.writer import check_output_folder
+    from curate.curation import curate_dataset
     from curate.embed import embedding_cache_path
 
-    cfg = load_config_or_report(args.config, CurateConfig, args.set)
+    cfg = command_config(args, CurateConfig, ALIASES, {"--out": args.out})
     if cfg is None:
-        return 2
+        return 0
     base = Path(args.config).resolve().parent
     roots = [str((s.path if s.path.is_absolute() else base / s.path).resolve()) for s in cfg.sources]
+    check_output_folder(args.out, Dataset(args.out, info={"source_roots": roots}), args.overwrite)  # fail now
+    cache = None if args.no_cache else args.cache or embedding_cache_path()
     provenance = config_provenance("curate", args, cfg)
-    try:
-        check_output_folder(args.out, Dataset(args.out, info={"source_roots": roots}), args.overwrite)  # fail now
-        cache = None if args.no_cache else args.cache or embedding_cache_path()
-        result, files = curate_dataset(cfg, base, args.out, cache, provenance, args.overwrite)
-    except OutputError as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        return 2
+    result, files = curate_dataset(cfg, base, args.out, cache, provenance, args.overwrite)
     print_problems([p for p in result.problems if p.level != "info"], sys.stderr, limit=50)
     c, splits = result.document["counts"], result.document["splits"]
     print(
@@ -41,21 +51,23 @@ def cmd_curate(args: argparse.Namespace) -> int:
 
 def register(sub: argparse._SubParsersAction) -> None:
     """Add ``curate`` to the ``fuzzyfire`` parser."""
+    from curate.core.options import add_config_options
+
     p = add_command(
         sub,
         "curate",
         help="merge labelled sources, remove duplicates, keep the most diverse, split without leakage",
         description="FiIW-style curation: merge sources -> exact and near duplicates -> diversity ranking -> top N ->\n"
         "seeded split where no group of near duplicates straddles two splits. Writes a COCO + YOLO dataset with\n"
-        "manifest.json, curation.json, report.html and distances.png. Sources are never modified.\n\n"
+        "manifest.json, curation.json, report.html and distances.png. Sources are never modified. Settings:\n"
+        "CONFIG.yaml (docs/config.md#curate; source paths relative to its folder), the options below, then\n"
+        "--set KEY=VALUE.\n\n"
         "example:\n  fuzzyfire curate configs/curate-shared.yaml --out out/curated\n"
-        "  fuzzyfire curate configs/curate-shared.yaml --out out/fiiw --set rank.top=1400 "
+        "  fuzzyfire curate configs/curate-shared.yaml --out out/fiiw --top 1400 "
         "--set 'split.sizes={train: 1000, valid: 200, test: 200}'",
     )
-    p.add_argument("config", help="YAML file (see configs/curate-shared.yaml)")
-    p.add_argument("--out", required=True, type=Path, help="output dataset folder")
-    p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="override a config key")
+    p.add_argument("--out", type=Path, help="output dataset folder")
     p.add_argument("--overwrite", action="store_true", help="replace a fuzzyfire dataset already at --out")
-    p.add_argument("--cache", type=Path, help="embedding cache file (default: user cache dir)")
-    p.add_argument("--no-cache", action="store_true", help="do not read or write the embedding cache")
+    add_cache_args(p)
+    add_config_options(p, CurateConfig, ALIASES, "docs/config.md#curate", required=True)
     p.set_defaults(func=cmd_curate)

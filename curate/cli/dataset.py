@@ -10,15 +10,16 @@ from pathlib import Path
 from curate.core.commands import (
     add_command,
     add_reader_args,
-    load_config_or_report,
     parse_aliases,
     print_problems,
     read_from_args,
     write_dataset_or_report,
 )
 from curate.core.formats.images import NEGATIVES_ONLY
+from curate.core.options import Alias, one_of
 from curate.core.problems import count_levels, has_errors
 from curate.core.writer import IMAGE_MODES, OUTPUT_FORMATS
+from curate.sources import MergeConfig
 from curate.stats import dataset_stats, plot_box_sizes
 from curate.validate import validate
 
@@ -98,14 +99,21 @@ def cmd_stats(args: argparse.Namespace) -> int:
     return 0
 
 
-def cmd_merge(args: argparse.Namespace) -> int:
-    from curate.sources import MergeConfig, merge_sources
+#: ``images`` of merge and curate (:class:`curate.sources.MergeConfig`).
+IMAGES_ALIAS = Alias("--images", ("images",), "how images reach --out", one_of(("copy", "hardlink", "symlink")))
+#: Flags of ``fuzzyfire merge``: aliases of :class:`curate.sources.MergeConfig` keys (their defaults are the keys').
+MERGE_ALIASES: tuple[Alias, ...] = (IMAGES_ALIAS,)
 
-    cfg = load_config_or_report(args.config, MergeConfig, args.set)
+
+def cmd_merge(args: argparse.Namespace) -> int:
+    from curate.core.options import command_config
+    from curate.sources import merge_sources
+
+    cfg = command_config(args, MergeConfig, MERGE_ALIASES, {"--out": args.out})
     if cfg is None:
-        return 2
+        return 0
     ds, problems = merge_sources(cfg, Path(args.config).resolve().parent, args.out)
-    written = write_dataset_or_report(ds, args, "merge", ("coco", "yolo"), args.images, cfg)
+    written = write_dataset_or_report(ds, args, "merge", ("coco", "yolo"), cfg.images, cfg)
     if written is None:
         return 2
     print_problems([p for p in problems + written.problems if p.level != "info"], sys.stderr, limit=50)
@@ -174,18 +182,18 @@ def _register_inspect(sub: argparse._SubParsersAction) -> None:
 
 
 def _register_merge(sub: argparse._SubParsersAction) -> None:
+    from curate.core.options import add_config_options
+
     p = add_command(
         sub,
         "merge",
         help="merge labelled sources listed in a YAML config into one dataset",
-        description="Merge datasets of any format into one COCO + YOLO folder with a fixed class list.\n\n"
+        description="Merge datasets of any format into one COCO + YOLO folder with a fixed class list. Settings:\n"
+        "CONFIG.yaml (docs/config.md#merge; source paths relative to its folder), the options below, then\n"
+        "--set KEY=VALUE.\n\n"
         "example:\n  fuzzyfire merge configs/merge-shared.yaml --out out/merged --set classes=[fire]",
     )
-    p.add_argument("config", help="YAML file (see configs/merge-shared.yaml)")
-    p.add_argument("--out", required=True, type=Path, help="output folder")
-    p.add_argument(
-        "--set", action="append", default=[], metavar="KEY=VALUE", help="override a config key, e.g. classes=[fire]"
-    )
-    p.add_argument("--images", default="copy", choices=("copy", "hardlink", "symlink"), help="how images reach --out")
+    p.add_argument("--out", type=Path, help="output folder")
     p.add_argument("--overwrite", action="store_true", help="replace a fuzzyfire dataset already at --out")
+    add_config_options(p, MergeConfig, MERGE_ALIASES, "docs/config.md#merge", required=True)
     p.set_defaults(func=cmd_merge)

@@ -9,11 +9,13 @@ from pathlib import Path
 from curate.core.commands import add_command
 from curate.core.dataset import Dataset
 from curate.core.formats.registry import FORMATS
-from curate.core.load import SplitError, pick_split
+from curate.core.load import pick_split
 from curate.core.names import check_names, split_names
+from curate.core.options import Alias, one_of
 from curate.core.problems import Problem
-from curate.core.writer import OutputError, check_output_folder
+from curate.core.writer import check_output_folder
 from curate.mix import (
+    MixConfig,
     MixError,
     Mixture,
     build_mixture,
@@ -36,47 +38,88 @@ manifest.json and mixture.json (which output file came from which source file). 
 nested: the real images of R250_S750 are inside those of R500_S500."""
 
 
-def _sources(args: argparse.Namespace) -> tuple[Dataset, Dataset, list[Problem]]:
-    """The real and synthetic pools: each its own split (``--real-split`` / ``--synth-split``, else the shared
-    ``--split``, else ``train`` when present, else every image) and the reader's errors."""
+def _seeds(text: str) -> list[int]:
+    try:
+        return parse_seeds(text)
+    except MixError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+
+
+#: Flags of ``fuzzyfire mix``: aliases of :class:`curate.mix.MixConfig` keys (their defaults are the keys').
+ALIASES: tuple[Alias, ...] = (
+    Alias("--mixtures", ("mixtures",), "comma-separated names, e.g. R1000_S0,R750_S250,R500_S500",
+          {"type": lambda text: split_names([text])}),
+    Alias("--paper-grid", ("paper_grid",), "the paper's strategies: R250..R1000_S0, R750_S250, R500_S500, R250_S750, "
+          "R0_S250..R0_S1000", {"action": "store_true"}),
+    Alias("--total", ("total",), "--paper-grid: images per mixture", {"type": int}),
+    Alias("--step", ("step",), "--paper-grid: step between sizes", {"type": int}),
+    Alias("--seeds", ("seeds",), "seed(s): 0, 0-4 or 0,3,7", {"type": _seeds}),
+    Alias("--seed", ("seeds",), "the same as --seeds", {"type": _seeds, "metavar": "SEEDS"}),
+    Alias("--split", ("split",), "split to draw from in both sources, unless --real-split / --synth-split say "
+          "otherwise (null: train when present, else every image)", {}),
+    Alias("--real-split", ("real_split",), "split of --real to draw from (null: --split)", {}),
+    Alias("--synth-split", ("synth_split",), "split of --synth to draw from (null: --split)", {}),
+    Alias("--real-format", ("real_format",), "format of --real", one_of(("auto", *FORMATS))),
+    Alias("--synth-format", ("synth_format",), "format of --synth", one_of(("auto", *FORMATS))),
+    Alias("--val-split", ("val_split",), "split of --val (null: val or valid when present, else all)", {}),
+    Alias("--val-format", ("val_format",), "format of --val", one_of(("auto", *FORMATS))),
+    Alias("--classes", ("classes",), "class names in YOLO id order (empty: real's classes, then synthetic's)",
+          {"type": lambda text: split_names([text])}),
+    Alias("--images", ("images",), "how images reach the mixture (symlink: referenced, not copied)",
+          one_of(("symlink", "hardlink", "copy"))),
+)  # fmt: skip
+
+
+def _sources(args: argparse.Namespace, cfg: MixConfig) -> tuple[Dataset, Dataset, list[Problem]]:
+    """The real and synthetic pools: each its own split (``real_split`` / ``synth_split``, else the shared
+    ``split``, else ``train`` when present, else every image) and the reader's errors."""
     from curate.core.formats.registry import read_dataset
 
-    real_read = read_dataset(args.real, args.real_format)
-    synth_read = read_dataset(args.synth, args.synth_format)
-    real_split = args.split if args.real_split is None else args.real_split
-    synth_split = args.split if args.synth_split is None else args.synth_split
+    real_read = read_dataset(args.real, cfg.real_format)
+    synth_read = read_dataset(args.synth, cfg.synth_format)
+    real_split = cfg.split if cfg.real_split is None else cfg.real_split
+    synth_split = cfg.split if cfg.synth_split is None else cfg.synth_split
     real = pick_split(real_read.dataset, real_split, args.real, defaults=("train",))
     synth = pick_split(synth_read.dataset, synth_split, args.synth, defaults=("train",))
     errors = [p for p in real_read.problems + synth_read.problems if p.level == "error"]
     return real, synth, errors
 
 
-def _validation(args: argparse.Namespace) -> Dataset | None:
-    """The ``--val`` set's split, or None; ``--val-split`` / ``--val-format`` without ``--val`` are refused."""
+def _changed(cfg: MixConfig, keys: dict[str, str]) -> list[str]:
+    """The flags of ``keys`` ({flag: key}) whose keys ``cfg`` holds at other values than their defaults."""
+    default = MixConfig()
+    return [flag for flag, key in keys.items() if getattr(cfg, key) != getattr(default, key)]
+
+
+def _validation(args: argparse.Namespace, cfg: MixConfig) -> Dataset | None:
+    """The ``--val`` set's split, or None; ``val_split`` / ``val_format`` without ``--val`` are refused."""
     from curate.core.formats.registry import read_dataset
 
     if args.val is None:
-        given = [o for o, v in (("--val-split", args.val_split), ("--val-format", args.val_format)) if v is not None]
+        given = _changed(cfg, {"--val-split": "val_split", "--val-format": "val_format"})
         if given:
             raise MixError(f"{' and '.join(given)} describe --val, which is not given")
         return None
     where = Path(args.val).resolve()  # data.yaml names its image folders by this path: no '..' in it
-    return pick_split(read_dataset(where, args.val_format or "auto").dataset, args.val_split, args.val, ("val",))
+    return pick_split(read_dataset(where, cfg.val_format).dataset, cfg.val_split, args.val, ("val",))
 
 
-def _grid(args: argparse.Namespace) -> list[Mixture]:
-    """The mixtures asked for; ``--total`` / ``--step`` only with ``--paper-grid``."""
-    if args.paper_grid:
-        return paper_grid(1000 if args.total is None else args.total, 250 if args.step is None else args.step)
-    given = [o for o, v in (("--total", args.total), ("--step", args.step)) if v is not None]
+def _grid(cfg: MixConfig) -> list[Mixture]:
+    """The mixtures asked for: the names, or the paper's grid (``total`` / ``step`` size only that)."""
+    if cfg.paper_grid and cfg.mixtures:
+        raise MixError("--mixtures and --paper-grid both name the mixtures: give one")
+    if cfg.paper_grid:
+        return paper_grid(cfg.total, cfg.step)
+    given = _changed(cfg, {"--total": "total", "--step": "step"})
     if given:
         raise MixError(f"{' and '.join(given)} size the --paper-grid; --mixtures names its sizes itself")
-    return parse_mixtures(args.mixtures or "")
+    if not cfg.mixtures:
+        raise MixError("--mixtures or --paper-grid is required (keys mixtures, paper_grid)")
+    return parse_mixtures(",".join(cfg.mixtures))
 
 
-def _check_outputs(
-    real: Dataset, synth: Dataset, plan: list[tuple[int, Mixture]], args: argparse.Namespace, classes: list[str]
-) -> None:
+def _check_outputs(real: Dataset, synth: Dataset, plan: list[tuple[int, Mixture]], args: argparse.Namespace,
+                   classes: list[str]) -> None:  # fmt: skip
     """Every mixture folder checked before the first is written (:func:`curate.core.writer.check_output_folder`)."""
     for seed, mix in plan:
         folder = mixture_dir(args.out, mix, seed)
@@ -84,79 +127,49 @@ def _check_outputs(
 
 
 def cmd_mix(args: argparse.Namespace) -> int:
-    from curate.core.commands import command_args, print_problems
+    from curate.core.commands import print_problems, settings_args
+    from curate.core.options import command_config
 
-    try:
-        mixtures, seeds = _grid(args), parse_seeds(args.seeds)
-        real, synth, errors = _sources(args)
-        check_available(real, synth, mixtures)
-        classes = split_names([args.classes or ""])
-        known = list(dict.fromkeys(real.category_names + synth.category_names))
-        check_names("class", classes, known, f"{args.real} and {args.synth}", "classes", "--classes")
-        val = _validation(args)
-        plan = [(seed, mix) for seed in seeds for mix in mixtures]
-        _check_outputs(real, synth, plan, args, classes)
-    except (MixError, SplitError, OutputError) as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        return 2
+    cfg = command_config(args, MixConfig, ALIASES, {"--real": args.real, "--synth": args.synth, "--out": args.out})
+    if cfg is None:
+        return 0
+    mixtures, seeds = _grid(cfg), list(cfg.seeds)
+    real, synth, errors = _sources(args, cfg)
+    check_available(real, synth, mixtures)
+    classes = list(cfg.classes)
+    known = list(dict.fromkeys(real.category_names + synth.category_names))
+    check_names("class", classes, known, f"{args.real} and {args.synth}", "classes", "--classes")
+    val = _validation(args, cfg)
+    plan = [(seed, mix) for seed in seeds for mix in mixtures]
+    _check_outputs(real, synth, plan, args, classes)
     if errors:
         print_problems(errors, sys.stderr, limit=20)
+    provenance = settings_args(args, cfg, ALIASES)
     for seed, mix in plan:
-        try:
-            folder = write_mixture(
-                real, synth, mix, seed, args.out, args.images, classes, command_args(args), args.overwrite, val
-            )
-        except (MixError, OutputError) as exc:
-            print(f"error: {exc}", file=sys.stderr)
-            return 2
+        folder = write_mixture(real, synth, mix, seed, args.out, cfg.images, classes, provenance, args.overwrite, val)
         print(f"wrote {folder}: {mix.real} real + {mix.synth} synthetic images (seed {seed})")
     return 0
 
 
 def register(sub: argparse._SubParsersAction) -> None:
     """Add ``mix`` to the ``fuzzyfire`` parser."""
+    from curate.core.options import add_config_options
+
     p = add_command(
         sub,
         "mix",
         help="write R(m)_S(n) mixtures of real and synthetic images (nested seeded draws)",
-        description="Draw training mixtures of m real and n synthetic images with a seed.\n\n" + _EXAMPLE,
+        description="Draw training mixtures of m real and n synthetic images with a seed. Settings: CONFIG.yaml\n"
+        "(docs/config.md#mix), the options below, then --set KEY=VALUE.\n\n" + _EXAMPLE,
     )
-    p.add_argument("--real", required=True, help="real dataset folder or COCO .json")
-    p.add_argument("--synth", required=True, help="synthetic dataset folder or COCO .json")
-    group = p.add_mutually_exclusive_group(required=True)
-    group.add_argument("--mixtures", help="comma-separated names, e.g. R1000_S0,R750_S250,R500_S500")
-    group.add_argument(
-        "--paper-grid",
-        action="store_true",
-        help="the paper's strategies: R250..R1000_S0, R750_S250, R500_S500, R250_S750, R0_S250..R0_S1000",
-    )
-    p.add_argument("--total", type=int, help="--paper-grid: images per mixture (default 1000)")
-    p.add_argument("--step", type=int, help="--paper-grid: step between sizes (default 250)")
-    p.add_argument("--seeds", "--seed", dest="seeds", default="0", help="seed(s): 0, 0-4 or 0,3,7 (default 0)")
-    p.add_argument("--out", required=True, type=Path, help="output folder")
-    p.add_argument(
-        "--split",
-        help="split to draw from in both sources, unless --real-split / --synth-split say otherwise (default: "
-        "train when present, else every image)",
-    )
-    p.add_argument("--real-split", help="split of --real to draw from (default: --split)")
-    p.add_argument("--synth-split", help="split of --synth to draw from (default: --split)")
-    p.add_argument("--classes", help="class names in YOLO id order (default: real's classes, then synthetic's)")
-    p.add_argument(
-        "--images",
-        default="symlink",
-        choices=("symlink", "hardlink", "copy"),
-        help="how images reach the mixture (default symlink: referenced, not copied)",
-    )
+    p.add_argument("--real", help="real dataset folder or COCO .json")
+    p.add_argument("--synth", help="synthetic dataset folder or COCO .json")
+    p.add_argument("--out", type=Path, help="output folder")
     p.add_argument(
         "--val",
         help="YOLO validation set whose images data.yaml's val names (default: the training images), "
         "e.g. the real set's valid split; its class ids must be the mixture's",
     )
-    p.add_argument("--val-split", help="split of --val (default: val or valid when present, else all)")
-    formats = ("auto", *FORMATS)
-    p.add_argument("--val-format", choices=formats, help="format of --val (default: detect)")
-    p.add_argument("--real-format", default="auto", choices=formats, help="format of --real (default: detect)")
-    p.add_argument("--synth-format", default="auto", choices=formats, help="format of --synth (default: detect)")
     p.add_argument("--overwrite", action="store_true", help="replace mixtures already at --out")
+    add_config_options(p, MixConfig, ALIASES, "docs/config.md#mix")
     p.set_defaults(func=cmd_mix)

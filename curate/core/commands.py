@@ -1,6 +1,6 @@
 """Helpers for every package's commands (``<package>/cli.py``): a subcommand with examples, the options of a
-command that reads a dataset, its arguments for the manifest, problems printed one per line, and a config
-loaded or a dataset written, or else ``error: ...`` on stderr for the command to return 2."""
+command that reads a dataset, its arguments for the manifest, problems printed one per line, and a dataset
+written, or else ``error: ...`` on stderr for the command to return 2. Settings: :mod:`curate.core.options`."""
 
 from __future__ import annotations
 
@@ -8,16 +8,15 @@ import argparse
 import sys
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Any, TextIO, TypeVar
+from typing import Any, TextIO
 
-from curate.core.config import ConfigError, load_config, located, to_dict
+from curate.core.config import to_dict
 from curate.core.dataset import Dataset
 from curate.core.formats.common import ReadResult
 from curate.core.formats.registry import FORMATS, read_dataset
+from curate.core.options import Alias
 from curate.core.problems import Problem, count_levels
 from curate.core.writer import OutputError, WriteResult, write_dataset
-
-T = TypeVar("T")
 
 
 class HelpFormatter(argparse.RawDescriptionHelpFormatter):
@@ -100,6 +99,14 @@ def command_args(args: argparse.Namespace) -> dict:
     return {k: v for k, v in vars(args).items() if k not in ("func", "command")}
 
 
+def settings_args(args: argparse.Namespace, config: Any, aliases: Sequence[Alias]) -> dict[str, Any]:
+    """The manifest's arguments of a command with settings (:mod:`curate.core.options`): its own inputs and switches
+    (:func:`command_args`, less ``CONFIG.yaml``, ``--set``, ``--print-config`` and the ``aliases``' flags, whose
+    values the settings hold) and every key of its resolved ``config``."""
+    settings_fields = {"config", "config_flag", "set", "print_config", *(a.dest for a in aliases)}
+    return {**{k: v for k, v in command_args(args).items() if k not in settings_fields}, **to_dict(config)}
+
+
 def print_problems(problems: Sequence[Problem], stream: TextIO | None = None, limit: int | None = None) -> None:
     """One ``path: reason`` line per problem on ``stream`` (stdout), then the counts on stderr."""
     stream = stream or sys.stdout
@@ -111,16 +118,6 @@ def print_problems(problems: Sequence[Problem], stream: TextIO | None = None, li
     stream.flush()
     counts = count_levels(problems)
     print(f"{counts['error']} errors, {counts['warning']} warnings, {counts['info']} info", file=sys.stderr)
-
-
-def load_config_or_report(path: Path | str, schema: type[T], overrides: Sequence[str] = ()) -> T | None:
-    """:func:`~curate.core.config.load_config`; ``None`` after printing ``error: PATH: message`` on stderr when
-    the file does not fit ``schema`` (the command then returns 2)."""
-    try:
-        return load_config(path, schema, overrides)
-    except ConfigError as exc:
-        print(f"error: {located(path, str(exc))}", file=sys.stderr)
-        return None
 
 
 def config_provenance(command: str, args: argparse.Namespace, config: Any) -> dict[str, Any]:

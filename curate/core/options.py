@@ -50,6 +50,11 @@ class Alias:
         return {self.keys[0]: _plain(value)}
 
 
+def one_of(values: Sequence[str]) -> dict[str, Any]:
+    """:attr:`Alias.kwargs` of a flag that takes one of ``values``, shown as ``a|b|c`` in the usage and help."""
+    return {"choices": tuple(values), "metavar": "|".join(values)}
+
+
 def _plain(value: Any) -> Any:
     if isinstance(value, Path):
         return value.as_posix()
@@ -106,7 +111,14 @@ def add_config_options(
         help="set any config key (dotted, the value in YAML), after CONFIG.yaml and the options; repeatable",
     )
     p.add_argument("--print-config", action="store_true", help="print the resolved settings as YAML and stop")
-    group = p.add_argument_group("settings (each an alias of a config key; defaults are the keys')")
+    add_aliases(
+        p.add_argument_group("settings (each an alias of a config key; defaults are the keys')"), schema, aliases
+    )
+
+
+def add_aliases(group: Any, schema: type | Callable[[], type], aliases: Sequence[Alias]) -> None:
+    """The flags of ``aliases`` in ``group`` (a parser or an argument group), each holding ``None`` until given and
+    its help ending with its keys' defaults in ``schema`` (as in :func:`add_config_options`)."""
     for a in aliases:
         kwargs = dict(a.kwargs)
         if kwargs.get("action") is None:
@@ -146,3 +158,21 @@ def _given(value: Any) -> bool:
 def print_config(cfg: Any, stream: Any = None) -> None:
     """``cfg`` as YAML (what ``--print-config`` shows): a file :func:`config_from_args` reads back unchanged."""
     yaml.safe_dump(to_dict(cfg), stream or sys.stdout, sort_keys=False, default_flow_style=None, width=100)
+
+
+def command_config(
+    args: argparse.Namespace, schema: type[T], aliases: Sequence[Alias], required: Mapping[str, Any] | None = None
+) -> T | None:
+    """A command's settings (:func:`config_from_args`), or ``None`` once ``--print-config`` has printed them (the
+    command then stops). Otherwise every input of ``required`` ({name as the user types it: its value}) must be
+    given: a ValueError names those that are not (they are not argparse-required, so ``--print-config`` needs
+    none)."""
+    cfg = config_from_args(args, schema, aliases)
+    if args.print_config:
+        print_config(cfg)
+        return None
+    missing = [name for name, value in (required or {}).items() if value is None or value == []]
+    if missing:
+        names = ", ".join(missing[:-1]) + " and " + missing[-1] if len(missing) > 1 else missing[0]
+        raise ValueError(f"{names} {'are' if len(missing) > 1 else 'is'} required (unless --print-config)")
+    return cfg

@@ -2,8 +2,10 @@
 
 from __future__ import annotations
 
+import typing
 from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
+from typing import Literal
 
 from curate.core.formats.coco import ANNOTATIONS_FILE, read_coco
 from curate.core.formats.common import ReadResult
@@ -14,10 +16,12 @@ from curate.core.formats.yolo import read_dfire, read_yolo
 from curate.core.imageio import is_image_file
 from curate.core.walk import walk
 
-#: ``images``: a folder of images without labels, read as a negatives-only set, or every image holding the class a
-#: ``label`` declares (:mod:`~curate.core.formats.images`); ``folders``: a classification layout, one sub-folder per
-#: class (:mod:`~curate.core.formats.folders`).
-FORMATS: tuple[str, ...] = ("coco", "yolo", "voc", "dfire", "images", "folders")
+#: A reader's name as a settings key holds it: ``auto`` (detect the format) or one of :data:`FORMATS`.
+DatasetFormat = Literal["auto", "coco", "yolo", "voc", "dfire", "images", "folders"]
+#: The readers by name. ``images``: a folder of images without labels, read as a negatives-only set, or every image
+#: holding the class a ``label`` declares (:mod:`~curate.core.formats.images`); ``folders``: a classification
+#: layout, one sub-folder per class (:mod:`~curate.core.formats.folders`).
+FORMATS: tuple[str, ...] = typing.get_args(DatasetFormat)[1:]
 
 
 def detect_format(path: Path | str) -> str:
