@@ -45,18 +45,17 @@ bench: $(STAMP)
 # The study: make experiment [CONFIG=...] [REAL=labelled/folder] [RARE=folder] [NEGATIVES=fire-free/photos]
 #   [BROAD=fire/photos] [OUT=folder] [SET="key=value key=value"]. Without REAL: configs/demo.yaml (stand-in data,
 #   offline); with REAL: configs/own-data.yaml (the recommended study of your data). NEGATIVES are your fire-free
-#   photos: the false-alarm test set (a quarter held out by content hash) and, the rest, backgrounds and hard
-#   negatives of the pools. BROAD is a folder of fire photos without boxes (each holds fire): a test set judged per
+#   photos: the false-alarm test set (the quarter its holdout picks by content hash) and, the rest, backgrounds and
+#   hard negatives of the pools (the pool holds out the test set's share: one key). BROAD is a folder of fire photos without boxes (each holds fire): a test set judged per
 #   image (a fire/ + normal/ layout: SET="tests.broad={path: /abs/layout}").
 CONFIG ?= $(if $(REAL),configs/own-data.yaml,configs/demo.yaml)
 comma := ,
 experiment: $(STAMP)
 	$(BIN)/fuzzyfire experiment $(CONFIG) $(if $(OUT),--out $(OUT)) \
-	  $(if $(REAL),--set real.path=$(abspath $(REAL)) --set real.standin=null) \
-	  $(if $(RARE),--set 'rare={path: $(abspath $(RARE))$(comma) name: rare}') \
+	  $(if $(REAL),--set real.path=$(abspath $(REAL))) \
+	  $(if $(RARE),--set 'rare={path: $(abspath $(RARE))}') \
 	  $(if $(NEGATIVES),--set 'tests={fire-free: {path: $(abspath $(NEGATIVES))$(comma) holdout: 0.25}}' \
-	    --set 'synth.method2.backgrounds=[$(abspath $(NEGATIVES))]' --set synth.method2.background_holdout=0.25 \
-	    --set synth.method2.photo_negatives=1.0) \
+	    --set 'synth.method2.backgrounds=[$(abspath $(NEGATIVES))]' --set synth.method2.photo_negatives=1.0) \
 	  $(if $(BROAD),--set 'tests.broad={path: $(abspath $(BROAD))$(comma) label: fire}') \
 	  $(foreach s,$(SET),--set '$(s)')
 

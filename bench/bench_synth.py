@@ -39,8 +39,9 @@ import numpy as np
 from synth.compose.composite import composite
 from synth.flames import simulate as F
 from synth.flames.library import FlameLibraryConfig, build_library
-from synth.method1 import Method1Config, run_method1
-from synth.method2 import Method2Config, plan_flames, run_method2
+from synth.generate import generate
+from synth.method1 import Method1Config
+from synth.method2 import Method2Config, plan_flames
 
 
 def _statm_mb(pid: str) -> float:
@@ -139,7 +140,7 @@ def bench_cutouts(n: int, cutouts: Path | None, real: Path, photos: Path, worker
         library = load_library([cutouts])
         cfg = Method2Config(n=n, width=416, height=416, scenes=0, backgrounds=(photos,), background_holdout=0.25,
                             images_per_view=2, flames=FlameLibraryConfig(source="cutouts"))  # fmt: skip
-        bench_run("method2_cutouts", lambda out: run_method2(cfg, library, out, workers=workers), n, "416x416")
+        bench_run("method2_cutouts", lambda out: generate(cfg, library, out, workers=workers), n, "416x416")
 
 
 def main() -> None:
@@ -173,10 +174,10 @@ def main() -> None:
         bench_composite(library)
     if "method2" in only:
         cfg2 = Method2Config(n=args.n, width=640, height=480, **scenes)
-        bench_run(f"method2{tag}", lambda out: run_method2(cfg2, library, out, workers=workers), args.n)
+        bench_run(f"method2{tag}", lambda out: generate(cfg2, library, out, workers=workers), args.n)
     if "method1" in only:
         cfg1 = Method1Config(n=args.n, width=640, height=480, **scenes)
-        bench_run(f"method1{tag}", lambda out: run_method1(cfg1, library, out, workers=workers), args.n)
+        bench_run(f"method1{tag}", lambda out: generate(cfg1, library, out, workers=workers), args.n)
 
 
 if __name__ == "__main__":

@@ -35,10 +35,11 @@ NEAR_FILLED = 0.9  # mask share of the box from which a cut-out counts as a fill
 def make_pool(environments: list[Path], n: int, seed: int, out: Path) -> Path:
     """A Method 2 pool of ``n`` 416x416 composites on ``environments`` (panoramas or meshes) in ``out``."""
     from synth.flames.library import build_library
-    from synth.method2 import Method2Config, run_method2
+    from synth.generate import generate
+    from synth.method2 import Method2Config
 
     cfg = Method2Config(n=n, seed=seed, width=416, height=416, scenes=0, environments=tuple(environments))
-    run_method2(cfg, build_library(cfg.flames), out)
+    generate(cfg, build_library(cfg.flames), out)
     return out
 
 

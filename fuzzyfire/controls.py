@@ -17,7 +17,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from curate.mix import parse_mixture, real_subset
 from fuzzyfire.cutout_pools import PoolKey, own_pool
@@ -45,17 +45,19 @@ def control_label(mixture: str) -> str:
     return f"{mixture} {CONTROL}"
 
 
-#: The Method 2 keys a control keeps from its pool's config: what acts on an image that gets no flame (its size,
-#: count and seed, the crops and camera).
-KEPT: tuple[str, ...] = ("n", "seed", "width", "height", "images_per_view", "smoke_class", "camera")
+def kept_settings(cfg: Method2Config) -> dict[str, Any]:
+    """The Method 2 keys a control keeps from its pool's config ``cfg``, by name: what acts on an image that gets no
+    flame (its size, count and seed, the crops and camera)."""
+    return {"n": cfg.n, "seed": cfg.seed, "width": cfg.width, "height": cfg.height,
+            "images_per_view": cfg.images_per_view, "smoke_class": cfg.smoke_class, "camera": cfg.camera}  # fmt: skip
 
 
 def control_config(cfg: Method2Config) -> Method2Config:
     """The Method 2 config of a control pool: no flame (every image a negative) on the mixture's own frames only
-    (the experiment adds them as frames), with :data:`KEPT` of ``cfg``; the places (environments, photos, frames),
-    the flame library and the flames' placement and look are the defaults, so the variants of a study that differ
-    only in those share one control (and its runs)."""
-    return type(cfg)(**{key: getattr(cfg, key) for key in KEPT}, scenes=0, own_frames=1.0, negatives=1.0)
+    (the experiment adds them as labelled frames), with the :func:`kept_settings` of ``cfg``; the places (environments,
+    photos, labelled frames), the flame library and the flames' placement and look are the defaults, so the variants
+    of a study that differ only in those share one control (and its runs)."""
+    return type(cfg)(**kept_settings(cfg), scenes=0, own_frames=1.0, negatives=1.0)
 
 
 def control_pools(

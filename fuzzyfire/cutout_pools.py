@@ -10,7 +10,7 @@ change of the mask rule makes new cut-outs and pools. Validation and test images
 
 With ``synth.method2.own_frames`` > 0 an own pool also composites on the mixture's own real training images
 (:mod:`synth.places.frames`: each keeps its own fire boxes, flames stand beside them): the subset is written as a
-stage ``frames-<hash>`` (COCO, images linked) and becomes the pool's ``frames``, at that share of the views
+stage ``frames-<hash>`` (COCO, images linked) and becomes the pool's ``labelled_frames``, at that share of the views
 (the photo kind's weight, :func:`synth.places.kinds.kind_weights`; the config's places take the rest). The flames
 are simulated unless ``flames.source`` says otherwise.
 
@@ -115,8 +115,8 @@ def own_pool(root: Path, cfg: Method2Config, subset: Dataset, base: Path) -> tup
     cut = cutout_stage(root, subset) if cfg.flames.source == "cutouts" else None
     if cfg.own_frames > 0:
         frames = frames_stage(root, subset).folder
-        cfg = replace(cfg, frames=(frames,), photo_share=cfg.own_frames, panorama_share=1.0 - cfg.own_frames)
-    stage, ref = synth_stage(root, "method2", cfg, base, cutouts=cut)
+        cfg = replace(cfg, labelled_frames=(frames,), photo_share=cfg.own_frames, panorama_share=1 - cfg.own_frames)
+    stage, ref = synth_stage(root, cfg, base, cutouts=cut)
     return cut, stage, ref
 
 

@@ -57,6 +57,7 @@ from fuzzyfire.stages import (
     synth_stage,
     with_class_rules,
 )
+from synth.method2 import Method2Config
 from train.config import TrainConfig
 
 
@@ -92,9 +93,11 @@ def prepare_pools(cfg: ExperimentConfig, base: Path, out: Path, methods: Sequenc
     """Build (or reuse) the synthetic pools of ``methods``."""
     pools = {}
     for method in methods:
-        synth = getattr(cfg.synth, method)
-        synth = simulated(synth) if method == "method2" else synth  # own cut-out pools: fuzzyfire.cutout_pools
-        pools[method] = _stage(method, synth_stage, out / "data", method, synth, base)
+        synth = cfg.synth.section(method)
+        if synth is None:
+            raise ExperimentConfigError(f"synth.{method} is null: no {method} pool to build")
+        synth = simulated(synth) if isinstance(synth, Method2Config) else synth  # own pools: fuzzyfire.cutout_pools
+        pools[method] = _stage(method, synth_stage, out / "data", synth, base)
     return pools
 
 
@@ -142,7 +145,7 @@ def grid_entries(cfg: ExperimentConfig) -> list[GridEntry]:
     for name in cfg.grid.table1:
         if parse_mixture(name).real:
             raise ValueError(f"grid.table1: {name} has real images; Table 1 compares synthetic-only training")
-        for method in (m for m in METHODS if getattr(cfg.synth, m) is not None):
+        for method in (m for m in METHODS if cfg.synth.section(m) is not None):
             tables.setdefault((name, method), []).append("table1")
     return [GridEntry(name, method, tuple(dict.fromkeys(t))) for (name, method), t in tables.items()]
 
@@ -428,9 +431,7 @@ def reading_lines(cfg: ExperimentConfig, data: Prepared, datasets: Datasets) -> 
 def run_experiment(cfg: ExperimentConfig, base: Path, out: Path, executor=None) -> ExperimentResult:
     """The whole study (module docstring); ``base`` resolves relative paths of the config. Without an
     ``executor`` nothing is trained: the report covers the runs finished so far (``failed`` lists the others)."""
-    cfg.check()
-    given = {k: p if Path(p).is_absolute() else base / p for k, p in cfg.report.attributes.items()}
-    cfg = replace(cfg, report=replace(cfg.report, attributes=given))
+    cfg = cfg.resolved(base)
     out = Path(out).resolve()
     out.mkdir(parents=True, exist_ok=True)
     _say(f"env    {lock_summary(lock_status())}")

@@ -21,6 +21,7 @@ from eval.config import InferenceConfig
 from fuzzyfire.engine import EngineConfig, EngineError
 from synth.method1 import Method1Config
 from synth.method2 import Method2Config
+from synth.method_config import MethodConfig
 from synth.standin import StandInConfig
 from train.config import TrainConfig
 
@@ -78,8 +79,10 @@ class EvalSetConfig:
     """A test set: a dataset folder (``path``, optionally one ``split``) or a generated stand-in (``standin``).
     A folder of images without labels is a negatives-only set (no AP: its false alarms per 100 images are
     reported) unless ``label`` declares the class every image holds: an image-labelled set, judged by image recall
-    (no AP), as is a classification layout (``format: folders``: ``fire/`` and ``normal/`` sub-folders). ``holdout`` keeps only the images :func:`curate.core.holdout.held_out` picks at that share: the photos a
-    Method 2 pool with the same ``background_holdout`` never composites on."""
+    (no AP), as is a classification layout (``format: folders``: ``fire/`` and ``normal/`` sub-folders).
+    ``holdout`` keeps only the images :func:`curate.core.holdout.held_out` picks at that share; when ``path`` is a
+    folder of ``synth.method2.backgrounds``, the Method 2 pool never composites on them
+    (:meth:`ExperimentConfig.resolved`)."""
 
     path: Optional[Path] = None  # dataset folder (any format) or a folder of unlabelled images
     format: Literal["auto", "coco", "yolo", "voc", "dfire", "images", "folders"] = "auto"  # images: unlabelled
@@ -93,7 +96,8 @@ class EvalSetConfig:
     label: Optional[str] = None  # the class every image of a folder without label files holds (e.g. fire): an
     # image-labelled set, judged by image recall, no AP (null = such a folder is negatives only); on a stand-in,
     # its images are judged at the image level (those with a box of the class hold it, the others are negatives)
-    holdout: float = 0.0  # 0 = every image; 0 < share <= 1 = only the held-out share (chosen by content hash)
+    holdout: float = 0.0  # 0 = every image; 0 < share <= 1 = only the held-out share (chosen by content hash); on
+    # a folder of synth.method2.backgrounds, the photos the pool never composites on
     name: Optional[str] = None  # label in tables and figures; null = the key under ``tests:``
 
     def source(self, where: str = "test set") -> str:
@@ -125,6 +129,13 @@ class SynthConfig:
     method1: Optional[Method1Config] = field(default_factory=Method1Config)  # flame planes in 3D scenes; null = none
     method2: Optional[Method2Config] = field(default_factory=Method2Config)  # flames composited; null = none
 
+    def section(self, method: str) -> MethodConfig | None:
+        """The settings of the pool of ``method`` (None: left out); ValueError for a name not in :data:`METHODS`."""
+        sections: dict[str, MethodConfig | None] = {"method1": self.method1, "method2": self.method2}
+        if method not in sections:
+            raise ValueError(f"unknown synthesis method {method!r}; choose one of {', '.join(METHODS)}")
+        return sections[method]
+
 
 @dataclass(frozen=True)
 class GridConfig:
@@ -146,8 +157,10 @@ class GridConfig:
 
 
 @dataclass(frozen=True)
-class ExecutorConfig:
-    name: str = "local"  # local (one run at a time, all cores) | ray (one task per run)
+class RunExecutorConfig:
+    """Where an experiment's runs train (:mod:`fuzzyfire.executors`)."""
+
+    name: Literal["local", "ray"] = "local"  # local (one run at a time, all cores) | ray (one task per run)
     address: Optional[str] = None  # ray: address of a running cluster (e.g. ray://head:10001); null = start one here
     num_cpus: float = 2  # CPUs per run (ray task resources; also the torch threads when train.threads is 0)
     num_gpus: float = 0  # GPUs per run (ray task resources)
@@ -192,7 +205,7 @@ class ExperimentConfig:
     engine: EngineConfig = field(default_factory=EngineConfig)  # who trains: fuzzyfire or a command (engine.py)
     score: InferenceConfig = field(default_factory=InferenceConfig)  # how each run's model is scored (the inference
     # settings of fuzzyfire score)
-    executor: ExecutorConfig = field(default_factory=ExecutorConfig)  # where runs run: here, or on a Ray cluster
+    executor: RunExecutorConfig = field(default_factory=RunExecutorConfig)  # where runs run: here, or on a Ray cluster
     leakage: LeakageConfig = field(default_factory=LeakageConfig)  # test images that are training images: dropped
     report: ReportConfig = field(default_factory=ReportConfig)  # tables, comparisons and report.html
     images: Literal["symlink", "hardlink", "copy"] = "symlink"  # how images reach the mixture folders
@@ -203,7 +216,7 @@ class ExperimentConfig:
         if self.rare is not None:
             self.rare.source()
         self.check_test_names()
-        if getattr(self.synth, self.grid.synthetic) is None:
+        if self.synth.section(self.grid.synthetic) is None:
             raise ExperimentConfigError(
                 f"grid.synthetic is {self.grid.synthetic} but synth.{self.grid.synthetic} is null"
             )
@@ -228,6 +241,54 @@ class ExperimentConfig:
                 "train.real_finetune is fuzzyfire's trainer's; engine command trains with its own recipe (set it to 0)"
             )
 
+    def resolved(self, base: Path) -> ExperimentConfig:
+        """This config :meth:`check`-ed, with what follows from its parts filled in (``base``: the folder its relative
+        paths resolve against): ``report.attributes`` as absolute paths, and ``synth.method2.background_holdout``
+        from the test sets on its backgrounds (:meth:`background_holdout`)."""
+        self.check()
+        given = {k: p if Path(p).is_absolute() else base / p for k, p in self.report.attributes.items()}
+        cfg = replace(self, report=replace(self.report, attributes=given))
+        m2 = self.synth.method2
+        share = self.background_holdout(base)
+        if m2 is None or share == m2.background_holdout:
+            return cfg
+        return replace(cfg, synth=replace(self.synth, method2=replace(m2, background_holdout=share)))
+
+    def background_holdout(self, base: Path) -> float:
+        """The share of ``synth.method2.backgrounds`` photos the pool holds out: in an experiment, the ``holdout`` of
+        the test sets (rare and named) whose ``path`` is one of those folders (the largest, when several: a share's
+        held-out photos are among those of any larger share), so each stays disjoint from the pool; with no such
+        test set, ``background_holdout`` as given. A different ``background_holdout`` given beside such a test set
+        raises :class:`ExperimentConfigError`: the test set's ``holdout`` is the one key."""
+        m2 = self.synth.method2
+        if m2 is None or not m2.backgrounds:
+            return m2.background_holdout if m2 is not None else 0.0
+        folders = {_resolved(Path(p), base) for p in m2.backgrounds}
+        sets = {
+            **({"rare": self.rare} if self.rare is not None else {}),
+            **{f"tests.{k}": t for k, t in self.tests.items()},
+        }
+        on = {
+            key: t.holdout
+            for key, t in sets.items()
+            if t.path is not None and t.holdout and _resolved(t.path, base) in folders
+        }
+        if not on:
+            return m2.background_holdout
+        key, share = max(on.items(), key=lambda item: item[1])
+        if share >= 1.0:
+            raise ExperimentConfigError(
+                f"{key}.holdout {share:g} holds out every photo of synth.method2.backgrounds: nothing is left for the "
+                "pool to composite on"
+            )
+        if m2.background_holdout and m2.background_holdout != share:
+            raise ExperimentConfigError(
+                f"synth.method2.background_holdout {m2.background_holdout:g} and {key}.holdout {share:g} cut the same "
+                f"photos ({key}.path is a folder of synth.method2.backgrounds): the test set's holdout is the one key, "
+                "the pool holds out that share; remove synth.method2.background_holdout"
+            )
+        return share
+
     def test_names(self) -> dict[str, str]:
         """The label of every named test set (``tests:``), by key."""
         return {key: t.name or key for key, t in self.tests.items()}
@@ -243,3 +304,8 @@ class ExperimentConfig:
             if slug(name) in seen:
                 raise ExperimentConfigError(f"tests.{key}: the label {name!r} is taken by another test set")
             seen.append(slug(name))
+
+
+def _resolved(path: Path, base: Path) -> Path:
+    """``path`` (relative to ``base``) as an absolute path, links resolved."""
+    return (path if path.is_absolute() else base / path).resolve()

@@ -9,8 +9,9 @@ from its test set (``leakage.action: drop``, recorded in ``leakage.json`` and th
 A Method 2 pool with ``backgrounds`` composites flames on photographs; a test set holding one of those photos
 (the same bytes, by sha256) would score a detector on a picture it trained on. Every test set of an experiment
 (common, rare and the named ones) is checked against the background photos of every pool the grid uses; the
-shares a pool holds out (``background_holdout``, :func:`curate.core.holdout.held_out`) are no part of it, so a test set
-with the same ``holdout`` share is disjoint by construction.
+share a pool holds out (:func:`curate.core.holdout.held_out`) is no part of it. In an experiment that share is the
+``holdout`` of the test set on the same folder (:meth:`fuzzyfire.experiment_config.ExperimentConfig.resolved`), so
+such a test set is disjoint from the pool by construction.
 """
 
 from __future__ import annotations
@@ -25,6 +26,7 @@ from curate.core.dataset import Dataset
 
 if TYPE_CHECKING:
     from curate.scan import ScanResult
+    from fuzzyfire.experiment_config import SynthConfig
 
 
 class LeakageError(ValueError):
@@ -32,21 +34,22 @@ class LeakageError(ValueError):
     line: the count and one example)."""
 
 
-def pool_photos(synth: object, methods: Sequence[str], base: Path) -> dict[str, list[Path]]:
-    """The background photos of the pools ``methods`` of ``synth`` (an experiment's
-    :class:`fuzzyfire.experiment_config.SynthConfig`), each as its pool takes them
-    (:func:`synth.places.photos.pool_photos`: without the held-out share and without panoramas); ``backgrounds``
-    resolve against ``base``; the images of labelled ``frames`` (:mod:`synth.places.frames`) count too. Pools without
-    photos are left out."""
+def pool_photos(synth: SynthConfig, methods: Sequence[str], base: Path) -> dict[str, list[Path]]:
+    """The background photos of the pools ``methods`` of ``synth`` (an experiment's pools), each as its pool takes
+    them (:func:`synth.places.photos.pool_photos`: without the held-out share and without panoramas);
+    ``backgrounds`` resolve against ``base``; the images of ``labelled_frames`` (:mod:`synth.places.frames`) count
+    too. Pools without photos are left out."""
     from synth.places.frames import load_frames
     from synth.places.photos import pool_photos as photos_of
 
     out = {}
     for method in methods:
-        cfg = getattr(synth, method)
-        folders = [p if Path(p).is_absolute() else base / p for p in getattr(cfg, "backgrounds", ())]
-        frames = [p if Path(p).is_absolute() else base / p for p in getattr(cfg, "frames", ())]
-        photos = [*(photos_of(folders, cfg.background_holdout) if folders else []), *load_frames(frames)]
+        cfg = synth.section(method)
+        places = cfg.with_paths(lambda p: p if p.is_absolute() else base / p).places() if cfg is not None else None
+        if places is None:
+            continue
+        photos = [*(photos_of(places.backgrounds, places.background_holdout) if places.backgrounds else []),
+                  *load_frames(places.labelled_frames)]  # fmt: skip
         if photos:
             out[method] = photos
     return out
@@ -66,8 +69,8 @@ def check_leakage(pools: Mapping[str, Sequence[Path]], tests: Mapping[str, Datas
             image, (method, photo) = hits[0]
             raise LeakageError(
                 f"leakage: {len(hits)} images of test set {name!r} are background photos of the {method} pool "
-                f"(e.g. {image} = {photo}): hold them out of the pool (background_holdout) and give the test set "
-                "the same holdout share"
+                f"(e.g. {image} = {photo}): give the test set the pool's backgrounds folder with a holdout share "
+                "(the pool then never composites on the photos held out)"
             )
 
 

@@ -17,11 +17,14 @@ import shutil
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from curate.core.config import to_dict
 from fuzzyfire import __version__
 from fuzzyfire.datasets import DataRef
+
+if TYPE_CHECKING:
+    from synth.method_config import MethodConfig
 
 STAGE_FILE = "stage.json"
 STANDIN_LABEL = " (stand-in)"
@@ -186,32 +189,29 @@ def standin_stage(root: Path, name: str, cfg: Any) -> tuple[Stage, DataRef]:
     return stage, DataRef(stage.folder, {"kind": "standin", "hash": stage.hash}, "coco", standin=True)
 
 
-def synth_stage(root: Path, method: str, cfg: Any, base: Path, cutouts: Stage | None = None) -> tuple[Stage, DataRef]:
-    """A Method 1 or Method 2 pool, its flame library built from ``cfg.flames``; ``cfg.environments`` (and Method 2's
-    ``backgrounds`` and ``frames``) resolve against ``base``. They enter the pool's identity by content
+def synth_stage(root: Path, cfg: MethodConfig, base: Path, cutouts: Stage | None = None) -> tuple[Stage, DataRef]:
+    """A Method 1 or Method 2 pool of ``cfg``, its flame library built from ``cfg.flames``; its places (every key
+    of :meth:`~synth.method_config.MethodConfig.place_keys`: environments, and Method 2's backgrounds and
+    labelled frames) resolve against ``base``. They enter the pool's identity by content
     (:func:`content_identity`), not by path, so a study moved to another folder or machine finds its pools (and
     runs) again. ``cutouts``: a stage of real flame cut-outs (:mod:`fuzzyfire.cutout_pools`) for a ``flames.source:
     cutouts`` pool, named ``<method>-cutouts-<hash>``; its hash enters the pool's identity. The pool is made in one
     process per core."""
     from synth.flames.library import build_library
     from synth.flames.sprites import load_library
-    from synth.method1 import run_method1
-    from synth.method2 import run_method2
+    from synth.generate import generate
 
-    runner = {"method1": run_method1, "method2": run_method2}[method]
-    cfg = replace(cfg, environments=tuple(_absolute(Path(p), base) for p in cfg.environments))
-    if getattr(cfg, "backgrounds", ()):
-        cfg = replace(cfg, backgrounds=tuple(_absolute(Path(p), base) for p in cfg.backgrounds))
-    if getattr(cfg, "frames", ()):
-        cfg = replace(cfg, frames=tuple(_absolute(Path(p), base) for p in cfg.frames))
-    config = {k: v for k, v in to_dict(cfg).items() if k not in ("environments", "backgrounds", "frames")}
+    method = cfg.method
+    cfg = cfg.with_paths(lambda p: _absolute(p, base))
+    config = {k: v for k, v in to_dict(cfg).items() if k not in cfg.place_keys()}
     files = content_identity(cfg)
     flames = {"cutouts": cutouts.hash} if cutouts is not None else {}
+    frames = "-frames" if cfg.places().labelled_frames else ""
     stage = cached_stage(
         root,
-        f"{method}-cutouts" if cutouts is not None else f"{method}-frames" if getattr(cfg, "frames", ()) else method,
+        f"{method}-cutouts" if cutouts is not None else f"{method}{frames}",
         {"kind": method, "config": {**config, **files, **flames}},
-        lambda out: runner(
+        lambda out: generate(
             cfg,
             build_library(cfg.flames, load_library([cutouts.folder]) if cutouts else ()),
             out,
@@ -221,26 +221,27 @@ def synth_stage(root: Path, method: str, cfg: Any, base: Path, cutouts: Stage | 
     return stage, DataRef(stage.folder, {"kind": method, "hash": stage.hash}, "coco")
 
 
-def content_identity(cfg: Any) -> dict[str, Any]:
-    """The environment files, panoramas, background photos and labelled frames of ``cfg`` by content (only the
-    keys that are set)."""
+def content_identity(cfg: MethodConfig) -> dict[str, Any]:
+    """The places of ``cfg`` by content, under the kind of each (only the kinds it has): ``environments`` (mesh
+    files), ``panoramas``, ``backgrounds`` (the photos a pool composites on, its held-out share left out) and
+    ``frames`` (labelled frames, :mod:`synth.places.frames`)."""
     from synth.places.envfile import find_environment_files, fingerprint
-    from synth.places.kinds import split_places
     from synth.places.panorama import panorama_fingerprints
     from synth.places.photos import photo_fingerprints
 
     out: dict[str, Any] = {}
-    places = split_places(cfg.environments, getattr(cfg, "backgrounds", ()))
+    given = cfg.places()
+    places = given.split()
     if places.meshes:
         out["environments"] = [fingerprint(spec) for spec in find_environment_files(places.meshes)]
     if places.panoramas:
         out["panoramas"] = panorama_fingerprints(places.panoramas)
-    if getattr(cfg, "backgrounds", ()):
-        out["backgrounds"] = photo_fingerprints(cfg.backgrounds, cfg.background_holdout)
-    if getattr(cfg, "frames", ()):
+    if given.backgrounds:
+        out["backgrounds"] = photo_fingerprints(given.backgrounds, given.background_holdout)
+    if given.labelled_frames:
         from synth.places.frames import frame_fingerprints
 
-        out["frames"] = frame_fingerprints(cfg.frames)
+        out["frames"] = frame_fingerprints(given.labelled_frames)
     return out
 
 

@@ -7,10 +7,15 @@ import json
 import os
 from collections.abc import Callable, Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from curate.core.cluster import EXECUTOR_CHOICES, open_cluster
 from curate.core.commands import add_command
 from curate.core.options import Alias
+
+if TYPE_CHECKING:
+    from curate.core.writer import WriteResult
+    from synth.method_config import MethodConfig
 
 
 def parse_size(text: str) -> tuple[int, int]:
@@ -131,9 +136,10 @@ METHOD2_ALIASES: tuple[Alias, ...] = (
     *DATASET_ALIASES,
     Alias("--backgrounds", ("backgrounds",), "your fire-free photos (files or folders), composited on",
           {"type": Path, "nargs": "+", "metavar": "PATH"}),
-    Alias("--frames", ("frames",), "labelled datasets composited on like photos, each keeping its fire boxes",
-          {"type": Path, "nargs": "+", "metavar": "DATASET"}),
-    Alias("--photo-share", ("photo_share",), "share of views on photos or frames beside 3D scenes", {"type": float}),
+    Alias("--labelled-frames", ("labelled_frames",), "labelled datasets composited on like photos, each image "
+          "keeping its fire boxes", {"type": Path, "nargs": "+", "metavar": "DATASET"}),
+    Alias("--photo-share", ("photo_share",), "share of views on photos or labelled frames beside 3D scenes",
+          {"type": float}),
     Alias("--photo-negatives", ("photo_negatives",), "share of photo images left without flames (hard negatives)",
           {"type": float, "metavar": "SHARE"}),
     Alias("--auto-exposure", ("auto_exposure",), "bright flames lower the exposure of the scene around them",
@@ -149,7 +155,6 @@ def _built(args: argparse.Namespace, schema: type, aliases: Sequence[Alias]):
     from curate.core.options import config_from_args, print_config
     from curate.core.writer import check_output_target
     from synth.places.envfile import find_environment_files
-    from synth.places.kinds import split_places
 
     cfg = config_from_args(args, schema, aliases)
     if args.print_config:
@@ -158,7 +163,7 @@ def _built(args: argparse.Namespace, schema: type, aliases: Sequence[Alias]):
     if args.out is None:
         raise ValueError("--out is required (the output dataset folder)")
     check_output_target(args.out, args.overwrite)
-    places = split_places(cfg.environments, getattr(cfg, "backgrounds", ()))
+    places = cfg.places().split()
     if places.meshes:
         find_environment_files(places.meshes)
     if cfg.environments and not places.meshes and not places.panoramas:
@@ -167,34 +172,37 @@ def _built(args: argparse.Namespace, schema: type, aliases: Sequence[Alias]):
 
 
 def cmd_method1(args: argparse.Namespace) -> int:
-    from synth.flames.library import build_library
-    from synth.method1 import Method1Config, run_method1
+    from synth.method1 import Method1Config
 
     cfg = _built(args, Method1Config, METHOD1_ALIASES)
     if cfg is None:
         return 0
-    result = _generate(args, run_method1, cfg, build_library(cfg.flames))
+    result = _generate(args, cfg)
     print(f"wrote {args.out}: {cfg.n} images, {cfg.box_mode} boxes ({', '.join(result.files.values())})")
     return 0
 
 
 def cmd_method2(args: argparse.Namespace) -> int:
-    from synth.flames.library import build_library
-    from synth.method2 import Method2Config, run_method2
+    from synth.method2 import Method2Config
 
     cfg = _built(args, Method2Config, METHOD2_ALIASES)
     if cfg is None:
         return 0
-    result = _generate(args, run_method2, cfg, build_library(cfg.flames))
+    result = _generate(args, cfg)
     print(f"wrote {args.out}: {cfg.n} images ({', '.join(result.files.values())})")
     return 0
 
 
-def _generate(args: argparse.Namespace, run: Callable, cfg, library):  # noqa: ANN001, ANN202 - a WriteResult
-    """``run(cfg, library, --out)`` in ``--workers`` processes or on the Ray cluster of ``--executor ray``."""
+def _generate(args: argparse.Namespace, cfg: MethodConfig) -> WriteResult:
+    """``cfg``'s dataset at ``--out`` with the flame library of ``cfg.flames``, in ``--workers`` processes or on
+    the Ray cluster of ``--executor ray``."""
+    from synth.flames.library import build_library
+    from synth.generate import generate
+
+    library = build_library(cfg.flames)
     cluster = open_cluster(args.executor, args.address)
     try:
-        return run(cfg, library, args.out, overwrite=args.overwrite, workers=_workers(args), cluster=cluster)
+        return generate(cfg, library, args.out, overwrite=args.overwrite, workers=_workers(args), cluster=cluster)
     finally:
         if cluster is not None:
             cluster.close()
@@ -478,14 +486,14 @@ def _register_method2(sub: argparse._SubParsersAction) -> None:
         help="Method 2: composite flames on rendered views, photos and panoramas (exact boxes)",
         description="Render environment views once and composite flame sprites on them; boxes come\n"
         "from each flame's final visible mask. Places: procedural rooms, 3D files and 360-degree panoramas\n"
-        "(--environments), your fire-free photos (--backgrounds), your labelled frames (--frames). Resumes an\n"
-        "interrupted run. Settings: CONFIG.yaml (configs/synth-method2.yaml lists every key), the options\n"
+        "(--environments), your fire-free photos (--backgrounds), your labelled frames (--labelled-frames).\n"
+        "Resumes an interrupted run. Settings: CONFIG.yaml (configs/synth-method2.yaml lists every key), the options\n"
         "below, then --set KEY=VALUE.\n\n"
         "example:\n  fuzzyfire synth method2 --n 200 --out out/m2 --size 416x416\n"
         "  fuzzyfire synth method2 --n 200 --out out/m2-photos --backgrounds ../shared/data/fire-free\n"
         "  fuzzyfire synth method2 --n 200 --out out/m2-panoramas --environments ../shared/data/panoramas\n"
         "  fuzzyfire synth method2 --n 200 --out out/m2-rooms --environments configs/scenes\n"
-        "  fuzzyfire synth method2 --n 200 --out out/m2-frames --frames my/cctv-labelled  # keeps their boxes\n"
+        "  fuzzyfire synth method2 --n 200 --out out/m2-frames --labelled-frames my/cctv-labelled  # keeps their boxes\n"
         "  fuzzyfire synth method2 configs/synth-method2.yaml --set n=200 --set flames.exposed=true --out out/m2-yaml\n"
         "  fuzzyfire synth audit out/m2 --json",
     )

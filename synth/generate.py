@@ -1,5 +1,7 @@
 """The resumable generation loop that Method 1 and Method 2 share: stage image ``i`` for every ``i`` in
 ``range(cfg.n)`` not yet staged, from views rendered once per (scene, camera) and cached, then write the dataset.
+The loop reads a :class:`synth.method_config.MethodConfig` (its places through :meth:`~synth.method_config.
+MethodConfig.places`) and makes images with the config's method (:func:`image_maker`).
 """
 
 from __future__ import annotations
@@ -16,17 +18,19 @@ import cv2
 from curate.core.cluster import Cluster
 from curate.core.progress import progress
 from curate.core.writer import WriteResult, check_output_target
+from synth import method1, method2
 from synth.flames.sprites import SpriteSequence
+from synth.method_config import MethodConfig
 from synth.places import render
 from synth.places.envfile import EnvironmentFile, find_environment_files
 from synth.places.frames import Box, load_frames
-from synth.places.kinds import split_places
 from synth.places.panorama import PanoramaBackgrounds
 from synth.places.photos import PhotoBackgrounds, keep_in_pool
 from synth.places.views import ViewCache, environment_index
 from synth.schema import to_json
 from synth.staging import Staging, finish
 
+#: ``make_image(cfg, i, library, views)`` -> (image, fire masks, record, smoke masks or None): one image of a method.
 MakeImage = Callable[[Any, int, Sequence[SpriteSequence], ViewCache], tuple]
 
 #: Views per block of a run without mesh files (a process makes whole blocks).
@@ -37,11 +41,10 @@ MIN_IMAGES_PER_WORKER = 16
 
 @dataclass(frozen=True)
 class Job:
-    """What a process needs to make images of a run (picklable): the method, its config and image maker, the
-    flame library, the output folder (its staging folder receives the images) and the checked places."""
+    """What a process needs to make images of a run (picklable): the config and its image maker, the flame
+    library, the output folder (its staging folder receives the images) and the checked places."""
 
-    method: str
-    cfg: Any
+    cfg: MethodConfig
     make_image: MakeImage
     library: tuple[SpriteSequence, ...]
     out: Path
@@ -56,7 +59,7 @@ class Job:
 def opened_views(job: Job) -> Iterator[tuple[ViewCache, list[dict[str, str]]]]:
     """The run's :class:`ViewCache` on a fresh renderer (closed on exit) and the ``problems`` dicts of its
     photo and panorama backgrounds (unreadable files: reason)."""
-    cfg = job.cfg
+    cfg, places = job.cfg, job.cfg.places()
     with render.Renderer(cfg.width, cfg.height, job.platform) as renderer:
         photos = (
             PhotoBackgrounds(list(job.photo_files), cfg.width, cfg.height, cfg.seed, job.frames)
@@ -64,18 +67,18 @@ def opened_views(job: Job) -> Iterator[tuple[ViewCache, list[dict[str, str]]]]:
             else None
         )
         panoramas = PanoramaBackgrounds(list(job.panoramas), cfg.width, cfg.height, cfg.seed) if job.panoramas else None
-        share, count = getattr(cfg, "photo_share", 0.0), -(-cfg.n // cfg.images_per_view)  # views of the run
+        count = -(-cfg.n // cfg.images_per_view)  # views of the run
         views = ViewCache(
             cfg.seed,
             cfg.scenes,
             renderer,
             job.files,
             photos,
-            share,
+            places.photo_share,
             count,
             panoramas,
-            getattr(cfg, "panorama_share", 0.5),
-            surfaces=job.method == "method2",  # Method 2's flames stand on surfaces; Method 1 has its own rule
+            places.panorama_share,
+            surfaces=cfg.composited,  # Method 2's flames stand on surfaces; Method 1 has its own rule
         )
         yield views, [source.problems for source in (photos, panoramas) if source is not None]
 
@@ -84,7 +87,7 @@ def _make_images(job: Job, todo: Sequence[int]) -> dict[str, str]:
     """Make and stage images ``todo`` in this process (a progress bar); the backgrounds skipped, with reasons."""
     staging = Staging(job.out)
     with opened_views(job) as (views, problems):
-        for i in progress(todo, total=len(todo), desc=f"{job.method} images"):
+        for i in progress(todo, total=len(todo), desc=f"{job.cfg.method} images"):
             staging.save(i, *job.make_image(job.cfg, i, job.library, views))
         return {k: v for found in problems for k, v in found.items()}
 
@@ -148,7 +151,7 @@ def _collected(done: Iterator[tuple[int, dict[str, str]]], job: Job, total: int)
             problems.update(found)
             yield from range(made)
 
-    for _ in progress(images_done(), total=total, desc=f"{job.method} images"):
+    for _ in progress(images_done(), total=total, desc=f"{job.cfg.method} images"):
         pass
     return problems
 
@@ -173,40 +176,52 @@ def _on_cluster(job: Job, todo: Sequence[int], cluster: Cluster) -> dict[str, st
     return _collected((result for _, result in done), job, len(todo))
 
 
+def image_maker(cfg: MethodConfig) -> MakeImage:
+    """The ``make_image`` of ``cfg``'s method (:mod:`synth.method1` or :mod:`synth.method2`); TypeError for
+    another config."""
+    makers: dict[type, MakeImage] = {
+        method1.Method1Config: method1.make_image,
+        method2.Method2Config: method2.make_image,
+    }
+    if type(cfg) not in makers:
+        raise TypeError(f"no image maker for {type(cfg).__name__}: give make_image")
+    return makers[type(cfg)]
+
+
 def generate(
-    method: str,
-    cfg: Any,
-    make_image: MakeImage,
+    cfg: MethodConfig,
     library: Sequence[SpriteSequence],
     out: Path,
     overwrite: bool = False,
     platform: str | None = None,
     workers: int = 1,
     cluster: Cluster | None = None,
+    make_image: MakeImage | None = None,
 ) -> WriteResult:
-    """Generate (or resume) ``cfg.n`` images with ``make_image(cfg, i, library, views)`` and write ``out``.
+    """Generate (or resume) ``cfg.n`` images of ``cfg``'s method (``make_image(cfg, i, library, views)``; None:
+    the method's own, :func:`image_maker`) and write ``out``; returns the WriteResult.
 
-    ``method`` names the source tag (``synth:<method>``) and the command in the manifest; ``cfg`` is a
-    Method1Config or Method2Config (``n``, ``seed``, ``scenes``, ``environments``, ``width``, ``height``,
-    ``smoke_class``). The output folder, the environment files and the
-    background photos are checked before anything is rendered (:class:`~curate.core.writer.OutputError`,
-    FileNotFoundError, ValueError). A run that fails or is interrupted
-    keeps the images it finished in the staging folder and says so (the same command resumes from them); one
-    that finished none leaves nothing behind. ``workers`` > 1: images are made in up to that many processes (at
+    ``cfg.method`` names the source tag (``synth:<method>``) and the command in the manifest; its places are
+    read through :meth:`~synth.method_config.MethodConfig.places`. The output folder, the environment files and
+    the background photos are checked before anything is rendered (:class:`~curate.core.writer.OutputError`,
+    FileNotFoundError, ValueError). A run that fails or is interrupted keeps the images it finished in the
+    staging folder and says so (the same command resumes from them); one that finished none leaves nothing behind. ``workers`` > 1: images are made in up to that many processes (at
     least :data:`MIN_IMAGES_PER_WORKER` images each), each on whole blocks of views (:func:`blocks`); every image
     depends only on (seed, index), so the dataset is byte-identical to one process's. With a Ray ``cluster``
     the blocks are its tasks instead (``workers`` is not used): the same bytes again, ``out`` on shared storage.
     """
+    make_image = make_image or image_maker(cfg)
     if not library or not all(seq.sprites for seq in library):
         raise ValueError("the flame library is empty")
     check_output_target(out, overwrite)
-    places = split_places(cfg.environments, getattr(cfg, "backgrounds", ()))  # backgrounds: Method 2 only
-    if places.panoramas and method != "method2":
+    given = cfg.places()
+    places = given.split()
+    if places.panoramas and not cfg.composited:
         raise ValueError(f"{places.panoramas[0]}: a panorama is a Method 2 place (Method 1 needs 3D meshes)")
     files = find_environment_files(places.meshes) if places.meshes else []
-    photo_files = keep_in_pool(places.photos, getattr(cfg, "background_holdout", 0.0))
+    photo_files = keep_in_pool(places.photos, given.background_holdout)
     unreadable: list = []
-    frames = load_frames(getattr(cfg, "frames", ()), unreadable)  # labelled frames: photos keeping their fire boxes
+    frames = load_frames(given.labelled_frames, unreadable)  # labelled frames: photos keeping their fire boxes
     for problem in places.problems:  # unreadable files among the places and frames: named, never composited on
         print(f"{problem.path}: skipped background ({problem.reason})", file=sys.stderr)
     if note := places.panorama_note():
@@ -217,7 +232,7 @@ def generate(
     photo_files += [p for p in frames if p not in known]
     args = {**to_json(cfg), "flame_sequences": [s.name for s in library]}
     staging = Staging(out, args)
-    job = Job(method, cfg, make_image, tuple(library), out, platform, tuple(files), tuple(photo_files),
+    job = Job(cfg, make_image, tuple(library), out, platform, tuple(files), tuple(photo_files),
               tuple(places.panoramas), frames)  # fmt: skip
     try:
         todo = [i for i in range(cfg.n) if not staging.done(i)]
@@ -230,7 +245,9 @@ def generate(
             problems = _make_images(job, todo)
         for path, reason in problems.items():
             print(f"{path}: skipped background ({reason})", file=sys.stderr)
-        return finish(staging, out, cfg.n, f"synth:{method}", f"synth {method}", args, cfg.smoke_class, overwrite)
+        return finish(
+            staging, out, cfg.n, f"synth:{cfg.method}", f"synth {cfg.method}", args, cfg.smoke_class, overwrite
+        )
     except BaseException:
         staging.abandon(cfg.n)
         raise

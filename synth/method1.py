@@ -21,22 +21,19 @@ image can be (re)made alone: runs resume and are byte-reproducible.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass, field
-from pathlib import Path
-from typing import Any, Literal
+from dataclasses import dataclass
+from typing import Any, ClassVar, Literal
 
 import cv2
 import numpy as np
 from numpy.typing import NDArray
 
 from curate.core.boxes import clip_xyxy, mask_to_xywh, points_to_xyxy, xyxy_to_xywh
-from curate.core.cluster import Cluster
-from synth.compose.effects import CameraConfig, Effects, apply_effects, expose, sample_effects
-from synth.flames.library import FlameLibraryConfig
+from synth.compose.effects import Effects, apply_effects, expose, sample_effects
 from synth.flames.sprites import Sprite, SpriteSequence, flatten_rgba
-from synth.generate import generate
+from synth.method_config import MethodConfig
 from synth.places import render
-from synth.places.scenes import DEFAULT_SCENES, translate
+from synth.places.scenes import translate
 from synth.places.views import View, ViewCache
 from synth.schema import check_range
 from synth.staging import boxes_from_masks
@@ -45,54 +42,30 @@ BOX_MODES: tuple[str, ...] = ("paper", "visible")
 
 
 @dataclass(frozen=True)
-class Method1Config:
-    """Method 1 settings (``configs/synth-method1.yaml`` documents every key). ``flames`` describes the library
-    a command builds with :func:`synth.flames.library.build_library`; the manifest records the sequences used."""
+class Method1Config(MethodConfig):
+    """Method 1 settings (``configs/synth-method1.yaml`` documents every key; the keys both methods share:
+    :class:`synth.method_config.MethodConfig`). ``flames`` describes the library a command builds with
+    :func:`synth.flames.library.build_library`; the manifest records the sequences used."""
 
-    n: int = 100  # images
-    seed: int = 0  # same seed -> byte-identical dataset
-    width: int = 640  # image width, pixels, >= 16
-    height: int = 480  # image height, pixels, >= 16
-    scenes: int | None = None  # procedural environments (7 families), >= 0; null = 48 unless environments are given
-    environments: tuple[Path, ...] = ()  # mesh files / folders / sidecars (synth.places.envfile), rendered first; with
-    # files the views go to the environments in consecutive blocks (synth.places.views)
-    images_per_view: int = 1  # images (different planes) per camera view
-    max_flames: int = 3  # planes per image: uniform in 1..max_flames
-    negatives: float = 0.1  # fraction of images without flames
-    flame_height_m: tuple[float, float] = (0.3, 2.5)  # flame plane height, metres [lo, hi]
+    method: ClassVar[str] = "method1"
+    composited: ClassVar[bool] = False
+    bringing_places: ClassVar[str] = "environments are"
+
     distance_m: tuple[float, float] = (1.0, 25.0)  # plane distance from the camera
     clearance_m: tuple[float, float] = (0.05, 0.5)  # plane stands this far in front of the surface it is on
     yaw_jitter_deg: float = 25.0  # plane rotation about the vertical away from facing the camera
     box_mode: Literal["visible", "paper"] = "visible"  # written annotation: accurate, or projected corners
-    min_box_px: int = 4  # boxes smaller than this (either side) are not annotated
     effects: bool = True  # camera effects (white balance, blur, noise, JPEG) as in Method 2
-    smoke_class: bool = False  # also annotate smoke (class 'smoke')
     light: bool = True  # flames light their surroundings (a point light per flame)
-    camera: CameraConfig = field(default_factory=CameraConfig)  # probabilities of the stronger camera effects
-    flames: FlameLibraryConfig = field(default_factory=FlameLibraryConfig)  # the flame library
 
     def __post_init__(self) -> None:
-        if self.scenes is None:
-            object.__setattr__(self, "scenes", 0 if self.environments else DEFAULT_SCENES)
+        super().__post_init__()
         if self.box_mode not in BOX_MODES:
             raise ValueError(f"unknown box mode {self.box_mode!r}; choose one of {', '.join(BOX_MODES)}")
         if self.flames.source != "simulated":
             raise ValueError(f"flames.source {self.flames.source}: cut-out flames are for Method 2 pools only")
-        if self.n < 1 or self.scenes < 0 or self.images_per_view < 1 or self.width < 16 or self.height < 16:
-            raise ValueError(
-                f"n, images_per_view must be >= 1, scenes >= 0, width and height >= 16; got n {self.n}, "
-                f"images_per_view {self.images_per_view}, scenes {self.scenes}, size {self.width}x{self.height}"
-            )
-        if self.scenes == 0 and not self.environments:
-            raise ValueError("scenes is 0 and no environments are given: nothing to render")
-        if self.max_flames < 1 or not 0.0 <= self.negatives <= 1.0 or self.min_box_px < 1:
-            raise ValueError(
-                f"max_flames and min_box_px must be >= 1 and negatives in 0..1; got {self.max_flames}, "
-                f"{self.min_box_px}, {self.negatives}"
-            )
         if self.yaw_jitter_deg < 0:
             raise ValueError(f"yaw_jitter_deg must be >= 0, got {self.yaw_jitter_deg}")
-        check_range("flame_height_m", self.flame_height_m, 0.01)
         check_range("distance_m", self.distance_m, 0.2)
         check_range("clearance_m", self.clearance_m, 0.0)
 
@@ -297,17 +270,3 @@ def make_image(cfg: Method1Config, i: int, library: Sequence[SpriteSequence], vi
         return image, kept, record, None
     smoke, record["smoke_boxes"], _ = boxes_from_masks(visible_masks(layers, passes, 2), cfg.min_box_px)
     return image, kept, record, smoke
-
-
-def run_method1(
-    cfg: Method1Config,
-    library: Sequence[SpriteSequence],
-    out: Path,
-    overwrite: bool = False,
-    platform: str | None = None,
-    workers: int = 1,
-    cluster: Cluster | None = None,
-):
-    """Generate (or resume) ``cfg.n`` images and write the dataset to ``out`` (in ``workers`` processes, or as
-    tasks on a Ray ``cluster``: the same bytes); returns the WriteResult."""
-    return generate("method1", cfg, make_image, library, out, overwrite, platform, workers, cluster)

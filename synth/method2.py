@@ -11,25 +11,23 @@ Auto exposure draws from ``default_rng([seed, 2, i, 2])`` (:func:`metering`).
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
+from typing import ClassVar
 
 import numpy as np
 from numpy.typing import NDArray
 
 from curate.core.boxes import mask_to_xywh, xywh_overlaps_any
-from curate.core.cluster import Cluster
 from synth.compose.composite import BLEND_MODES, Placement, composite
-from synth.compose.effects import CameraConfig, Effects, apply_effects, expose, sample_effects, scale_light
+from synth.compose.effects import Effects, apply_effects, expose, sample_effects, scale_light
 from synth.compose.metering import draw_radiance, flame_share, mean_linear_luma, metered_gain
 from synth.compose.visibility import delta_e, measure
-from synth.flames.library import FlameLibraryConfig, pick_sequence
+from synth.flames.library import pick_sequence
 from synth.flames.sprites import Sprite, SpriteSequence, flame_extent
-from synth.generate import generate
+from synth.method_config import MethodConfig, PoolPlaces
 from synth.places import render
-from synth.places.scenes import DEFAULT_SCENES
 from synth.places.views import ViewCache
-from synth.schema import check_range
 from synth.staging import boxes_from_masks
 
 SITE_MAX_HEIGHT = 0.6  # tallest flame on a photo or panorama site, fraction of the image height
@@ -41,75 +39,52 @@ FLAME_GLOW = (0.1, 0.5)
 
 
 @dataclass(frozen=True)
-class Method2Config:
+class Method2Config(MethodConfig):
     """Method 2 settings (``configs/synth-method2.yaml`` lists every key; ``docs/config.md`` is generated from
-    here). ``flames`` describes the library a command builds with :func:`synth.flames.library.build_library`; the manifest
-    records the sequences used."""
+    here; the keys both methods share: :class:`synth.method_config.MethodConfig`). ``flames`` describes the library
+    a command builds with :func:`synth.flames.library.build_library`; the manifest records the sequences used."""
 
-    n: int = 100  # images to write, >= 1
-    seed: int = 0  # same seed -> byte-identical dataset
-    width: int = 640  # image width, pixels, >= 16
-    height: int = 480  # image height, pixels, >= 16
-    scenes: int | None = None  # procedural environments (7 families), >= 0; null = 48 unless environments,
-    # backgrounds, frames or own_frames are given (then only those)
-    environments: tuple[
-        Path, ...
-    ] = ()  # mesh files / folders / sidecar YAMLs (synth.places.envfile) and 2:1 panoramas,
-    # rendered first; with files the views go to the environments in consecutive blocks (synth.places.views)
+    method: ClassVar[str] = "method2"
+    composited: ClassVar[bool] = True
+    bringing_places: ClassVar[str] = "environments, backgrounds, labelled_frames or own_frames are"
+
     backgrounds: tuple[Path, ...] = ()  # fire-free photos (files / folders) composited on; 2:1 ones are panoramas
-    frames: tuple[Path, ...] = ()  # labelled datasets composited on like photos, each image keeping its own fire
-    # boxes, no flame placed over them (synth.places.frames): e.g. your cameras' frames
+    labelled_frames: tuple[Path, ...] = ()  # labelled datasets composited on like photos, each image keeping its
+    # own fire boxes, no flame placed over them (synth.places.frames): e.g. your cameras' frames
     own_frames: float = 0.0  # experiment only: share of an own pool's views on its mixture's real training images
-    # (fuzzyfire.cutout_pools; they become the pool's frames), 0..1; 0 = none
-    photo_share: float = 0.5  # share of views on a photo (or frame) when 3D scenes are also used, 0..1
-    background_holdout: float = 0.0  # share of the photos (by content hash) never composited on: test data, [0, 1)
+    # (fuzzyfire.cutout_pools; they become the pool's labelled_frames), 0..1; 0 = none
+    photo_share: float = 0.5  # share of views on a photo (or labelled frame) when 3D scenes are also used, 0..1
+    background_holdout: float = 0.0  # share of the photos (by content hash) never composited on: test data, [0, 1);
+    # in an experiment, set by the holdout of the test set on the same folder (docs/experiments.md)
     panorama_share: float = 0.5  # weight of panorama views beside photos and renders, 0..1
     images_per_view: int = 8  # images composited on each rendered or panorama view (render once, composite many
-    # times), >= 1; each image on a photo or frame has a crop of its own (synth.places.views)
-    max_flames: int = 3  # flames per image: uniform in 1..max_flames, >= 1
-    negatives: float = 0.1  # fraction of images without flames, 0..1
+    # times), >= 1; each image on a photo or labelled frame has a crop of its own (synth.places.views)
     photo_negatives: float | None = None  # fraction of the images on a fire-free photo (``backgrounds``) without
-    # flames: hard negatives of your own kind, 0..1; null = negatives (frames and other places keep that)
-    flame_height_m: tuple[float, float] = (0.3, 2.5)  # flame height in the scene, metres [lo, hi]; pixels = focal *
-    # height / depth
-    min_box_px: int = 4  # visible flames smaller than this on either side are not annotated, pixels, >= 1
-    smoke_class: bool = False  # also annotate smoke (class 'smoke': sprite alpha >= 0.25, visible part)
+    # flames: hard negatives of your own kind, 0..1; null = negatives (labelled frames and other places keep that)
     auto_exposure: bool = False  # the camera meters each frame with its flames in view: bright flames lower the
     # exposure of the scene around them (synth.compose.metering)
-    camera: CameraConfig = field(default_factory=CameraConfig)  # probabilities of the stronger camera effects
-    flames: FlameLibraryConfig = field(default_factory=FlameLibraryConfig)  # the flame library
 
     def __post_init__(self) -> None:
-        if self.scenes is None:
-            object.__setattr__(
-                self,
-                "scenes",
-                0 if self.environments or self.backgrounds or self.frames or self.own_frames > 0 else DEFAULT_SCENES,
-            )
-        if self.n < 1 or self.scenes < 0 or self.images_per_view < 1 or self.width < 16 or self.height < 16:
-            raise ValueError(
-                f"n, images_per_view must be >= 1, scenes >= 0, width and height >= 16; got n {self.n}, "
-                f"images_per_view {self.images_per_view}, scenes {self.scenes}, size {self.width}x{self.height}"
-            )
-        places = self.environments or self.backgrounds or self.frames or self.own_frames > 0
-        if self.scenes == 0 and not places:  # own_frames: the experiment adds the mixture's images as frames
-            raise ValueError(
-                "scenes is 0 and no environments, backgrounds, frames or own_frames are given: nothing to composite on"
-            )
-        for name in ("own_frames", "photo_share", "panorama_share", "negatives"):
-            if not 0.0 <= getattr(self, name) <= 1.0:
-                raise ValueError(f"{name} must be in 0..1, got {getattr(self, name)}")
+        super().__post_init__()
+        for name, share in (("own_frames", self.own_frames), ("photo_share", self.photo_share),
+                            ("panorama_share", self.panorama_share)):  # fmt: skip
+            if not 0.0 <= share <= 1.0:
+                raise ValueError(f"{name} must be in 0..1, got {share}")
         if not 0.0 <= self.background_holdout < 1.0:
             raise ValueError(f"background_holdout must be in 0..1 (exclusive), got {self.background_holdout}")
-        if self.max_flames < 1 or self.min_box_px < 1:
-            raise ValueError(f"max_flames and min_box_px must be >= 1, got {self.max_flames}, {self.min_box_px}")
         if self.photo_negatives is not None and not 0.0 <= self.photo_negatives <= 1.0:
             raise ValueError(f"photo_negatives must be in 0..1 or null, got {self.photo_negatives}")
         if self.photo_negatives is not None and not self.backgrounds and not self.own_frames:
             raise ValueError(
                 "photo_negatives is the share of the backgrounds photos left without flames: give backgrounds"
             )
-        check_range("flame_height_m", self.flame_height_m, 0.01)
+
+    def places(self) -> PoolPlaces:
+        return PoolPlaces(self.environments, self.backgrounds, self.labelled_frames, self.background_holdout,
+                          self.photo_share, self.panorama_share)  # fmt: skip
+
+    def brings_places(self) -> bool:  # own_frames: the experiment adds the mixture's images as labelled frames
+        return bool(self.environments or self.backgrounds or self.labelled_frames or self.own_frames > 0)
 
 
 def plan_flames(
@@ -300,17 +275,3 @@ def flame_record(p: Placement, name: str, seen) -> dict:
         "contrast": round(seen.contrast, 2),
         "seen": round(seen.seen / max(seen.pixels, 1), 4),
     }
-
-
-def run_method2(
-    cfg: Method2Config,
-    library: Sequence[SpriteSequence],
-    out: Path,
-    overwrite: bool = False,
-    platform: str | None = None,
-    workers: int = 1,
-    cluster: Cluster | None = None,
-):
-    """Generate (or resume) ``cfg.n`` images and write the dataset to ``out`` (in ``workers`` processes, or as
-    tasks on a Ray ``cluster``: the same bytes); returns the WriteResult."""
-    return generate("method2", cfg, make_image, library, out, overwrite, platform, workers, cluster)

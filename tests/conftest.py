@@ -1,4 +1,5 @@
-"""Shared test fixtures: the path to ../shared/data (tests using it skip when it is absent)."""
+"""Shared test fixtures: the path to ../shared/data (tests using it skip when it is absent), the synthesis tests'
+flame library, tiny datasets and a Ray head."""
 
 from __future__ import annotations
 
@@ -16,6 +17,14 @@ def shared_data() -> Path:
     if not (SHARED_DATA / "README.md").is_file():
         pytest.skip(f"real fire data not found at {SHARED_DATA} (only present in the fuzzyfire dev workspace)")
     return SHARED_DATA
+
+
+@pytest.fixture(scope="session")
+def library() -> list:
+    """Two tiny simulated flame sequences (:func:`factories.tiny_flames`): the synthesis tests' flame library."""
+    from factories import tiny_flames
+
+    return tiny_flames()
 
 
 @pytest.fixture(scope="session")

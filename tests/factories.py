@@ -211,3 +211,21 @@ def write_frames(root: Path, n: int = 3, width: int = 128, height: int = 96) -> 
         builder.add_box(image, "smoke", (2, 2, 30, 20))
     write_dataset(builder.build(), root / "frames", ("coco",), "copy")
     return root / "frames"
+
+
+def tiny_flames(count: int = 2, name: str = "f", **params: float) -> list:
+    """``count`` tiny simulated flame sequences ``<name><k>`` (a 40 x 28 grid, 40 steps, one sprite kept every 20,
+    sequence k from ``default_rng(k)``): the flame library of the synthesis tests; ``params`` are more
+    :class:`synth.flames.simulate.FlameParams` (e.g. ``smoke=4.0, soot=1.2`` for smoky flames)."""
+    from synth.flames import simulate
+
+    p = simulate.FlameParams(rows=40, cols=28, frames=40, keep_every=20, warmup=30, **params)
+    return [simulate.generate_sequence(f"{name}{k}", p, np.random.default_rng(k)) for k in range(count)]
+
+
+def dataset_files(folder: Path) -> dict[str, bytes]:
+    """Every file of a written dataset by relative path, with its bytes; ``manifest.json`` and ``data.yaml`` are left
+    out (they name the output folder by absolute path): two runs that made the same dataset compare equal."""
+    skip = {"manifest.json", "data.yaml"}
+    return {p.relative_to(folder).as_posix(): p.read_bytes() for p in sorted(folder.rglob("*"))
+            if p.is_file() and p.name not in skip}  # fmt: skip

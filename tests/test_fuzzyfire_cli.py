@@ -50,7 +50,7 @@ def test_help_has_examples(capsys: pytest.CaptureFixture[str]) -> None:
 @pytest.mark.parametrize(
     ("extra", "message"),
     [
-        (["--executor", "dask"], "unknown executor 'dask'"),
+        (["--executor", "dask"], "executor.name: 'dask' is not one of"),
         (["--address", "ray://head:10001"], "--address (executor.address) needs --executor ray"),
         (["--set", "train.epoch=3"], "train.epoch: unknown key"),
         (["--set", "real.standin=null"], "real: give path"),

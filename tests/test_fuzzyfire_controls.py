@@ -20,7 +20,15 @@ from curate.core.dataset import DatasetBuilder
 from curate.core.formats.coco import read_coco
 from eval.stats import MatchTable
 from fuzzyfire.aggregate import comparisons, table_text
-from fuzzyfire.controls import CONTROL, CONTROL_TABLE, KEPT, control_config, control_label, control_pools, has_control
+from fuzzyfire.controls import (
+    CONTROL,
+    CONTROL_TABLE,
+    control_config,
+    control_label,
+    control_pools,
+    has_control,
+    kept_settings,
+)
 from fuzzyfire.datasets import Datasets
 from fuzzyfire.experiment import grid_entries, needed_methods, prepare_data, write_mixtures
 from fuzzyfire.experiment_config import ExperimentConfig, ExperimentConfigError
@@ -67,9 +75,9 @@ def test_a_control_needs_method2() -> None:
 def test_the_control_pool_has_no_flame_and_keeps_the_rest_of_the_method2_config() -> None:
     m2 = _config(max_flames=2).synth.method2
     control = control_config(m2)
-    assert (control.negatives, control.own_frames, control.backgrounds, control.frames) == (1.0, 1.0, (), ())
+    assert (control.negatives, control.own_frames, control.backgrounds, control.labelled_frames) == (1.0, 1.0, (), ())
     assert control.flames.source == "simulated"
-    assert all(getattr(control, key) == getattr(m2, key) for key in KEPT)
+    assert kept_settings(control) == kept_settings(m2)
     own = replace(m2, own_frames=0.5, flames=replace(m2.flames, source="cutouts"))
     assert control_config(own) == control  # the variants of a study share their control
     places = replace(m2, environments=(Path("panoramas"),), backgrounds=(Path("photos"),), background_holdout=0.25)

@@ -135,7 +135,7 @@ def test_configs_without_the_key_keep_their_pools_and_mixtures(built) -> None:
             assert plain_refs[key].identity == refs[key].identity and plain_refs[key].path == refs[key].path
 
 
-def _identity_digest(cfg: Any, method: str, base: Path, monkeypatch: pytest.MonkeyPatch) -> str:
+def _identity_digest(cfg: Any, base: Path, monkeypatch: pytest.MonkeyPatch) -> str:
     """The digest of the identity :func:`fuzzyfire.stages.synth_stage` gives a pool (fuzzyfire's version left out),
     captured before anything is built."""
 
@@ -147,7 +147,7 @@ def _identity_digest(cfg: Any, method: str, base: Path, monkeypatch: pytest.Monk
 
     monkeypatch.setattr(stages, "cached_stage", capture)
     with pytest.raises(Captured) as got:
-        stages.synth_stage(Path("unused"), method, cfg, base)
+        stages.synth_stage(Path("unused"), cfg, base)
     return str(got.value)
 
 

@@ -31,15 +31,17 @@ def test_shipped_configs_load(name: str) -> None:
 #: The keys that make shared-data.yaml's study the recommended pool (docs/findings.md, "Own cut-out flames").
 OWN_FLAMES = ("grid.table1=[]", "synth.method1=null", "report.gap_draws=0", "report.baseline=R200_S0",
               "grid.control=false", "synth.method2.backgrounds=[../../shared/data/fire-free]",
-              "synth.method2.background_holdout=0.25", "synth.method2.own_frames=1.0",
+              "synth.method2.own_frames=1.0",
               "synth.method2.photo_negatives=1.0", "synth.method2.flames.source=cutouts",
               "synth.method2.auto_exposure=true", "grid.mixtures=[R200_S0,R200_S200]")  # fmt: skip
 
 
 def test_own_flames_is_shared_data_with_the_best_pools_keys() -> None:
     """configs/own-flames.yaml extends shared-data.yaml: the same study (and so the same pools and runs) as
-    shared-data.yaml with the documented --set keys."""
-    assert _load("own-flames.yaml") == _load("shared-data.yaml", *OWN_FLAMES)
+    shared-data.yaml with the documented --set keys; its pool holds out the fire-free test set's quarter."""
+    own = _load("own-flames.yaml")
+    assert own == _load("shared-data.yaml", *OWN_FLAMES)
+    assert own.resolved(CONFIGS).synth.method2.background_holdout == own.tests["fire-free"].holdout == 0.25
     assert _load("own-flames.yaml", "grid.seeds=[0]").grid.seeds == (0,)
 
 
@@ -145,3 +147,40 @@ def test_shipped_configs_have_a_fire_free_set() -> None:
     assert free.path.as_posix().endswith("shared/data/fire-free") and free.holdout == 0.25 and free.split is None
     assert demo.tests["fire-free"].standin.negatives == 1.0 and demo.tests["fire-free"].source() == "standin"
     assert _load("paper.yaml").tests == {} and shared.rare.name == "rare" and shared.rare.holdout == 0.0
+
+
+def _photo_study(m2: dict, **tests: dict) -> ExperimentConfig:
+    """A study whose Method 2 pool composites on ``photos`` (``m2``: more of its keys) and whose ``tests`` are given."""
+    synth = {"method2": {"scenes": 0, "backgrounds": ["photos"], **m2}}
+    return build_config({"real": {"path": "x"}, "synth": synth, "tests": tests}, ExperimentConfig)
+
+
+def test_the_test_sets_holdout_is_the_one_key_of_the_pools_held_out_share(tmp_path: Path) -> None:
+    """A test set on a folder of the pool's backgrounds states the share once; the pool holds it out (the largest
+    of several); a conflicting background_holdout, or a share that leaves the pool no photo, is refused."""
+    on = {"path": "photos", "holdout": 0.25}
+    assert _photo_study({}, free=on).resolved(tmp_path).synth.method2.background_holdout == 0.25
+    assert (
+        _photo_study({}, free=on, more={"path": str(tmp_path / "photos"), "holdout": 0.5})
+        .resolved(tmp_path)
+        .synth.method2.background_holdout
+        == 0.5
+    )  # the same folder, given another way: a share nested in 0.5
+    assert (
+        _photo_study({"background_holdout": 0.25}, free=on).resolved(tmp_path).synth.method2.background_holdout == 0.25
+    )
+    other = _photo_study({"background_holdout": 0.1}, free={"path": "elsewhere", "holdout": 0.25})
+    assert other.resolved(tmp_path).synth.method2.background_holdout == 0.1  # not the pool's photos: as given
+    with pytest.raises(ExperimentConfigError, match="background_holdout 0.1 and tests.free.holdout 0.25 cut the"):
+        _photo_study({"background_holdout": 0.1}, free=on).resolved(tmp_path)
+    with pytest.raises(ExperimentConfigError, match="tests.free.holdout 1 holds out every photo"):
+        _photo_study({}, free={"path": "photos", "holdout": 1.0}).resolved(tmp_path)
+
+
+def test_a_pool_section_is_read_by_its_method_name_and_an_executor_by_its_own() -> None:
+    cfg = _load("demo.yaml")
+    assert cfg.synth.section("method1") is cfg.synth.method1 and cfg.synth.section("method2") is cfg.synth.method2
+    with pytest.raises(ValueError, match="unknown synthesis method 'method3'"):
+        cfg.synth.section("method3")
+    with pytest.raises(ConfigError, match="executor.name: 'dask' is not one of"):
+        _load("demo.yaml", "executor.name=dask")

@@ -1,6 +1,6 @@
 """Leakage of a pool's background photos into a test set: found by content, named in one line with a count and an
 example, refused by ``fuzzyfire experiment`` (exit 2) before any pool is built; a test set taking the share the
-pool holds out is disjoint from it."""
+pool holds out is disjoint from it, and in an experiment the test set's ``holdout`` is that share."""
 
 from __future__ import annotations
 
@@ -56,6 +56,21 @@ def test_the_held_out_share_is_disjoint_from_the_pool(tmp_path: Path) -> None:
         check_leakage({"method2": pool}, {"fire-free": _photos_test_set(photos)})  # every photo: the pool's leak
 
 
+def test_in_an_experiment_the_test_sets_holdout_is_the_pools_held_out_share(tmp_path: Path) -> None:
+    """One key: a test set's ``holdout`` on a folder of the pool's backgrounds makes the pool hold out that share."""
+    from curate.core.config import build_config
+    from fuzzyfire.experiment_config import ExperimentConfig
+
+    photos = fire_free_photos(tmp_path / "photos", 12)
+    doc = toy_dict(mixtures=["R6_S6"], table1=[])
+    doc["synth"]["method2"] = {**doc["synth"]["method2"], "scenes": 0, "backgrounds": ["photos"]}
+    doc["tests"] = {"fire-free": {"path": str(photos), "holdout": 0.5}}  # the same folder, given another way
+    cfg = build_config(doc, ExperimentConfig).resolved(tmp_path)
+    assert cfg.synth.method2 is not None and cfg.synth.method2.background_holdout == 0.5
+    pool = pool_photos(cfg.synth, ("method2",), tmp_path)["method2"]
+    check_leakage({"method2": pool}, {"fire-free": _photos_test_set(photos, 0.5)})  # disjoint by construction
+
+
 def test_the_experiment_refuses_leakage_before_building_a_pool(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
     fire_free_photos(tmp_path / "photos", 5)
     doc = toy_dict(mixtures=["R6_S6"], table1=[])
@@ -75,7 +90,7 @@ def test_labelled_frames_are_pool_photos_too(tmp_path: Path) -> None:
     from curate.core.load import load_split
 
     frames = write_frames(tmp_path)
-    synth = SynthConfig(method2=Method2Config(scenes=0, frames=(Path("frames"),)))
+    synth = SynthConfig(method2=Method2Config(scenes=0, labelled_frames=(Path("frames"),)))
     pool = pool_photos(synth, ("method2",), tmp_path)["method2"]
     assert len(pool) == 3
     with pytest.raises(LeakageError, match="leakage: 3 images of test set 'cams' are background photos"):

@@ -65,15 +65,15 @@ def test_synth_stage_resolves_environments_by_content_and_every_key_counts(tmp_p
 
     flames = FlameLibraryConfig(sequences=1, frames=60, keep_every=30)
     cfg = Method2Config(n=2, width=64, height=48, scenes=1, images_per_view=2, flames=flames)
-    stage, _ = synth_stage(tmp_path / "data", "method2", cfg, tmp_path)
+    stage, _ = synth_stage(tmp_path / "data", cfg, tmp_path)
     identity = json.loads((stage.folder / "stage.json").read_text())["identity"]
     assert "environments" not in identity["config"]  # no files: nothing to fingerprint
     assert identity["config"]["flame_height_m"] == [0.3, 2.5]  # every key, at its default too
-    taller, _ = synth_stage(tmp_path / "data", "method2", replace(cfg, flame_height_m=(0.9, 3.0)), tmp_path)
+    taller, _ = synth_stage(tmp_path / "data", replace(cfg, flame_height_m=(0.9, 3.0)), tmp_path)
     assert taller.hash != stage.hash
     write_textured_room(tmp_path / "scenes" / "den.glb")
     files = replace(cfg, scenes=0, environments=(Path("scenes"),))
-    stage, _ = synth_stage(tmp_path / "data", "method2", files, tmp_path)
+    stage, _ = synth_stage(tmp_path / "data", files, tmp_path)
     identity = json.loads((stage.folder / "stage.json").read_text())["identity"]
     (env,) = identity["config"]["environments"]  # by content, not by path
     assert env["file"] == "den.glb" and len(env["sha256"]["den.glb"]) == 64 and env["scale"] == 1.0
@@ -98,8 +98,8 @@ def test_pools_are_identified_by_the_content_of_their_environments_and_photos(tm
     flames = FlameLibraryConfig(sequences=1, frames=60, keep_every=30)
     cfg = Method2Config(n=2, width=64, height=48, scenes=0, images_per_view=2, flames=flames,
                         environments=(Path("scenes"),), backgrounds=(Path("photos"),))  # fmt: skip
-    first, _ = synth_stage(tmp_path / "data", "method2", cfg, tmp_path / "a")
-    moved, _ = synth_stage(tmp_path / "data", "method2", cfg, tmp_path / "b")
+    first, _ = synth_stage(tmp_path / "data", cfg, tmp_path / "a")
+    moved, _ = synth_stage(tmp_path / "data", cfg, tmp_path / "b")
     assert moved.hash == first.hash and moved.cached
     (tmp_path / "b" / "scenes" / "den.yaml").write_text("scale: 0.5\n")  # a sidecar beside the mesh
     shutil.copy(next((tmp_path / "b" / "photos").rglob("*.png")), tmp_path / "b" / "photos" / "extra.png")

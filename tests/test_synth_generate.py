@@ -7,28 +7,32 @@ from __future__ import annotations
 
 from dataclasses import dataclass, replace
 from pathlib import Path
+from typing import ClassVar
 
 import cv2
 import numpy as np
 import pytest
+from factories import dataset_files
 
 from curate.core.formats.registry import read_dataset
-from synth.flames import simulate as F
 from synth.flames.sprites import Sprite, SpriteSequence
-from synth.generate import BLOCK_VIEWS, Job, blocks, generate
+from synth.generate import BLOCK_VIEWS, Job, blocks, generate, image_maker
+from synth.method_config import MethodConfig
 from synth.staging import staging_dir
 
 
 @dataclass(frozen=True)
-class TinyConfig:
+class TinyConfig(MethodConfig):
+    """A method of the tests' own: its images come from :func:`_make_image` (given to generate)."""
+
+    method: ClassVar[str] = "method9"
+    composited: ClassVar[bool] = False
+    bringing_places: ClassVar[str] = "environments are"
+
     n: int = 4
-    seed: int = 0
-    scenes: int = 1
-    environments: tuple = ()
-    images_per_view: int = 1
+    scenes: int | None = 1
     width: int = 32
     height: int = 24
-    smoke_class: bool = False
 
 
 def _library() -> list[SpriteSequence]:
@@ -57,9 +61,9 @@ def test_interrupted_run_resumes_and_writes_every_image(tmp_path):
 
     out = tmp_path / "out"
     with pytest.raises(KeyboardInterrupt):
-        generate("method9", TinyConfig(), failing, _library(), out)
+        generate(TinyConfig(), _library(), out, make_image=failing)
     assert calls == [0, 1, -1] and staging_dir(out).is_dir()
-    generate("method9", TinyConfig(), failing, _library(), out)
+    generate(TinyConfig(), _library(), out, make_image=failing)
     assert calls == [0, 1, -1, 2, 3]  # 0 and 1 were not made again
     ds = read_dataset(out).dataset
     assert len(ds.images) == 4 and {img.source for img in ds.images} == {"synth:method9"}
@@ -67,23 +71,21 @@ def test_interrupted_run_resumes_and_writes_every_image(tmp_path):
     assert not staging_dir(out).exists()
 
 
+def test_each_method_makes_its_own_images_and_another_config_brings_its_maker(tmp_path):
+    from synth import method1, method2
+
+    assert image_maker(method1.Method1Config()) is method1.make_image
+    assert image_maker(method2.Method2Config()) is method2.make_image
+    with pytest.raises(TypeError, match="no image maker for TinyConfig"):
+        generate(TinyConfig(), _library(), tmp_path / "out")
+    assert not (tmp_path / "out").exists()
+
+
 def test_empty_library_is_refused(tmp_path):
     with pytest.raises(ValueError, match="flame library is empty"):
-        generate("method9", TinyConfig(), _make_image, [], tmp_path / "out")
+        generate(TinyConfig(), [], tmp_path / "out", make_image=_make_image)
     with pytest.raises(ValueError, match="flame library is empty"):
-        generate("method9", TinyConfig(), _make_image, [SpriteSequence("s", (), {})], tmp_path / "out")
-
-
-def _files(folder: Path) -> dict[str, bytes]:
-    skip = {"manifest.json", "data.yaml"}  # these two name the output folder by absolute path
-    return {p.relative_to(folder).as_posix(): p.read_bytes() for p in sorted(folder.rglob("*")) if p.is_file()
-            and p.name not in skip}  # fmt: skip
-
-
-@pytest.fixture(scope="module")
-def flames() -> list[SpriteSequence]:
-    p = F.FlameParams(rows=40, cols=28, frames=40, keep_every=20, warmup=30)
-    return [F.generate_sequence(f"f{k}", p, np.random.default_rng(k)) for k in range(2)]
+        generate(TinyConfig(), [SpriteSequence("s", (), {})], tmp_path / "out", make_image=_make_image)
 
 
 def _panoramas(root: Path) -> Path:
@@ -98,35 +100,35 @@ def _panoramas(root: Path) -> Path:
     return root
 
 
-def _same_bytes_as_one_process(tmp_path: Path, flames, **how) -> None:  # noqa: ANN001
+def _same_bytes_as_one_process(tmp_path: Path, library, **how) -> None:  # noqa: ANN001
     """Method 2 on procedural rooms and panoramas, Method 1 on procedural rooms: a run with ``how`` (workers or a
     cluster) writes every file of a one-process run with the same bytes."""
-    from synth.method1 import Method1Config, run_method1
-    from synth.method2 import Method2Config, run_method2
+    from synth.method1 import Method1Config
+    from synth.method2 import Method2Config
 
     m2 = Method2Config(n=40, seed=3, width=96, height=72, scenes=2, environments=(_panoramas(tmp_path / "pano"),),
                        images_per_view=2, negatives=0.0, min_box_px=2)  # fmt: skip
     m1 = Method1Config(n=6, seed=5, width=96, height=72, scenes=2, negatives=0.0, min_box_px=2)
-    for run, cfg in ((run_method2, m2), (run_method1, m1)):
+    for cfg in (m2, m1):
         one, other = tmp_path / f"{cfg.n}-one", tmp_path / f"{cfg.n}-other"
-        run(cfg, flames, one)
-        run(cfg, flames, other, **how)
-        assert _files(one) == _files(other) and len(_files(one)) > cfg.n
+        generate(cfg, library, one)
+        generate(cfg, library, other, **how)
+        assert dataset_files(one) == dataset_files(other) and len(dataset_files(one)) > cfg.n
 
 
-def test_two_processes_write_the_bytes_of_one(tmp_path, flames):
-    _same_bytes_as_one_process(tmp_path, flames, workers=2)
+def test_two_processes_write_the_bytes_of_one(tmp_path, library):
+    _same_bytes_as_one_process(tmp_path, library, workers=2)
 
 
 @pytest.mark.slow
-def test_a_ray_cluster_writes_the_bytes_of_one_process(tmp_path, flames, cluster):
+def test_a_ray_cluster_writes_the_bytes_of_one_process(tmp_path, library, cluster):
     """The blocks as tasks on a real Ray head (2 workers)."""
-    _same_bytes_as_one_process(tmp_path, flames, cluster=cluster)
+    _same_bytes_as_one_process(tmp_path, library, cluster=cluster)
 
 
 def test_blocks_keep_an_environment_in_one_process_and_cover_every_image():
-    cfg = TinyConfig(n=40, scenes=0, images_per_view=2)
-    job = Job("method9", replace(cfg, scenes=0), _make_image, (), Path("x"), None, ("a", "b", "c"), (), (), ())
+    cfg = TinyConfig(n=40, scenes=0, environments=(Path("meshes"),), images_per_view=2)
+    job = Job(cfg, _make_image, (), Path("x"), None, ("a", "b", "c"), (), (), ())
     todo = [i for i in range(40) if i % 7]  # some images staged already
     got = blocks(job, todo)  # type: ignore[arg-type]
     assert sorted(i for b in got for i in b) == todo and len(got) == 3
@@ -146,8 +148,8 @@ def test_a_failure_in_a_process_is_raised_and_keeps_the_staged_images(tmp_path):
     out = tmp_path / "out"
     cfg = TinyConfig(n=3 * BLOCK_VIEWS, width=48, height=32)
     with pytest.raises(RuntimeError, match="image 5 cannot be made"):
-        generate("method9", cfg, _fails_at_5, _library(), out, workers=2)
+        generate(cfg, _library(), out, workers=2, make_image=_fails_at_5)
     staged = staging_dir(out)
     assert staged.is_dir() and not (staged / "records" / "000005.json").exists()
-    generate("method9", cfg, _make_image, _library(), out, workers=2)
+    generate(cfg, _library(), out, workers=2, make_image=_make_image)
     assert len(read_dataset(out).dataset.images) == cfg.n and not staged.exists()

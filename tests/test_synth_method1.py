@@ -4,18 +4,18 @@ mask ∧ occlusion); audit numbers, determinism, resume."""
 from __future__ import annotations
 
 import json
-from pathlib import Path
 
 import cv2
 import numpy as np
 import pytest
 import trimesh
+from factories import dataset_files, tiny_flames
 
 from curate.core.boxes import box_iou_xyxy, mask_to_xywh, xywh_to_xyxy
 from synth import method1 as M
 from synth.audit import audit_dataset
-from synth.flames import simulate as F
 from synth.flames.sprites import Sprite
+from synth.generate import generate
 from synth.places import camera as C
 from synth.places import render as R
 from synth.places.scenes import translate
@@ -27,15 +27,9 @@ W, H = 128, 96
 
 
 @pytest.fixture(scope="module")
-def library():
-    p = F.FlameParams(rows=40, cols=28, frames=40, keep_every=20, warmup=30)
-    return [F.generate_sequence(f"f{k}", p, np.random.default_rng(k)) for k in range(2)]
-
-
-@pytest.fixture(scope="module")
 def written(tmp_path_factory, library):
     out = tmp_path_factory.mktemp("m1") / "a"
-    M.run_method1(CFG, library, out)
+    generate(CFG, library, out)
     return out
 
 
@@ -43,15 +37,6 @@ def written(tmp_path_factory, library):
 def renderer():
     with R.Renderer(W, H) as r:
         yield r
-
-
-def _files(folder: Path) -> dict[str, bytes]:
-    skip = {"manifest.json", "data.yaml"}  # these two name the output folder by absolute path
-    return {
-        p.relative_to(folder).as_posix(): p.read_bytes()
-        for p in sorted(folder.rglob("*"))
-        if p.is_file() and p.name not in skip
-    }
 
 
 def _sprite(h=40, w=30, flame_rows=slice(None), alpha=255):
@@ -106,8 +91,8 @@ def test_paper_mode_writes_the_same_images_with_paper_boxes(written, library, tm
     from dataclasses import replace
 
     out = tmp_path / "paper"
-    M.run_method1(replace(CFG, box_mode="paper"), library, out)
-    a, b = _files(written), _files(out)
+    generate(replace(CFG, box_mode="paper"), library, out)
+    a, b = dataset_files(written), dataset_files(out)
     assert {k: v for k, v in a.items() if k.startswith("images/")} == {
         k: v for k, v in b.items() if k.startswith("images/")
     }
@@ -138,8 +123,8 @@ def test_same_seed_gives_byte_identical_output_and_resume_matches(written, libra
         views = ViewCache(CFG.seed, CFG.scenes, r)
         for i in (0, 3):
             st.save(i, *M.make_image(CFG, i, library, views))
-    M.run_method1(CFG, library, out)
-    assert _files(out) == _files(written)
+    generate(CFG, library, out)
+    assert dataset_files(out) == dataset_files(written)
 
 
 def test_projected_corners_match_the_rendered_outline(renderer):
@@ -216,10 +201,9 @@ def test_config_rejects_unknown_box_mode():
 def test_smoke_class_boxes_come_from_the_visible_smoke(tmp_path):
     from dataclasses import replace
 
-    p = F.FlameParams(rows=40, cols=28, frames=40, keep_every=20, warmup=30, smoke=4.0, soot=1.2)
-    smoky = [F.generate_sequence("smoky", p, np.random.default_rng(0))]
+    smoky = tiny_flames(1, "smoky", smoke=4.0, soot=1.2)
     out = tmp_path / "smoke"
-    M.run_method1(replace(CFG, n=3, smoke_class=True, max_flames=2), smoky, out)
+    generate(replace(CFG, n=3, smoke_class=True, max_flames=2), smoky, out)
     report = audit_dataset(out)
     assert report["mean_iou"] == 1.0 and report["smoke"]["boxes"] >= 1
     assert report["smoke"]["mean_iou"] == 1.0 and report["smoke"]["min_iou"] == 1.0

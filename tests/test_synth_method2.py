@@ -7,36 +7,23 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from factories import dataset_files, tiny_flames
 
 from synth import method2 as M
 from synth.audit import audit_dataset
 from synth.compose.metering import mean_linear_luma
 from synth.flames import simulate as F
+from synth.generate import generate
 from synth.staging import staging_dir
 
 CFG = M.Method2Config(n=6, seed=3, width=96, height=72, scenes=2, images_per_view=3, max_flames=3, negatives=0.0)
 
 
 @pytest.fixture(scope="module")
-def library():
-    p = F.FlameParams(rows=40, cols=28, frames=40, keep_every=20, warmup=30)
-    return [F.generate_sequence(f"f{k}", p, np.random.default_rng(k)) for k in range(2)]
-
-
-@pytest.fixture(scope="module")
 def written(tmp_path_factory, library):
     out = tmp_path_factory.mktemp("m2") / "a"
-    M.run_method2(CFG, library, out)
+    generate(CFG, library, out)
     return out
-
-
-def _files(folder: Path) -> dict[str, bytes]:
-    skip = {"manifest.json", "data.yaml"}  # these two name the output folder by absolute path
-    return {
-        p.relative_to(folder).as_posix(): p.read_bytes()
-        for p in sorted(folder.rglob("*"))
-        if p.is_file() and p.name not in skip
-    }
 
 
 def test_boxes_equal_the_final_mask_boxes(written):
@@ -68,17 +55,16 @@ def test_same_seed_gives_byte_identical_output_and_resume_matches(written, libra
         for i in range(2):
             st.save(i, *M.make_image(CFG, i, library, views))
     assert staging.is_dir()
-    M.run_method2(CFG, library, out)
-    assert _files(out) == _files(written)
+    generate(CFG, library, out)
+    assert dataset_files(out) == dataset_files(written)
 
 
 def test_smoke_class_boxes_come_from_the_smoke_masks(tmp_path):
     from dataclasses import replace
 
-    p = F.FlameParams(rows=40, cols=28, frames=40, keep_every=20, warmup=30, smoke=4.0, soot=1.2)
-    smoky = [F.generate_sequence("smoky", p, np.random.default_rng(0))]
+    smoky = tiny_flames(1, "smoky", smoke=4.0, soot=1.2)
     out = tmp_path / "smoke"
-    M.run_method2(replace(CFG, n=4, smoke_class=True, max_flames=2), smoky, out)
+    generate(replace(CFG, n=4, smoke_class=True, max_flames=2), smoky, out)
     coco = json.loads((out / "annotations.json").read_text())
     assert [c["name"] for c in coco["categories"]] == ["fire", "smoke"]
     report = audit_dataset(out)
@@ -140,8 +126,8 @@ def test_labelled_frames_keep_their_fire_boxes_and_flames_stand_beside_them(tmp_
     from curate.core.formats.coco import read_coco
 
     frames = write_frames(tmp_path)
-    cfg = replace(CFG, n=8, scenes=0, frames=(frames,), width=128, height=96, images_per_view=1, max_flames=2)
-    M.run_method2(cfg, library, tmp_path / "a")
+    cfg = replace(CFG, n=8, scenes=0, labelled_frames=(frames,), width=128, height=96, images_per_view=1, max_flames=2)
+    generate(cfg, library, tmp_path / "a")
     ds = read_coco(tmp_path / "a").dataset
     per_image = json.loads((tmp_path / "a" / "manifest.json").read_text())["args"]["per_image"]
     by_image = ds.annotations_by_image()
@@ -155,8 +141,8 @@ def test_labelled_frames_keep_their_fire_boxes_and_flames_stand_beside_them(tmp_
     report = audit_dataset(tmp_path / "a")
     assert flames >= 4 and report["boxes"] == flames and report["mean_iou"] == 1.0
     assert report["frame_boxes"] == sum(len(m["frame_boxes"]) for m in per_image)
-    M.run_method2(cfg, library, tmp_path / "b")
-    assert _files(tmp_path / "a") == _files(tmp_path / "b")
+    generate(cfg, library, tmp_path / "b")
+    assert dataset_files(tmp_path / "a") == dataset_files(tmp_path / "b")
 
 
 def test_photo_negatives_leave_every_fire_free_photo_without_flames_and_the_rest_as_before(tmp_path, library):
@@ -172,7 +158,7 @@ def test_photo_negatives_leave_every_fire_free_photo_without_flames_and_the_rest
     kinds = {}
     for share in (None, 1.0):
         out = tmp_path / f"neg{share}"
-        M.run_method2(replace(cfg, photo_negatives=share), library, out)
+        generate(replace(cfg, photo_negatives=share), library, out)
         per_image = json.loads((out / "manifest.json").read_text())["args"]["per_image"]
         kinds[share] = [("photo" in m, bool(m["flames"])) for m in per_image]
     assert [photo for photo, _ in kinds[None]] == [photo for photo, _ in kinds[1.0]]  # the same views
@@ -201,7 +187,7 @@ def test_auto_exposure_darkens_only_the_scene_of_fire_images_and_keeps_boxes_exa
     from dataclasses import replace
 
     out = tmp_path / "ae"
-    M.run_method2(replace(CFG, auto_exposure=True), library, out)
+    generate(replace(CFG, auto_exposure=True), library, out)
     assert audit_dataset(out)["min_iou"] == 1.0
     plain = json.loads((written / "manifest.json").read_text())["args"]["per_image"]
     metered = json.loads((out / "manifest.json").read_text())["args"]["per_image"]
@@ -237,9 +223,9 @@ def test_n_images_on_at_least_n_photos_use_n_distinct_photos(tmp_path, library):
         write_image(tmp_path / "photos" / f"p{k:02d}.jpg", 120, 90, seed=k)
     cfg = replace(CFG, n=32, scenes=0, images_per_view=8, backgrounds=(tmp_path / "photos",))
     one, two = tmp_path / "one", tmp_path / "two"
-    M.run_method2(cfg, library, one)
+    generate(cfg, library, one)
     photos = [Path(m["photo"]).name for m in json.loads((one / "manifest.json").read_text())["args"]["per_image"]]
     assert len(set(photos[:12])) == 12 and len(set(photos[:14])) == 14  # every photo before any repeats
     assert photos[14:28] == photos[:14]
-    M.run_method2(cfg, library, two, workers=2)
-    assert _files(one) == _files(two)
+    generate(cfg, library, two, workers=2)
+    assert dataset_files(one) == dataset_files(two)
