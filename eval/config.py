@@ -1,6 +1,6 @@
 """eval's settings as frozen dataclasses (:mod:`curate.core.config` builds them from YAML, ``--set`` and flags):
 how a detector ONNX runs over images (:class:`InferenceConfig`: an experiment's ``score`` section too), which
-model it is (:class:`ModelConfig`), which test set it is scored on (:class:`TestSetConfig`), and one dataclass
+model it is (:class:`OnnxModelConfig`), which test set it is scored on (:class:`TestSetConfig`), and one dataclass
 per command: :class:`ScoreConfig`, :class:`CompareConfig` and :class:`PredictConfig` (whose boxes are drawn: its
 :class:`DrawingInference` keeps them at an alarm's confidence). Every default is written here once; the commands'
 flags are aliases of these keys (:mod:`eval.cli.options`)."""
@@ -21,7 +21,7 @@ from eval.operating import ALARM_BUDGET
 
 
 @dataclass(frozen=True)
-class ModelConfig:
+class OnnxModelConfig:
     """What a detector ONNX is, where its metadata does not say (or says otherwise)."""
 
     format: ModelFormat = "auto"  # output layout; auto = the metadata's, else inferred from the output shape
@@ -57,9 +57,9 @@ class InferenceConfig:
             )
         parse_device(self.device)  # DeviceError (a ValueError) naming the choices
 
-    def detector(self, path: Path | str, model: ModelConfig | None = None) -> OnnxDetector:
+    def detector(self, path: Path | str, model: OnnxModelConfig | None = None) -> OnnxDetector:
         """The detector ONNX at ``path`` (as ``model`` describes it) on this config's device with its threads."""
-        m = model or ModelConfig()
+        m = model or OnnxModelConfig()
         return OnnxDetector(path, m.format, m.names, m.imgsz, threads=self.threads, device=self.device)
 
 
@@ -91,7 +91,7 @@ class TestSetConfig:
 class ScoringConfig:
     """What ``score`` and ``compare`` share: the model, how it runs, the test set, the bootstrap's seed."""
 
-    model: ModelConfig = field(default_factory=ModelConfig)  # the detector ONNX (layout, classes, input size)
+    model: OnnxModelConfig = field(default_factory=OnnxModelConfig)  # the detector ONNX (layout, classes, input size)
     inference: InferenceConfig = field(default_factory=InferenceConfig)  # how it runs and its post-processing
     data: TestSetConfig = field(default_factory=TestSetConfig)  # the test set (--data) as read
     seed: int = 0  # seed of the bootstrap's image resamples
@@ -147,7 +147,7 @@ class DrawingInference(InferenceConfig):
 class PredictConfig:
     """``fuzzyfire predict``'s settings."""
 
-    model: ModelConfig = field(default_factory=ModelConfig)  # the detector ONNX (layout, classes, input size)
+    model: OnnxModelConfig = field(default_factory=OnnxModelConfig)  # the detector ONNX (layout, classes, input size)
     inference: DrawingInference = field(default_factory=DrawingInference)  # how it runs; its boxes are drawn, so
     # at an alarm's confidence, not scoring's
     classes: Optional[tuple[str, ...]] = None  # only these model classes, e.g. [fire]; null = every class

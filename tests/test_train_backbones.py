@@ -10,7 +10,7 @@ import pytest
 import torch
 
 from train.backbones import build_backbone
-from train.config import ModelConfig
+from train.config import DetectorConfig
 from train.export import export_onnx
 from train.model import build_model
 
@@ -34,7 +34,7 @@ def test_cspdarknet_taps() -> None:
 def test_lite0_uses_imagenet_weights_and_exports(tmp_path: Path) -> None:
     from curate.effnet import efficientnet_lite0
 
-    cfg = ModelConfig(backbone="efficientnet-lite0")
+    cfg = DetectorConfig(backbone="efficientnet-lite0")
     model = build_model(1, cfg, imgsz=64).eval()
     reference = efficientnet_lite0()
     assert torch.equal(model.backbone.blocks[3]._depthwise_conv.weight, reference._blocks[3]._depthwise_conv.weight)
@@ -49,7 +49,7 @@ def test_lite0_uses_imagenet_weights_and_exports(tmp_path: Path) -> None:
 
 @pytest.mark.parametrize("freeze", [0, 1, 3, 4, 5, 7])
 def test_frozen_split_is_the_same_network(freeze: int) -> None:
-    model = build_model(1, ModelConfig(backbone="efficientnet-lite0", freeze=freeze), imgsz=64).eval()
+    model = build_model(1, DetectorConfig(backbone="efficientnet-lite0", freeze=freeze), imgsz=64).eval()
     x = torch.rand(2, 3, 64, 64, generator=torch.Generator().manual_seed(1))
     with torch.no_grad():
         whole = model(x)
@@ -63,7 +63,7 @@ def test_frozen_split_is_the_same_network(freeze: int) -> None:
 
 
 def test_frozen_stages_stay_in_inference_mode() -> None:
-    model = build_model(1, ModelConfig(backbone="efficientnet-lite0", freeze=3), imgsz=64).train()
+    model = build_model(1, DetectorConfig(backbone="efficientnet-lite0", freeze=3), imgsz=64).train()
     assert not model.backbone.stem_bn.training and not model.backbone.blocks[4]._bn2.training
     assert model.backbone.blocks[5]._bn2.training and model.neck.training
     before = model.backbone.blocks[4]._bn2.running_mean.clone()
@@ -73,11 +73,11 @@ def test_frozen_stages_stay_in_inference_mode() -> None:
 
 def test_freeze_needs_pretrained_lite0() -> None:
     with pytest.raises(ValueError, match="only efficientnet-lite0"):
-        build_model(1, ModelConfig(backbone="cspdarknet", freeze=3), imgsz=64)
-    assert not build_model(1, ModelConfig(backbone="cspdarknet"), imgsz=64).has_frozen
-    assert build_model(1, ModelConfig(), imgsz=64).backbone.freeze == 7  # the default: every Lite0 stage
-    assert build_model(1, ModelConfig(pretrained=False), imgsz=64).backbone.freeze == 0
+        build_model(1, DetectorConfig(backbone="cspdarknet", freeze=3), imgsz=64)
+    assert not build_model(1, DetectorConfig(backbone="cspdarknet"), imgsz=64).has_frozen
+    assert build_model(1, DetectorConfig(), imgsz=64).backbone.freeze == 7  # the default: every Lite0 stage
+    assert build_model(1, DetectorConfig(pretrained=False), imgsz=64).backbone.freeze == 0
     with pytest.raises(ValueError, match="pretrained is false"):
-        build_model(1, ModelConfig(backbone="efficientnet-lite0", freeze=3, pretrained=False), imgsz=64)
+        build_model(1, DetectorConfig(backbone="efficientnet-lite0", freeze=3, pretrained=False), imgsz=64)
     with pytest.raises(ValueError, match="freeze must be 0..7"):
-        build_model(1, ModelConfig(backbone="efficientnet-lite0", freeze=8), imgsz=64)
+        build_model(1, DetectorConfig(backbone="efficientnet-lite0", freeze=8), imgsz=64)

@@ -10,7 +10,7 @@ from factories_train import painted_dataset
 
 from curate.core.imageio import read_image
 from curate.core.letterbox import letterbox_image, to_nchw_float
-from train.config import AugmentConfig, ModelConfig
+from train.config import AugmentConfig, DetectorConfig
 from train.data import TrainBatches, cache_images, letterboxed_images
 from train.features import FeatureBatches, FrozenRunner, ValidationInputs, cache_views
 from train.model import build_model
@@ -25,7 +25,7 @@ def dataset(tmp_path_factory: pytest.TempPathFactory):
 
 @pytest.fixture(scope="module")
 def model():
-    return build_model(2, ModelConfig(backbone="efficientnet-lite0", freeze=3), imgsz=64).eval()
+    return build_model(2, DetectorConfig(backbone="efficientnet-lite0", freeze=3), imgsz=64).eval()
 
 
 def test_onnxruntime_equals_torch(model) -> None:
@@ -38,7 +38,7 @@ def test_onnxruntime_equals_torch(model) -> None:
 
 
 def test_nothing_frozen_passes_images_through() -> None:
-    runner = FrozenRunner(build_model(1, ModelConfig(backbone="cspdarknet"), imgsz=64), 64, CPU)
+    runner = FrozenRunner(build_model(1, DetectorConfig(backbone="cspdarknet"), imgsz=64), 64, CPU)
     x = torch.rand(2, 3, 64, 64)
     assert runner.identity and runner.session is None and torch.equal(runner(x)[0], x)
 
@@ -89,7 +89,7 @@ def test_validation_inputs_are_the_scorer_preprocessing(dataset, model) -> None:
     expected = letterbox_image(read_image(dataset.image_path(first.record)), 64, 64)
     assert np.array_equal(first.image, expected)
     plain = ValidationInputs(
-        images, FrozenRunner(build_model(2, ModelConfig(backbone="cspdarknet"), imgsz=64), 64, CPU), batch=4
+        images, FrozenRunner(build_model(2, DetectorConfig(backbone="cspdarknet"), imgsz=64), 64, CPU), batch=4
     )
     records, (x,) = next(iter(plain))
     assert [r.id for r in records] == [i.record.id for i in images[:4]]

@@ -12,7 +12,7 @@ import torch
 from factories_train import painted_dataset
 
 import train.loop as loop
-from train.config import ModelConfig, OptimConfig, TrainConfig
+from train.config import DetectorConfig, OptimConfig, TrainConfig
 
 TIMING = ("train_images_per_s", "val_seconds")
 CFG = TrainConfig(epochs=2, imgsz=64, batch=8, seed=5, optim=OptimConfig(warmup_min_iters=2, nominal_batch=16))
@@ -150,7 +150,7 @@ def test_resume_refuses_another_config(data, reference_run: Path, tmp_path: Path
 FROZEN = replace(
     CFG,
     epochs=3,
-    model=ModelConfig(backbone="efficientnet-lite0", freeze=3),
+    model=DetectorConfig(backbone="efficientnet-lite0", freeze=3),
     feature_views=2,
     optim=OptimConfig(optimizer="adamw", lr0=0.002, momentum=0.9, warmup_min_iters=2, nominal_batch=16),
 )

@@ -6,7 +6,7 @@ import math
 
 import torch
 
-from train.config import LossConfig, ModelConfig
+from train.config import DetectorConfig, LossConfig
 from train.loss import DetectionLoss, ciou_cxcywh, scaled_gains
 from train.model import STRIDES, build_model
 
@@ -30,7 +30,7 @@ def test_gains_rescaled() -> None:
 
 def test_loss_falls_on_a_tiny_overfit() -> None:
     torch.manual_seed(0)
-    model = build_model(2, ModelConfig()).train()
+    model = build_model(2, DetectorConfig()).train()
     images = torch.rand(2, 3, 64, 64)
     targets = torch.tensor([[0, 0, 20.0, 24.0, 16.0, 20.0], [1, 1, 40.0, 30.0, 30.0, 24.0]])
     loss_fn = DetectionLoss(model.head.anchors, STRIDES, 2, 64, LossConfig())

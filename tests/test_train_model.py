@@ -5,13 +5,13 @@ from __future__ import annotations
 import pytest
 import torch
 
-from train.config import ModelConfig
+from train.config import DetectorConfig
 from train.model import STRIDES, build_model
 
 
 @pytest.mark.parametrize(("size", "low", "high"), [("n", 1.6e6, 1.9e6), ("s", 6.8e6, 7.3e6)])
 def test_parameter_counts_match_the_family(size: str, low: float, high: float) -> None:
-    count = sum(p.numel() for p in build_model(1, ModelConfig(size=size, backbone="cspdarknet")).parameters())
+    count = sum(p.numel() for p in build_model(1, DetectorConfig(size=size, backbone="cspdarknet")).parameters())
     assert low < count < high
 
 
@@ -48,4 +48,4 @@ def test_bad_arguments() -> None:
     with pytest.raises(ValueError, match="num_classes"):
         build_model(0)
     with pytest.raises(ValueError, match="anchors"):
-        build_model(1, ModelConfig(anchors=(((10.0, 10.0),),)))
+        build_model(1, DetectorConfig(anchors=(((10.0, 10.0),),)))

@@ -7,7 +7,7 @@ import math
 import pytest
 import torch
 
-from train.config import ModelConfig, OptimConfig
+from train.config import DetectorConfig, OptimConfig
 from train.model import build_model
 from train.optim import Schedule, accumulation, build_optimizer, parameter_groups
 
@@ -16,7 +16,7 @@ SGD = OptimConfig(optimizer="sgd", lr0=0.01, momentum=0.937, warmup_epochs=3.0, 
 
 
 def _scratch():
-    return build_model(1, ModelConfig(backbone="cspdarknet"))
+    return build_model(1, DetectorConfig(backbone="cspdarknet"))
 
 
 def test_groups_keep_decay_off_bn_and_bias() -> None:
@@ -53,7 +53,7 @@ def test_warmup_then_linear_decay() -> None:
 
 
 def test_frozen_weights_are_not_optimised_and_adamw_warms_its_beta1() -> None:
-    model = build_model(1, ModelConfig(backbone="efficientnet-lite0", freeze=7), imgsz=64)
+    model = build_model(1, DetectorConfig(backbone="efficientnet-lite0", freeze=7), imgsz=64)
     groups = parameter_groups(model)
     trainable = [p for p in model.parameters() if p.requires_grad]
     assert sum(len(g) for g in groups) == len(trainable) < len(list(model.parameters()))

@@ -32,7 +32,7 @@ DEFAULT_ANCHORS: tuple[tuple[tuple[float, float], ...], ...] = (
 
 
 @dataclass(frozen=True)
-class ModelConfig:
+class DetectorConfig:
     size: Literal["n", "s", "m"] = "n"  # depth/width multiples from MODEL_SIZES
     anchors: Optional[tuple[tuple[tuple[float, float], ...], ...]] = None  # anchors per level, (w, h) input
     # pixels; null = DEFAULT_ANCHORS, re-fitted by k-means when they fit badly
@@ -101,7 +101,7 @@ class TrainConfig:
     feature_cache_gb: float = 4.0  # RAM for cached views; fewer views are kept when they would not fit
     allow_errors: bool = False  # fuzzyfire train only (not read by the experiment): train on data whose reading
     # found errors (their boxes or images left out); false = refuse before training, naming the first error
-    model: ModelConfig = field(default_factory=ModelConfig)  # the detector
+    model: DetectorConfig = field(default_factory=DetectorConfig)  # the detector
     optim: OptimConfig = field(default_factory=OptimConfig)  # optimizer and schedule
     loss: LossConfig = field(default_factory=LossConfig)  # loss gains
     augment: AugmentConfig = field(default_factory=AugmentConfig)  # augmentations

@@ -24,7 +24,7 @@ from curate.core.lock import lock_status
 from curate.core.manifest import git_commit, versions
 from curate.core.progress import progress
 from train.anchors import check_anchors, label_sizes
-from train.config import DEFAULT_ANCHORS, ModelConfig, TrainConfig
+from train.config import DEFAULT_ANCHORS, DetectorConfig, TrainConfig
 from train.data import CachedImage, TrainBatches, cache_images, letterboxed_images, real_indices
 from train.device import resolve_device, uses_amp
 from train.ema import ModelEMA
@@ -293,7 +293,7 @@ def load_detector(path: Path | str) -> tuple[Detector, list[str], int]:
     saved = {**state["config"]["model"], "anchors": state["anchors"], "autoanchor": False, "pretrained": False}
     saved["freeze"] = 0  # the weights are all in the file
     imgsz = int(state["config"]["imgsz"])
-    model = build_model(len(state["class_names"]), ModelConfig(**saved), imgsz)
+    model = build_model(len(state["class_names"]), DetectorConfig(**saved), imgsz)
     model.load_state_dict(state["model"] if "ema" not in state else state["ema"]["weights"])
     return model.eval(), list(state["class_names"]), imgsz
 

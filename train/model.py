@@ -21,7 +21,7 @@ from torch import Tensor, nn
 
 from train.backbones import build_backbone
 from train.blocks import C3, Conv, scaled_depth, scaled_width
-from train.config import DEFAULT_ANCHORS, MODEL_SIZES, ModelConfig
+from train.config import DEFAULT_ANCHORS, MODEL_SIZES, DetectorConfig
 
 STRIDES: tuple[int, ...] = (8, 16, 32)
 
@@ -122,9 +122,9 @@ class Detector(nn.Module):
     Training and validation may start after the backbone's frozen part: ``frozen_features(images)`` once, then
     ``forward_frozen`` / ``predict_frozen`` on what it returned (see :mod:`train.backbones`)."""
 
-    def __init__(self, num_classes: int, cfg: ModelConfig | None = None, imgsz: int = 640) -> None:
+    def __init__(self, num_classes: int, cfg: DetectorConfig | None = None, imgsz: int = 640) -> None:
         super().__init__()
-        cfg = cfg or ModelConfig()
+        cfg = cfg or DetectorConfig()
         depth, width = MODEL_SIZES[cfg.size]
         self.backbone = build_backbone(cfg.backbone, depth, width, imgsz, cfg.pretrained, cfg.freeze)
         channels = tuple(scaled_width(c, width) for c in (256, 512, 1024))  # the family's P3-P5 widths
@@ -165,7 +165,7 @@ class Detector(nn.Module):
         return self.head.decode(self.forward_frozen(frozen))
 
 
-def build_model(num_classes: int, cfg: ModelConfig | None = None, imgsz: int = 640) -> Detector:
+def build_model(num_classes: int, cfg: DetectorConfig | None = None, imgsz: int = 640) -> Detector:
     """The detector for ``num_classes`` classes; ``imgsz`` only matters to backbones with fixed padding."""
     if num_classes < 1:
         raise ValueError(f"num_classes must be >= 1, got {num_classes}")

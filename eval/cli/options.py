@@ -19,7 +19,7 @@ from eval.onnx_model import FORMATS
 if TYPE_CHECKING:  # the parser is built without importing onnxruntime
     from curate.core.dataset import Dataset
     from curate.core.problems import Problem
-    from eval.config import InferenceConfig, ModelConfig, ScoringConfig, TestSetConfig
+    from eval.config import InferenceConfig, OnnxModelConfig, ScoringConfig, TestSetConfig
     from eval.onnx_model import OnnxDetector
     from eval.score import ScoreResult, TestSet
 
@@ -133,7 +133,7 @@ def settings(
     return cfg
 
 
-def open_detector(path: Path, model: ModelConfig, inference: InferenceConfig) -> OnnxDetector:
+def open_detector(path: Path, model: OnnxModelConfig, inference: InferenceConfig) -> OnnxDetector:
     """The detector ONNX at ``path`` as ``model`` describes it, on ``inference``'s device (the device notice, if
     any, on stderr); raises :class:`eval.onnx_model.ModelError` for a model that cannot be run."""
     detector = inference.detector(path, model)
