@@ -15,7 +15,7 @@ $(STAMP): pyproject.toml $(LOCK)
 	$(BIN)/python -m pip install --quiet --upgrade pip
 	$(BIN)/python -m pip install --quiet torch==2.13.0 -c $(LOCK)
 	$(BIN)/python -m pip install --quiet -e ".[dev]" -c $(LOCK)
-	$(BIN)/python -m curate.core.lock
+	$(BIN)/python -m ground.run.lock
 	touch $(STAMP)
 
 # Refresh requirements.lock: install pyproject.toml's dependencies unconstrained into a scratch venv, freeze them.

@@ -10,8 +10,8 @@ import tempfile
 import time
 from pathlib import Path
 
-from curate.core.formats.registry import read_dataset
-from curate.core.writer import write_dataset
+from ground.data.formats.registry import read_dataset
+from ground.data.writer import write_dataset
 
 DEFAULT = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "fire-cctv-416"
 

@@ -108,9 +108,9 @@ def same_group_pairs(doc: dict) -> set[tuple[str, str]]:
 def reduced_vs_full(photos: Path, count: int) -> tuple[float, int, int, int]:
     """On the first ``count`` photos: the smallest cosine between an embedding from the reduced decode (as dedup
     makes it) and one from the full decode, and the near-duplicate pairs (distance < 0.45) each way and in both."""
-    from curate.core.imageio import read_image
     from curate.embed import l2_normalize, load_embedder
     from curate.scan import scan_images
+    from ground.image.imageio import read_image
 
     paths = sorted(photos.glob("*.jpg"))[:count]
     embedder = load_embedder()

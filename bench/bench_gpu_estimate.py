@@ -41,7 +41,7 @@ def gflop(fn, *args) -> float:
 
 def augment_rate(imgsz: int, images: int = 64) -> float:
     """Augmented training samples per second on one core at ``imgsz``."""
-    from curate.core.formats.registry import read_dataset
+    from ground.data.formats.registry import read_dataset
     from train.augment import AugmentConfig
     from train.data import TrainBatches, cache_images
 
@@ -63,9 +63,9 @@ def main() -> int:
     if not DATA.is_dir():
         print(f"gpu_estimate_skipped: {DATA} not found", file=sys.stderr)
         return 0
-    from curate.core.config import load_config
     from curate.mix import parse_mixture
     from fuzzyfire.experiment_config import ExperimentConfig
+    from ground.config.loader import load_config
     from train.model import build_model
 
     torch.set_num_threads(1)

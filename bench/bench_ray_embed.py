@@ -16,9 +16,9 @@ from pathlib import Path
 
 import numpy as np
 
-from curate.core.cluster import Cluster
 from curate.embed import load_embedder
 from curate.scan import ScanResult, list_image_files, scan_images
+from ground.run.cluster import Cluster
 
 DEFAULT = Path(__file__).resolve().parents[2] / "shared" / "data" / "fire-cctv-416"
 

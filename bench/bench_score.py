@@ -23,16 +23,16 @@ from pathlib import Path
 
 import numpy as np
 
-from curate.core.cocoeval import run_cocoeval
-from curate.core.dataset import DatasetBuilder
-from curate.core.detections import PostprocessConfig
-from curate.core.formats.registry import read_dataset
-from curate.core.imageio import read_image
-from curate.core.letterbox import letterbox_image, to_nchw_float
 from eval.config import InferenceConfig
 from eval.onnx_model import OnnxDetector
 from eval.score import score
 from eval.stats import MatchTable, bootstrap_ap
+from ground.data.dataset import DatasetBuilder
+from ground.data.formats.registry import read_dataset
+from ground.detect.cocoeval import run_cocoeval
+from ground.detect.detections import PostprocessConfig
+from ground.detect.letterbox import letterbox_image, to_nchw_float
+from ground.image.imageio import read_image
 
 SIZE = 320
 SHARED = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "fire-smoke-608"

@@ -59,7 +59,7 @@ def main() -> int:
     base_rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     cluster = None
     if args.ray:
-        from curate.core.cluster import Cluster
+        from ground.run.cluster import Cluster
 
         cluster = Cluster(local_cpus=args.ray)
     tracemalloc.start()  # numpy's allocations: what the search adds to the driver beyond the vectors

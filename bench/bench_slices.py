@@ -20,7 +20,6 @@ from pathlib import Path
 import numpy as np
 from bench_score import SIZE, _dataset
 
-from curate.core.cocoeval import LOOSE_IOU, run_cocoeval
 from eval.attributes import dataset_attributes
 from eval.config import InferenceConfig
 from eval.imagelevel import image_hits
@@ -28,6 +27,7 @@ from eval.onnx_model import OnnxDetector
 from eval.score import score, scored_images
 from eval.slices import Side, compare_slices, make_slices
 from eval.stats import MatchTable
+from ground.detect.cocoeval import LOOSE_IOU, run_cocoeval
 
 
 def main() -> None:

@@ -17,7 +17,7 @@ from pathlib import Path
 
 import torch
 
-from curate.core.formats.registry import read_dataset
+from ground.data.formats.registry import read_dataset
 from train.config import TrainConfig
 from train.loop import build_trainer, train_one_epoch
 

@@ -168,7 +168,7 @@ def ort_gpu_reason(device: str) -> str | None:
     """Why onnxruntime cannot run on ``device`` here (None: it can, or ``device`` is the CPU)."""
     import onnxruntime as ort
 
-    from curate.core.device import onnx_providers
+    from ground.run.device import onnx_providers
 
     _, notice = onnx_providers(device)
     if notice is None:
@@ -183,7 +183,7 @@ def data_reason(data: Path) -> str | None:
 
 
 def expected_provider(device: str) -> str:
-    from curate.core.device import parse_device
+    from ground.run.device import parse_device
 
     return "CPUExecutionProvider" if parse_device(device)[0] == "cpu" else "CUDAExecutionProvider"
 
@@ -196,7 +196,7 @@ class Study:
     """The run of the mixture R<images>_S0 as ``fuzzyfire experiment`` plans it, its validation and test sets."""
 
     spec: Any  # fuzzyfire.runs.RunSpec
-    val: Any  # curate.core.dataset.Dataset
+    val: Any  # ground.data.dataset.Dataset
     test: Any
     out: Path
 
@@ -211,10 +211,10 @@ class Study:
 def prepare_study(data: Path, out: Path, images: int, epochs: int, seed: int) -> Study:
     """Curate fire-cctv-416 and write the mixture R<images>_S0 as configs/shared-data.yaml does (both cached in
     ``out``), then plan its run (the rare and named test sets and the synthetic runs left out)."""
-    from curate.core.config import load_config
     from fuzzyfire.datasets import Datasets
     from fuzzyfire.experiment import grid_entries, plan_runs, prepare_data, write_mixtures
     from fuzzyfire.experiment_config import ExperimentConfig
+    from ground.config.loader import load_config
 
     overrides = [
         f"real.path={(data / REAL).resolve().as_posix()}",
@@ -383,9 +383,9 @@ def check_ray(paths: Sequence[Path], device: str, local: Any, cpus: int) -> Outc
     ``device`` (None: made here)."""
     import numpy as np
 
-    from curate.core.cluster import Cluster
     from curate.embedremote import task_gpus
     from curate.scan import scan_images
+    from ground.run.cluster import Cluster
 
     embedder = _embedder(device)
     local = local if local is not None else scan_images(paths, embedder)

@@ -20,9 +20,9 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from curate.core.imageio import ImageError, read_image
 from curate.embed import OnnxEmbedder, l2_normalize
 from curate.search import two_view_distances
+from ground.image.imageio import ImageError, read_image
 
 Image = NDArray[np.uint8]
 

@@ -4,7 +4,7 @@ merge labelled sources -> exact duplicates -> near duplicates -> diversity ranki
 which no group of near duplicates straddles two splits -> a curated dataset (COCO + YOLO + manifest) with
 ``curation.json``, ``report.html`` and ``distances.png`` beside it.
 
-The schema dataclasses below are built from YAML by :mod:`curate.core.config` (see ``configs/curate-shared.yaml``).
+The schema dataclasses below are built from YAML by :mod:`ground.config.loader` (see ``configs/curate-shared.yaml``).
 """
 
 from __future__ import annotations
@@ -17,10 +17,6 @@ from typing import Any
 
 import numpy as np
 
-from curate.core.cluster import Cluster, open_cluster
-from curate.core.dataset import Dataset
-from curate.core.problems import Problem
-from curate.core.writer import write_dataset
 from curate.dedupjob import DedupRun, dedup_document, dedup_options, run_dedup, tie_key, write_outputs
 from curate.embed import OnnxEmbedder, Preprocess, load_embedder
 from curate.embedcache import EmbeddingCache
@@ -29,6 +25,10 @@ from curate.scan import ScanResult
 from curate.settings import DuplicateSearchConfig, EmbedderConfig, ExecutorConfig, RankConfig
 from curate.sources import MergeConfig, SourceConfig, merge_sources
 from curate.split import near_groups, resolve_sizes, split_groups, straddling_groups
+from ground.data.dataset import Dataset
+from ground.data.problems import Problem
+from ground.data.writer import write_dataset
+from ground.run.cluster import Cluster, open_cluster
 
 CURATION_FILE = "curation.json"  # what the curation did, beside the curated dataset
 
@@ -130,7 +130,7 @@ def curate_dataset(
     """``fuzzyfire curate`` whole: :func:`curate` with ``cfg.model``'s embedder and the embedding cache file
     ``cache`` (None: no cache), then the dataset in ``out`` (COCO + YOLO + manifest; ``provenance``: the
     manifest's ``command``, ``args`` and ``sources``) and ``curation.json`` + its report beside it. Returns the
-    result and the report files; raises :class:`curate.core.writer.OutputError` when ``out`` is refused."""
+    result and the report files; raises :class:`ground.data.writer.OutputError` when ``out`` is refused."""
     embedder = build_embedder(cfg.model)
     cluster = open_cluster(cfg.executor.name, cfg.executor.address)
     db = EmbeddingCache(cache) if cache is not None else None

@@ -14,15 +14,15 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from curate.core.imageio import ImageError, check_complete, decode_sized
-from curate.core.problems import Problem
 from curate.embed import OnnxEmbedder, Preprocess
 from curate.embedcache import FileFacts
+from ground.data.problems import Problem
+from ground.image.imageio import ImageError, check_complete, decode_sized
 
 
 def hash_image_file(path: Path) -> tuple[int, str] | Problem:
     """``(bytes, sha256 hex)`` of a file, or a Problem when it cannot be read or its bytes are truncated or
-    garbled (:func:`~curate.core.imageio.check_complete`: checked here too, so a file cached by a reader that
+    garbled (:func:`~ground.image.imageio.check_complete`: checked here too, so a file cached by a reader that
     did not check it is not taken from the cache)."""
     try:
         data = path.read_bytes()
@@ -55,7 +55,7 @@ def decode_facts(path: Path, preprocess: Preprocess | None) -> tuple[FileFacts, 
     """Decode one file: its facts and the (2, S, S, 3) model inputs of its two views (None without ``preprocess``).
 
     With ``preprocess`` a large JPEG is decoded at reduced size, its short side at least
-    :meth:`~curate.embed.Preprocess.decode_min_side` (:func:`curate.core.imageio.decode_image`); width and height
+    :meth:`~curate.embed.Preprocess.decode_min_side` (:func:`ground.image.imageio.decode_image`); width and height
     are the full size, the pixel hash and sharpness are of the decoded image (the same decode for the same file, so equal
     pictures still hash equal)."""
     try:

@@ -33,10 +33,10 @@ from typing import Literal
 import numpy as np
 from numpy.typing import NDArray
 
-from curate.core.cluster import Cluster
 from curate.partition import AUTO_PARTITION_MIN, PARTITION, partitioned_pairs
 from curate.scan import ScannedImage
 from curate.search import Pairs, duplicate_pairs, grid_cells
+from ground.run.cluster import Cluster
 
 #: Default near-duplicate radius on unit EfficientNet-Lite0 embeddings (see ``experiments/dedup_quality.py``).
 DEFAULT_THRESHOLD = 0.45

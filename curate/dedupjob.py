@@ -17,8 +17,6 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from curate.core.cluster import Cluster
-from curate.core.problems import Problem
 from curate.dedup import DedupResult, find_duplicates
 from curate.embed import OnnxEmbedder
 from curate.embedcache import EmbeddingCache
@@ -27,6 +25,8 @@ from curate.report import make_thumbs, write_histogram, write_html
 from curate.scan import ScannedImage, ScanResult, scan_images
 from curate.search import build_index
 from curate.settings import DuplicateSearchConfig, EmbedderConfig, RankConfig
+from ground.data.problems import Problem
+from ground.run.cluster import Cluster
 
 APPLY_MODES: tuple[str, ...] = ("copy", "link")
 REPORT_GROUPS = 100  # groups shown in report.html

@@ -109,8 +109,8 @@ def embedding_cache_path() -> Path:
 
 def builtin_model_path(folder: Path | None = None) -> Path:
     """The EfficientNet-Lite0 ONNX file, exported on first use (named by the weights' sha256)."""
-    from curate.core.manifest import file_sha256
     from curate.lite0_weights import lite0_weights_path
+    from ground.data.manifest import file_sha256
 
     folder = folder or cache_dir() / "models"
     size = LITE0_PREPROCESS.size
@@ -171,7 +171,7 @@ class OnnxEmbedder:
         machine that does not have the file (a Ray worker)."""
         import onnxruntime as ort
 
-        from curate.core.device import onnx_providers
+        from ground.run.device import onnx_providers
 
         self.path = Path(model)
         if model_bytes is None and not self.path.is_file():

@@ -10,7 +10,7 @@ the driver writes them to the content-hash cache as they arrive, so an interrupt
 and later commands reuse the vectors. The model travels once through Ray's object store (a worker needs no copy
 of the user's cache folder) and each worker process keeps its session for every later task (what an actor pool
 would give), while a task stays a pure function of its shard: a task whose worker dies is simply run again
-(:meth:`curate.core.cluster.Cluster.map`), which an actor pool's lost in-flight batches would not give for free,
+(:meth:`ground.run.cluster.Cluster.map`), which an actor pool's lost in-flight batches would not give for free,
 and nothing beyond Ray core is needed (Ray Data would add pyarrow and pandas).
 
 **GPUs.** ``device`` ``cuda`` (or ``auto`` on a cluster with GPUs) makes each task reserve
@@ -28,12 +28,12 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from curate.core.cluster import Cluster
-from curate.core.problems import Problem
-from curate.core.progress import progress
 from curate.decode import embed_batch, hash_image_file
 from curate.embed import OnnxEmbedder, Preprocess
 from curate.embedcache import FileFacts
+from ground.data.problems import Problem
+from ground.run.cluster import Cluster
+from ground.run.progress import progress
 
 SHARD_IMAGES = 256  # images per Ray task (rounded to whole batches)
 HASH_SHARD_FILES = 2048  # files per hashing task
@@ -105,7 +105,7 @@ def hash_on_cluster(paths: Sequence[Path], cluster: Cluster) -> list[tuple[int, 
 def task_gpus(cluster: Cluster, device: str) -> float:
     """GPU share each embedding task reserves: ``1 / TASKS_PER_GPU`` for ``cuda`` (refused on a cluster without
     GPUs) or ``auto`` on a cluster with GPUs, else 0."""
-    from curate.core.device import parse_device
+    from ground.run.device import parse_device
 
     kind, _ = parse_device(device)
     if kind == "cpu" or (kind == "auto" and cluster.gpus() == 0):

@@ -20,10 +20,10 @@ from typing import Any, Literal, Optional
 
 import numpy as np
 
-from curate.core.dataset import Dataset, ImageRecord, merge
-from curate.core.formats.registry import DatasetFormat
-from curate.core.formats.yolo import ultralytics_val_folders
-from curate.core.writer import plan_image_names, write_dataset
+from ground.data.dataset import Dataset, ImageRecord, merge
+from ground.data.formats.registry import DatasetFormat
+from ground.data.formats.yolo import ultralytics_val_folders
+from ground.data.writer import plan_image_names, write_dataset
 
 _NAME = re.compile(r"^R(\d+)_S(\d+)$")
 #: Folder per seed inside the output: ``OUT/seed<S>/R<m>_S<n>``.

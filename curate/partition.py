@@ -7,7 +7,7 @@ search backend; SemDeDup-style).
    nearest cells (found in tasks of :data:`ASSIGN_ROWS` queries on a cluster: N x cells x D work).
 3. **Tasks.** A task takes a run of cells (about :data:`TASK_VECTORS` home vectors in all) and searches exactly
    (faiss ``IndexFlatIP``) the home vectors of each cell for the queries that probe it, within the radius. Tasks
-   run in this process one after another, or as Ray tasks on a :class:`~curate.core.cluster.Cluster`; each
+   run in this process one after another, or as Ray tasks on a :class:`~ground.run.cluster.Cluster`; each
    carries only its own vectors, so a worker's memory is O(task) and the driver's is the vectors, their probes
    and the pairs: O(N (D + nprobe)).
 
@@ -26,9 +26,9 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from curate.core.cluster import Cluster
-from curate.core.progress import progress
 from curate.search import FlatIndex, Pairs, exact_knn, exact_pairs, float32_slack, search_radius
+from ground.run.cluster import Cluster
+from ground.run.progress import progress
 
 PARTITION = "partition"  # the backend's name (``--backend partition``)
 #: ``auto`` searches by partitions above this many vectors: one flat or IVF index of 10 M x 320 float32 is 13 GB

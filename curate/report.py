@@ -15,7 +15,7 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from curate.core.imageio import ImageError, read_image
+from ground.image.imageio import ImageError, read_image
 
 THUMB = 160
 _CSS = """body{font-family:sans-serif;margin:1em}figure{display:inline-block;margin:3px;text-align:center;

@@ -21,15 +21,15 @@ from typing import TypeVar
 import numpy as np
 from numpy.typing import NDArray
 
-from curate.core.cluster import Cluster
-from curate.core.imageio import is_image_file
-from curate.core.problems import Problem
-from curate.core.progress import progress
-from curate.core.walk import walk_files
 from curate.decode import embed_batch, hash_image_file
 from curate.embed import OnnxEmbedder, l2_normalize
 from curate.embedcache import EmbeddingCache, FileFacts
 from curate.embedremote import embed_on_cluster, hash_on_cluster
+from ground.data.problems import Problem
+from ground.data.walk import walk_files
+from ground.image.imageio import is_image_file
+from ground.run.cluster import Cluster
+from ground.run.progress import progress
 
 T = TypeVar("T")
 R = TypeVar("R")
@@ -75,7 +75,7 @@ def list_images_or_fail(inputs: Iterable[Path | str]) -> list[Path]:
     inputs = list(inputs)
     paths = list_image_files(inputs)
     if not paths:
-        from curate.core.imageio import IMAGE_SUFFIXES
+        from ground.image.imageio import IMAGE_SUFFIXES
 
         raise ValueError(
             f"no image files in {', '.join(map(str, inputs))} (looked for {' '.join(sorted(IMAGE_SUFFIXES))}, "

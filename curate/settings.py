@@ -5,7 +5,7 @@
 ranked) are sections of :class:`DedupJobConfig`, :class:`LeakageJobConfig` and
 :class:`curate.curation.CurateConfig` alike, so a key means the same in every command (``model.path``,
 ``dedup.threshold``, ``rank.top``, ``executor.name``). Frozen dataclasses built from YAML, flags and ``--set`` by
-:mod:`curate.core.options`; the commands' flags hold no defaults of their own.
+:mod:`ground.cli.options`; the commands' flags hold no defaults of their own.
 """
 
 from __future__ import annotations

@@ -1,6 +1,6 @@
 """Labelled sources to merge into one dataset (the first step of a FiIW-style curation).
 
-Schemas are plain frozen dataclasses; ``curate.core.config`` builds them from commented YAML.
+Schemas are plain frozen dataclasses; ``ground.config.loader`` builds them from commented YAML.
 """
 
 from __future__ import annotations
@@ -9,10 +9,10 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Literal, Optional
 
-from curate.core.dataset import Dataset, merge
-from curate.core.formats.registry import read_dataset
-from curate.core.load import data_classes
-from curate.core.problems import Problem
+from ground.data.dataset import Dataset, merge
+from ground.data.formats.registry import read_dataset
+from ground.data.load import data_classes
+from ground.data.problems import Problem
 
 
 @dataclass(frozen=True)
@@ -50,7 +50,7 @@ def read_source(src: SourceConfig, base: Path) -> tuple[Dataset, list[Problem]]:
 
 def merge_sources(cfg: MergeConfig, base: Path, out_root: Path) -> tuple[Dataset, list[Problem]]:
     """Read every source and merge them with the classes ``cfg.classes`` (null: every class of the sources,
-    :func:`curate.core.load.data_classes`); a class outside given ``cfg.classes`` is an error, never dropped
+    :func:`ground.data.load.data_classes`); a class outside given ``cfg.classes`` is an error, never dropped
     silently."""
     datasets, problems = [], []
     for src in cfg.sources:

@@ -9,7 +9,7 @@ from typing import Any
 
 import numpy as np
 
-from curate.core.dataset import Dataset
+from ground.data.dataset import Dataset
 
 #: Buckets of :func:`crowding`: boxes whose image holds 1, 2, 3-4 or 5+ boxes.
 CROWDING: tuple[tuple[str, int, int], ...] = (("1", 1, 1), ("2", 2, 2), ("3-4", 3, 4), ("5+", 5, 2**31))

@@ -7,17 +7,17 @@ from collections.abc import Mapping, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
-from curate.core.dataset import Dataset
-from curate.core.formats.common import ReadResult
-from curate.core.formats.registry import read_dataset
-from curate.core.imageio import ImageError, decode_image, jpeg_repaired, read_bytes
-from curate.core.problems import LEVELS, Problem
-from curate.core.progress import progress
+from ground.data.dataset import Dataset
+from ground.data.formats.common import ReadResult
+from ground.data.formats.registry import read_dataset
+from ground.data.problems import LEVELS, Problem
+from ground.image.imageio import ImageError, decode_image, jpeg_repaired, read_bytes
+from ground.run.progress import progress
 
 
 def decode_problems(ds: Dataset, workers: int = 4) -> list[Problem]:
     """An error for every image of ``ds`` that does not fully decode; a warning for each thing in a JPEG that
-    libjpeg skips with a warning of its own (:func:`~curate.core.imageio.jpeg_repaired`: the image decodes)."""
+    libjpeg skips with a warning of its own (:func:`~ground.image.imageio.jpeg_repaired`: the image decodes)."""
 
     def check(path: Path) -> list[Problem]:
         try:
@@ -42,7 +42,7 @@ def validate(
     alias_option: str = "aliases",
 ) -> ReadResult:
     """Read ``path`` and check it; returns what could be read with every problem, sorted by level (``aliases``
-    of classes the source lacks: :func:`~curate.core.formats.registry.read_dataset`)."""
+    of classes the source lacks: :func:`~ground.data.formats.registry.read_dataset`)."""
     result = read_dataset(path, fmt, names=names, aliases=aliases, alias_option=alias_option)
     problems = list(result.problems)
     if decode:

@@ -12,9 +12,9 @@ Each image gets one value per attribute (None where it has none, e.g. the fire c
   in degrees, saturation 0..1 of OpenCV's HSV): ``chemical`` when most of them are neither red, orange nor yellow
   (hue 60-330 deg with saturation > 0.25: blue, green, violet flames), else ``yellow-white`` when they are pale or
   yellow (median saturation < 0.35 or median hue >= 35 deg), else ``orange-red``. An image labelled at the image
-  level (no boxes: :attr:`curate.core.dataset.ImageRecord.labels`) is read over the whole image; its ``size``
+  level (no boxes: :attr:`ground.data.dataset.ImageRecord.labels`) is read over the whole image; its ``size``
   and ``fires`` stay None.
-- ``sky``: ``sky`` when the sky (:func:`curate.core.sky.sky_mask`, at 160 px) covers at least 5 % of the image, else
+- ``sky``: ``sky`` when the sky (:func:`ground.image.sky.sky_mask`, at 160 px) covers at least 5 % of the image, else
   ``no sky`` (rooms, close-ups, streets between walls).
 - ``blur``: the variance of the Laplacian of the grey image at 256 px on the long side (:func:`curate.scan.
   sharpness`): ``blurred`` < 50 <= ``soft`` < 200 <= ``sharp``.
@@ -35,13 +35,13 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from curate.core.dataset import Annotation, Dataset
-from curate.core.imageio import ImageError, read_image
-from curate.core.progress import progress
-from curate.core.sky import sky_mask
 from curate.decode import sharpness
 from curate.stats import LARGE_AREA, SMALL_AREA
 from eval.found import SIZES, bucket
+from ground.data.dataset import Annotation, Dataset
+from ground.image.imageio import ImageError, read_image
+from ground.image.sky import sky_mask
+from ground.run.progress import progress
 
 #: The computed attributes and their values in order (ordinal ones from low to high).
 ATTRIBUTES: dict[str, tuple[str, ...]] = {
@@ -122,7 +122,7 @@ def fire_colour(image: NDArray[np.uint8], boxes: NDArray[np.float64]) -> str | N
 
 def _small(image: NDArray[np.uint8], side: int) -> NDArray[np.uint8]:
     """``image`` (H, W, 3) shrunk to ``side`` px on its long side (as it is when already smaller). Bilinear: a
-    JPEG is decoded at most 2x larger (:func:`curate.core.imageio.read_image` ``min_side``), where it matches area
+    JPEG is decoded at most 2x larger (:func:`ground.image.imageio.read_image` ``min_side``), where it matches area
     averaging closely at a fraction of its cost."""
     h, w = image.shape[:2]
     scale = side / max(h, w)

@@ -1,4 +1,4 @@
-"""eval's settings as frozen dataclasses (:mod:`curate.core.config` builds them from YAML, ``--set`` and flags):
+"""eval's settings as frozen dataclasses (:mod:`ground.config.loader` builds them from YAML, ``--set`` and flags):
 how a detector ONNX runs over images (:class:`InferenceConfig`: an experiment's ``score`` section too), which
 model it is (:class:`OnnxModelConfig`), which test set it is scored on (:class:`TestSetConfig`), and one dataclass
 per command: :class:`ScoreConfig`, :class:`CompareConfig` and :class:`PredictConfig` (whose boxes are drawn: its
@@ -11,13 +11,13 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Optional
 
-from curate.core.detections import PostprocessConfig
-from curate.core.device import parse_device
-from curate.core.formats.registry import FORMATS as DATA_FORMATS
-from curate.core.letterbox import ResizeMode
 from eval.errors import ALARM_CONF
 from eval.onnx_model import ModelFormat, OnnxDetector
 from eval.operating import ALARM_BUDGET
+from ground.data.formats.registry import FORMATS as DATA_FORMATS
+from ground.detect.detections import PostprocessConfig
+from ground.detect.letterbox import ResizeMode
+from ground.run.device import parse_device
 
 
 @dataclass(frozen=True)

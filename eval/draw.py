@@ -15,7 +15,7 @@ import cv2
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from curate.core.boxes import xywh_to_xyxy
+from ground.data.boxes import xywh_to_xyxy
 
 RGB = tuple[int, int, int]
 

@@ -20,13 +20,13 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from curate.core.boxes import xywh_to_xyxy
-from curate.core.dataset import Dataset
-from curate.core.imageio import ImageError, read_image
-from curate.core.problems import Problem
 from eval.draw import GROUND_TRUTH, PREDICTION, draw_labelled
 from eval.errors import ErrorCase, worst_errors
 from eval.predict_media import write_image
+from ground.data.boxes import xywh_to_xyxy
+from ground.data.dataset import Dataset
+from ground.data.problems import Problem
+from ground.image.imageio import ImageError, read_image
 
 FOLDER = "errors"
 MIN_SIDE = 640  # pixels: smaller images are enlarged by a whole factor to at least this longer side
@@ -62,7 +62,7 @@ def case_boxes(case: ErrorCase, dataset: Dataset, names: dict[int, str]) -> tupl
 
 def case_picture(case: ErrorCase, dataset: Dataset, names: dict[int, str]) -> NDArray[np.uint8]:
     """(k H, k W, 3) uint8 RGB: the case's image enlarged by :func:`enlargement` with :func:`case_boxes` drawn;
-    raises :class:`curate.core.imageio.ImageError` when the image cannot be read."""
+    raises :class:`ground.image.imageio.ImageError` when the image cannot be read."""
     img = next(i for i in dataset.images if i.id == case.image_id)
     pixels = read_image(dataset.image_path(img))
     k = enlargement(pixels.shape[1], pixels.shape[0])

@@ -15,7 +15,7 @@ best IoU with a ground-truth box of its own / of another class:
 
 A ground-truth box no detection matched and no classification or localisation error points at is ``missed``.
 Each type's weight is dAP50 = AP50 with that type fixed - AP50, every type fixed alone, AP50 by pycocotools
-(:func:`curate.core.cocoeval.run_cocoeval`): a classification error takes the class of its box and a localisation
+(:func:`ground.detect.cocoeval.run_cocoeval`): a classification error takes the class of its box and a localisation
 error the box itself (dropped if that box is already detected), duplicates, "both" and background errors are
 dropped, missed boxes are removed from the ground truth.
 """
@@ -33,9 +33,9 @@ import numpy as np
 from numpy.typing import NDArray
 from pycocotools.cocoeval import Params
 
-from curate.core.boxes import box_iou_xyxy, xywh_to_xyxy
-from curate.core.cocoeval import run_cocoeval, top_records
-from curate.core.dataset import Dataset
+from ground.data.boxes import box_iou_xyxy, xywh_to_xyxy
+from ground.data.dataset import Dataset
+from ground.detect.cocoeval import run_cocoeval, top_records
 
 T_FG = 0.5  # foreground IoU: a detection at or above it is on its object
 T_BG = 0.1  # background IoU: a detection below it with every box is on nothing

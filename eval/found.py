@@ -22,10 +22,10 @@ from typing import Any
 
 import numpy as np
 
-from curate.core.boxes import box_iou_xyxy, xywh_to_xyxy
-from curate.core.dataset import Dataset
 from curate.stats import CROWDING, crowding_bucket
 from eval.errors import ALARM_CONF, T_BG, T_FG, area_inside
+from ground.data.boxes import box_iou_xyxy, xywh_to_xyxy
+from ground.data.dataset import Dataset
 
 #: Box size buckets: (name, smallest, largest) square root of the area in pixels, the largest excluded.
 SIZES: tuple[tuple[str, float, float], ...] = (

@@ -25,10 +25,10 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from curate.core.boxes import box_iou_xyxy, xywh_to_xyxy, xyxy_to_cxcywh
-from curate.core.dataset import Dataset
 from eval.operating import Alarms, alarms_of
 from eval.stats import PairedDelta, paired_delta, resample_weights, resampled, seed_picks
+from ground.data.boxes import box_iou_xyxy, xywh_to_xyxy, xyxy_to_cxcywh
+from ground.data.dataset import Dataset
 
 HIT_IOU = 0.1  # IoU with a fire box at which a detection hits it (or its centre inside the box)
 IMAGE_RECALL = "image_recall"  # result key: share of fire images detected at the operating threshold (0..1)

@@ -24,7 +24,7 @@ from typing import Literal, get_args
 import numpy as np
 from numpy.typing import NDArray
 
-from curate.core.device import onnx_providers
+from ground.run.device import onnx_providers
 
 #: A model's output layout (module docstring), or ``auto``: read from its metadata, else inferred.
 ModelFormat = Literal["auto", "fuzzyfire", "yolov5", "yolov8"]
@@ -178,7 +178,7 @@ class OnnxDetector:
     ``fmt`` is ``auto`` or one of :data:`LAYOUTS`; ``names`` overrides the metadata's class names;
     ``image_size`` ``(width, height)`` is needed only when the model's input size is dynamic and its
     metadata does not say. ``threads`` = 0 lets onnxruntime use every core. ``device`` picks onnxruntime's
-    provider (:func:`curate.core.device.onnx_providers`); ``device_notice`` says when a GPU was asked for and the CPU is used.
+    provider (:func:`ground.run.device.onnx_providers`); ``device_notice`` says when a GPU was asked for and the CPU is used.
     """
 
     def __init__(

@@ -23,9 +23,9 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from curate.core.cocoeval import run_cocoeval
-from curate.core.dataset import Dataset
 from eval.stats import PairedDelta, class_matches, paired_delta, resample_weights
+from ground.data.dataset import Dataset
+from ground.detect.cocoeval import run_cocoeval
 
 ALARM_BUDGET = 10.0  # false alarms per 100 images without fire at which Table 2 reads the recall (issue 23)
 RECALL_AT_ALARMS = "recall_at_10_alarms"  # result key of the recall of fire boxes at ALARM_BUDGET (0..1)

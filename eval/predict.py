@@ -11,21 +11,21 @@ from functools import partial
 import numpy as np
 from numpy.typing import NDArray
 
-from curate.core.dataset import Dataset, ImageRecord
-from curate.core.detections import ImageDetections, Predictions, postprocess, to_original
-from curate.core.imageio import ImageError, read_image
-from curate.core.letterbox import letterbox_image, to_chw_float, to_nchw_float
-from curate.core.problems import Problem
-from curate.core.progress import progress
 from eval.config import InferenceConfig
 from eval.onnx_model import OnnxDetector
+from ground.data.dataset import Dataset, ImageRecord
+from ground.data.problems import Problem
+from ground.detect.detections import ImageDetections, Predictions, postprocess, to_original
+from ground.detect.letterbox import letterbox_image, to_chw_float, to_nchw_float
+from ground.image.imageio import ImageError, read_image
+from ground.run.progress import progress
 
 Loaded = tuple[int, int] | ImageError  # an image's decoded (width, height), or why it could not be read
 
 
 def _loader(width: int, height: int, pad: int, resize: str) -> Callable[[str, NDArray[np.float32], int], Loaded]:
     """``load(path, batch, slot)``: decode, letterbox and write the image into ``batch[slot]`` (3, H, W)
-    (:func:`curate.core.letterbox.to_chw_float`), in the decoding thread."""
+    (:func:`ground.detect.letterbox.to_chw_float`), in the decoding thread."""
 
     def load(path: str, batch: NDArray[np.float32], slot: int) -> Loaded:
         try:

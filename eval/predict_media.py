@@ -3,7 +3,7 @@ image, or a video, each drawn with its detections into an output folder, plus th
 
 Images go through :func:`eval.predict.predict_dataset` (so the same letterbox, onnxruntime batching, NMS and
 mapping back to original pixels as ``fuzzyfire score``) as a dataset without boxes; their sizes are read from the
-headers first, and a file :mod:`curate.core.imageio` cannot read is named with its reason and skipped. Video
+headers first, and a file :mod:`ground.image.imageio` cannot read is named with its reason and skipped. Video
 frames go through :func:`eval.predict.detect_images`, the same post-processing on decoded frames.
 
 ``detections.json`` is a list of COCO-style results, one per detection, best first within an image:
@@ -24,18 +24,18 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from curate.core.cocoeval import ClassMatch, detection_records
-from curate.core.dataset import Dataset, DatasetBuilder
-from curate.core.detections import ImageDetections, Predictions
-from curate.core.imageio import ImageError, image_size, is_image_file, read_image
-from curate.core.problems import Problem
-from curate.core.progress import progress
-from curate.core.walk import walk_files
 from eval.config import InferenceConfig
 from eval.draw import draw_detections
 from eval.onnx_model import OnnxDetector
 from eval.predict import detect_images, predict_dataset
 from eval.video import VideoWriter, is_video_file, read_batches, video_info
+from ground.data.dataset import Dataset, DatasetBuilder
+from ground.data.problems import Problem
+from ground.data.walk import walk_files
+from ground.detect.cocoeval import ClassMatch, detection_records
+from ground.detect.detections import ImageDetections, Predictions
+from ground.image.imageio import ImageError, image_size, is_image_file, read_image
+from ground.run.progress import progress
 
 DETECTIONS_FILE = "detections.json"
 #: Suffixes a drawn image keeps; any other image is written as ``<name>.png`` (e.g. ``a.gif.png``).
@@ -73,7 +73,7 @@ def source_kind(source: Path) -> str:
 
 
 def image_files(source: Path, exclude: Path | None = None) -> list[Path]:
-    """``source`` itself when it is a file, else the image files below it (:func:`curate.core.walk.walk_files`:
+    """``source`` itself when it is a file, else the image files below it (:func:`ground.data.walk.walk_files`:
     links followed, hidden entries skipped, sorted), leaving out those inside ``exclude``."""
     if source.is_file():
         return [source]
@@ -107,7 +107,7 @@ def keep_classes(det: ImageDetections, labels: frozenset[int] | None) -> ImageDe
 
 def to_records(preds: Predictions, names: dict[int, tuple[str, int | None]]) -> list[dict[str, Any]]:
     """``detections.json`` records of ``preds``, rounded as ``score``'s ``predictions.json``
-    (:func:`curate.core.cocoeval.detection_records`); ``names``: image id -> (file name, frame or None)."""
+    (:func:`ground.detect.cocoeval.detection_records`); ``names``: image id -> (file name, frame or None)."""
     classes = preds.class_names
     match = ClassMatch({i: i + 1 for i in range(len(classes))}, tuple(classes), (), ())
     out = []

@@ -12,13 +12,13 @@ from typing import Any
 import cv2
 import numpy as np
 
-from curate.core.dataset import Dataset
-from curate.core.imageio import ImageError, read_image
 from eval.draw import draw_boxes
 from eval.errors import ALARMS
 from eval.imagelevel import IMAGE_LABELLED, IMAGE_RECALL, IMAGELEVEL, image_operating_curve
 from eval.operating import ALARM_BUDGET, OPERATING, RECALL_AT_ALARMS, Alarms, curve_at_rates, recall_at_rates
 from eval.tables import METRIC_LABELS, Table, heading, marks, shown_scale, to_csv, to_latex, to_markdown
+from ground.data.dataset import Dataset
+from ground.image.imageio import ImageError, read_image
 
 _CSS = """body{font-family:system-ui,sans-serif;margin:2em auto;max-width:1100px;color:#222}
 table{border-collapse:collapse;margin:1em 0}td,th{padding:.3em .7em;border-bottom:1px solid #ddd;text-align:right}
@@ -456,7 +456,7 @@ def image_operating_figures(results: Sequence[Mapping[str, Any]], folder: Path) 
 
 
 def table_metrics(results: Sequence[Mapping[str, Any]]) -> tuple[str, ...]:
-    """The paper's AP and AP50, then AP25 (:mod:`curate.core.cocoeval`; runs scored before it existed lack it),
+    """The paper's AP and AP50, then AP25 (:mod:`ground.detect.cocoeval`; runs scored before it existed lack it),
     the recall at 10 alarms per 100 images without fire (:mod:`eval.operating`; only studies with a set without
     fire have it) and the image recall (:mod:`eval.imagelevel`), each when every row of a set with boxes has it;
     the sets without fire have their alarm column and the image-labelled sets their image recall whatever this

@@ -11,14 +11,6 @@ from typing import Any, NamedTuple
 
 from pycocotools.cocoeval import COCOeval
 
-from curate.core.cocoeval import CocoMetrics, evaluate_detections
-from curate.core.dataset import Dataset
-from curate.core.detections import Predictions
-from curate.core.fast_cocoeval import CocoBoxes, boxes_to_records
-from curate.core.formats.registry import read_dataset
-from curate.core.holdout import held_out_images
-from curate.core.load import SplitError, pick_split
-from curate.core.problems import Problem
 from eval.config import InferenceConfig, TestSetConfig
 from eval.error_pictures import WORST, write_error_pictures
 from eval.errors import ALARM_CONF, ErrorBreakdown, error_breakdown
@@ -29,6 +21,14 @@ from eval.operating import ALARM_BUDGET, Alarms, FoundScores, alarms_of, found_s
 from eval.plots import plot_pr_curves, pr_curves_from_eval
 from eval.predict import predict_dataset
 from eval.stats import MatchTable
+from ground.data.dataset import Dataset
+from ground.data.formats.registry import read_dataset
+from ground.data.holdout import held_out_images
+from ground.data.load import SplitError, pick_split
+from ground.data.problems import Problem
+from ground.detect.cocoeval import CocoMetrics, evaluate_detections
+from ground.detect.detections import Predictions
+from ground.detect.fast_cocoeval import CocoBoxes, boxes_to_records
 
 
 class ScoreError(ValueError):
@@ -67,11 +67,11 @@ class TestSet(NamedTuple):
 
 
 def load_test_set(path: Path | str, settings: TestSetConfig | None = None) -> TestSet:
-    """Read any dataset :func:`curate.core.formats.registry.read_dataset` reads (a folder, a COCO .json, a
+    """Read any dataset :func:`ground.data.formats.registry.read_dataset` reads (a folder, a COCO .json, a
     ``data.yaml``) as ``settings`` say (default: :class:`eval.config.TestSetConfig`'s): one split of it (``val``
     and ``valid`` are one name; None = :func:`default_split`; :data:`ALL_SPLITS` = every image), with its class
     ``aliases`` (source name -> class) and the boxes of the classes ``drop_class`` removed; with ``holdout`` > 0
-    only the images held out by content at that share (:func:`curate.core.holdout.held_out`: the photos a Method 2
+    only the images held out by content at that share (:func:`ground.data.holdout.held_out`: the photos a Method 2
     pool with ``background_holdout`` never shows). ``label``: the class every image of a folder without label
     files holds (an image-labelled set)."""
     cfg = settings or TestSetConfig()

@@ -10,7 +10,7 @@ rest; one still too
 small is kept and marked (``too_few``) and never compared. An attribute left with one slice is no cut at all and
 is dropped.
 
-**Comparisons.** For each slice: the differences ``b - a`` of AP50, AP25 (:data:`curate.core.cocoeval.LOOSE_IOU`)
+**Comparisons.** For each slice: the differences ``b - a`` of AP50, AP25 (:data:`ground.detect.cocoeval.LOOSE_IOU`)
 and image recall (:mod:`eval.imagelevel`), each by the paired image-level bootstrap: every resample draws the
 slice's images with replacement and scores both sides on them, each side the mean over its runs (seeds). Many
 slices are many tests: each comparison's slices of one metric are one family, and a slice is called helped or

@@ -26,7 +26,7 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from curate.core.imageio import read_image
+from ground.image.imageio import read_image
 from synth.flames.cutouts import MASK_RULES, cut, pixel_box
 
 NEAR_FILLED = 0.9  # mask share of the box from which a cut-out counts as a filled rectangle

@@ -21,11 +21,11 @@ import cv2
 import numpy as np
 
 from curate.calibrate import _bright, _jpeg, _noise, _resize, _rotate
-from curate.core.imageio import read_image
 from curate.dedup import DEFAULT_THRESHOLD, UnionFind, find_duplicates
 from curate.embed import load_embedder
 from curate.rank import k_center
 from curate.scan import list_image_files, scan_images
+from ground.image.imageio import read_image
 
 DEFAULT = Path(__file__).resolve().parents[1].parent / "shared" / "data"
 SOURCES, DISTRACTORS = 100, 200

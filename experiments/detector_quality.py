@@ -36,8 +36,8 @@ MIXTURE = "R400_S0"
 
 
 def _config(seeds: list[int], train_overrides: list[str]):
-    from curate.core.config import load_config
     from fuzzyfire.experiment_config import ExperimentConfig
+    from ground.config.loader import load_config
 
     grid = [f"grid.mixtures=[{MIXTURE}]", "grid.table1=[]", f"grid.seeds=[{','.join(map(str, seeds))}]"]
     return load_config(CONFIG, ExperimentConfig, [*grid, "report.samples=false", *train_overrides])

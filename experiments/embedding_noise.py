@@ -137,12 +137,12 @@ def perturbation_sweep(folder: Path) -> None:
     """Kept images and split assignments changed by Gaussian moves of the unit embeddings (worst of 3 draws)."""
     from dataclasses import replace
 
-    from curate.core.config import load_config
     from curate.curation import assign_splits
     from curate.dedupjob import dedup_options, run_dedup
     from curate.embed import embedding_cache_path, l2_normalize, load_embedder
     from curate.embedcache import EmbeddingCache
     from fuzzyfire.experiment_config import ExperimentConfig
+    from ground.config.loader import load_config
 
     cfg = load_config(REPO / "configs" / "shared-data.yaml", ExperimentConfig).real.curate_config()
     embedder = load_embedder()

@@ -18,9 +18,9 @@ import time
 from pathlib import Path
 
 import fuzzyfire.experiment as experiment
-from curate.core.config import load_config
 from fuzzyfire.executors import build_executor
 from fuzzyfire.experiment_config import ExperimentConfig
+from ground.config.loader import load_config
 
 CONFIG = Path(__file__).resolve().parents[1] / "configs" / "demo.yaml"
 

@@ -11,7 +11,6 @@ from pathlib import Path
 
 import numpy as np
 
-from curate.core.config import to_dict
 from curate.mix import parse_mixture
 from eval.errors import ALARM_CONF, ALARMS
 from eval.imagelevel import IMAGE_LABELLED, IMAGE_RECALL, IMAGE_RECALL_AT_CONF, IMAGELEVEL, image_alarms
@@ -35,6 +34,7 @@ from fuzzyfire.learning import LEARNING, run_flag
 from fuzzyfire.runs import EvalSet, RunSpec
 from fuzzyfire.slicing import run_hits
 from fuzzyfire.stages import Prepared, digest, label
+from ground.config.loader import to_dict
 from synth.method2 import Method2Config
 
 STANDIN_NOTICE = (
@@ -130,9 +130,9 @@ FOUND_FILE = "found_scores.json"  # the scores of the detections that found a bo
 
 def run_ap25(datasets: Datasets, folder: Path, test: DataRef, scored: dict) -> float | None:
     """AP25 of a run on a test set: from its results (``scored``), else from ``folder/predictions.json``
-    against the test set (:func:`curate.core.cocoeval.loose_ap`), kept in ``folder/ap25.json`` with the digest
+    against the test set (:func:`ground.detect.cocoeval.loose_ap`), kept in ``folder/ap25.json`` with the digest
     of the predictions it was read from (a set scored again is read again)."""
-    from curate.core.cocoeval import loose_ap
+    from ground.detect.cocoeval import loose_ap
 
     if scored.get("AP25") is not None:
         return scored["AP25"]
@@ -510,8 +510,8 @@ def realism_gaps(
 
 def write_summary(cfg: ExperimentConfig, specs, results, rows, out: Path, standin: bool) -> None:
     """``experiment.json`` (config, versions, runs and their status) and ``results.jsonl``."""
-    from curate.core.lock import lock_status
-    from curate.core.manifest import git_commit, versions
+    from ground.data.manifest import git_commit, versions
+    from ground.run.lock import lock_status
 
     runs = [
         {"label": s.label, "seed": s.seed, "folder": s.out.relative_to(out).as_posix(), "hash": s.hash(),

@@ -9,9 +9,9 @@ import sys
 from collections.abc import Sequence
 from pathlib import Path
 
-from curate.core.commands import HelpFormatter, add_command
-from curate.core.writer import OutputError
 from fuzzyfire import __version__
+from ground.cli.commands import HelpFormatter, add_command
+from ground.data.writer import OutputError
 
 #: Modules whose ``register(subparsers)`` adds commands, in help order (imported when the parser is built);
 #: ``experiment``, this module's own, comes last.
@@ -40,11 +40,11 @@ configs/demo.yaml needs no data: its 'real' and 'rare' sets are generated stand-
 
 
 def cmd_experiment(args: argparse.Namespace) -> int:
-    from curate.core.config import ConfigError, load_config, located
     from fuzzyfire.aggregate import STANDIN_NOTICE, answer_text, table_text
     from fuzzyfire.executors import ExecutorError, build_executor
     from fuzzyfire.experiment import run_experiment
     from fuzzyfire.experiment_config import ExperimentConfig, ExperimentConfigError
+    from ground.config.loader import ConfigError, load_config, located
 
     overrides = list(args.set)
     if args.executor:

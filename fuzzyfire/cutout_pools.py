@@ -4,7 +4,7 @@ For a mixture R<m>_S<n> with m > 0 and a seed, the real training subset is the m
 on (:func:`curate.mix.real_subset`, drawn from ``real.train_split`` only). Its fire boxes are cut out
 (:mod:`synth.flames.cutouts`, the ``grabcut`` mask rule) into a stage ``cutouts-<hash>``, and a Method 2 pool
 ``method2-cutouts-<hash>`` is composited with those flames; the mixture's n synthetic images are drawn from that pool. Both stages live in ``OUT/data`` and are identified
-by the subset's content (:func:`curate.core.fingerprint.fingerprint`: image bytes, split and boxes), the mask
+by the subset's content (:func:`ground.data.fingerprint.fingerprint`: image bytes, split and boxes), the mask
 rule's parameters and the pool's config, so mixtures and seeds that draw the same subset share them, and a
 change of the mask rule makes new cut-outs and pools. Validation and test images never reach a pool.
 
@@ -32,8 +32,8 @@ from fuzzyfire.datasets import DataRef, Datasets
 from fuzzyfire.stages import Stage, cached_stage, synth_stage
 
 if TYPE_CHECKING:
-    from curate.core.dataset import Dataset
     from fuzzyfire.experiment_config import ExperimentConfig
+    from ground.data.dataset import Dataset
     from synth.method2 import Method2Config
 
 #: The class whose boxes are cut out.
@@ -61,8 +61,8 @@ def is_own(cfg: Method2Config | None) -> bool:
 def frames_stage(root: Path, subset: Dataset) -> Stage:
     """``subset`` (images and fire boxes) written as a COCO dataset whose images link to the originals: the
     labelled frames of an own pool (:mod:`synth.places.frames`), a cached stage identified by the subset's content."""
-    from curate.core.fingerprint import fingerprint
-    from curate.core.writer import write_dataset
+    from ground.data.fingerprint import fingerprint
+    from ground.data.writer import write_dataset
 
     identity = {"kind": "frames", "real": fingerprint(subset).to_dict()}
     return cached_stage(root, "frames", identity, lambda out: write_dataset(subset, out, ("coco",), "symlink"))
@@ -85,7 +85,7 @@ def cutout_stage(root: Path, subset: Dataset) -> Stage:
     one's image), as a cached stage; ValueError when no box gives one."""
     import json
 
-    from curate.core.fingerprint import fingerprint
+    from ground.data.fingerprint import fingerprint
     from synth.flames.cutouts import cutouts, write_cutouts
 
     identity = {

@@ -9,12 +9,12 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
-from curate.core.classes import canonical_class
-from curate.core.dataset import Dataset
-from curate.core.formats.images import IMAGE_LABELLED, NEGATIVES_ONLY
-from curate.core.formats.registry import read_dataset
-from curate.core.holdout import held_out_images
-from curate.core.load import ClassChanges, class_changes, pick_split, prepare
+from ground.data.classes import canonical_class
+from ground.data.dataset import Dataset
+from ground.data.formats.images import IMAGE_LABELLED, NEGATIVES_ONLY
+from ground.data.formats.registry import read_dataset
+from ground.data.holdout import held_out_images
+from ground.data.load import ClassChanges, class_changes, pick_split, prepare
 
 
 @dataclass(frozen=True)
@@ -22,11 +22,11 @@ class DataRef:
     """A labelled dataset a run reads: ``path`` (folder or COCO .json) in ``format``, one ``split`` of it (None =
     every image), classes renamed by ``aliases`` and ``drop`` removed (an image left with no box by the class
     rules leaves the set unless every box it lost was of a class of ``negatives``:
-    :func:`curate.core.load.with_classes`), with ``holdout`` > 0 only the images
-    :func:`curate.core.holdout.held_out` picks at that share, and without the images ``exclude`` names (their
+    :func:`ground.data.load.with_classes`), with ``holdout`` > 0 only the images
+    :func:`ground.data.holdout.held_out` picks at that share, and without the images ``exclude`` names (their
     ``file_name``: test images that leak from the training data, :mod:`fuzzyfire.leakage`). ``label``: the class
     every image of a folder without label files holds (an image-labelled set; on a stand-in, its image-level
-    view: :meth:`curate.core.dataset.Dataset.at_image_level`). ``identity``: what made it
+    view: :meth:`ground.data.dataset.Dataset.at_image_level`). ``identity``: what made it
     (hashable JSON; no absolute output paths, so two experiment folders give the same run identities)."""
 
     path: Path
@@ -58,7 +58,7 @@ class Datasets:
     """Each dataset read once, each (split, classes) prepared once; ``classes`` are the experiment's.
 
     :meth:`read` gives a dataset as read (every split, its own classes), :meth:`get` one split of it with
-    exactly ``classes`` (:func:`curate.core.load.prepare`). Both return shared immutable objects."""
+    exactly ``classes`` (:func:`ground.data.load.prepare`). Both return shared immutable objects."""
 
     def __init__(
         self, classes: Sequence[str], read: dict[tuple, Dataset] | None = None, notes: dict[tuple, str] | None = None
@@ -96,15 +96,15 @@ class Datasets:
 
     def changes(self, ref: DataRef) -> ClassChanges:
         """What the class rules remove from split ``ref.split`` (None = every image) of ``ref``'s dataset
-        (:func:`curate.core.load.class_changes`), before its hold-out and leaked images are taken out."""
+        (:func:`ground.data.load.class_changes`), before its hold-out and leaked images are taken out."""
         chosen = pick_split(self.read(ref), ref.split, ref.path)
         return class_changes(chosen, self.classes, ref.drop, ref.negatives)
 
 
 def read_ref(ref: DataRef) -> tuple[Dataset, str]:
     """``ref``'s dataset as read (every split; a stand-in with a ``label`` at the image level) and what its folder
-    was read as when it holds no boxes (the reader's info line: :data:`curate.core.formats.images.NEGATIVES_ONLY`,
-    :data:`curate.core.formats.images.IMAGE_LABELLED`; "" otherwise)."""
+    was read as when it holds no boxes (the reader's info line: :data:`ground.data.formats.images.NEGATIVES_ONLY`,
+    :data:`ground.data.formats.images.IMAGE_LABELLED`; "" otherwise)."""
     label = None if ref.standin else ref.label
     result = read_dataset(ref.path, ref.format, aliases=dict(ref.aliases) or None, label=label)
     ds = result.dataset

@@ -1,5 +1,5 @@
 """Executors run the grid's runs: ``local`` (one at a time in this process, every core for each run) or ``ray``
-(one Ray task per run with its CPU/GPU needs, on a local Ray or an existing cluster: :mod:`curate.core.cluster`).
+(one Ray task per run with its CPU/GPU needs, on a local Ray or an existing cluster: :mod:`ground.run.cluster`).
 
 Both yield :class:`Outcome` objects as runs finish; a failing run is reported, not fatal, so the others go on.
 A run is a pure function of its spec, so the two give identical results for the same seeds. On a cluster,
@@ -14,7 +14,7 @@ from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 from typing import Any
 
-from curate.core.cluster import Cluster, ClusterError
+from ground.run.cluster import Cluster, ClusterError
 
 #: An unknown executor name or an executor that cannot start: the error of every Ray connection problem.
 ExecutorError = ClusterError
@@ -49,7 +49,7 @@ class LocalExecutor:
 
 
 class RayExecutor:
-    """One Ray task per item with ``num_cpus`` / ``num_gpus`` on a :class:`curate.core.cluster.Cluster`:
+    """One Ray task per item with ``num_cpus`` / ``num_gpus`` on a :class:`ground.run.cluster.Cluster`:
     ``address`` joins a running cluster, otherwise a local Ray is started with ``local_cpus`` CPUs (default: all)
     and shut down by :meth:`close`."""
 

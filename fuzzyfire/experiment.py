@@ -23,10 +23,6 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
-from curate.core.dataset import Dataset, DatasetBuilder
-from curate.core.formats.yolo import ultralytics_val_folders
-from curate.core.load import SplitError
-from curate.core.lock import lock_status, lock_summary
 from curate.mix import mixture_dir, parse_mixture, write_mixture
 from eval.errors import ALARMS
 from eval.imagelevel import IMAGE_LABELLED
@@ -57,6 +53,10 @@ from fuzzyfire.stages import (
     synth_stage,
     with_class_rules,
 )
+from ground.data.dataset import Dataset, DatasetBuilder
+from ground.data.formats.yolo import ultralytics_val_folders
+from ground.data.load import SplitError
+from ground.run.lock import lock_status, lock_summary
 from synth.method2 import Method2Config
 from train.config import TrainConfig
 
@@ -396,9 +396,9 @@ def check_data(cfg: ExperimentConfig, data: Prepared, datasets: Datasets, photos
 
 def studied_classes(cfg: ExperimentConfig, data: Prepared, datasets: Datasets) -> tuple[ExperimentConfig, Datasets]:
     """``cfg`` with its classes resolved (``classes: null`` = the classes the real data boxes, less
-    ``real.drop_classes`` and ``real.negative_classes``: :func:`curate.core.load.data_classes`) and ``datasets`` prepared with them; says which
-    classes are studied and what the class rules removed from each set (:class:`curate.core.load.ClassChanges`)."""
-    from curate.core.load import data_classes
+    ``real.drop_classes`` and ``real.negative_classes``: :func:`ground.data.load.data_classes`) and ``datasets`` prepared with them; says which
+    classes are studied and what the class rules removed from each set (:class:`ground.data.load.ClassChanges`)."""
+    from ground.data.load import data_classes
 
     classes, given = cfg.classes, cfg.classes is not None
     if classes is None:

@@ -1,5 +1,5 @@
 """The schema of ``fuzzyfire experiment CONFIG``: frozen dataclasses built once from commented YAML by
-:func:`curate.core.config.load_config` (``docs/config.md`` lists every key with its type, default and meaning: it
+:func:`ground.config.loader.load_config` (``docs/config.md`` lists every key with its type, default and meaning: it
 is generated from these classes by :mod:`fuzzyfire.reference`).
 
 Component configs are the packages' own: :class:`curate.curation.CurateConfig`, :class:`synth.method1.
@@ -67,7 +67,7 @@ class RealConfig:
 
     def curate_config(self) -> CurateConfig:
         """``curate`` with its sources filled in from ``path`` when it lists none (``drop_classes`` apply to the
-        curated set, as for a folder read in place: :func:`curate.core.load.with_classes`)."""
+        curated set, as for a folder read in place: :func:`ground.data.load.with_classes`)."""
         assert self.curate is not None, "curate_config() without real.curate"
         if self.curate.sources:
             return self.curate
@@ -80,7 +80,7 @@ class EvalSetConfig:
     A folder of images without labels is a negatives-only set (no AP: its false alarms per 100 images are
     reported) unless ``label`` declares the class every image holds: an image-labelled set, judged by image recall
     (no AP), as is a classification layout (``format: folders``: ``fire/`` and ``normal/`` sub-folders).
-    ``holdout`` keeps only the images :func:`curate.core.holdout.held_out` picks at that share; when ``path`` is a
+    ``holdout`` keeps only the images :func:`ground.data.holdout.held_out` picks at that share; when ``path`` is a
     folder of ``synth.method2.backgrounds``, the Method 2 pool never composites on them
     (:meth:`ExperimentConfig.resolved`)."""
 

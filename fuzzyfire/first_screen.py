@@ -2,7 +2,7 @@
 one sentence of what its images are), the headline with its interval and the control's share, how sure (seeds
 that agree in sign, what the interval resamples, runs that did not learn) and what the data became (classes,
 curation, leakage). Built from the study's numbers and its data's own records (``curation.json``, each pool's
-``manifest.json``, :class:`curate.core.load.ClassChanges`, :class:`fuzzyfire.leakage.TestLeaks`)."""
+``manifest.json``, :class:`ground.data.load.ClassChanges`, :class:`fuzzyfire.leakage.TestLeaks`)."""
 
 from __future__ import annotations
 
@@ -76,7 +76,7 @@ def curation_sentence(folder: Path) -> str | None:
 
 def class_sentence(classes: Sequence[str], given: bool, changes: Mapping[str, Any]) -> str:
     """The classes studied (named by the config, or the real data's) and what the class rules removed from each
-    set (``changes``: :class:`curate.core.load.ClassChanges` by set label; sets it left alone are not named)."""
+    set (``changes``: :class:`ground.data.load.ClassChanges` by set label; sets it left alone are not named)."""
     source = "as the config names them" if given else "every class the real data boxes"
     touched = [f"{name}: {c.text()}" for name, c in changes.items() if c]
     rules = "; ".join(touched) if touched else "No box removed from any set"

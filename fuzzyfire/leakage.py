@@ -9,7 +9,7 @@ from its test set (``leakage.action: drop``, recorded in ``leakage.json`` and th
 A Method 2 pool with ``backgrounds`` composites flames on photographs; a test set holding one of those photos
 (the same bytes, by sha256) would score a detector on a picture it trained on. Every test set of an experiment
 (common, rare and the named ones) is checked against the background photos of every pool the grid uses; the
-share a pool holds out (:func:`curate.core.holdout.held_out`) is no part of it. In an experiment that share is the
+share a pool holds out (:func:`ground.data.holdout.held_out`) is no part of it. In an experiment that share is the
 ``holdout`` of the test set on the same folder (:meth:`fuzzyfire.experiment_config.ExperimentConfig.resolved`), so
 such a test set is disjoint from the pool by construction.
 """
@@ -22,7 +22,7 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from curate.core.dataset import Dataset
+from ground.data.dataset import Dataset
 
 if TYPE_CHECKING:
     from curate.scan import ScanResult
@@ -58,7 +58,7 @@ def pool_photos(synth: SynthConfig, methods: Sequence[str], base: Path) -> dict[
 def check_leakage(pools: Mapping[str, Sequence[Path]], tests: Mapping[str, Dataset]) -> None:
     """Raise :class:`LeakageError` when an image of a test set (``tests``: datasets by label) has the bytes of
     a photo of a pool (``pools``: photo paths by method). Hashes nothing when no pool has photos."""
-    from curate.core.manifest import file_sha256
+    from ground.data.manifest import file_sha256
 
     if not any(pools.values()):
         return

@@ -73,7 +73,7 @@ synth.method2.Method2Config (python -m fuzzyfire.reference); docs/config.md has 
 
 def generated() -> dict[str, str]:
     """{path relative to the repository: text} of every generated file."""
-    from curate.core.reference import commented_yaml, markdown
+    from ground.config.reference import commented_yaml, markdown
     from synth.method1 import Method1Config
     from synth.method2 import Method2Config
 

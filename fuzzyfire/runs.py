@@ -20,19 +20,19 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, NamedTuple
 
-from curate.core.config import to_dict
 from eval.errors import ALARMS
 from eval.imagelevel import IMAGE_LABELLED
 from fuzzyfire.datasets import DataRef, load_data
 from fuzzyfire.engine import CommandJob, command_train
 from fuzzyfire.stages import digest
+from ground.config.loader import to_dict
 
 if TYPE_CHECKING:
-    from curate.core.cocoeval import CocoMetrics
-    from curate.core.dataset import Dataset
     from eval.config import InferenceConfig
     from eval.errors import ErrorBreakdown
     from fuzzyfire.engine import EngineConfig
+    from ground.data.dataset import Dataset
+    from ground.detect.cocoeval import CocoMetrics
     from train.config import TrainConfig
 
 RESULTS_FILE = "results.json"

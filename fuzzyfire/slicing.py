@@ -65,7 +65,7 @@ def run_hits(datasets: Datasets, folder: Path, ref: DataRef) -> ImageHits:
 def run_matches25(datasets: Datasets, folder: Path, ref: DataRef) -> MatchTable:
     """A run's matches at IoU 0.25 on the test set ``ref`` (:class:`eval.stats.MatchTable`), kept in
     ``folder/matches25.npz`` (its predictions' digest in ``folder/matches25.json``)."""
-    from curate.core.cocoeval import LOOSE_IOU, run_cocoeval
+    from ground.detect.cocoeval import LOOSE_IOU, run_cocoeval
 
     predictions = (folder / "predictions.json").read_bytes()
     npz, stamp = folder / MATCHES25_FILE, folder / "matches25.json"

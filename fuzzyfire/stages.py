@@ -19,9 +19,9 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from curate.core.config import to_dict
 from fuzzyfire import __version__
 from fuzzyfire.datasets import DataRef
+from ground.config.loader import to_dict
 
 if TYPE_CHECKING:
     from synth.method_config import MethodConfig
@@ -57,9 +57,9 @@ class StageMismatch(ValueError):
 
 
 def contents(folder: Path) -> dict[str, Any] | None:
-    """The :class:`curate.core.fingerprint.Fingerprint` of the dataset in ``folder`` (None: not a dataset)."""
-    from curate.core.fingerprint import fingerprint
-    from curate.core.formats.coco import read_coco
+    """The :class:`ground.data.fingerprint.Fingerprint` of the dataset in ``folder`` (None: not a dataset)."""
+    from ground.data.fingerprint import fingerprint
+    from ground.data.formats.coco import read_coco
 
     if not (folder / "annotations.json").is_file():
         return None
@@ -68,8 +68,8 @@ def contents(folder: Path) -> dict[str, Any] | None:
 
 def environment() -> dict[str, Any]:
     """What a stage was built with: the versions that shape outputs and the lock file's hash."""
-    from curate.core.lock import lock_status
-    from curate.core.manifest import versions
+    from ground.data.manifest import versions
+    from ground.run.lock import lock_status
 
     return {"versions": versions(), "lock": lock_status().get("sha256")}
 
@@ -176,7 +176,7 @@ def folder_ref(
 
 def with_class_rules(ref: DataRef, drop, negatives) -> DataRef:
     """``ref`` with the classes ``drop`` and ``negatives`` removed, images left without boxes leaving it unless
-    their boxes were all of ``negatives`` (:func:`curate.core.load.with_classes`), both in its identity."""
+    their boxes were all of ``negatives`` (:func:`ground.data.load.with_classes`), both in its identity."""
     identity = {**ref.identity, "drop": list(drop), "negative_classes": list(negatives)}
     return replace(ref, identity=identity, drop=tuple(drop), negatives=tuple(negatives))
 

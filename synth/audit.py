@@ -19,7 +19,7 @@ from typing import Any
 import cv2
 import numpy as np
 
-from curate.core.boxes import box_iou_xyxy, mask_to_xywh, xywh_to_xyxy
+from ground.data.boxes import box_iou_xyxy, mask_to_xywh, xywh_to_xyxy
 
 
 def _summary(ious: list[float], images: int) -> dict[str, Any]:

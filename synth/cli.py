@@ -9,12 +9,12 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from curate.core.cluster import EXECUTOR_CHOICES, open_cluster
-from curate.core.commands import add_command
-from curate.core.options import Alias
+from ground.cli.commands import add_command
+from ground.cli.options import Alias
+from ground.run.cluster import EXECUTOR_CHOICES, open_cluster
 
 if TYPE_CHECKING:
-    from curate.core.writer import WriteResult
+    from ground.data.writer import WriteResult
     from synth.method_config import MethodConfig
 
 
@@ -28,8 +28,8 @@ def parse_size(text: str) -> tuple[int, int]:
 
 
 def cmd_flames(args: argparse.Namespace) -> int:
-    from curate.core.options import config_from_args, print_config
-    from curate.core.progress import progress
+    from ground.cli.options import config_from_args, print_config
+    from ground.run.progress import progress
     from synth.flames.library import FlameLibraryConfig, build_library
     from synth.flames.preview import write_preview
     from synth.flames.sprites import save_sequence
@@ -51,8 +51,8 @@ def cmd_flames(args: argparse.Namespace) -> int:
 def cmd_cutouts(args: argparse.Namespace) -> int:
     import sys
 
-    from curate.core.commands import print_problems, read_from_args
-    from curate.core.load import SplitError, pick_split
+    from ground.cli.commands import print_problems, read_from_args
+    from ground.data.load import SplitError, pick_split
     from synth.flames.cutouts import cutouts, write_cutouts
 
     if args.min_side < 1 or not 0.0 <= args.min_cover <= 1.0:
@@ -152,8 +152,8 @@ METHOD2_ALIASES: tuple[Alias, ...] = (
 def _built(args: argparse.Namespace, schema: type, aliases: Sequence[Alias]):
     """The config of a dataset command, or None after ``--print-config`` printed it; the output folder and the
     places are checked before the flame library is made."""
-    from curate.core.options import config_from_args, print_config
-    from curate.core.writer import check_output_target
+    from ground.cli.options import config_from_args, print_config
+    from ground.data.writer import check_output_target
     from synth.places.envfile import find_environment_files
 
     cfg = config_from_args(args, schema, aliases)
@@ -247,7 +247,7 @@ def cmd_gap(args: argparse.Namespace) -> int:
     import numpy as np
 
     from curate.cli.dedup import load_model_from_args, model_from_args
-    from curate.core.commands import print_problems
+    from ground.cli.commands import print_problems
     from synth.gap import (
         dataset_boxes,
         dataset_images,
@@ -301,9 +301,9 @@ def cmd_gap(args: argparse.Namespace) -> int:
 def cmd_colour(args: argparse.Namespace) -> int:
     import sys
 
-    from curate.core.commands import print_problems
-    from curate.core.formats.registry import read_dataset
-    from curate.core.load import pick_split
+    from ground.cli.commands import print_problems
+    from ground.data.formats.registry import read_dataset
+    from ground.data.load import pick_split
     from synth.flames.measure import flame_colour
 
     sides = {"synthetic": (args.synthetic, args.synthetic_split), "real": (args.real, args.real_split)}
@@ -373,7 +373,7 @@ def _method2_config() -> type:
 
 
 def _register_flames(sub: argparse._SubParsersAction) -> None:
-    from curate.core.options import add_config_options
+    from ground.cli.options import add_config_options
 
     p = add_command(
         sub,
@@ -392,7 +392,7 @@ def _register_flames(sub: argparse._SubParsersAction) -> None:
 
 
 def _register_cutouts(sub: argparse._SubParsersAction) -> None:
-    from curate.core.commands import add_reader_args
+    from ground.cli.commands import add_reader_args
 
     p = add_command(
         sub,
@@ -439,7 +439,7 @@ def _dataset_arguments(
 ) -> None:
     """Method 1 and Method 2's options: the run's own (--out, --overwrite, --workers) and the settings (``schema``
     imports the config class only when the help is printed)."""
-    from curate.core.options import add_config_options
+    from ground.cli.options import add_config_options
 
     p.add_argument("--out", type=Path, help="output dataset folder (required unless --print-config)")
     p.add_argument("--overwrite", action="store_true", help="replace a fuzzyfire dataset already at --out")

@@ -23,12 +23,12 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from curate.core.imageio import ImageError, read_image
-from curate.core.problems import Problem
 from curate.embed import OnnxEmbedder, l2_normalize
 from curate.embedcache import EmbeddingCache
 from curate.frechet import Gap, gap_interval
 from curate.scan import list_image_files, scan_images
+from ground.data.problems import Problem
+from ground.image.imageio import ImageError, read_image
 
 
 @dataclass(frozen=True)
@@ -97,8 +97,8 @@ class GapReport:
 def dataset_images(path: Path, split: str | None = None, fmt: str = "auto") -> list[Path]:
     """Image paths of the dataset at ``path`` (any format the toolkit reads), of ``split`` when given;
     ``fmt="images"``: every image file under the folder (no labels needed)."""
-    from curate.core.formats.registry import read_dataset
-    from curate.core.load import pick_split
+    from ground.data.formats.registry import read_dataset
+    from ground.data.load import pick_split
 
     if fmt == "images":
         if split is not None:
@@ -153,9 +153,9 @@ def dataset_boxes(
 ) -> list[tuple[Path, list[tuple[float, float, float, float]]]]:
     """(image path, its ``category`` boxes [x, y, w, h] in pixels) of every image of the dataset at ``path`` (of
     ``split`` when given) that has such a box; ValueError when there is none (or ``fmt`` is ``images``)."""
-    from curate.core.classes import canonical_class
-    from curate.core.formats.registry import read_dataset
-    from curate.core.load import pick_split
+    from ground.data.classes import canonical_class
+    from ground.data.formats.registry import read_dataset
+    from ground.data.load import pick_split
 
     if fmt == "images":
         raise ValueError(f"{path}: crops need boxes, a plain folder of images has none")
@@ -212,7 +212,7 @@ def embed_crops(
 ) -> ImageSet:
     """L2-normalised embeddings (N, D) of every box of ``items`` (from :func:`dataset_boxes`) cut out by
     :func:`crop_box` and resized by ``embedder.preprocess``; unreadable images are kept as problems."""
-    from curate.core.progress import progress
+    from ground.run.progress import progress
 
     pending: list[NDArray[np.uint8]] = []
     vectors: list[NDArray[np.float32]] = []

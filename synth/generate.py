@@ -15,9 +15,9 @@ from typing import Any
 
 import cv2
 
-from curate.core.cluster import Cluster
-from curate.core.progress import progress
-from curate.core.writer import WriteResult, check_output_target
+from ground.data.writer import WriteResult, check_output_target
+from ground.run.cluster import Cluster
+from ground.run.progress import progress
 from synth import method1, method2
 from synth.flames.sprites import SpriteSequence
 from synth.method_config import MethodConfig
@@ -203,7 +203,7 @@ def generate(
 
     ``cfg.method`` names the source tag (``synth:<method>``) and the command in the manifest; its places are
     read through :meth:`~synth.method_config.MethodConfig.places`. The output folder, the environment files and
-    the background photos are checked before anything is rendered (:class:`~curate.core.writer.OutputError`,
+    the background photos are checked before anything is rendered (:class:`~ground.data.writer.OutputError`,
     FileNotFoundError, ValueError). A run that fails or is interrupted keeps the images it finished in the
     staging folder and says so (the same command resumes from them); one that finished none leaves nothing behind. ``workers`` > 1: images are made in up to that many processes (at
     least :data:`MIN_IMAGES_PER_WORKER` images each), each on whole blocks of views (:func:`blocks`); every image

@@ -28,7 +28,7 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from curate.core.boxes import clip_xyxy, mask_to_xywh, points_to_xyxy, xyxy_to_xywh
+from ground.data.boxes import clip_xyxy, mask_to_xywh, points_to_xyxy, xyxy_to_xywh
 from synth.compose.effects import Effects, apply_effects, expose, sample_effects
 from synth.flames.sprites import Sprite, SpriteSequence, flatten_rgba
 from synth.method_config import MethodConfig

@@ -18,7 +18,7 @@ from typing import ClassVar
 import numpy as np
 from numpy.typing import NDArray
 
-from curate.core.boxes import mask_to_xywh, xywh_overlaps_any
+from ground.data.boxes import mask_to_xywh, xywh_overlaps_any
 from synth.compose.composite import BLEND_MODES, Placement, composite
 from synth.compose.effects import Effects, apply_effects, expose, sample_effects, scale_light
 from synth.compose.metering import draw_radiance, flame_share, mean_linear_luma, metered_gain

@@ -4,7 +4,7 @@ Each image ``i`` is staged in ``<out>/../.<out name>.parts/`` as ``images/NNNNNN
 (uint8 instance map: value k = the k-th fire box of the image, 0 = none; ``NNNNNN.smoke.png`` likewise for the
 smoke boxes when smoke is a class) and ``records/NNNNNN.json`` (written
 last, so its presence marks the image complete: an interrupted run resumes there). :func:`finish` writes the
-dataset with ``curate.core.writer.write_dataset`` (COCO + YOLO + manifest with per-image metadata), copies the masks
+dataset with ``ground.data.writer.write_dataset`` (COCO + YOLO + manifest with per-image metadata), copies the masks
 to ``<out>/masks/`` beside the image names and draws a contact sheet.
 """
 
@@ -23,9 +23,9 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from curate.core.boxes import mask_to_xywh
-from curate.core.dataset import Dataset, DatasetBuilder
-from curate.core.writer import WriteResult, plan_image_names, write_dataset
+from ground.data.boxes import mask_to_xywh
+from ground.data.dataset import Dataset, DatasetBuilder
+from ground.data.writer import WriteResult, plan_image_names, write_dataset
 
 CATEGORIES: tuple[str, ...] = ("fire", "smoke")
 

@@ -31,10 +31,10 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from curate.core.formats.common import list_images
-from curate.core.imageio import ImageError, read_image, unit_to_u8
-from curate.core.progress import progress
-from curate.core.writer import WriteResult, plan_image_names, write_dataset
+from ground.data.formats.common import list_images
+from ground.data.writer import WriteResult, plan_image_names, write_dataset
+from ground.image.imageio import ImageError, read_image, unit_to_u8
+from ground.run.progress import progress
 from synth.compose.composite import BLEND_MODES, Placement, composite
 from synth.compose.effects import apply_effects, sample_effects
 from synth.flames.simulate import generate_sequence, sample_params

@@ -32,7 +32,7 @@ def split_folder(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """A COCO folder of 10 painted images (classes fire, smoke): ids 1-6 in split train, 7-10 in test."""
     from factories_train import painted_dataset
 
-    from curate.core.writer import write_dataset
+    from ground.data.writer import write_dataset
 
     root = tmp_path_factory.mktemp("split")
     ds = painted_dataset(root / "src", 10, seed=0)
@@ -95,8 +95,8 @@ def ray_head():
 
 @pytest.fixture()
 def cluster(ray_head: str):
-    """A :class:`curate.core.cluster.Cluster` joined to :func:`ray_head`, closed after the test."""
-    from curate.core.cluster import Cluster
+    """A :class:`ground.run.cluster.Cluster` joined to :func:`ray_head`, closed after the test."""
+    from ground.run.cluster import Cluster
 
     with Cluster(ray_head) as joined:
         yield joined

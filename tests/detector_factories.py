@@ -18,7 +18,7 @@ import onnx
 from onnx import TensorProto, helper, numpy_helper
 from PIL import Image
 
-from curate.core.dataset import DatasetBuilder
+from ground.data.dataset import DatasetBuilder
 
 SIZE = 64
 NAMES = ("fire", "smoke")
@@ -36,7 +36,7 @@ class TestImage:
     boxes: tuple[tuple[str, tuple[float, float, float, float]], ...]  # (class, xywh original pixels)
 
 
-# Letterbox geometry into 64x64 written out by hand (independent of curate.core.boxes).
+# Letterbox geometry into 64x64 written out by hand (independent of ground.data.boxes).
 IMAGES = (
     TestImage("wide", 64, 32, 40, (1.0, 1.0), (0, 16), (("fire", (4, 2, 20, 10)), ("smoke", (30, 8, 16, 16)))),
     TestImage("tall", 30, 60, 80, (32 / 30, 64 / 60), (16, 0), (("fire", (6, 12, 15, 30)),)),

@@ -8,8 +8,8 @@ from pathlib import Path
 import numpy as np
 from PIL import Image
 
-from curate.core.dataset import Dataset, DatasetBuilder
-from curate.core.writer import write_dataset
+from ground.data.dataset import Dataset, DatasetBuilder
+from ground.data.writer import write_dataset
 
 
 def write_image(path: Path, width: int, height: int, seed: int = 0, fmt: str | None = None) -> Path:

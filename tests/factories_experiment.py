@@ -11,8 +11,8 @@ import numpy as np
 import yaml
 from PIL import Image
 
-from curate.core.config import build_config
 from fuzzyfire.experiment_config import ExperimentConfig
+from ground.config.loader import build_config
 
 SIZE = {"width": 64, "height": 48}
 FLAMES = {"sequences": 2, "frames": 48, "keep_every": 12}

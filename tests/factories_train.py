@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 from PIL import Image
 
-from curate.core.dataset import Dataset, DatasetBuilder
+from ground.data.dataset import Dataset, DatasetBuilder
 
 COLOURS = {"fire": (250, 120, 20), "smoke": (40, 90, 250)}
 

@@ -64,8 +64,8 @@ def test_curate_refuses_bad_config_and_unsafe_out(config: Path, tmp_path: Path, 
 
 
 def test_shared_config_parses() -> None:
-    from curate.core.config import load_config
     from curate.curation import CurateConfig
+    from ground.config.loader import load_config
 
     cfg = load_config(Path(__file__).parents[1] / "configs" / "curate-shared.yaml", CurateConfig)
     assert [s.name for s in cfg.sources] == ["fire-cctv-416", "fire-smoke-608"]

@@ -8,8 +8,8 @@ from pathlib import Path
 import pytest
 from factories import tiny_pool
 
-from curate.core.dataset import Dataset
 from fuzzyfire.cli import main
+from ground.data.dataset import Dataset
 
 
 @pytest.fixture(scope="module")
@@ -19,7 +19,7 @@ def pools(tmp_path_factory: pytest.TempPathFactory) -> tuple[Dataset, Dataset]:
 
 
 def test_cli_writes_grid_per_seed(pools: tuple[Dataset, Dataset], tmp_path: Path) -> None:
-    from curate.core.writer import write_dataset
+    from ground.data.writer import write_dataset
 
     real, synth = pools
     write_dataset(real, tmp_path / "real", ("coco",), "copy")
@@ -35,7 +35,7 @@ def test_cli_writes_grid_per_seed(pools: tuple[Dataset, Dataset], tmp_path: Path
 def test_cli_val_option(pools: tuple[Dataset, Dataset], tmp_path: Path) -> None:
     import yaml
 
-    from curate.core.writer import write_dataset
+    from ground.data.writer import write_dataset
 
     real, synth = pools
     write_dataset(real, tmp_path / "real", ("coco", "yolo"), "copy")
@@ -55,7 +55,7 @@ def _split_pools(pools: tuple[Dataset, Dataset], root: Path) -> tuple[Path, Path
     """The real pool written with train/valid splits, the synthetic one without splits."""
     from dataclasses import replace
 
-    from curate.core.writer import write_dataset
+    from ground.data.writer import write_dataset
 
     real, synth = pools
     real = replace(real, images=tuple(replace(i, split="train" if i.id % 4 else "valid") for i in real.images))

@@ -93,8 +93,8 @@ CROSS_BUILD_NOISE = 3.4e-6
 
 @pytest.fixture(scope="module")
 def shared_curation(shared_data: Path, embedder: OnnxEmbedder, tmp_path_factory: pytest.TempPathFactory):
-    from curate.core.config import load_config
     from fuzzyfire.experiment_config import ExperimentConfig
+    from ground.config.loader import load_config
 
     configs = Path(__file__).resolve().parents[1] / "configs"
     cfg = load_config(configs / "shared-data.yaml", ExperimentConfig).real.curate_config()
@@ -109,7 +109,7 @@ def _picked(result) -> list[tuple[str, str]]:
 @pytest.mark.slow
 @pytest.mark.shared_data
 def test_shared_curation_is_the_one_the_findings_state(shared_curation) -> None:
-    from curate.core.fingerprint import fingerprint
+    from ground.data.fingerprint import fingerprint
 
     *_, result = shared_curation
     assert fingerprint(result.dataset).describe() == SHARED_CURATION

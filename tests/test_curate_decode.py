@@ -10,9 +10,9 @@ import numpy as np
 import pytest
 from curate_helpers import save, scene, use_session_cache
 
-from curate.core.problems import Problem
 from curate.decode import embed_batch, pixel_hash, sharpness
 from curate.embed import load_embedder
+from ground.data.problems import Problem
 
 
 def test_pixel_hash_sees_pixels_not_bytes() -> None:
@@ -58,7 +58,7 @@ def test_a_jpeg_with_extraneous_header_bytes_is_named_and_keeps_its_content_hash
     clean, bad = extraneous_jpeg()
     (tmp_path / "clean.jpg").write_bytes(clean)
     (tmp_path / "bad.jpg").write_bytes(bad)
-    with caplog.at_level(logging.WARNING, logger="curate.core.imageio"):
+    with caplog.at_level(logging.WARNING, logger="ground.image.imageio"):
         facts = {name: decode_facts(tmp_path / name, None) for name in ("clean.jpg", "bad.jpg")}
     assert [r.getMessage() for r in caplog.records] == [
         f"{tmp_path / 'bad.jpg'}: corrupt JPEG data (1 extraneous bytes before marker 0xdb)"

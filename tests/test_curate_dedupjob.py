@@ -7,11 +7,11 @@ from pathlib import Path
 import pytest
 from curate_helpers import save, scene, transformed, use_session_cache
 
-from curate.core.problems import Problem
 from curate.dedupjob import apply_selection, dedup_document, dedup_options, run_dedup, unreadable_summary
 from curate.embed import load_embedder
 from curate.scan import list_image_files
 from curate.settings import RankConfig
+from ground.data.problems import Problem
 
 
 def test_document_counts_and_selection(tmp_path: Path, tmp_path_factory: pytest.TempPathFactory) -> None:

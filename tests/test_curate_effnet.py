@@ -7,9 +7,9 @@ import pytest
 import torch
 from curate_helpers import GRACE_HOPPER
 
-from curate.core.imageio import read_image
 from curate.effnet import EMBED_DIM, EfficientNetLite0, SameConv, efficientnet_lite0
 from curate.embed import Preprocess
+from ground.image.imageio import read_image
 
 IMAGENET = Preprocess(size=224)  # the resolution the weights were trained at, no blur
 

@@ -9,7 +9,6 @@ import pytest
 import torch
 from curate_helpers import GRACE_HOPPER, scene, use_session_cache
 
-from curate.core.imageio import read_image
 from curate.effnet import efficientnet_lite0
 from curate.embed import (
     LITE0_PREPROCESS,
@@ -19,6 +18,7 @@ from curate.embed import (
     l2_normalize,
     load_embedder,
 )
+from ground.image.imageio import read_image
 
 
 @pytest.fixture(scope="module")

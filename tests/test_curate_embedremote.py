@@ -16,12 +16,12 @@ import pytest
 from curate_helpers import save, scene, transformed, use_session_cache
 
 from curate import embedremote
-from curate.core.cluster import Cluster, ClusterError
 from curate.dedupjob import dedup_options, run_dedup
 from curate.embed import OnnxEmbedder, load_embedder
 from curate.embedremote import TASKS_PER_GPU, task_gpus
 from curate.scan import list_image_files, scan_images
 from fuzzyfire.cli import main
+from ground.run.cluster import Cluster, ClusterError
 
 pytestmark = pytest.mark.slow
 

@@ -8,8 +8,6 @@ from pathlib import Path
 import pytest
 from factories import tiny_pool
 
-from curate.core.dataset import Dataset
-from curate.core.formats.coco import read_coco
 from curate.mix import (
     MixError,
     Mixture,
@@ -21,6 +19,8 @@ from curate.mix import (
     real_subset,
     write_mixture,
 )
+from ground.data.dataset import Dataset
+from ground.data.formats.coco import read_coco
 
 
 @pytest.fixture(scope="module")
@@ -117,7 +117,7 @@ def test_written_mixture_is_byte_identical_and_references_images(
 def test_data_yaml_val_names_a_yolo_validation_set(pools: tuple[Dataset, Dataset], tmp_path: Path) -> None:
     import yaml
 
-    from curate.core.writer import write_dataset
+    from ground.data.writer import write_dataset
 
     real, synth = pools
     default = write_mixture(real, synth, Mixture(4, 4), 0, tmp_path / "default")
@@ -132,7 +132,7 @@ def test_data_yaml_val_names_a_yolo_validation_set(pools: tuple[Dataset, Dataset
 
 
 def test_unusable_validation_sets_are_refused(pools: tuple[Dataset, Dataset], tmp_path: Path) -> None:
-    from curate.core.writer import write_dataset
+    from ground.data.writer import write_dataset
 
     real, synth = pools
     with pytest.raises(MixError, match="no YOLO label files"):  # COCO only: ultralytics finds no labels

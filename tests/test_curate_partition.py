@@ -8,10 +8,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from curate.core.cluster import Cluster
 from curate.embed import l2_normalize
 from curate.partition import make_task, nearest_cells, partitioned_pairs, plan_tasks, probe_cells, train_cells
 from curate.search import duplicate_pairs
+from ground.run.cluster import Cluster
 
 RADIUS = 0.45
 
@@ -120,7 +120,7 @@ def test_the_same_pairs_and_bits_for_any_thread_count_and_task_size(monkeypatch:
 
 
 class _InProcess:
-    """The part of :class:`curate.core.cluster.Cluster` the partitioned search uses, run here: probes in tasks of
+    """The part of :class:`ground.run.cluster.Cluster` the partitioned search uses, run here: probes in tasks of
     ``ASSIGN_ROWS`` as on a cluster, results yielded last task first (a cluster yields them as they finish)."""
 
     def put(self, value: object) -> object:

@@ -79,7 +79,7 @@ def test_rerun_hits_cache_with_identical_vectors(folder: Path, embedder: OnnxEmb
 def test_a_garbled_jpeg_cached_by_an_older_reader_is_still_refused(
     folder: Path, embedder: OnnxEmbedder, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    import curate.core.imageio as imageio
+    import ground.image.imageio as imageio
 
     paths = [folder / "garbled.jpg", folder / "s0.jpg"]
     with monkeypatch.context() as older:  # a reader without the scan-data check caches the grey decode
@@ -106,7 +106,7 @@ def test_big_jpegs_decode_reduced_with_the_same_near_duplicates(embedder: OnnxEm
     near-duplicate pairs; facts keep the full size."""
     import cv2
 
-    from curate.core.imageio import read_image
+    from ground.image.imageio import read_image
 
     def pairs(v: np.ndarray, threshold: float) -> set[tuple[int, int]]:
         d = np.linalg.norm(v[:, None] - v[None], axis=2)

@@ -1,7 +1,7 @@
 from factories import write_yolo_dataset
 
-from curate.core.formats.yolo import read_yolo
 from curate.stats import dataset_stats, plot_box_sizes, relative_box_sizes
+from ground.data.formats.yolo import read_yolo
 
 
 def test_counts(tmp_path):

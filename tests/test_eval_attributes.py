@@ -8,7 +8,6 @@ import cv2
 import numpy as np
 import pytest
 
-from curate.core.dataset import DatasetBuilder
 from eval.attributes import (
     AttributesError,
     dataset_attributes,
@@ -17,6 +16,7 @@ from eval.attributes import (
     merged,
     read_attributes_csv,
 )
+from ground.data.dataset import DatasetBuilder
 
 NONE = np.zeros((0, 4))
 

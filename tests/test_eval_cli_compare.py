@@ -11,8 +11,8 @@ import json
 import pytest
 from detector_factories import layout_and_two_detectors, oracle_model, rows_for, write_test_set
 
-from curate.core.holdout import content_fraction
 from fuzzyfire.cli import main
+from ground.data.holdout import content_fraction
 
 
 @pytest.fixture(scope="module")

@@ -8,9 +8,9 @@ import argparse
 import pytest
 from detector_factories import oracle_model
 
-from curate.core.config import ConfigError
 from eval.cli import options as O
 from eval.config import PredictConfig, ScoreConfig
+from ground.config.loader import ConfigError
 
 
 def test_parsers():

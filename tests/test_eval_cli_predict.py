@@ -13,10 +13,10 @@ import pytest
 from detector_factories import IMAGES, oracle_model, rows_for, write_test_set
 from detector_factories import TestImage as Still
 
-from curate.core.boxes import xywh_to_xyxy
-from curate.core.imageio import read_image
 from eval.draw import draw_detections, line_width
 from fuzzyfire.cli import main
+from ground.data.boxes import xywh_to_xyxy
+from ground.image.imageio import read_image
 
 NAMES = ["fire", "smoke"]
 PICKED = {"wide": "a/wide.png", "big": "a/b/big.png", "neg1": "neg1.png"}  # 3 images, nested folders

@@ -11,8 +11,8 @@ from detector_factories import IMAGES, NAMES, layout_and_two_detectors, oracle_m
 from pycocotools.coco import COCO
 from pycocotools.cocoeval import COCOeval
 
-from curate.core.holdout import held_out
 from fuzzyfire.cli import main
+from ground.data.holdout import held_out
 
 
 @pytest.fixture(scope="module")
@@ -209,8 +209,8 @@ def test_a_folder_of_images_without_labels_is_scored_as_negatives(work, tmp_path
 def test_errors_out_draws_the_worst_false_alarms_and_misses(work, tmp_path):
     from detector_factories import to_input_cxcywh
 
-    from curate.core.imageio import read_image
     from eval.draw import GROUND_TRUTH, PREDICTION
+    from ground.image.imageio import read_image
 
     imgs = {i.name: i for i in IMAGES}
     missed_box = imgs["big"].boxes[1][1]  # (70, 72, 40, 40): its row left out

@@ -4,11 +4,11 @@ from __future__ import annotations
 
 import pytest
 
-from curate.core.config import build_config, to_dict
-from curate.core.detections import PostprocessConfig
 from eval import config as C
 from eval.errors import ALARM_CONF
 from eval.operating import ALARM_BUDGET
+from ground.config.loader import build_config, to_dict
+from ground.detect.detections import PostprocessConfig
 
 
 def test_defaults_score_as_coco_does_and_draw_at_an_alarms_confidence() -> None:

@@ -9,11 +9,11 @@ import numpy as np
 import pytest
 from factories import write_image
 
-from curate.core.dataset import DatasetBuilder
-from curate.core.imageio import read_image
 from eval import error_pictures as E
 from eval.draw import GROUND_TRUTH, PREDICTION
 from eval.errors import ErrorCase
+from ground.data.dataset import DatasetBuilder
+from ground.image.imageio import read_image
 
 
 @pytest.mark.parametrize(("w", "h", "k"), [(64, 32, 10), (640, 480, 1), (100, 300, 3), (2000, 10, 1), (639, 1, 2)])

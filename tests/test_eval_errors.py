@@ -6,9 +6,9 @@ from __future__ import annotations
 import pytest
 from factories import planted_dataset
 
-from curate.core.cocoeval import run_cocoeval
-from curate.core.dataset import DatasetBuilder
 from eval.errors import ERROR_TYPES, error_breakdown
+from ground.data.dataset import DatasetBuilder
+from ground.detect.cocoeval import run_cocoeval
 
 FIRE, SMOKE = 1, 2
 

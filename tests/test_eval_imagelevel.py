@@ -8,7 +8,6 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from curate.core.dataset import DatasetBuilder
 from eval.imagelevel import (
     ImageHits,
     image_alarms,
@@ -18,6 +17,7 @@ from eval.imagelevel import (
     paired_image_recall,
 )
 from eval.operating import Alarms, alarms_of
+from ground.data.dataset import DatasetBuilder
 
 
 def _set(tmp_path: Path):

@@ -8,8 +8,6 @@ import numpy as np
 import pytest
 from factories import planted_dataset
 
-from curate.core.cocoeval import run_cocoeval
-from curate.core.dataset import DatasetBuilder
 from eval.operating import (
     Alarms,
     FoundScores,
@@ -21,6 +19,8 @@ from eval.operating import (
     pooled,
     recall_at_rates,
 )
+from ground.data.dataset import DatasetBuilder
+from ground.detect.cocoeval import run_cocoeval
 
 FIRE, SMOKE = 1, 2
 

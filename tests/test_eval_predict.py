@@ -8,13 +8,13 @@ import numpy as np
 import pytest
 from detector_factories import IMAGES, oracle_model, write_test_set
 
-from curate.core.boxes import xyxy_to_xywh
-from curate.core.detections import PostprocessConfig
-from curate.core.formats.registry import read_dataset
-from curate.core.imageio import read_image
 from eval.config import InferenceConfig
 from eval.onnx_model import OnnxDetector
 from eval.predict import _loader, detect_images, predict_dataset
+from ground.data.boxes import xyxy_to_xywh
+from ground.data.formats.registry import read_dataset
+from ground.detect.detections import PostprocessConfig
+from ground.image.imageio import read_image
 
 
 @pytest.fixture(scope="module")
@@ -71,7 +71,7 @@ def test_decoded_images_get_the_detections_their_files_get(setup, batch):
 
 
 def test_decoding_threads_fill_the_batch_exactly_as_to_nchw_float(setup):
-    from curate.core.letterbox import letterbox_image, to_nchw_float
+    from ground.detect.letterbox import letterbox_image, to_nchw_float
 
     ds, det = setup
     spec = det.spec

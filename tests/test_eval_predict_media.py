@@ -7,10 +7,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from curate.core.cocoeval import ClassMatch, detection_records
-from curate.core.detections import ImageDetections, Predictions
-from curate.core.problems import Problem
 from eval import predict_media as M
+from ground.data.problems import Problem
+from ground.detect.cocoeval import ClassMatch, detection_records
+from ground.detect.detections import ImageDetections, Predictions
 
 
 def _det(boxes, scores, labels) -> ImageDetections:
@@ -77,7 +77,7 @@ def test_keep_classes_and_records_round_as_score_does():
 
 
 def test_write_image_encodes_by_suffix(tmp_path):
-    from curate.core.imageio import read_image
+    from ground.image.imageio import read_image
 
     rgb = np.zeros((10, 12, 3), np.uint8)
     rgb[:, :6] = (250, 10, 10)

@@ -6,7 +6,6 @@ import numpy as np
 from detector_factories import write_test_set
 from PIL import Image
 
-from curate.core.formats.registry import read_dataset
 from eval.report import (
     figure_html,
     render_page,
@@ -16,6 +15,7 @@ from eval.report import (
     write_study_report,
 )
 from eval.tables import table2
+from ground.data.formats.registry import read_dataset
 
 
 def test_table_html_marks_best_and_second():

@@ -27,8 +27,8 @@ def test_split_selection(work):
 
 
 def test_default_split_is_test_then_val_never_train_silently(tmp_path):
-    from curate.core.dataset import DatasetBuilder
     from eval.score import default_split
+    from ground.data.dataset import DatasetBuilder
 
     def dataset(splits: tuple[str, ...]):
         builder = DatasetBuilder(tmp_path, ["fire"])
@@ -90,8 +90,8 @@ def test_metrics_are_pycocotools_numbers_on_the_records_written(work):
     from pycocotools.coco import COCO
     from pycocotools.cocoeval import COCOeval
 
-    from curate.core.cocoeval import LOOSE_IOU, evaluate_predictions
-    from curate.core.detections import ImageDetections
+    from ground.detect.cocoeval import LOOSE_IOU, evaluate_predictions
+    from ground.detect.detections import ImageDetections
 
     _, test, det = work
     ds = load_test_set(test).dataset
@@ -138,7 +138,7 @@ def test_metrics_are_pycocotools_numbers_on_the_records_written(work):
 
 
 def test_records_are_built_from_the_evaluated_detections(work):
-    from curate.core.cocoeval import evaluate_predictions
+    from ground.detect.cocoeval import evaluate_predictions
 
     _, test, det = work
     ds = load_test_set(test).dataset

@@ -8,11 +8,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from curate.core.cocoeval import LOOSE_IOU, run_cocoeval
-from curate.core.dataset import DatasetBuilder
 from eval.imagelevel import image_hits
 from eval.slices import Side, compare_slices, holm, make_slices
 from eval.stats import MatchTable
+from ground.data.dataset import DatasetBuilder
+from ground.detect.cocoeval import LOOSE_IOU, run_cocoeval
 
 
 def test_small_slices_merge_with_their_smaller_neighbour_or_into_other() -> None:

@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from curate.core.cocoeval import run_cocoeval
-from curate.core.dataset import DatasetBuilder
 from eval.stats import MatchTable, bootstrap_ap, mean_std, paired_bootstrap, resample_weights
+from ground.data.dataset import DatasetBuilder
+from ground.detect.cocoeval import run_cocoeval
 
 
 def test_mean_std_is_the_sample_std():

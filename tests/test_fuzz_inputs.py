@@ -178,7 +178,7 @@ def test_validate_names_every_bad_file_and_reads_every_good_one(fuzz, validated)
 
 
 def test_crlf_bom_polygon_rows_and_rotation_read_like_any_other(fuzz):
-    from curate.core.formats.yolo import read_yolo
+    from ground.data.formats.yolo import read_yolo
 
     result = read_yolo(fuzz["yolo"])
     ds = result.dataset

@@ -14,10 +14,6 @@ from typing import Any
 import pytest
 from factories_experiment import toy_dict
 
-from curate.core.cocoeval import run_cocoeval
-from curate.core.config import build_config
-from curate.core.dataset import DatasetBuilder
-from curate.core.formats.coco import read_coco
 from eval.stats import MatchTable
 from fuzzyfire.aggregate import comparisons, table_text
 from fuzzyfire.controls import (
@@ -32,6 +28,10 @@ from fuzzyfire.controls import (
 from fuzzyfire.datasets import Datasets
 from fuzzyfire.experiment import grid_entries, needed_methods, prepare_data, write_mixtures
 from fuzzyfire.experiment_config import ExperimentConfig, ExperimentConfigError
+from ground.config.loader import build_config
+from ground.data.dataset import DatasetBuilder
+from ground.data.formats.coco import read_coco
+from ground.detect.cocoeval import run_cocoeval
 
 SEEDS = [0, 1]
 

@@ -16,8 +16,6 @@ from factories import tiny_pool
 from factories_experiment import toy_dict
 
 import fuzzyfire.stages as stages
-from curate.core.config import build_config
-from curate.core.formats.coco import read_coco
 from fuzzyfire.cutout_pools import cutout_pools, cutout_stage, simulated
 from fuzzyfire.datasets import Datasets
 from fuzzyfire.experiment import (
@@ -29,6 +27,8 @@ from fuzzyfire.experiment import (
     write_mixtures,
 )
 from fuzzyfire.experiment_config import ExperimentConfig
+from ground.config.loader import build_config
+from ground.data.formats.coco import read_coco
 
 CONFIGS = Path(__file__).resolve().parents[1] / "configs"
 SEEDS = [0, 1]

@@ -7,10 +7,10 @@ from pathlib import Path
 
 import pytest
 
-import curate.core.formats.registry as registry
-from curate.core.load import SplitError
+import ground.data.formats.registry as registry
 from fuzzyfire.datasets import DataRef, Datasets, load_data
 from fuzzyfire.stages import folder_ref
+from ground.data.load import SplitError
 
 
 @pytest.fixture
@@ -61,7 +61,7 @@ def test_a_dataset_read_under_other_aliases_is_another_read(split_folder: Path, 
 def test_a_holdout_share_keeps_exactly_the_held_out_photos(tmp_path: Path) -> None:
     from factories_experiment import fire_free_photos
 
-    from curate.core.holdout import held_out, held_out_images
+    from ground.data.holdout import held_out, held_out_images
 
     folder = fire_free_photos(tmp_path / "photos", 10)
     ref = folder_ref(folder, tmp_path, "auto", {}, (), None, 0.5)
@@ -91,7 +91,7 @@ def test_a_label_declares_a_folder_image_labelled_and_a_stand_in_is_read_at_the_
     from factories import write_image
     from factories_experiment import fire_free_photos
 
-    from curate.core.dataset import DatasetBuilder
+    from ground.data.dataset import DatasetBuilder
 
     folder = fire_free_photos(tmp_path / "fires", 3)
     declared = folder_ref(folder, tmp_path, "auto", {}, (), label="fire")

@@ -13,7 +13,6 @@ from pathlib import Path
 import pytest
 from factories_experiment import TRAIN, command_engine, run_local_and_ray, toy_dict
 
-from curate.core.config import build_config
 from fuzzyfire.cli import main
 from fuzzyfire.datasets import Datasets
 from fuzzyfire.engine import EngineConfig, EngineError
@@ -21,6 +20,7 @@ from fuzzyfire.executors import LocalExecutor
 from fuzzyfire.experiment import grid_entries, needed_methods, plan_runs, prepare_data, write_mixtures
 from fuzzyfire.experiment_config import ExperimentConfig, ExperimentConfigError
 from fuzzyfire.runs import RESULTS_FILE, execute_run
+from ground.config.loader import build_config
 
 
 def _config(**engine) -> ExperimentConfig:

@@ -49,7 +49,7 @@ def full_run(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, str, Count
     each dataset folder was read (every read of the dataset registry counted)."""
     import contextlib
 
-    import curate.core.formats.registry as registry
+    import ground.data.formats.registry as registry
 
     root = tmp_path_factory.mktemp("experiment")
     config = write_toy_config(root / "toy.yaml", fire_free=True)
@@ -228,8 +228,8 @@ def test_missing_test_split_fails_before_training(tmp_path: Path) -> None:
 
     from factories_train import painted_dataset
 
-    from curate.core.writer import write_dataset
     from fuzzyfire.experiment_config import RealConfig
+    from ground.data.writer import write_dataset
 
     ds = painted_dataset(tmp_path / "src", 6, seed=0)
     images = tuple(replace(img, split="train" if img.id <= 4 else "valid") for img in ds.images)
@@ -244,7 +244,7 @@ def _fake_yolo_study(**doc) -> ExperimentConfig:
     """One run (R12_S0, seed 0) of the fake ``yolo`` engine on the toy's stand-in, no pools, no rare set."""
     from factories_experiment import command_engine, toy_dict
 
-    from curate.core.config import build_config
+    from ground.config.loader import build_config
 
     base = {**toy_dict(mixtures=["R12_S0"], table1=[]), "rare": None, "engine": command_engine()}
     base["report"] = {"bootstrap": 0, "samples": False, "gap_draws": 0}

@@ -8,9 +8,9 @@ from pathlib import Path
 import pytest
 from conftest import REPO
 
-from curate.core.config import ConfigError, build_config, load_config
 from curate.mix import paper_grid, parse_mixture
 from fuzzyfire.experiment_config import EvalSetConfig, ExperimentConfig, ExperimentConfigError
+from ground.config.loader import ConfigError, build_config, load_config
 
 CONFIGS = REPO / "configs"
 

@@ -6,8 +6,8 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-from curate.core.load import ClassChanges
 from fuzzyfire import first_screen as fs
+from ground.data.load import ClassChanges
 
 
 def _cmp(mixture: str, baseline: str, value: float, low: float, high: float, seeds: list[float]) -> dict:

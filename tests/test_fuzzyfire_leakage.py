@@ -11,13 +11,13 @@ import pytest
 import yaml
 from factories_experiment import fire_free_photos, toy_dict
 
-import curate.core.manifest as manifest
-from curate.core.holdout import held_out
+import ground.data.manifest as manifest
 from fuzzyfire.cli import main
 from fuzzyfire.datasets import Datasets
 from fuzzyfire.experiment_config import SynthConfig
 from fuzzyfire.leakage import LeakageError, check_leakage, pool_photos
 from fuzzyfire.stages import folder_ref
+from ground.data.holdout import held_out
 from synth.method2 import Method2Config
 
 
@@ -58,8 +58,8 @@ def test_the_held_out_share_is_disjoint_from_the_pool(tmp_path: Path) -> None:
 
 def test_in_an_experiment_the_test_sets_holdout_is_the_pools_held_out_share(tmp_path: Path) -> None:
     """One key: a test set's ``holdout`` on a folder of the pool's backgrounds makes the pool hold out that share."""
-    from curate.core.config import build_config
     from fuzzyfire.experiment_config import ExperimentConfig
+    from ground.config.loader import build_config
 
     photos = fire_free_photos(tmp_path / "photos", 12)
     doc = toy_dict(mixtures=["R6_S6"], table1=[])
@@ -87,7 +87,7 @@ def test_the_experiment_refuses_leakage_before_building_a_pool(tmp_path: Path, c
 def test_labelled_frames_are_pool_photos_too(tmp_path: Path) -> None:
     from factories import write_frames
 
-    from curate.core.load import load_split
+    from ground.data.load import load_split
 
     frames = write_frames(tmp_path)
     synth = SynthConfig(method2=Method2Config(scenes=0, labelled_frames=(Path("frames"),)))
@@ -104,10 +104,10 @@ def test_test_images_that_are_training_images_are_found_and_named(
     too; the real set's own test split is checked against its splits only, not the folders it was curated from."""
     from curate_helpers import save, scene, transformed, use_session_cache
 
-    from curate.core.dataset import DatasetBuilder
     from curate.embed import load_embedder
     from curate.scan import scan_images
     from fuzzyfire.leakage import find_test_leaks, reference_images, write_leaks
+    from ground.data.dataset import DatasetBuilder
 
     use_session_cache(tmp_path_factory)
     train = DatasetBuilder(tmp_path / "train", ["fire"])

@@ -18,7 +18,7 @@ def test_generated_files_match_the_dataclasses(rel: str) -> None:
 
 
 def test_every_key_of_the_command_sections_is_documented() -> None:
-    from curate.core.reference import rows
+    from ground.config.reference import rows
 
     for heading, _, cls in sections():
         missing = [r.key for r in rows(cls) if not r.doc]
@@ -26,7 +26,7 @@ def test_every_key_of_the_command_sections_is_documented() -> None:
 
 
 def test_the_method_yamls_load_as_their_defaults() -> None:
-    from curate.core.config import load_config
+    from ground.config.loader import load_config
     from synth.method1 import Method1Config
     from synth.method2 import Method2Config
 

@@ -97,9 +97,9 @@ def _fake_yolo_run(tmp_path: Path) -> RunSpec:
     from factories_experiment import command_engine
     from factories_train import painted_dataset
 
-    from curate.core.config import build_config
-    from curate.core.writer import write_dataset
     from fuzzyfire.engine import EngineConfig
+    from ground.config.loader import build_config
+    from ground.data.writer import write_dataset
 
     write_dataset(painted_dataset(tmp_path / "src", 5, seed=0, size=(64, 64)), tmp_path / "real", ("coco",))
     (tmp_path / "mix").mkdir()

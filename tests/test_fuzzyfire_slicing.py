@@ -12,10 +12,10 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from curate.core.dataset import DatasetBuilder
 from eval.imagelevel import IMAGELEVEL
 from fuzzyfire.datasets import DataRef
 from fuzzyfire.slicing import run_hits, run_matches25, set_attributes, slices_csv, study_slices
+from ground.data.dataset import DatasetBuilder
 
 
 class Loader:
@@ -84,8 +84,8 @@ def _study_rows(tmp_path: Path, ds, ap50: float | None) -> list[dict]:
     for mixture, find_night in (("R200_S0", False), ("R200_S200", True)):
         for seed in (0, 1):
             folder = _scores(tmp_path / mixture / f"seed{seed}" / "common", ds, find_night, seed)
-            from curate.core.cocoeval import run_cocoeval
             from eval.stats import MatchTable
+            from ground.detect.cocoeval import run_cocoeval
 
             records = json.loads((folder / "predictions.json").read_text())
             MatchTable(run_cocoeval(ds, records, [1])).save(folder / "matches.npz")

@@ -118,7 +118,7 @@ def _dataset_builder(n: int, seeds: list[int]):
     """A build function writing a COCO dataset of ``n`` images whose pixels come from ``seeds`` (one per build)."""
     from dataclasses import replace
 
-    from curate.core.writer import write_dataset
+    from ground.data.writer import write_dataset
     from tests.factories import tiny_pool
 
     def build(folder: Path) -> None:
@@ -135,8 +135,8 @@ def _dataset_builder(n: int, seeds: list[int]):
 
 
 def test_a_stage_records_its_contents_and_environment(tmp_path: Path) -> None:
-    from curate.core.fingerprint import fingerprint
-    from curate.core.formats.coco import read_coco
+    from ground.data.fingerprint import fingerprint
+    from ground.data.formats.coco import read_coco
 
     stage = cached_stage(tmp_path, "data", {"n": 3}, _dataset_builder(3, [0]))
     doc = json.loads((stage.folder / STAGE_FILE).read_text())

@@ -1,6 +1,6 @@
 """The import graph, read from the source with ``ast`` (imports at module level and inside functions alike):
-no cycles between modules, packages layered ``curate <- synth, train, eval <- fuzzyfire``, and ``curate.core``
-(the floor) importing nothing from the rest of ``curate``."""
+no cycles between modules, packages layered ``ground <- curate <- synth, train, eval <- fuzzyfire``, and the ground floor
+layered by concept (docs/architecture.md)."""
 
 from __future__ import annotations
 
@@ -11,15 +11,27 @@ from pathlib import Path
 import pytest
 from conftest import REPO
 
-PACKAGES = ("curate", "synth", "train", "eval", "fuzzyfire")
+PACKAGES = ("ground", "curate", "synth", "train", "eval", "fuzzyfire")
 
-#: Which packages each package may import (itself included): ``curate <- synth, train, eval <- fuzzyfire``.
+#: Which packages each package may import (itself included):
+#: ``ground <- curate <- synth, train, eval <- fuzzyfire``.
 ALLOWED: dict[str, frozenset[str]] = {
-    "curate": frozenset({"curate"}),
-    "synth": frozenset({"curate", "synth"}),
-    "train": frozenset({"curate", "train"}),
-    "eval": frozenset({"curate", "eval"}),
+    "ground": frozenset({"ground"}),
+    "curate": frozenset({"ground", "curate"}),
+    "synth": frozenset({"ground", "curate", "synth"}),
+    "train": frozenset({"ground", "curate", "train"}),
+    "eval": frozenset({"ground", "curate", "eval"}),
     "fuzzyfire": frozenset(PACKAGES),
+}
+
+#: Inside the ground floor: which concepts each may import (itself included).
+GROUND: dict[str, frozenset[str]] = {
+    "run": frozenset({"run"}),
+    "config": frozenset({"config"}),
+    "image": frozenset({"image"}),
+    "data": frozenset({"run", "image", "data"}),
+    "detect": frozenset({"run", "image", "data", "detect"}),
+    "cli": frozenset({"run", "config", "image", "data", "cli"}),
 }
 
 
@@ -47,7 +59,7 @@ def _imports(name: str, path: Path, known: set[str]) -> Iterator[tuple[str, int]
         else:
             continue
         for target in targets:
-            while target and target not in known:  # `import curate.core.formats.coco` -> that module
+            while target and target not in known:  # `import ground.data.formats.coco` -> that module
                 target = target.rpartition(".")[0]
             if target:
                 yield target, node.lineno
@@ -110,7 +122,7 @@ def _cycles(graph: dict[str, dict[str, int]]) -> list[frozenset[str]]:
 
 
 def test_the_graph_is_read(graph: dict[str, dict[str, int]]) -> None:
-    assert "curate.core.boxes" in graph["curate.core.nms"]  # module level
+    assert "ground.data.boxes" in graph["ground.detect.nms"]  # module level
     assert "curate.effnet" in graph["curate.embed"]  # inside a function
     assert "curate.cli.dataset" in graph["curate.cli"]  # `from package import module`
 
@@ -135,14 +147,24 @@ def test_packages_import_only_the_packages_below(graph: dict[str, dict[str, int]
     assert wrong == []
 
 
-def test_curate_core_imports_nothing_from_the_rest_of_curate(graph: dict[str, dict[str, int]]) -> None:
+def test_the_ground_floor_is_layered_by_concept(graph: dict[str, dict[str, int]]) -> None:
+    """Inside the ground floor each concept imports only those below it: ``run, config, image <- data <- detect,
+    cli`` (docs/architecture.md)."""
     modules = _modules()
-    core = [name for name in graph if name == "curate.core" or name.startswith("curate.core.")]
-    assert len(core) > 15
+    floor = [name for name in graph if name.startswith("ground.") and name.count(".") >= 1]
+    assert len(floor) > 30
     wrong = [
         f"{modules[src].relative_to(REPO)}:{line}: {src} imports {dst}"
-        for src in core
+        for src in floor
         for dst, line in graph[src].items()
-        if dst.split(".")[0] == "curate" and not (dst == "curate.core" or dst.startswith("curate.core."))
+        if dst.startswith("ground.") and dst.split(".")[1] not in GROUND[src.split(".")[1]]
     ]
     assert wrong == []
+
+
+def test_every_ground_floor_module_is_used_above_it(graph: dict[str, dict[str, int]]) -> None:
+    """No module of the ground floor that no package imports (a drawer of leftovers)."""
+    used = {dst for src, edges in graph.items() if not src.startswith("ground") for dst in edges}
+    used |= {dst for src, edges in graph.items() for dst in edges if src.startswith("ground")}
+    floor = [n for n in graph if n.startswith("ground.") and not _modules()[n].name == "__init__.py"]
+    assert [n for n in floor if n not in used] == []

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from curate.core.boxes import mask_to_xywh
+from ground.data.boxes import mask_to_xywh
 from synth.compose.composite import Placement, composite
 from synth.flames.sprites import SMOKE_ALPHA, Sprite
 

@@ -9,9 +9,9 @@ import cv2
 import numpy as np
 import pytest
 
-from curate.core.formats.registry import read_dataset
-from curate.core.problems import Problem
 from fuzzyfire.cli import main
+from ground.data.formats.registry import read_dataset
+from ground.data.problems import Problem
 from synth.flames.cutouts import MIN_KEPT, cut, cutouts, filled, fire_mask, grabcut_mask, pixel_box
 from synth.flames.sprites import load_library, write_png
 

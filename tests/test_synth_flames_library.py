@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from curate.core.config import ConfigError, load_config
+from ground.config.loader import ConfigError, load_config
 from synth.flames import library as L
 from synth.flames.sprites import save_sequence
 from synth.method1 import Method1Config

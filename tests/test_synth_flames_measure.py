@@ -9,8 +9,8 @@ import cv2
 import numpy as np
 import pytest
 
-from curate.core.formats.registry import read_dataset
 from fuzzyfire.cli import main
+from ground.data.formats.registry import read_dataset
 from synth.flames.measure import colour_of, flame_colour
 
 WHITE, RED, ORANGE, YELLOW, BLUE = (255, 255, 250), (230, 20, 10), (255, 128, 0), (250, 230, 40), (30, 60, 200)

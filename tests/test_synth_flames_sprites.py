@@ -2,7 +2,7 @@ import cv2
 import numpy as np
 import pytest
 
-from curate.core.imageio import ImageError
+from ground.image.imageio import ImageError
 from synth.flames import simulate as F
 from synth.flames import sprites as S
 

@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 from factories import dataset_files
 
-from curate.core.formats.registry import read_dataset
+from ground.data.formats.registry import read_dataset
 from synth.flames.sprites import Sprite, SpriteSequence
 from synth.generate import BLOCK_VIEWS, Job, blocks, generate, image_maker
 from synth.method_config import MethodConfig

@@ -11,7 +11,7 @@ import pytest
 import trimesh
 from factories import dataset_files, tiny_flames
 
-from curate.core.boxes import box_iou_xyxy, mask_to_xywh, xywh_to_xyxy
+from ground.data.boxes import box_iou_xyxy, mask_to_xywh, xywh_to_xyxy
 from synth import method1 as M
 from synth.audit import audit_dataset
 from synth.flames.sprites import Sprite

@@ -122,8 +122,8 @@ def test_labelled_frames_keep_their_fire_boxes_and_flames_stand_beside_them(tmp_
 
     from factories import write_frames
 
-    from curate.core.boxes import xywh_overlaps_any
-    from curate.core.formats.coco import read_coco
+    from ground.data.boxes import xywh_overlaps_any
+    from ground.data.formats.coco import read_coco
 
     frames = write_frames(tmp_path)
     cfg = replace(CFG, n=8, scenes=0, labelled_frames=(frames,), width=128, height=96, images_per_view=1, max_flames=2)

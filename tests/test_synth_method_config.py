@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from curate.core.config import ConfigError, build_config
+from ground.config.loader import ConfigError, build_config
 from synth.method1 import Method1Config
 from synth.method2 import Method2Config
 from synth.method_config import MethodConfig, PoolPlaces

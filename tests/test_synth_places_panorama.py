@@ -10,7 +10,7 @@ import cv2
 import numpy as np
 import pytest
 
-from curate.core.imageio import ImageError
+from ground.image.imageio import ImageError
 from synth.places import render
 from synth.places.panorama import (
     PanoramaBackgrounds,

@@ -105,7 +105,7 @@ def test_photo_fingerprints_cover_site_sidecars(tmp_path: Path) -> None:
 
 
 def test_a_held_out_share_of_photos_is_chosen_by_content(tmp_path: Path) -> None:
-    from curate.core.holdout import held_out
+    from ground.data.holdout import held_out
     from synth.places.photos import photo_fingerprints, pool_photos
 
     for i in range(40):

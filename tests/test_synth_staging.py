@@ -10,7 +10,7 @@ import cv2
 import numpy as np
 import pytest
 
-from curate.core.formats.registry import read_dataset
+from ground.data.formats.registry import read_dataset
 from synth.staging import Staging, boxes_from_masks, finish, instance_map, staging_dir
 
 

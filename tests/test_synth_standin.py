@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from curate.core.boxes import mask_to_xywh
-from curate.core.formats.registry import read_dataset
+from ground.data.boxes import mask_to_xywh
+from ground.data.formats.registry import read_dataset
 from synth.flames.colour import CHEMICAL_LINES
 from synth.standin import (
     NOTICE,

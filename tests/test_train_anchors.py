@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from curate.core.dataset import DatasetBuilder
+from ground.data.dataset import DatasetBuilder
 from train.anchors import anchor_fit, check_anchors, kmeans_anchors, label_sizes
 from train.config import DEFAULT_ANCHORS
 

@@ -8,8 +8,8 @@ from pathlib import Path
 import pytest
 from factories_train import painted_dataset
 
-from curate.core.writer import write_dataset
 from fuzzyfire.cli import main
+from ground.data.writer import write_dataset
 
 
 @pytest.fixture(scope="module")

@@ -1,10 +1,10 @@
-"""The training schema: YOLOv5 recipe defaults, strict loading through curate.core.config."""
+"""The training schema: YOLOv5 recipe defaults, strict loading through ground.config.loader."""
 
 from __future__ import annotations
 
 import pytest
 
-from curate.core.config import ConfigError, build_config, to_dict
+from ground.config.loader import ConfigError, build_config, to_dict
 from train.config import MODEL_SIZES, TrainConfig
 
 
@@ -56,7 +56,7 @@ def test_real_finetune_is_at_most_the_epochs() -> None:
 
 
 def test_validation_post_processing_is_scorings_one_section() -> None:
-    from curate.core.detections import PostprocessConfig
+    from ground.detect.detections import PostprocessConfig
 
     assert TrainConfig().postprocess == PostprocessConfig()
     cfg = build_config({"postprocess": {"conf": 0.01}}, TrainConfig)

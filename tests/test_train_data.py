@@ -10,7 +10,7 @@ import pytest
 import torch
 from factories_train import painted_dataset
 
-from curate.core.dataset import DatasetBuilder
+from ground.data.dataset import DatasetBuilder
 from train.augment import Sample
 from train.config import AugmentConfig
 from train.data import TrainBatches, cache_images, collate, letterboxed_images, real_indices

@@ -8,8 +8,8 @@ import pytest
 import torch
 from factories_train import painted_dataset
 
-from curate.core.imageio import read_image
-from curate.core.letterbox import letterbox_image, to_nchw_float
+from ground.detect.letterbox import letterbox_image, to_nchw_float
+from ground.image.imageio import read_image
 from train.config import AugmentConfig, DetectorConfig
 from train.data import TrainBatches, cache_images, letterboxed_images
 from train.features import FeatureBatches, FrozenRunner, ValidationInputs, cache_views

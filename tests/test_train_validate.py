@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 import torch
 
-from curate.core.dataset import DatasetBuilder, ImageRecord
-from curate.core.detections import PostprocessConfig
+from ground.data.dataset import DatasetBuilder, ImageRecord
+from ground.detect.detections import PostprocessConfig
 from train.validate import evaluate, fitness
 
 

@@ -13,7 +13,7 @@ from collections.abc import Sequence
 import numpy as np
 from numpy.typing import NDArray
 
-from curate.core.dataset import Dataset
+from ground.data.dataset import Dataset
 
 #: Anchors are re-fitted when fewer than this fraction of labels can be matched by the default ones.
 MIN_BPR = 0.98

@@ -4,7 +4,7 @@ HSV jitter, horizontal flip, letterbox.
 Every function takes ``rng: np.random.Generator`` where it draws, returns new arrays and never modifies its
 inputs. Images are (H, W, 3) uint8 RGB; boxes are (N, 4) float64 xyxy pixels of the image they travel with;
 classes are (N,) int64. Geometry is expressed as 3x3 matrices applied to pixels (``cv2.warpAffine``) and to
-boxes (:func:`curate.core.boxes.affine_xyxy`) alike, so boxes always stay consistent with pixels.
+boxes (:func:`ground.data.boxes.affine_xyxy`) alike, so boxes always stay consistent with pixels.
 """
 
 from __future__ import annotations
@@ -16,7 +16,7 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from curate.core import boxes as bx
+from ground.data import boxes as bx
 from train.config import AugmentConfig
 
 #: Padding grey of YOLO-family detectors (114 of 255).

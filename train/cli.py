@@ -6,9 +6,9 @@ import argparse
 import sys
 from pathlib import Path
 
-from curate.core.commands import add_command
-from curate.core.formats.registry import FORMATS
-from curate.core.options import Alias
+from ground.cli.commands import add_command
+from ground.cli.options import Alias
+from ground.data.formats.registry import FORMATS
 
 _EXAMPLE = """example:
   fuzzyfire train --train out/mixtures/seed0/R500_S500 --val ../shared/data/fire-cctv-416 \\
@@ -26,9 +26,9 @@ TRAIN_SPLITS = ("train",)
 VAL_SPLITS = ("valid", "val", "validation")
 
 
-def _read(path: str, fmt: str):  # -> curate.core.formats.common.ReadResult
+def _read(path: str, fmt: str):  # -> ground.data.formats.common.ReadResult
     """The dataset at ``path``."""
-    from curate.core.formats.registry import read_dataset
+    from ground.data.formats.registry import read_dataset
 
     return read_dataset(path, fmt)
 
@@ -60,7 +60,7 @@ def data_errors(reads: dict[str, object]) -> str:
 def clipped_boxes(reads: dict[str, object]) -> str:
     """``; N boxes in PATH reached outside their image and were clipped to it`` for the datasets ``reads`` (a
     folder read twice counts once); "" when no box was clipped."""
-    from curate.core.formats.common import CLIPPED
+    from ground.data.formats.common import CLIPPED
 
     counts = {path: len(found) for path, found in _per_folder(reads, lambda p: p.code == CLIPPED).values()}
     return "".join(f"; {n} box{'es' if n > 1 else ''} in {path} reached outside {'their' if n > 1 else 'its'} image "
@@ -71,11 +71,11 @@ def _datasets(args: argparse.Namespace, allow_errors: bool = False):  # -> (trai
     """The training and validation splits (default: the first of :data:`TRAIN_SPLITS` / :data:`VAL_SPLITS`
     each has, else every image) without the ``--drop-class`` boxes, the training set with the ``--classes``
     list, and a note for the summary line (boxes clipped to their image). Every class named must be a class of
-    one of the two sets (:class:`~curate.core.names.UnknownNameError`). Data whose reading found errors raises
+    one of the two sets (:class:`~ground.data.names.UnknownNameError`). Data whose reading found errors raises
     ValueError naming the first, unless ``allow_errors`` (then one line says so on stderr)."""
-    from curate.core.classes import canonical_class
-    from curate.core.load import pick_split
-    from curate.core.names import check_names, split_names
+    from ground.data.classes import canonical_class
+    from ground.data.load import pick_split
+    from ground.data.names import check_names, split_names
 
     reads = [_read(args.train, args.train_format), _read(args.val, args.val_format)]
     by_path = {args.train: reads[0], args.val: reads[1]} if args.train != args.val else {args.train: reads[0]}
@@ -131,7 +131,7 @@ ALIASES: tuple[Alias, ...] = (
 
 def build_config(args: argparse.Namespace):
     """The run's TrainConfig: CONFIG.yaml (or the defaults: the study's detector), the flags given, ``--set``."""
-    from curate.core.options import config_from_args
+    from ground.cli.options import config_from_args
     from train.config import TrainConfig
     from train.device import resolve_device
 
@@ -141,7 +141,7 @@ def build_config(args: argparse.Namespace):
 
 
 def cmd_train(args: argparse.Namespace) -> int:
-    from curate.core.options import print_config
+    from ground.cli.options import print_config
     from train.loop import ResumeError, fit
 
     cfg = build_config(args)
@@ -153,7 +153,7 @@ def cmd_train(args: argparse.Namespace) -> int:
     train_ds, val_ds, clipped = _datasets(args, cfg.allow_errors)
     same = Path(args.train).resolve() == Path(args.val).resolve()
     if same and {i.split for i in train_ds.images} & {i.split for i in val_ds.images}:
-        from curate.core.load import splits_found
+        from ground.data.load import splits_found
 
         raise ValueError(
             f"{args.train}: training and validation images are the same split ({splits_found(val_ds)}); "
@@ -178,7 +178,7 @@ def cmd_train(args: argparse.Namespace) -> int:
 
 def register(sub: argparse._SubParsersAction) -> None:
     """Add ``train`` to the ``fuzzyfire`` parser."""
-    from curate.core.options import add_config_options
+    from ground.cli.options import add_config_options
     from train.config import TrainConfig
 
     p = add_command(

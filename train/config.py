@@ -1,4 +1,4 @@
-"""Training hyper-parameters as frozen dataclasses (``curate.core.config`` builds them from commented YAML).
+"""Training hyper-parameters as frozen dataclasses (``ground.config.loader`` builds them from commented YAML).
 
 The defaults are the study's detector, chosen by AP per CPU-minute on real data (docs/findings.md, "Which detector recipe, and why?"):
 ImageNet EfficientNet-Lite0 with every stage frozen, its features computed once for 20 augmented views
@@ -18,7 +18,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Literal, Optional
 
-from curate.core.detections import PostprocessConfig
+from ground.detect.detections import PostprocessConfig
 
 #: Depth and width multiples of the YOLOv5 family (published values).
 MODEL_SIZES: dict[str, tuple[float, float]] = {"n": (0.33, 0.25), "s": (0.33, 0.50), "m": (0.67, 0.75)}

@@ -4,7 +4,7 @@ Every training image is decoded once, resized so its longest side is the trainin
 (about ``3 * imgsz^2`` bytes per image: 0.3 MB at 320 px). A sample's augmentation draws from its own
 generator seeded by ``(seed, draw, index)`` (``draw`` is the epoch, or the view number when frozen features are
 cached: :mod:`train.features`), so batches do not depend on threads, worker processes or where a run resumed.
-Validation images are decoded and letterboxed exactly as ``fuzzyfire score`` does (:mod:`curate.core.letterbox`).
+Validation images are decoded and letterboxed exactly as ``fuzzyfire score`` does (:mod:`ground.detect.letterbox`).
 
 Batches are ``(images, targets)``: images (B, 3, S, S) float32 RGB in [0, 1]; targets (T, 6) float32 rows
 ``[image index in batch, class (0-based), cx, cy, w, h]`` in input pixels.
@@ -22,11 +22,11 @@ import numpy as np
 import torch
 from numpy.typing import NDArray
 
-from curate.core import boxes as bx
-from curate.core.dataset import Dataset, ImageRecord
-from curate.core.imageio import ImageError, read_image
-from curate.core.letterbox import letterbox_image
-from curate.core.progress import progress
+from ground.data import boxes as bx
+from ground.data.dataset import Dataset, ImageRecord
+from ground.detect.letterbox import letterbox_image
+from ground.image.imageio import ImageError, read_image
+from ground.run.progress import progress
 from train.augment import Sample, augment, resize_longest
 from train.config import AugmentConfig
 
@@ -61,7 +61,7 @@ def cache_images(ds: Dataset, size: int, desc: str = "decoding images", workers:
 @dataclass(frozen=True)
 class LetterboxedImage:
     """A validation image as a scorer feeds it to the model: ``image`` (size, size, 3) uint8 RGB, letterboxed
-    from the original pixels by :func:`curate.core.letterbox.letterbox_image`."""
+    from the original pixels by :func:`ground.detect.letterbox.letterbox_image`."""
 
     record: ImageRecord
     image: NDArray[np.uint8]

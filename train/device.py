@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import torch
 
-from curate.core.device import DeviceError, parse_device
+from ground.run.device import DeviceError, parse_device
 
 __all__ = ["DeviceError", "parse_device", "resolve_device", "uses_amp"]
 

@@ -25,9 +25,9 @@ import torch
 from numpy.typing import NDArray
 from torch import Tensor, nn
 
-from curate.core.dataset import ImageRecord
-from curate.core.letterbox import to_nchw_float
-from curate.core.progress import progress
+from ground.data.dataset import ImageRecord
+from ground.detect.letterbox import to_nchw_float
+from ground.run.progress import progress
 from train.data import LetterboxedImage, TrainBatches, prefetched
 from train.model import Detector
 

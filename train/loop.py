@@ -19,10 +19,10 @@ from typing import Any
 import numpy as np
 import torch
 
-from curate.core.dataset import Dataset
-from curate.core.lock import lock_status
-from curate.core.manifest import git_commit, versions
-from curate.core.progress import progress
+from ground.data.dataset import Dataset
+from ground.data.manifest import git_commit, versions
+from ground.run.lock import lock_status
+from ground.run.progress import progress
 from train.anchors import check_anchors, label_sizes
 from train.config import DEFAULT_ANCHORS, DetectorConfig, TrainConfig
 from train.data import CachedImage, TrainBatches, cache_images, letterboxed_images, real_indices

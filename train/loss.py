@@ -5,7 +5,7 @@ BCE classes; objectness weighted per level by ``balance``; gains rescaled for cl
 BCE(cls_l, onehot))`` with ``B`` the batch size (YOLOv5 scales by it so the gradient per image is constant).
 With one class no class loss is computed (the class probability is defined as 1 when decoding).
 
-CIoU lives here rather than in ``curate/core/boxes.py``: it is a differentiable torch loss, not box bookkeeping.
+CIoU lives here rather than in ``ground/data/boxes.py``: it is a differentiable torch loss, not box bookkeeping.
 """
 
 from __future__ import annotations

@@ -1,5 +1,5 @@
 """Per-epoch validation: detections of the (EMA) model on the letterboxed validation images, scored with
-the toolkit's one post-processing (:mod:`curate.core.detections`) and one COCO evaluation (:mod:`curate.core.cocoeval`),
+the toolkit's one post-processing (:mod:`ground.detect.detections`) and one COCO evaluation (:mod:`ground.detect.cocoeval`),
 the very code ``fuzzyfire score`` runs on the exported ONNX model. So the best epoch's AP is the AP that
 scoring its ``best.onnx`` on the same images reports (up to ONNX float differences).
 """
@@ -11,9 +11,9 @@ from collections.abc import Sequence
 import numpy as np
 import torch
 
-from curate.core.cocoeval import evaluate_predictions
-from curate.core.dataset import Dataset
-from curate.core.detections import PostprocessConfig, Predictions, postprocess, to_original
+from ground.data.dataset import Dataset
+from ground.detect.cocoeval import evaluate_predictions
+from ground.detect.detections import PostprocessConfig, Predictions, postprocess, to_original
 from train.features import ValidationInputs
 
 

@@ -1,7 +1,7 @@
 """curate's ``fuzzyfire`` commands, one module per group: :mod:`~curate.cli.dataset` (convert, validate, stats,
 merge), :mod:`~curate.cli.mix` (mix), :mod:`~curate.cli.dedup` (dedup, leakage) and :mod:`~curate.cli.curate`
 (curate). Each ``cmd_*`` returns an exit code; the helpers every package's commands share are in
-:mod:`curate.core.commands`."""
+:mod:`ground.cli.commands`."""
 
 from __future__ import annotations
 

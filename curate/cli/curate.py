@@ -8,9 +8,9 @@ from pathlib import Path
 
 from curate.cli.dataset import IMAGES_ALIAS
 from curate.cli.dedup import EXECUTOR_ALIASES, SEARCH_ALIASES, add_cache_args, embedding_run_aliases
-from curate.core.commands import add_command
-from curate.core.options import Alias
 from curate.curation import CurateConfig
+from ground.cli.commands import add_command
+from ground.cli.options import Alias
 
 #: Flags of ``fuzzyfire curate``: aliases of :class:`curate.curation.CurateConfig` keys (their defaults are the keys').
 ALIASES: tuple[Alias, ...] = (
@@ -23,12 +23,12 @@ ALIASES: tuple[Alias, ...] = (
 
 
 def cmd_curate(args: argparse.Namespace) -> int:
-    from curate.core.commands import config_provenance, print_problems
-    from curate.core.dataset import Dataset
-    from curate.core.options import command_config
-    from curate.core.writer import check_output_folder
     from curate.curation import curate_dataset
     from curate.embed import embedding_cache_path
+    from ground.cli.commands import config_provenance, print_problems
+    from ground.cli.options import command_config
+    from ground.data.dataset import Dataset
+    from ground.data.writer import check_output_folder
 
     cfg = command_config(args, CurateConfig, ALIASES, {"--out": args.out})
     if cfg is None:
@@ -51,7 +51,7 @@ def cmd_curate(args: argparse.Namespace) -> int:
 
 def register(sub: argparse._SubParsersAction) -> None:
     """Add ``curate`` to the ``fuzzyfire`` parser."""
-    from curate.core.options import add_config_options
+    from ground.cli.options import add_config_options
 
     p = add_command(
         sub,

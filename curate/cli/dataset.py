@@ -7,7 +7,10 @@ import json
 import sys
 from pathlib import Path
 
-from curate.core.commands import (
+from curate.sources import MergeConfig
+from curate.stats import dataset_stats, plot_box_sizes
+from curate.validate import validate
+from ground.cli.commands import (
     add_command,
     add_reader_args,
     parse_aliases,
@@ -15,13 +18,10 @@ from curate.core.commands import (
     read_from_args,
     write_dataset_or_report,
 )
-from curate.core.formats.images import NEGATIVES_ONLY
-from curate.core.options import Alias, one_of
-from curate.core.problems import count_levels, has_errors
-from curate.core.writer import IMAGE_MODES, OUTPUT_FORMATS
-from curate.sources import MergeConfig
-from curate.stats import dataset_stats, plot_box_sizes
-from curate.validate import validate
+from ground.cli.options import Alias, one_of
+from ground.data.formats.images import NEGATIVES_ONLY
+from ground.data.problems import count_levels, has_errors
+from ground.data.writer import IMAGE_MODES, OUTPUT_FORMATS
 
 
 def cmd_convert(args: argparse.Namespace) -> int:
@@ -106,8 +106,8 @@ MERGE_ALIASES: tuple[Alias, ...] = (IMAGES_ALIAS,)
 
 
 def cmd_merge(args: argparse.Namespace) -> int:
-    from curate.core.options import command_config
     from curate.sources import merge_sources
+    from ground.cli.options import command_config
 
     cfg = command_config(args, MergeConfig, MERGE_ALIASES, {"--out": args.out})
     if cfg is None:
@@ -182,7 +182,7 @@ def _register_inspect(sub: argparse._SubParsersAction) -> None:
 
 
 def _register_merge(sub: argparse._SubParsersAction) -> None:
-    from curate.core.options import add_config_options
+    from ground.cli.options import add_config_options
 
     p = add_command(
         sub,

@@ -11,15 +11,15 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
-from curate.core.cluster import EXECUTOR_CHOICES, Cluster, open_cluster
-from curate.core.commands import add_command
-from curate.core.device import parse_device
-from curate.core.options import Alias, one_of
 from curate.dedupjob import APPLY_MODES
 from curate.partition import PARTITION
 from curate.rank import RANK_METHODS
 from curate.search import BACKENDS
 from curate.settings import PREPROCESSING, DedupJobConfig, EmbedderConfig, LeakageJobConfig
+from ground.cli.commands import add_command
+from ground.cli.options import Alias, one_of
+from ground.run.cluster import EXECUTOR_CHOICES, Cluster, open_cluster
+from ground.run.device import parse_device
 
 
 def _floats3(text: str) -> tuple[float, float, float]:
@@ -115,7 +115,7 @@ def add_cache_args(p: argparse.ArgumentParser) -> None:
 def add_model_args(p: argparse.ArgumentParser) -> None:
     """The embedding model's flags for a command without settings of its own (``synth gap``): aliases of
     :class:`curate.settings.EmbedderConfig` keys, read by :func:`load_model_from_args`; and the cache's."""
-    from curate.core.options import add_aliases
+    from ground.cli.options import add_aliases
 
     add_aliases(p.add_argument_group("embedding model", _USER_MODEL), EmbedderConfig, _MODEL_FLAGS)
     add_cache_args(p)
@@ -126,7 +126,7 @@ _MODEL_FLAGS = (*model_aliases(""), *embedding_run_aliases(""))
 
 def model_from_args(args: argparse.Namespace) -> EmbedderConfig:
     """The EmbedderConfig the flags of :func:`add_model_args` give (each key not given at its default)."""
-    from curate.core.config import build_config
+    from ground.config.loader import build_config
 
     flags = [(a, getattr(args, a.dest)) for a in _MODEL_FLAGS]
     given = {k: v for a, value in flags if value is not None and value is not False for k, v in a.values(value).items()}
@@ -181,9 +181,9 @@ def embedding_session(
 
 
 def cmd_dedup(args: argparse.Namespace) -> int:
-    from curate.core.options import command_config
     from curate.dedupjob import check_apply_target
     from curate.scan import list_images_or_fail, scan_images
+    from ground.cli.options import command_config
 
     cfg = command_config(args, DedupJobConfig, DEDUP_ALIASES, {"DIR": args.dirs, "--out": args.out})
     if cfg is None:
@@ -246,9 +246,9 @@ def _dedup_scanned(args: argparse.Namespace, cfg: DedupJobConfig, paths: list[Pa
 def cmd_leakage(args: argparse.Namespace) -> int:
     import json
 
-    from curate.core.options import command_config
     from curate.leakage import find_leaks, leak_summary
     from curate.scan import list_images_or_fail, scan_images
+    from ground.cli.options import command_config
 
     cfg = command_config(args, LeakageJobConfig, LEAKAGE_ALIASES, {"A": args.a, "B": args.b})
     if cfg is None:
@@ -289,7 +289,7 @@ def cmd_leakage(args: argparse.Namespace) -> int:
 
 def register(sub: argparse._SubParsersAction) -> None:
     """Add ``dedup`` and ``leakage`` to the ``fuzzyfire`` parser."""
-    from curate.core.options import add_config_options
+    from ground.cli.options import add_config_options
 
     p = add_command(
         sub,

@@ -6,14 +6,6 @@ import argparse
 import sys
 from pathlib import Path
 
-from curate.core.commands import add_command
-from curate.core.dataset import Dataset
-from curate.core.formats.registry import FORMATS
-from curate.core.load import pick_split
-from curate.core.names import check_names, split_names
-from curate.core.options import Alias, one_of
-from curate.core.problems import Problem
-from curate.core.writer import check_output_folder
 from curate.mix import (
     MixConfig,
     MixError,
@@ -26,6 +18,14 @@ from curate.mix import (
     parse_seeds,
     write_mixture,
 )
+from ground.cli.commands import add_command
+from ground.cli.options import Alias, one_of
+from ground.data.dataset import Dataset
+from ground.data.formats.registry import FORMATS
+from ground.data.load import pick_split
+from ground.data.names import check_names, split_names
+from ground.data.problems import Problem
+from ground.data.writer import check_output_folder
 
 _EXAMPLE = """example:
   fuzzyfire mix --real ../shared/data/fire-cctv-416 --synth out/method2 \\
@@ -73,7 +73,7 @@ ALIASES: tuple[Alias, ...] = (
 def _sources(args: argparse.Namespace, cfg: MixConfig) -> tuple[Dataset, Dataset, list[Problem]]:
     """The real and synthetic pools: each its own split (``real_split`` / ``synth_split``, else the shared
     ``split``, else ``train`` when present, else every image) and the reader's errors."""
-    from curate.core.formats.registry import read_dataset
+    from ground.data.formats.registry import read_dataset
 
     real_read = read_dataset(args.real, cfg.real_format)
     synth_read = read_dataset(args.synth, cfg.synth_format)
@@ -93,7 +93,7 @@ def _changed(cfg: MixConfig, keys: dict[str, str]) -> list[str]:
 
 def _validation(args: argparse.Namespace, cfg: MixConfig) -> Dataset | None:
     """The ``--val`` set's split, or None; ``val_split`` / ``val_format`` without ``--val`` are refused."""
-    from curate.core.formats.registry import read_dataset
+    from ground.data.formats.registry import read_dataset
 
     if args.val is None:
         given = _changed(cfg, {"--val-split": "val_split", "--val-format": "val_format"})
@@ -120,15 +120,15 @@ def _grid(cfg: MixConfig) -> list[Mixture]:
 
 def _check_outputs(real: Dataset, synth: Dataset, plan: list[tuple[int, Mixture]], args: argparse.Namespace,
                    classes: list[str]) -> None:  # fmt: skip
-    """Every mixture folder checked before the first is written (:func:`curate.core.writer.check_output_folder`)."""
+    """Every mixture folder checked before the first is written (:func:`ground.data.writer.check_output_folder`)."""
     for seed, mix in plan:
         folder = mixture_dir(args.out, mix, seed)
         check_output_folder(folder, build_mixture(real, synth, mix, seed, folder, classes), args.overwrite)
 
 
 def cmd_mix(args: argparse.Namespace) -> int:
-    from curate.core.commands import print_problems, settings_args
-    from curate.core.options import command_config
+    from ground.cli.commands import print_problems, settings_args
+    from ground.cli.options import command_config
 
     cfg = command_config(args, MixConfig, ALIASES, {"--real": args.real, "--synth": args.synth, "--out": args.out})
     if cfg is None:
@@ -153,7 +153,7 @@ def cmd_mix(args: argparse.Namespace) -> int:
 
 def register(sub: argparse._SubParsersAction) -> None:
     """Add ``mix`` to the ``fuzzyfire`` parser."""
-    from curate.core.options import add_config_options
+    from ground.cli.options import add_config_options
 
     p = add_command(
         sub,

@@ -10,12 +10,12 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from curate.core.commands import add_command
-from curate.core.options import Alias
 from eval.cli.options import SCORING_ALIASES, add_settings, fmt, load_test_set, report_problems, score_model, settings
 from eval.errors import ALARM_CONF
 from eval.imagelevel import IMAGE_RECALL, IMAGE_RECALL_AT_CONF
 from eval.operating import RECALL_AT_ALARMS
+from ground.cli.commands import add_command
+from ground.cli.options import Alias
 
 if TYPE_CHECKING:
     from eval.config import CompareConfig
@@ -57,7 +57,7 @@ def _side(models: list[Path], results: list) -> dict:  # results: list[eval.scor
 def same_content(model_a: list[Path], model_b: list[Path]) -> list[dict]:
     """The models that are one file's content more than once among both sides: per sha256 of the file contents
     (in first-listed order), ``{"sha256", "A": [paths], "B": [paths]}``; only those listed twice or more."""
-    from curate.core.manifest import file_sha256
+    from ground.data.manifest import file_sha256
 
     groups: dict[str, dict] = {}
     for side, models in (("A", model_a), ("B", model_b)):
@@ -92,11 +92,11 @@ def same_content_lines(groups: list[dict], runs_a: int, runs_b: int) -> list[str
 def cmd_compare(args: argparse.Namespace) -> int:
     import numpy as np
 
-    from curate.core.cocoeval import ClassMatchError
     from eval.imagelevel import paired_image_recall
     from eval.onnx_model import ModelError
     from eval.score import ScoreError, score_operating
     from eval.stats import MatchTable, paired_bootstrap
+    from ground.detect.cocoeval import ClassMatchError
 
     cfg = settings(args, _compare_config(), ALIASES, required=("--data",))
     if cfg is None:
@@ -242,11 +242,11 @@ def _compare_slices(
     computed attributes (and ``--attributes``), printed as a table unless ``--json``; ``--forest`` draws them."""
     import numpy as np
 
-    from curate.core.cocoeval import LOOSE_IOU, run_cocoeval
     from eval.attributes import dataset_attributes, merged, read_attributes_csv
     from eval.score import scored_images
     from eval.slices import Side, compare_slices, make_slices
     from eval.stats import MatchTable
+    from ground.detect.cocoeval import LOOSE_IOU, run_cocoeval
 
     ds, cat_ids = scored_images(results[0][0])
     attrs = dataset_attributes(ds, cfg.inference.workers)

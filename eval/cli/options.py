@@ -10,18 +10,18 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, TypeVar
 
-from curate.core.formats.images import IMAGE_LABELLED, NEGATIVES_ONLY
-from curate.core.formats.registry import FORMATS as DATA_FORMATS
-from curate.core.letterbox import RESIZE_MODES
-from curate.core.options import Alias
 from eval.onnx_model import FORMATS
+from ground.cli.options import Alias
+from ground.data.formats.images import IMAGE_LABELLED, NEGATIVES_ONLY
+from ground.data.formats.registry import FORMATS as DATA_FORMATS
+from ground.detect.letterbox import RESIZE_MODES
 
 if TYPE_CHECKING:  # the parser is built without importing onnxruntime
-    from curate.core.dataset import Dataset
-    from curate.core.problems import Problem
     from eval.config import InferenceConfig, OnnxModelConfig, ScoringConfig, TestSetConfig
     from eval.onnx_model import OnnxDetector
     from eval.score import ScoreResult, TestSet
+    from ground.data.dataset import Dataset
+    from ground.data.problems import Problem
 
 T = TypeVar("T")
 
@@ -52,7 +52,7 @@ def parse_alias(text: str) -> tuple[str, str]:
 
 
 def _drop_keys(names: list[str]) -> dict[str, Any]:
-    from curate.core.names import split_names
+    from ground.data.names import split_names
 
     return {"data.drop_class": split_names(names)}
 
@@ -108,7 +108,7 @@ def add_settings(p: argparse.ArgumentParser, schema: Any, aliases: tuple[Alias, 
     """``--config CONFIG.yaml``, ``--set``, ``--print-config`` and the ``aliases`` of ``schema`` (a function
     returning the dataclass: it is imported when the help or the settings are needed); ``section`` names the
     command's table in :data:`REFERENCE`."""
-    from curate.core.options import add_config_options
+    from ground.cli.options import add_config_options
 
     add_config_options(p, schema, aliases, f"{REFERENCE}#{section}", flag="--config")
 
@@ -119,7 +119,7 @@ def settings(
     """The command's settings from ``--config``, its flags and ``--set``; None once ``--print-config`` printed
     them (the command then stops). The options ``required`` (e.g. ``--data``) are needed only when it does not:
     ValueError names those missing."""
-    from curate.core.options import config_from_args, print_config
+    from ground.cli.options import config_from_args, print_config
 
     cfg = config_from_args(args, schema, aliases)
     if args.print_config:
@@ -171,7 +171,7 @@ def score_model(path: Path, cfg: ScoringConfig, dataset: Dataset, problems: list
 
     detector = open_detector(path, cfg.model, cfg.inference)
     if not dataset.categories:
-        from curate.core.classes import canonical_class
+        from ground.data.classes import canonical_class
 
         dataset = dataset.with_categories(list(dict.fromkeys(canonical_class(n) for n in detector.spec.class_names)))
     return score(detector, dataset, cfg.inference, problems)
@@ -179,7 +179,7 @@ def score_model(path: Path, cfg: ScoringConfig, dataset: Dataset, problems: list
 
 def report_problems(result: ScoreResult) -> None:
     """The reading and scoring problems of ``result`` worth a word (not info lines), on stderr."""
-    from curate.core.commands import print_problems
+    from ground.cli.commands import print_problems
 
     shown = [p for p in result.problems if p.level != "info"]
     if shown:

@@ -8,9 +8,9 @@ import sys
 from collections.abc import Sequence
 from pathlib import Path
 
-from curate.core.commands import add_command
-from curate.core.options import Alias
 from eval.cli.options import MODEL_ALIASES, add_settings, open_detector, parse_names, settings
+from ground.cli.commands import add_command
+from ground.cli.options import Alias
 
 #: Flags of ``fuzzyfire predict``: aliases of :class:`eval.config.PredictConfig` keys (their defaults are the keys').
 ALIASES: tuple[Alias, ...] = (
@@ -65,10 +65,10 @@ def class_labels(wanted: Sequence[str] | None, names: Sequence[str]) -> frozense
 
 
 def cmd_predict(args: argparse.Namespace) -> int:
-    from curate.core.commands import print_problems
     from eval.onnx_model import ModelError
     from eval.predict_media import SourceError, predict_images, predict_video, source_kind, write_records
     from eval.video import VideoError
+    from ground.cli.commands import print_problems
 
     cfg = settings(args, _predict_config(), ALIASES, required=("--out",))
     if cfg is None:

@@ -8,9 +8,9 @@ import json
 import sys
 from pathlib import Path
 
-from curate.core.commands import add_command
-from curate.core.options import Alias
 from eval.cli.options import SCORING_ALIASES, add_settings, fmt, load_test_set, report_problems, score_model, settings
+from ground.cli.commands import add_command
+from ground.cli.options import Alias
 
 #: Flags of ``fuzzyfire score``: aliases of :class:`eval.config.ScoreConfig` keys (their defaults are the keys').
 ALIASES: tuple[Alias, ...] = (
@@ -63,10 +63,10 @@ def _print_text(result, intervals: dict, split: str) -> None:  # result: eval.sc
 
 
 def cmd_score(args: argparse.Namespace) -> int:
-    from curate.core.cocoeval import ClassMatchError
-    from curate.core.commands import print_problems
     from eval.onnx_model import ModelError
     from eval.score import ScoreError, error_pictures, score_errors, score_found, score_image_level, write_outputs
+    from ground.cli.commands import print_problems
+    from ground.detect.cocoeval import ClassMatchError
 
     cfg = settings(args, _score_config(), ALIASES, required=("--data",))
     if cfg is None:

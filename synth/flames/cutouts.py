@@ -28,12 +28,12 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from curate.core.classes import canonical_class
-from curate.core.dataset import Dataset
-from curate.core.imageio import ImageError, read_image, unit_to_u8
-from curate.core.names import check_names
-from curate.core.problems import Problem
-from curate.core.progress import progress
+from ground.data.classes import canonical_class
+from ground.data.dataset import Dataset
+from ground.data.names import check_names
+from ground.data.problems import Problem
+from ground.image.imageio import ImageError, read_image, unit_to_u8
+from ground.run.progress import progress
 from synth.flames.sprites import write_png
 
 #: Cut-outs per sequence folder (Method 1/2 pick a sequence, then one of its frames).

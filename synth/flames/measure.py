@@ -24,8 +24,8 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from curate.core.dataset import Dataset
-from curate.core.problems import Problem
+from ground.data.dataset import Dataset
+from ground.data.problems import Problem
 from synth.flames.cutouts import cutouts
 
 #: HSV value and saturation bounds of a near-white pixel.

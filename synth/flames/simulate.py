@@ -34,7 +34,7 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from curate.core.imageio import unit_to_u8
+from ground.image.imageio import unit_to_u8
 from synth.compose.ramps import smoothstep
 from synth.flames.colour import exposed_palette, flame_palette
 from synth.flames.sprites import Sprite, SpriteSequence, crop_to_content

@@ -29,7 +29,7 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from curate.core.imageio import ImageError
+from ground.image.imageio import ImageError
 
 #: A sprite pixel is *smoke* where its ``over`` alpha is at least this (and it is not flame): smoke a viewer sees
 #: (a quarter of the background hidden), not the faint haze at the plume's edges. Smoke boxes come from here.

@@ -165,7 +165,7 @@ def fingerprint(spec: EnvironmentFile) -> dict[str, Any]:
     (a mesh that is not a ``.glb`` also brings the materials, buffers and textures beside it) and its sidecar
     settings. Two copies of a scene in different folders have one fingerprint; an edited file or setting
     changes it."""
-    from curate.core.manifest import file_sha256
+    from ground.data.manifest import file_sha256
 
     beside = [] if spec.file.suffix.lower() == ".glb" else sorted(
         p for p in spec.file.parent.iterdir() if p.is_file() and p.suffix.lower() in RESOURCE_SUFFIXES

@@ -14,8 +14,8 @@ from collections.abc import Iterable, Sequence
 from pathlib import Path
 from typing import Any
 
-from curate.core.dataset import Dataset
-from curate.core.problems import Problem
+from ground.data.dataset import Dataset
+from ground.data.problems import Problem
 
 #: A box [x, y, w, h] in pixels of the image it is in.
 Box = tuple[float, float, float, float]
@@ -33,7 +33,7 @@ def load_frames(paths: Iterable[Path | str], problems: list[Problem] | None = No
     ``fire`` boxes [x, y, w, h] px (other classes dropped; an image without fire boxes is a frame too, with
     none), in the datasets' order; ValueError when a dataset has no images. The images the reader skipped as
     unreadable are appended to ``problems`` (when given), as the reader names them."""
-    from curate.core.formats.registry import read_dataset
+    from ground.data.formats.registry import read_dataset
 
     out: dict[Path, tuple[Box, ...]] = {}
     for path in paths:
@@ -48,18 +48,18 @@ def load_frames(paths: Iterable[Path | str], problems: list[Problem] | None = No
 
 
 def frame_fingerprints(paths: Iterable[Path | str]) -> list[dict[str, Any]]:
-    """Each labelled dataset at ``paths`` by content (:func:`curate.core.fingerprint.fingerprint` of its fire
+    """Each labelled dataset at ``paths`` by content (:func:`ground.data.fingerprint.fingerprint` of its fire
     boxes and image bytes): what a pool composited on it is made of, wherever the folder lies."""
-    from curate.core.fingerprint import fingerprint
-    from curate.core.load import load_split
+    from ground.data.fingerprint import fingerprint
+    from ground.data.load import load_split
 
     return [fingerprint(fire_only(load_split(path), path)).to_dict() for path in paths]
 
 
 def fire_only(ds: Dataset, where: Path | str) -> Dataset:
     """``ds`` (every image) with its fire boxes alone: a frame whose boxes are all of other classes stays a frame,
-    with none (their classes count as negatives, :func:`curate.core.load.with_classes`)."""
-    from curate.core.load import prepare
+    with none (their classes count as negatives, :func:`ground.data.load.with_classes`)."""
+    from ground.data.load import prepare
 
     return prepare(ds, None, [FIRE], where=where, negatives=[n for n in ds.category_names if n != FIRE])
 

@@ -12,10 +12,10 @@ from pathlib import Path
 
 import numpy as np
 
-from curate.core.imageio import ImageError
-from curate.core.problems import Problem
-from curate.core.walk import walk_files
 from curate.scan import list_image_files
+from ground.data.problems import Problem
+from ground.data.walk import walk_files
+from ground.image.imageio import ImageError
 from synth.places.envfile import MESH_SUFFIXES, is_environment_sidecar
 from synth.places.panorama import FLOAT_SUFFIXES, PANORAMA_SUFFIXES, is_panorama, named_panorama, readable_panorama
 

@@ -29,10 +29,10 @@ import numpy as np
 import yaml
 from numpy.typing import NDArray
 
-from curate.core.config import ConfigError, build_config
-from curate.core.imageio import MAX_PIXELS, ImageError, image_size, read_image
-from curate.core.problems import Problem
-from curate.core.walk import walk_files
+from ground.config.loader import ConfigError, build_config
+from ground.data.problems import Problem
+from ground.data.walk import walk_files
+from ground.image.imageio import MAX_PIXELS, ImageError, image_size, read_image
 from synth.compose.light import REC709
 from synth.places import render
 from synth.schema import check_range
@@ -191,7 +191,7 @@ def list_panoramas(paths: Iterable[Path | str], problems: list[Problem] | None =
 
 def panorama_fingerprints(paths: Iterable[Path | str]) -> list[dict[str, str]]:
     """The panoramas under ``paths`` as name and sha256 of their bytes, and of their sidecars when present."""
-    from curate.core.manifest import file_sha256
+    from ground.data.manifest import file_sha256
 
     out = []
     for p in list_panoramas(paths):

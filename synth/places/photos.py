@@ -16,9 +16,9 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from curate.core.holdout import held_out
-from curate.core.imageio import ImageError, read_image
 from curate.scan import list_image_files
+from ground.data.holdout import held_out
+from ground.image.imageio import ImageError, read_image
 from synth.places.frames import Box, crop_boxes
 from synth.places.sites import Site, estimate_site, read_site_sidecar, sidecar_files
 
@@ -51,7 +51,7 @@ def keep_in_pool(photos: Sequence[Path], holdout: float) -> list[Path]:
 def photo_fingerprints(paths: Iterable[Path | str], holdout: float = 0.0) -> list[dict[str, str]]:
     """The pool's photos under ``paths`` (:func:`pool_photos` order) as name and sha256 of their bytes (and of
     their site sidecar, if any): what a pool composited on them is made of, wherever the folder lies."""
-    from curate.core.manifest import file_sha256
+    from ground.data.manifest import file_sha256
 
     out = []
     for photo in pool_photos(paths, holdout):

@@ -33,7 +33,7 @@ import numpy as np
 import yaml
 from numpy.typing import NDArray
 
-from curate.core.sky import sky_like, top_connected
+from ground.image.sky import sky_like, top_connected
 
 SIDECAR_FOLDER = "_site.yaml"
 CAMERA_HEIGHT_M = 1.6

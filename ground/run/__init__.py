@@ -1,0 +1,1 @@
+"""Where and how work runs: the Ray connection, the compute device, file locks and progress bars."""
