@@ -13,6 +13,7 @@ from ground.data.dataset import Dataset, merge
 from ground.data.formats.registry import read_dataset
 from ground.data.load import data_classes
 from ground.data.problems import Problem
+from ground.data.writer import DEFAULT_IMAGE_MODE
 
 
 @dataclass(frozen=True)
@@ -35,7 +36,7 @@ class MergeConfig:
     classes: Optional[tuple[str, ...]] = None  # output classes in YOLO id order; null = every class of the sources
     # (fire and smoke first, then the others by name); a source class outside a given list is an error unless
     # mapped (aliases) or dropped (drop_classes)
-    images: Literal["copy", "hardlink", "symlink"] = "copy"  # how images reach the output folder
+    images: Literal["copy", "hardlink", "symlink"] = DEFAULT_IMAGE_MODE  # how images reach the output folder
 
 
 def read_source(src: SourceConfig, base: Path) -> tuple[Dataset, list[Problem]]:

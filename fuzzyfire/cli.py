@@ -11,6 +11,7 @@ from pathlib import Path
 
 from fuzzyfire import __version__
 from ground.cli.commands import HelpFormatter, add_command
+from ground.cli.options import Alias, add_config_options
 from ground.data.writer import OutputError
 
 #: Modules whose ``register(subparsers)`` adds commands, in help order (imported when the parser is built);
@@ -44,15 +45,14 @@ def cmd_experiment(args: argparse.Namespace) -> int:
     from fuzzyfire.executors import ExecutorError, build_executor
     from fuzzyfire.experiment import run_experiment
     from fuzzyfire.experiment_config import ExperimentConfig, ExperimentConfigError
-    from ground.config.loader import ConfigError, load_config, located
+    from ground.cli.options import config_from_args, print_config
+    from ground.config.loader import ConfigError, located
 
-    overrides = list(args.set)
-    if args.executor:
-        overrides.append(f"executor.name={args.executor}")
-    if args.address:
-        overrides.append(f"executor.address={args.address}")
     try:
-        cfg = load_config(args.config, ExperimentConfig, overrides)
+        cfg = config_from_args(args, ExperimentConfig, ALIASES)
+        if args.print_config:
+            print_config(cfg)
+            return 0
         cfg.check()
         if cfg.executor.address and cfg.executor.name != "ray":
             raise ExperimentConfigError("--address (executor.address) needs --executor ray")
@@ -81,6 +81,19 @@ def cmd_experiment(args: argparse.Namespace) -> int:
     return 1 if result.failed and not args.report_only else 0
 
 
+#: Flags of ``fuzzyfire experiment``: aliases of ExperimentConfig keys.
+ALIASES: tuple[Alias, ...] = (
+    Alias("--executor", ("executor.name",), "where runs train: local (one at a time here) | ray (a task each)"),
+    Alias("--address", ("executor.address",), "ray: a running cluster, e.g. ray://head:10001 (null: a local Ray)"),
+)  # fmt: skip
+
+
+def _experiment_config() -> type:
+    from fuzzyfire.experiment_config import ExperimentConfig
+
+    return ExperimentConfig
+
+
 def register(sub: argparse._SubParsersAction) -> None:
     """Add ``experiment`` to the ``fuzzyfire`` parser."""
     p = add_command(
@@ -89,11 +102,8 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="the whole study: curate, synth, mix, train each mixture x seed, score, tables and report",
         description=_DESCRIPTION,
     )
-    p.add_argument("config", help="YAML file (configs/demo.yaml, configs/paper.yaml, configs/shared-data.yaml)")
+    add_config_options(p, _experiment_config, ALIASES, "docs/config.md#experiment", required=True)
     p.add_argument("--out", type=Path, help="experiment folder (default: out/<config name>); rerun to resume")
-    p.add_argument("--executor", help="local (default: one run at a time, all cores) or ray (one task per run)")
-    p.add_argument("--address", help="ray: address of a running cluster, e.g. ray://head:10001 (default: local Ray)")
-    p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="override a config key")
     p.add_argument(
         "--report-only",
         action="store_true",

@@ -1,15 +1,20 @@
-"""The ``fuzzyfire`` parser (every command, help order) and ``fuzzyfire experiment``: help with examples, clear
-errors before any work (exit code 2)."""
+"""The ``fuzzyfire`` parser (every command, help order, no flag with a default of its own) and ``fuzzyfire
+experiment``: help with examples, clear errors before any work (exit code 2); the Makefile repeats no default."""
 
 from __future__ import annotations
 
+import argparse
+import re
 from pathlib import Path
 
 import pytest
+import yaml
 from conftest import REPO
 from factories_experiment import write_toy_config
 
 from fuzzyfire.cli import build_parser, main
+from fuzzyfire.experiment_config import ExperimentConfig, RealConfig
+from ground.config.loader import to_dict
 
 
 def test_every_command_has_help_with_an_example(capsys):
@@ -88,10 +93,66 @@ def test_every_option_with_a_default_shows_it_in_help(capsys: pytest.CaptureFixt
         text = capsys.readouterr().out
         for action in parser._actions:
             default = action.default
-            if not action.option_strings or default in (None, [], "==SUPPRESS==") or isinstance(default, bool):
+            alias = getattr(action, "key_defaults", None) is not None
+            if (
+                not action.option_strings
+                or not alias
+                and (default in (None, [], "==SUPPRESS==") or isinstance(default, bool))
+            ):
                 continue
-            start = text.index(f"  {action.option_strings[0]}")
+            flag = re.compile(rf"\n  {re.escape(action.option_strings[0])}[ ,\n]")
+            start = flag.search(text, text.index("\noptions:")).start()
             block = text[start : text.find("\n  -", start + 1)]
-            assert "default" in block, (argv, action.option_strings, block)
+            assert re.search(r"\[[\w.]+=", block) if alias else "default" in block, (
+                argv,
+                action.option_strings,
+                block,
+            )
             checked += 1
     assert checked > 50
+
+
+#: What a flag that is no setting defaults to: nothing (an input, an output, a switch, a repeatable option).
+NO_DEFAULT = (None, False, [], argparse.SUPPRESS)
+
+
+def test_no_flag_of_any_command_holds_a_default_of_its_own() -> None:
+    """Every default lives once, in a config dataclass: a flag with a value of its own is an alias of a key (its
+    help reads the key's default from the dataclass); any other flag defaults to nothing."""
+    commands = list(_commands(build_parser()))
+    assert len(commands) > 20
+    aliases = [a for _, p in commands for a in p._actions if getattr(a, "key_defaults", None) is not None]
+    assert len(aliases) > 100
+    wrong = [
+        f"fuzzyfire {' '.join(name)} {action.option_strings[0]} = {action.default!r}"
+        for name, parser in commands
+        for action in parser._actions
+        if action.option_strings
+        and getattr(action, "key_defaults", None) is None
+        and not isinstance(action, (argparse._HelpAction, argparse._VersionAction))
+        and action.default not in NO_DEFAULT
+    ]
+    assert wrong == []
+
+
+def _default(cfg: object, key: str) -> object:
+    """The default of the dotted ``key`` in the default ``cfg`` (a key inside a mapping or a null section: None)."""
+    node = cfg
+    for part in key.split("."):
+        if not hasattr(node, part):
+            return None
+        node = getattr(node, part)
+    return to_dict(node)
+
+
+def test_the_makefile_passes_keys_never_a_default() -> None:
+    """``make experiment``'s ``--set KEY=VALUE`` values differ from ExperimentConfig's defaults (a value equal to
+    a default would be a second place to change it); values made from the make variables are the user's."""
+    makefile = (REPO / "Makefile").read_text(encoding="utf-8")
+    tokens = [a or b for a, b in re.findall(r"--set (?:'([^']*)'|([^\s')]+))", makefile)]
+    sets = [tuple(tok.split("=", 1)) for tok in tokens if "$(" not in tok]
+    assert ("synth.method2.photo_negatives", "1.0") in sets
+    defaults = ExperimentConfig(real=RealConfig())
+    same = [f"{k}={v}" for k, v in sets if yaml.safe_load(v) == _default(defaults, k)]
+    assert same == []
+    assert _default(defaults, "train.epochs") == defaults.train.epochs  # the check can see a default

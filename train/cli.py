@@ -26,7 +26,7 @@ TRAIN_SPLITS = ("train",)
 VAL_SPLITS = ("valid", "val", "validation")
 
 
-def _read(path: str, fmt: str):  # -> ground.data.formats.common.ReadResult
+def _read(path: str, fmt: str | None):  # -> ground.data.formats.common.ReadResult
     """The dataset at ``path``."""
     from ground.data.formats.registry import read_dataset
 
@@ -195,8 +195,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--train-split", help="split of --train to use (default: train when present, else all)")
     p.add_argument("--val-split", help="split of --val to use (default: valid/val when present, else all)")
     formats = ("auto", *FORMATS)
-    p.add_argument("--train-format", default="auto", choices=formats, help="format of --train (default: detect)")
-    p.add_argument("--val-format", default="auto", choices=formats, help="format of --val (default: detect)")
+    p.add_argument("--train-format", choices=formats, help="format of --train (default: detect)")
+    p.add_argument("--val-format", choices=formats, help="format of --val (default: detect)")
     p.add_argument("--classes", help="training class names in output order, e.g. fire,smoke")
     p.add_argument(
         "--drop-class",

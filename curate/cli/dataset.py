@@ -21,14 +21,14 @@ from ground.cli.commands import (
 from ground.cli.options import Alias, one_of
 from ground.data.formats.images import NEGATIVES_ONLY
 from ground.data.problems import count_levels, has_errors
-from ground.data.writer import IMAGE_MODES, OUTPUT_FORMATS
+from ground.data.writer import DEFAULT_IMAGE_MODE, IMAGE_MODES, OUTPUT_FORMATS
 
 
 def cmd_convert(args: argparse.Namespace) -> int:
     result = read_from_args(args)
     ds = result.dataset
     formats = list(OUTPUT_FORMATS) if args.to == "all" else [args.to]
-    written = write_dataset_or_report(ds, args, "convert", formats, args.images)
+    written = write_dataset_or_report(ds, args, "convert", formats, args.images or DEFAULT_IMAGE_MODE)
     if written is None:
         return 2
     problems = result.problems + written.problems
@@ -143,9 +143,8 @@ def _register_convert(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--out", required=True, type=Path, help="output folder (must not be inside the source)")
     p.add_argument(
         "--images",
-        default="copy",
         choices=IMAGE_MODES,
-        help="how images reach the output (reference = absolute paths, COCO only)",
+        help=f"how images reach the output (reference = absolute paths, COCO only; default: {DEFAULT_IMAGE_MODE})",
     )
     p.add_argument("--overwrite", action="store_true", help="replace a fuzzyfire dataset already at --out")
     add_reader_args(p)

@@ -47,9 +47,7 @@ def add_command(sub: argparse._SubParsersAction, name: str, help: str, descripti
 def add_reader_args(p: argparse.ArgumentParser, source: bool = True) -> None:
     """Options every command that reads a dataset accepts; ``--source`` (the tag of every image) only where the
     command writes or shows the tag (``source``)."""
-    p.add_argument(
-        "--from", dest="fmt", default="auto", choices=("auto", *FORMATS), help="source format (default: detect)"
-    )
+    p.add_argument("--from", dest="fmt", choices=("auto", *FORMATS), help="source format (default: detect)")
     p.add_argument(
         "--names",
         type=lambda s: [n.strip() for n in s.split(",") if n.strip()],

@@ -9,7 +9,7 @@ from collections.abc import Iterable, Mapping, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import Any
+from typing import Any, Final
 
 from ground.data.dataset import Dataset, source_roots
 from ground.data.formats.coco import write_coco
@@ -19,6 +19,8 @@ from ground.data.problems import Problem
 from ground.run.progress import progress
 
 IMAGE_MODES: tuple[str, ...] = ("copy", "hardlink", "symlink", "reference")
+#: How images reach a written dataset unless told: copies (the output stands alone).
+DEFAULT_IMAGE_MODE: Final = "copy"
 OUTPUT_FORMATS: tuple[str, ...] = ("coco", "yolo")
 
 
@@ -117,7 +119,7 @@ def write_dataset(
     ds: Dataset,
     out: Path | str,
     formats: Sequence[str] = OUTPUT_FORMATS,
-    images: str = "copy",
+    images: str = DEFAULT_IMAGE_MODE,
     command: str = "",
     args: Mapping[str, Any] | None = None,
     sources: Iterable[Path] = (),

@@ -60,7 +60,7 @@ def detect_format(path: Path | str) -> str:
 
 def read_dataset(
     path: Path | str,
-    fmt: str = "auto",
+    fmt: str | None = None,
     *,
     names: Sequence[str] | None = None,
     source: str | None = None,
@@ -68,12 +68,12 @@ def read_dataset(
     alias_option: str = "aliases",
     label: str | None = None,
 ) -> ReadResult:
-    """Read a dataset of format ``fmt`` (``auto`` detects it). ``names`` only applies to YOLO. An alias of a
+    """Read a dataset of format ``fmt`` (``auto`` or None detects it). ``names`` only applies to YOLO. An alias of a
     class the source does not have is an :class:`~ground.data.names.UnknownNameError` naming ``alias_option``
     (the option or key that gave it: :meth:`~ground.data.formats.common.ReadResult.check_aliases`). ``label``
     declares a folder of images without label files image-labelled (every image holds that class); a source
     of any other format raises ValueError (its own labels say what its images hold)."""
-    fmt = detect_format(path) if fmt == "auto" else fmt
+    fmt = detect_format(path) if fmt in (None, "auto") else fmt
     if label is not None and fmt != "images":
         raise ValueError(f"{path}: label: {label} declares a folder of images without label files, but it reads as "
                          f"{fmt!r}{' (its folders name the classes)' if fmt == 'folders' else ' (it has labels)'}")  # fmt: skip
