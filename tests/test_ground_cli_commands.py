@@ -113,7 +113,7 @@ def test_reader_args_and_aliases() -> None:
     parser = argparse.ArgumentParser()
     add_reader_args(parser)
     args = parser.parse_args(["--names", "fire, smoke,", "--alias", "flame=fire", "--drop-class", "default"])
-    assert (args.fmt, args.names, args.drop_class, args.source) == (None, ["fire", "smoke"], ["default"], None)  # None: detect
+    assert (args.fmt, args.names, args.drop_class, args.source) == (None, ["fire", "smoke"], ["default"], None)
     assert parse_aliases([*args.alias, " big = fire "]) == {"flame": "fire", "big": "fire"}
     with pytest.raises(SystemExit, match="expected NAME=CLASS"):
         parse_aliases(["flame"])
