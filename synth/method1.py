@@ -30,6 +30,7 @@ from numpy.typing import NDArray
 
 from ground.data.boxes import clip_xyxy, mask_to_xywh, points_to_xyxy, xyxy_to_xywh
 from synth.compose.effects import Effects, apply_effects, expose, sample_effects
+from synth.flames.library import flame_draws
 from synth.flames.sprites import Sprite, SpriteSequence, flatten_rgba
 from synth.method_config import MethodConfig
 from synth.places import render
@@ -130,12 +131,8 @@ def place_plane(cfg: Method1Config, sprite: Sprite, view: View, rng: np.random.G
 
 def place_planes(cfg: Method1Config, library: Sequence[SpriteSequence], view: View, rng: np.random.Generator):
     """Up to ``max_flames`` planes (none for a negative image) with random sprites of the library."""
-    if rng.random() < cfg.negatives:
-        return []
     planes = []
-    for _ in range(int(rng.integers(1, cfg.max_flames + 1))):
-        seq = library[int(rng.integers(len(library)))]
-        frame = int(rng.integers(len(seq.sprites)))
+    for seq, frame in flame_draws(library, cfg.max_flames, cfg.negatives, rng):
         plane = place_plane(cfg, seq.sprites[frame], view, rng)
         if plane is not None:
             planes.append(Plane(plane.sprite, f"{seq.name}/{frame}", plane.pose, plane.width, plane.height))

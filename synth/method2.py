@@ -23,7 +23,7 @@ from synth.compose.composite import BLEND_MODES, Placement, composite
 from synth.compose.effects import Effects, apply_effects, expose, sample_effects, scale_light
 from synth.compose.metering import draw_radiance, flame_share, mean_linear_luma, metered_gain
 from synth.compose.visibility import delta_e, measure
-from synth.flames.library import pick_sequence
+from synth.flames.library import flame_draws
 from synth.flames.sprites import Sprite, SpriteSequence, flame_extent
 from synth.method_config import MethodConfig, PoolPlaces
 from synth.places import render
@@ -101,13 +101,9 @@ def plan_flames(
     panorama or room, :mod:`synth.places.sites`) only at pixels whose depth is > 0 (the ground) and never over the
     ``avoid`` boxes [x, y, w, h] (:func:`kept_clear`). No flame (an empty list) with probability ``negatives``
     (default ``cfg.negatives``; per view: :func:`negative_share`)."""
-    if rng.random() < (cfg.negatives if negatives is None else negatives):
-        return []
     fy = render.intrinsics(yfov, cfg.width, cfg.height)[1, 1]
     out = []
-    for _ in range(int(rng.integers(1, cfg.max_flames + 1))):
-        seq = pick_sequence(library, rng)
-        frame = int(rng.integers(len(seq.sprites)))
+    for seq, frame in flame_draws(library, cfg.max_flames, cfg.negatives if negatives is None else negatives, rng):
         sprite = seq.sprites[frame]
         if avoid is not None:
             spot = site_spot(depth, fy, flame_extent(sprite), cfg, avoid, rng)

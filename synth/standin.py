@@ -37,6 +37,7 @@ from ground.image.imageio import ImageError, read_image, unit_to_u8
 from ground.run.progress import progress
 from synth.compose.composite import BLEND_MODES, Placement, composite
 from synth.compose.effects import apply_effects, sample_effects
+from synth.flames.library import flame_draws
 from synth.flames.simulate import generate_sequence, sample_params
 from synth.flames.sprites import SpriteSequence
 from synth.staging import Staging, boxes_from_masks, build_dataset, contact_sheet
@@ -176,12 +177,8 @@ def plan_placements(
     cfg: StandInConfig, library: Sequence[SpriteSequence], rng: np.random.Generator
 ) -> list[tuple[Placement, str]]:
     """Random flames (sprite, size, position, blend) for one image; empty for a negative image."""
-    if rng.random() < cfg.negatives:
-        return []
     out = []
-    for _ in range(int(rng.integers(1, cfg.max_flames + 1))):
-        seq = library[int(rng.integers(len(library)))]
-        frame = int(rng.integers(len(seq.sprites)))
+    for seq, frame in flame_draws(library, cfg.max_flames, cfg.negatives, rng):
         sprite = seq.sprites[frame]
         hpx = max(int(round(rng.uniform(*cfg.flame_height) * cfg.height)), 8)
         sw, sh = sprite.size

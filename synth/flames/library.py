@@ -6,7 +6,7 @@ which the caller supplies (``fuzzyfire experiment`` cuts them from each mixture'
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Literal
@@ -100,3 +100,16 @@ def build_library(cfg: FlameLibraryConfig, cutouts: Sequence[SpriteSequence] = (
 def pick_sequence(library: Sequence[SpriteSequence], rng: np.random.Generator) -> SpriteSequence:
     """One sequence of ``library`` for a flame, uniform (one ``rng.integers`` draw)."""
     return library[int(rng.integers(len(library)))]
+
+
+def flame_draws(
+    library: Sequence[SpriteSequence], max_flames: int, negatives: float, rng: np.random.Generator
+) -> Iterator[tuple[SpriteSequence, int]]:
+    """The flames of one image as (sequence, frame index): none with probability ``negatives``, else 1 to
+    ``max_flames``, each a uniform sequence of ``library`` and frame of it. Drawn lazily, so the draws a caller
+    makes for each flame (its size, its place) come between them in ``rng``'s stream, as when written inline."""
+    if rng.random() < negatives:
+        return
+    for _ in range(int(rng.integers(1, max_flames + 1))):
+        seq = pick_sequence(library, rng)
+        yield seq, int(rng.integers(len(seq.sprites)))
