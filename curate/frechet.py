@@ -18,6 +18,9 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+#: Random equal-size draws of a gap interval (``synth gap``'s and an experiment report's default).
+DRAWS = 200
+
 
 def _factor(x: NDArray[np.floating]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """(mean (D,), factor F with F^T F = covariance): F is (n, D), or (D, D) when n > D."""
@@ -77,7 +80,7 @@ def gap_interval(
     synthetic: NDArray[np.floating],
     real: NDArray[np.floating],
     rng: np.random.Generator,
-    draws: int = 200,
+    draws: int = DRAWS,
     size: int | None = None,
 ) -> Gap:
     """The embedding gap of ``synthetic`` (n_s, D) to ``real`` (n_r, D) and the real-vs-real floor.

@@ -27,7 +27,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ground.image.imageio import read_image
-from synth.flames.cutouts import MASK_RULES, cut, pixel_box
+from synth.flames.cutouts import MASK_RULES, CutoutConfig, cut, pixel_box
 
 NEAR_FILLED = 0.9  # mask share of the box from which a cut-out counts as a filled rectangle
 
@@ -77,12 +77,12 @@ def measure(pool: Path, loose: float) -> dict[str, dict[str, list[float]]]:
         for k, bbox in enumerate(boxes, start=1):
             box = pixel_box(widened(bbox, loose), rgb.shape[1], rgb.shape[0])
             x, y, w, h = box
-            if min(w, h) < 16:
+            if min(w, h) < CutoutConfig().min_side:
                 continue
             truth = labels[y : y + h, x : x + w] == k
             for rule in MASK_RULES:
                 start = time.perf_counter()
-                result = cut(rgb, box, 0.08, rule)
+                result = cut(rgb, box, CutoutConfig(mask=rule))
                 if result is None:
                     break  # under min_cover: skipped by every rule alike
                 got[rule]["seconds"].append(time.perf_counter() - start)

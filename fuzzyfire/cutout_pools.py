@@ -2,7 +2,7 @@
 
 For a mixture R<m>_S<n> with m > 0 and a seed, the real training subset is the m real images the mixture trains
 on (:func:`curate.mix.real_subset`, drawn from ``real.train_split`` only). Its fire boxes are cut out
-(:mod:`synth.flames.cutouts`, the ``grabcut`` mask rule) into a stage ``cutouts-<hash>``, and a Method 2 pool
+(:mod:`synth.flames.cutouts`, at the defaults of ``fuzzyfire synth cutouts``: :func:`cut_settings`) into a stage ``cutouts-<hash>``, and a Method 2 pool
 ``method2-cutouts-<hash>`` is composited with those flames; the mixture's n synthetic images are drawn from that pool. Both stages live in ``OUT/data`` and are identified
 by the subset's content (:func:`ground.data.fingerprint.fingerprint`: image bytes, split and boxes), the mask
 rule's parameters and the pool's config, so mixtures and seeds that draw the same subset share them, and a
@@ -34,14 +34,8 @@ from fuzzyfire.stages import Stage, cached_stage, synth_stage
 if TYPE_CHECKING:
     from fuzzyfire.experiment_config import ExperimentConfig
     from ground.data.dataset import Dataset
+    from synth.flames.cutouts import CutoutConfig
     from synth.method2 import Method2Config
-
-#: The class whose boxes are cut out.
-FIRE = "fire"
-
-#: Cut-out settings: boxes at least this many pixels on both sides and this share fire-coloured (the command's
-#: defaults).
-MIN_SIDE, MIN_COVER = 16, 0.08
 
 #: Key of an own pool in :func:`cutout_pools`: (mixture, method, seed).
 PoolKey = tuple[str, str, int]
@@ -68,13 +62,20 @@ def frames_stage(root: Path, subset: Dataset) -> Stage:
     return cached_stage(root, "frames", identity, lambda out: write_dataset(subset, out, ("coco",), "symlink"))
 
 
-def mask_identity() -> dict[str, Any]:
-    """The cut-out mask rule and its parameters (in every cut-out stage's identity)."""
+def cut_settings() -> CutoutConfig:
+    """The own pools' cut-out settings: ``fuzzyfire synth cutouts``' defaults (fire boxes, the grabcut rule)."""
+    from synth.flames.cutouts import CutoutConfig
+
+    return CutoutConfig()
+
+
+def mask_identity(cut: CutoutConfig) -> dict[str, Any]:
+    """The cut-out mask rule of ``cut`` and its parameters (in every cut-out stage's identity)."""
     from synth.flames import cutouts
 
     return {
-        "rule": "grabcut",
-        "context": cutouts.CONTEXT,
+        "rule": cut.mask,
+        "context": cut.context,
         "iterations": cutouts.GRABCUT_ITERATIONS,
         "min_kept": cutouts.MIN_KEPT,
     }
@@ -88,23 +89,25 @@ def cutout_stage(root: Path, subset: Dataset) -> Stage:
     from ground.data.fingerprint import fingerprint
     from synth.flames.cutouts import cutouts, write_cutouts
 
+    settings = cut_settings()
     identity = {
         "kind": "cutouts",
         "real": fingerprint(subset).to_dict(),
-        "class": FIRE,
-        "min_side": MIN_SIDE,
-        "min_cover": MIN_COVER,
-        "mask": mask_identity(),
+        "class": settings.class_name,
+        "min_side": settings.min_side,
+        "min_cover": settings.min_cover,
+        "mask": mask_identity(settings),
     }
 
     def cut(out: Path) -> int:
-        return write_cutouts(cutouts(subset, FIRE, MIN_SIDE, MIN_COVER), out)
+        return write_cutouts(cutouts(subset, settings), out)
 
     stage = cached_stage(root, "cutouts", identity, cut)
     if not json.loads((stage.folder / "cutouts.json").read_text(encoding="utf-8")):
         raise ValueError(
-            f"flames.source: the {len(subset.images)} real images of a mixture give no cut-out (fire boxes of at "
-            f"least {MIN_SIDE} px and {MIN_COVER:.0%} fire colour): use flames.source simulated ({stage.folder})"
+            f"flames.source: the {len(subset.images)} real images of a mixture give no cut-out ({settings.class_name} "
+            f"boxes of at least {settings.min_side} px and {settings.min_cover:.0%} fire colour): use flames.source "
+            f"simulated ({stage.folder})"
         )
     return stage
 
@@ -135,8 +138,9 @@ def cutout_pools(
     m2 = cfg.synth.method2
     if m2 is None or not is_own(m2):
         return {}
-    if FIRE not in cfg.classes:
-        raise ValueError(f"own Method 2 pools take '{FIRE}' boxes, but classes are {list(cfg.classes)}")
+    fire = cut_settings().class_name
+    if fire not in cfg.classes:
+        raise ValueError(f"own Method 2 pools take '{fire}' boxes, but classes are {list(cfg.classes)}")
     entries = list(dict.fromkeys(mixtures))
     kept = [name for name in entries if parse_mixture(name).real == 0]
     if kept:

@@ -16,6 +16,7 @@ from typing import Literal, Optional
 
 from curate.curation import CurateConfig
 from curate.dedup import DEFAULT_THRESHOLD
+from curate.frechet import DRAWS
 from curate.sources import SourceConfig
 from eval.config import InferenceConfig
 from fuzzyfire.engine import EngineConfig, EngineError
@@ -184,7 +185,7 @@ class ReportConfig:
     bootstrap: int = 1000  # paired image-level bootstrap resamples per comparison (0 = no comparisons)
     baseline: Optional[str] = None  # mixture the others are compared with (default: largest real-only one)
     samples: bool = True  # sample thumbnails with boxes (8 per dataset) in report.html
-    gap_draws: int = 200  # realism gap of each synthetic pool (synth gap) over this many draws; 0 = none
+    gap_draws: int = DRAWS  # realism gap of each synthetic pool (synth gap) over this many draws; 0 = none
     min_fire_images: int = 50  # a test set with fewer fire images gets no AP or AP50 (their interval is too wide
     # to tell mixtures apart): its AP25 and image recall, with intervals, instead
     attributes: dict[str, Path] = field(default_factory=dict)  # test-set label -> CSV image,attribute,value of your

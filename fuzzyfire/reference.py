@@ -17,9 +17,12 @@ def sections() -> list[tuple[str, str, type]]:
     from curate.sources import MergeConfig
     from eval.config import CompareConfig, PredictConfig, ScoreConfig
     from fuzzyfire.experiment_config import ExperimentConfig
+    from synth.flames.cutouts import CutoutConfig
     from synth.flames.library import FlameLibraryConfig
+    from synth.gap import GapConfig
     from synth.method1 import Method1Config
     from synth.method2 import Method2Config
+    from synth.places.scenes import ScenesConfig
     from train.config import TrainConfig
 
     return [
@@ -32,6 +35,13 @@ def sections() -> list[tuple[str, str, type]]:
          "`synth.method1` (configs/synth-method1.yaml).", Method1Config),
         ("flame library", "`fuzzyfire synth flames [CONFIG.yaml]` and the `flames` section of Method 1 and 2.",
          FlameLibraryConfig),
+        ("synth cutouts", "`fuzzyfire synth cutouts SRC --out OUT [--config CONFIG.yaml] [--set KEY=VALUE]` and "
+         "`fuzzyfire synth colour SYNTHETIC REAL [--config CONFIG.yaml]` (its flame pixels are these cut-outs'); an "
+         "experiment's own cut-out pools (`synth.method2.flames.source: cutouts`) cut at these defaults.", CutoutConfig),
+        ("synth scenes", "`fuzzyfire synth scenes [CONFIG.yaml] --out OUT [--set KEY=VALUE]`.", ScenesConfig),
+        ("synth gap", "`fuzzyfire synth gap SYNTHETIC REAL [--config CONFIG.yaml] [--set KEY=VALUE]`; its `model` "
+         "section is dedup's. An experiment's report measures each pool's image gap over `report.gap_draws`.",
+         GapConfig),
         ("train", "`fuzzyfire train [CONFIG.yaml] --train DATASET --val VAL [--set KEY=VALUE]` and an experiment's `train`.",
          TrainConfig),
         ("curate", "`fuzzyfire curate CONFIG.yaml --out OUT [--set KEY=VALUE]` and an experiment's `real.curate`.",

@@ -9,8 +9,9 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from curate.cli.dedup import add_cache_args, embedding_run_aliases, model_aliases
 from ground.cli.commands import add_command
-from ground.cli.options import Alias
+from ground.cli.options import Alias, one_of
 from ground.run.cluster import EXECUTOR_CHOICES, open_cluster
 
 if TYPE_CHECKING:
@@ -52,24 +53,25 @@ def cmd_cutouts(args: argparse.Namespace) -> int:
     import sys
 
     from ground.cli.commands import print_problems, read_from_args
+    from ground.cli.options import command_config
     from ground.data.load import SplitError, pick_split
-    from synth.flames.cutouts import cutouts, write_cutouts
+    from synth.flames.cutouts import CutoutConfig, cutouts, write_cutouts
 
-    if args.min_side < 1 or not 0.0 <= args.min_cover <= 1.0:
-        raise ValueError(f"--min-side must be >= 1 and --min-cover in 0..1, got {args.min_side}, {args.min_cover}")
+    cfg = command_config(args, CutoutConfig, CUTOUT_ALIASES, {"SRC": args.src, "--out": args.out})
+    if cfg is None:
+        return 0
     result = read_from_args(args)
     try:
         ds = pick_split(result.dataset, args.split, args.src)
         problems: list = []
-        items = cutouts(ds, args.class_name, args.min_side, args.min_cover, problems, args.mask)
-        n = write_cutouts(items, args.out)
+        n = write_cutouts(cutouts(ds, cfg, problems), args.out)
     except (SplitError, ValueError, FileExistsError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
     if problems:
         print_problems(problems, sys.stderr, limit=20)
     print(
-        f"wrote {n} cut-outs of {args.class_name!r} from {len(ds.images)} images to {args.out} (use: --flames {args.out})"
+        f"wrote {n} cut-outs of {cfg.class_name!r} from {len(ds.images)} images to {args.out} (use: --flames {args.out})"
     )
     return 0
 
@@ -78,26 +80,67 @@ def cmd_scenes(args: argparse.Namespace) -> int:
     import cv2
     import numpy as np
 
+    from ground.cli.options import command_config
     from synth.places import camera, render, scenes
 
+    cfg = command_config(args, scenes.ScenesConfig, SCENES_ALIASES, {"--out": args.out})
+    if cfg is None:
+        return 0
     args.out.mkdir(parents=True, exist_ok=True)
-    w, h = args.size
-    with render.Renderer(w, h) as r:
-        for i in range(args.n):
-            env = scenes.build_environment(i, args.seed)
+    with render.Renderer(cfg.width, cfg.height) as r:
+        for i in range(cfg.n):
+            env = scenes.build_environment(i, cfg.seed)
             scene = scenes.to_pyrender(env, r.pyrender)
-            rng = np.random.default_rng([args.seed, 1, i])
+            rng = np.random.default_rng([cfg.seed, 1, i])
             view = camera.find_view(
                 env.camera, rng, lambda v, s=scene: render.render_view(r, s, v.pose, v.yfov, True)[1]
             )
             rgb, _ = render.render_view(r, scene, view.pose, view.yfov)
             cv2.imwrite(str(args.out / f"{env.name}.png"), cv2.cvtColor(rgb, cv2.COLOR_RGB2BGR))
-    print(f"wrote {args.n} environment previews to {args.out}")
+    print(f"wrote {cfg.n} environment previews to {args.out}")
     return 0
 
 
 def _size_keys(size: tuple[int, int]) -> dict[str, int]:
     return {"width": size[0], "height": size[1]}
+
+
+#: Flags of ``synth cutouts`` (keys of synth.flames.cutouts.CutoutConfig).
+CUTOUT_ALIASES: tuple[Alias, ...] = (
+    Alias("--class", ("class_name",), "class to cut out", {}),
+    Alias("--min-side", ("min_side",), "skip boxes smaller than this on either side, pixels", {"type": int}),
+    Alias("--min-cover", ("min_cover",), "skip boxes less fire-coloured than this share", {"type": float}),
+    Alias("--mask", ("mask",), "flame mask rule", one_of(("colour", "grabcut"))),
+)  # fmt: skip
+
+#: Flags of ``synth colour`` (keys of synth.flames.cutouts.CutoutConfig: its flame pixels are cut-outs').
+COLOUR_ALIASES: tuple[Alias, ...] = (Alias("--class", ("class_name",), "the flames' class", {}),)
+
+#: Flags of ``synth scenes`` (keys of synth.places.scenes.ScenesConfig).
+SCENES_ALIASES: tuple[Alias, ...] = (
+    Alias("--n", ("n",), "procedural environments to preview", {"type": int}),
+    Alias("--seed", ("seed",), "the environments' seed", {"type": int}),
+    Alias("--size", ("width", "height"), "preview size WxH, pixels", {"type": parse_size, "metavar": "WxH"},
+          _size_keys),
+)  # fmt: skip
+
+#: Flags of ``synth gap`` (keys of synth.gap.GapConfig).
+GAP_ALIASES: tuple[Alias, ...] = (
+    Alias("--format", ("format",), "layout of SYNTHETIC", one_of(("auto", "coco", "yolo", "voc", "dfire", "images"))),
+    Alias("--real-format", ("real_format",), "layout of REAL",
+          one_of(("auto", "coco", "yolo", "voc", "dfire", "images"))),
+    Alias("--draws", ("draws",), "random equal-size draws", {"type": int}),
+    Alias("--size", ("size",), "images (crops) per side (null: min(synthetic, real / 2))", {"type": int}),
+    Alias("--seed", ("seed",), "seed of the draws", {"type": int}),
+    Alias("--crops", ("crops",), "the flame gap: compare box crops, not whole images", {"action": "store_true"}),
+    Alias("--class", ("class_name",), "with --crops: the boxes' class", {}),
+    Alias("--all-boxes", ("all_boxes",), "with --crops: also the boxes a pool has no flame mask for (the own fires "
+          "of the labelled frames it composited on; left out by default: they are real flames)",
+          {"action": "store_true"}),
+    Alias("--context", ("context",), "with --crops: context around a box, fraction of its size", {"type": float}),
+    *model_aliases(),
+    *embedding_run_aliases(),
+)  # fmt: skip
 
 
 #: Flags of ``synth flames`` (keys of synth.flames.library.FlameLibraryConfig).
@@ -200,7 +243,7 @@ def _generate(args: argparse.Namespace, cfg: MethodConfig) -> WriteResult:
     from synth.generate import generate
 
     library = build_library(cfg.flames)
-    cluster = open_cluster(args.executor, args.address)
+    cluster = open_cluster(args.executor or "local", args.address)
     try:
         return generate(cfg, library, args.out, overwrite=args.overwrite, workers=_workers(args), cluster=cluster)
     finally:
@@ -246,9 +289,11 @@ def cmd_gap(args: argparse.Namespace) -> int:
 
     import numpy as np
 
-    from curate.cli.dedup import load_model_from_args, model_from_args
+    from curate.cli.dedup import load_model
     from ground.cli.commands import print_problems
+    from ground.cli.options import command_config
     from synth.gap import (
+        GapConfig,
         dataset_boxes,
         dataset_images,
         embed_crops,
@@ -259,10 +304,13 @@ def cmd_gap(args: argparse.Namespace) -> int:
         synthetic_boxes,
     )
 
-    sides = [(args.synthetic, args.synthetic_split, args.format), (args.real, args.real_split, args.real_format)]
-    if args.crops:
-        boxes = [dataset_boxes(path, split, fmt, args.class_name) for path, split, fmt in sides]
-        if not args.all_boxes:
+    cfg = command_config(args, GapConfig, GAP_ALIASES, {"SYNTHETIC": args.synthetic, "REAL": args.real})
+    if cfg is None:
+        return 0
+    sides = [(args.synthetic, args.synthetic_split, cfg.format), (args.real, args.real_split, cfg.real_format)]
+    if cfg.crops:
+        boxes = [dataset_boxes(path, split, fmt, cfg.class_name) for path, split, fmt in sides]
+        if not cfg.all_boxes:
             boxes[0], left = synthetic_boxes(args.synthetic, boxes[0])
             if left:
                 print(
@@ -271,23 +319,22 @@ def cmd_gap(args: argparse.Namespace) -> int:
                     file=sys.stderr,
                 )
             if not boxes[0]:
-                print(f"error: {args.synthetic}: no {args.class_name!r} box of a drawn flame", file=sys.stderr)
+                print(f"error: {args.synthetic}: no {cfg.class_name!r} box of a drawn flame", file=sys.stderr)
                 return 2
-        embedder, _ = load_model_from_args(args)
-        synthetic, real = (embed_crops(str(s[0]), b, embedder, args.context) for s, b in zip(sides, boxes))
+        embedder, _ = load_model(cfg.model, args)
+        synthetic, real = (embed_crops(str(s[0]), b, embedder, cfg.context) for s, b in zip(sides, boxes))
     else:
         images = [dataset_images(path, split, fmt) for path, split, fmt in sides]
-        embedder, cache = load_model_from_args(args)
-        workers = model_from_args(args).workers
-        synthetic, real = (embed_set(str(s[0]), p, embedder, cache, workers) for s, p in zip(sides, images))
+        embedder, cache = load_model(cfg.model, args)
+        synthetic, real = (embed_set(str(s[0]), p, embedder, cache, cfg.model.workers) for s, p in zip(sides, images))
     problems = [*synthetic.problems, *real.problems]
     if problems:
         print_problems(problems, sys.stderr, limit=20)
-    rng = np.random.default_rng(args.seed)
-    unit = "crops" if args.crops else "images"
-    report = measure_gap(synthetic, real, embedder.model_id, rng, args.draws, args.size, unit)
-    by_kind = {} if args.crops else split_by_kind(synthetic, images[0], image_kinds(args.synthetic))
-    kinds = {k: measure_gap(s, real, embedder.model_id, np.random.default_rng(args.seed), args.draws, args.size)
+    rng = np.random.default_rng(cfg.seed)
+    unit = "crops" if cfg.crops else "images"
+    report = measure_gap(synthetic, real, embedder.model_id, rng, cfg.draws, cfg.size, unit)
+    by_kind = {} if cfg.crops else split_by_kind(synthetic, images[0], image_kinds(args.synthetic))
+    kinds = {k: measure_gap(s, real, embedder.model_id, np.random.default_rng(cfg.seed), cfg.draws, cfg.size)
              for k, s in by_kind.items() if len(s.vectors) >= 20}  # fmt: skip
     if args.json:
         print(json.dumps({**report.to_json(), "kinds": {k: r.to_json() for k, r in kinds.items()}}))
@@ -302,23 +349,29 @@ def cmd_colour(args: argparse.Namespace) -> int:
     import sys
 
     from ground.cli.commands import print_problems
+    from ground.cli.options import command_config
     from ground.data.formats.registry import read_dataset
     from ground.data.load import pick_split
+    from synth.flames.cutouts import CutoutConfig
     from synth.flames.measure import flame_colour
 
+    cfg = command_config(args, CutoutConfig, COLOUR_ALIASES, {"SYNTHETIC": args.synthetic, "REAL": args.real})
+    if cfg is None:
+        return 0
     sides = {"synthetic": (args.synthetic, args.synthetic_split), "real": (args.real, args.real_split)}
     problems: list = []
     measured = {}
     for name, (path, split) in sides.items():
         result = read_dataset(path)
         problems += result.problems
-        measured[name] = flame_colour(pick_split(result.dataset, split, path), args.class_name, problems)
+        measured[name] = flame_colour(pick_split(result.dataset, split, path), cfg, problems)
     if problems:
         print_problems(problems, sys.stderr, limit=20)
     if args.json:
         print(json.dumps({name: c.to_dict() for name, c in measured.items()}))
         return 0
-    print(f"flame colour of the {args.class_name!r} boxes (their GrabCut flame pixels; synth/flames/measure.py)")
+    rule = {"grabcut": "GrabCut", "colour": "colour-rule"}[cfg.mask]
+    print(f"flame colour of the {cfg.class_name!r} boxes (their {rule} flame pixels; synth/flames/measure.py)")
     print(f"{'':<10} {'boxes':>6} {'near-white':>10} {'saturation':>10} {'hue':>6} {'red':>6}")
     for name, c in measured.items():
         path, split = sides[name]
@@ -329,14 +382,17 @@ def cmd_colour(args: argparse.Namespace) -> int:
 
 
 def _add_pair(p: argparse.ArgumentParser, synthetic_help: str, real_help: str) -> None:
-    """The SYNTHETIC and REAL positionals of a command comparing two sets, and a split option for each."""
-    p.add_argument("synthetic", type=Path, help=synthetic_help)
-    p.add_argument("real", type=Path, help=real_help)
+    """The SYNTHETIC and REAL positionals of a command comparing two sets (required unless --print-config), and a
+    split option for each."""
+    p.add_argument("synthetic", type=Path, nargs="?", metavar="SYNTHETIC", help=synthetic_help)
+    p.add_argument("real", type=Path, nargs="?", metavar="REAL", help=real_help)
     p.add_argument("--synthetic-split", help="only this split of SYNTHETIC (default: every image)")
     p.add_argument("--real-split", help="only this split of REAL (default: every image)")
 
 
 def _register_colour(sub: argparse._SubParsersAction) -> None:
+    from ground.cli.options import add_config_options
+
     p = add_command(
         sub,
         "colour",
@@ -344,14 +400,32 @@ def _register_colour(sub: argparse._SubParsersAction) -> None:
         description="Measure the flames of a labelled synthetic set against a real one in four figures you can\n"
         "check by eye: the share of near-white (over-exposed) flame pixels, their median saturation, the median hue of\n"
         "the colourful ones (0 red, 30 orange, 60 yellow) and the share of those that are red. Flame pixels: the\n"
-        "GrabCut cut-out mask of every --class box (the rule of synth cutouts), on both sides.\n\n"
+        "GrabCut cut-out mask of every --class box (the rule and settings of synth cutouts), on both sides.\n\n"
         "example:\n  fuzzyfire synth colour out/m2 ../shared/data/fire-cctv-416 --real-split train\n"
         "  fuzzyfire synth colour out/m2-exposed out/curated --real-split train --json",
     )
     _add_pair(p, "synthetic dataset, any labelled format", "real dataset, any labelled format")
-    p.add_argument("--class", dest="class_name", default="fire", help="the flames' class (default fire)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
+    add_config_options(p, _cutout_config, COLOUR_ALIASES, "docs/config.md#synth-cutouts", flag="--config")
     p.set_defaults(func=cmd_colour)
+
+
+def _cutout_config() -> type:
+    from synth.flames.cutouts import CutoutConfig
+
+    return CutoutConfig
+
+
+def _scenes_config() -> type:
+    from synth.places.scenes import ScenesConfig
+
+    return ScenesConfig
+
+
+def _gap_config() -> type:
+    from synth.gap import GapConfig
+
+    return GapConfig
 
 
 def _flame_library_config() -> type:
@@ -393,6 +467,7 @@ def _register_flames(sub: argparse._SubParsersAction) -> None:
 
 def _register_cutouts(sub: argparse._SubParsersAction) -> None:
     from ground.cli.commands import add_reader_args
+    from ground.cli.options import add_config_options
 
     p = add_command(
         sub,
@@ -406,20 +481,17 @@ def _register_cutouts(sub: argparse._SubParsersAction) -> None:
         "example:\n  fuzzyfire synth cutouts ../shared/data/fire-cctv-416 --split train --out out/cutouts\n"
         "  fuzzyfire synth method2 --environments ../shared/data/scenes --flames out/cutouts --n 200 --out out/m2-real",
     )
-    p.add_argument("src", help="labelled dataset folder (any layout fuzzyfire reads)")
-    p.add_argument("--out", required=True, type=Path, help="new folder for the sequence folders")
+    p.add_argument("src", nargs="?", metavar="SRC", help="labelled dataset folder (any layout fuzzyfire reads)")
+    p.add_argument("--out", type=Path, help="new folder for the sequence folders (required unless --print-config)")
     p.add_argument("--split", help="only this split (default: every image)")
-    p.add_argument("--class", dest="class_name", default="fire", help="class to cut out (default fire)")
-    p.add_argument("--min-side", type=int, default=16, help="skip boxes smaller than this, pixels (default 16)")
-    p.add_argument(
-        "--min-cover", type=float, default=0.08, help="skip boxes less fire-coloured than this share (default 0.08)"
-    )
-    p.add_argument("--mask", default="grabcut", choices=("colour", "grabcut"), help="flame mask rule (default grabcut)")
     add_reader_args(p, source=False)
+    add_config_options(p, _cutout_config, CUTOUT_ALIASES, "docs/config.md#synth-cutouts", flag="--config")
     p.set_defaults(func=cmd_cutouts)
 
 
 def _register_scenes(sub: argparse._SubParsersAction) -> None:
+    from ground.cli.options import add_config_options
+
     p = add_command(
         sub,
         "scenes",
@@ -427,10 +499,8 @@ def _register_scenes(sub: argparse._SubParsersAction) -> None:
         description="Render a preview PNG of each of the first N environments.\n\n"
         "example:\n  fuzzyfire synth scenes --out out/scenes --n 48 --size 320x240",
     )
-    p.add_argument("--out", required=True, type=Path, help="folder for the preview PNGs")
-    p.add_argument("--n", type=int, default=48, help="procedural environments to preview")
-    p.add_argument("--seed", type=int, default=0, help="random seed")
-    p.add_argument("--size", type=parse_size, default="320x240", help="preview size WxH in pixels")
+    p.add_argument("--out", type=Path, help="folder for the preview PNGs (required unless --print-config)")
+    add_config_options(p, _scenes_config, SCENES_ALIASES, "docs/config.md#synth-scenes")
     p.set_defaults(func=cmd_scenes)
 
 
@@ -451,9 +521,8 @@ def _dataset_arguments(
     )
     p.add_argument(
         "--executor",
-        default="local",
         choices=EXECUTOR_CHOICES,
-        help="local (default: --workers processes) or ray (blocks of views as Ray tasks; the same bytes; --out on "
+        help="local (the default: --workers processes) or ray (blocks of views as Ray tasks; the same bytes; --out on "
         "storage every node sees)",
     )
     p.add_argument("--address", help="with --executor ray: a running cluster (HOST:6379); default a local Ray")
@@ -517,7 +586,7 @@ def _register_audit(sub: argparse._SubParsersAction) -> None:
 
 
 def _register_gap(sub: argparse._SubParsersAction) -> None:
-    from curate.cli.dedup import add_model_args
+    from ground.cli.options import add_config_options
 
     p = add_command(
         sub,
@@ -537,25 +606,9 @@ def _register_gap(sub: argparse._SubParsersAction) -> None:
         "synthetic dataset (or image folder with --format images)",
         "real dataset (or image folder with --real-format images)",
     )
-    formats = ["auto", "coco", "yolo", "voc", "dfire", "images"]
-    p.add_argument("--format", default="auto", choices=formats, help="layout of SYNTHETIC (default auto)")
-    p.add_argument("--real-format", default="auto", choices=formats, help="layout of REAL (default auto)")
-    p.add_argument("--draws", type=int, default=200, help="random equal-size draws (default 200)")
-    p.add_argument("--size", type=int, help="images (crops) per side (default min(synthetic, real / 2))")
-    p.add_argument("--crops", action="store_true", help="the flame gap: compare box crops, not whole images")
-    p.add_argument("--class", dest="class_name", default="fire", help="with --crops: the boxes' class (default fire)")
-    p.add_argument(
-        "--all-boxes",
-        action="store_true",
-        help="with --crops: also the boxes a pool has no flame mask for (the own fires of the labelled frames it "
-        "composited on; left out by default: they are real flames)",
-    )
-    p.add_argument(
-        "--context", type=float, default=0.1, help="with --crops: context around a box, fraction of its size (0.1)"
-    )
-    p.add_argument("--seed", type=int, default=0, help="seed of the draws (default 0)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
-    add_model_args(p)
+    add_cache_args(p)
+    add_config_options(p, _gap_config, GAP_ALIASES, "docs/config.md#synth-gap", flag="--config")
     p.set_defaults(func=cmd_gap)
 
 

@@ -17,7 +17,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal, Optional
 
 import cv2
 import numpy as np
@@ -25,8 +25,9 @@ from numpy.typing import NDArray
 
 from curate.embed import OnnxEmbedder, l2_normalize
 from curate.embedcache import EmbeddingCache
-from curate.frechet import Gap, gap_interval
+from curate.frechet import DRAWS, Gap, gap_interval
 from curate.scan import list_image_files, scan_images
+from curate.settings import EmbedderConfig
 from ground.data.problems import Problem
 from ground.image.imageio import ImageError, read_image
 
@@ -43,6 +44,32 @@ class ImageSet:
 #: Context around a box when it is cut out for the flame gap: this fraction of the box's width (height) on the
 #: left and right (top and bottom).
 CROP_CONTEXT = 0.1
+
+#: The layout of a side: ``auto`` (detect), a labelled format, or ``images`` (a plain folder of images).
+GapFormat = Literal["auto", "coco", "yolo", "voc", "dfire", "images"]
+
+
+@dataclass(frozen=True)
+class GapConfig:
+    """``fuzzyfire synth gap SYNTHETIC REAL``: how far a synthetic set is from a real one (module docstring)."""
+
+    format: GapFormat = "auto"  # layout of SYNTHETIC (auto: detect; images: a plain folder of images, no labels)
+    real_format: GapFormat = "auto"  # layout of REAL, as format
+    draws: int = DRAWS  # random equal-size draws, >= 1
+    size: Optional[int] = None  # images (crops) per side, >= 2; null = min(synthetic, real / 2)
+    seed: int = 0  # seed of the draws
+    crops: bool = False  # the flame gap: compare box crops, not whole images
+    class_name: str = "fire"  # crops: the boxes' class
+    context: float = CROP_CONTEXT  # crops: context around a box, fraction of its width (height) on each side, >= 0
+    all_boxes: bool = False  # crops: also the boxes a pool has no flame mask for (the own fires of the labelled
+    # frames it composited on; left out by default: they are real flames)
+    model: EmbedderConfig = EmbedderConfig()  # the embedding CNN (built-in ImageNet Lite0, or your ONNX), as dedup's
+
+    def __post_init__(self) -> None:
+        if self.draws < 1 or (self.size is not None and self.size < 2) or self.context < 0:
+            raise ValueError(
+                f"draws must be >= 1, size >= 2 (or null), context >= 0; got {self.draws}, {self.size}, {self.context}"
+            )
 
 
 @dataclass(frozen=True)
@@ -248,7 +275,7 @@ def measure_gap(
     real: ImageSet,
     model: str,
     rng: np.random.Generator,
-    draws: int = 200,
+    draws: int = DRAWS,
     size: int | None = None,
     unit: str = "images",
 ) -> GapReport:

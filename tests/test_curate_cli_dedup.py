@@ -139,17 +139,3 @@ def test_settings_print_and_read_back_without_any_image(tmp_path: Path, capsys) 
     assert "DIR is required (unless --print-config)" in capsys.readouterr().err
     assert main(["leakage", str(tmp_path), "--config", str(tmp_path / "nope.yaml")]) == 2
     assert capsys.readouterr().err == f"error: {tmp_path / 'nope.yaml'}: does not exist, not a settings file\n"
-
-
-def test_the_embedding_flags_of_a_command_without_settings_hold_no_defaults() -> None:
-    import argparse
-
-    from curate.cli.dedup import add_model_args, model_from_args
-    from curate.settings import EmbedderConfig
-
-    p = argparse.ArgumentParser()
-    add_model_args(p)  # synth gap's
-    assert all(a.default is None for a in p._actions if a.dest.startswith("alias_"))
-    assert model_from_args(p.parse_args([])) == EmbedderConfig()
-    given = model_from_args(p.parse_args(["--nhwc", "--mean", "1,2,3", "--workers", "2"]))
-    assert given == EmbedderConfig(layout="nhwc", mean=(1.0, 2.0, 3.0), workers=2)

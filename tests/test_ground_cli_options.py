@@ -127,10 +127,21 @@ def _commands():
     from eval.cli.predict import ALIASES as PREDICT_ALIASES
     from eval.cli.score import ALIASES as SCORE_ALIASES
     from eval.config import CompareConfig, PredictConfig, ScoreConfig
-    from synth.cli import FLAME_ALIASES, METHOD1_ALIASES, METHOD2_ALIASES
+    from synth.cli import (
+        COLOUR_ALIASES,
+        CUTOUT_ALIASES,
+        FLAME_ALIASES,
+        GAP_ALIASES,
+        METHOD1_ALIASES,
+        METHOD2_ALIASES,
+        SCENES_ALIASES,
+    )
+    from synth.flames.cutouts import CutoutConfig
     from synth.flames.library import FlameLibraryConfig
+    from synth.gap import GapConfig
     from synth.method1 import Method1Config
     from synth.method2 import Method2Config
+    from synth.places.scenes import ScenesConfig
     from train.cli import ALIASES as TRAIN_ALIASES
     from train.config import TrainConfig
 
@@ -138,6 +149,10 @@ def _commands():
         (FlameLibraryConfig, FLAME_ALIASES),
         (Method1Config, METHOD1_ALIASES),
         (Method2Config, METHOD2_ALIASES),
+        (CutoutConfig, CUTOUT_ALIASES),
+        (CutoutConfig, COLOUR_ALIASES),
+        (ScenesConfig, SCENES_ALIASES),
+        (GapConfig, GAP_ALIASES),
         (TrainConfig, TRAIN_ALIASES),
         (ScoreConfig, SCORE_ALIASES),
         (CompareConfig, COMPARE_ALIASES),

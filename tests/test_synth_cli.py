@@ -260,4 +260,4 @@ def test_method2_says_which_backgrounds_it_took_for_panoramas_and_keeps_small_2_
 def test_cutouts_refuse_settings_out_of_range_before_reading(tmp_path, capsys):
     for extra in (["--min-cover", "3"], ["--min-side", "0"]):
         assert main(["synth", "cutouts", str(tmp_path / "nowhere"), "--out", str(tmp_path / "c"), *extra]) == 2
-        assert "--min-side must be >= 1 and --min-cover in 0..1" in capsys.readouterr().err
+        assert "min_side must be >= 1 and min_cover in 0..1" in capsys.readouterr().err

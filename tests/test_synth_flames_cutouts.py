@@ -12,7 +12,16 @@ import pytest
 from fuzzyfire.cli import main
 from ground.data.formats.registry import read_dataset
 from ground.data.problems import Problem
-from synth.flames.cutouts import MIN_KEPT, cut, cutouts, filled, fire_mask, grabcut_mask, pixel_box
+from synth.flames.cutouts import (
+    MIN_KEPT,
+    CutoutConfig,
+    cut,
+    cutouts,
+    filled,
+    fire_mask,
+    grabcut_mask,
+    pixel_box,
+)
 from synth.flames.sprites import load_library, write_png
 
 ORANGE, CORE, BLUE, GREY = (240, 120, 20), (255, 240, 200), (30, 60, 200), (128, 128, 128)
@@ -41,13 +50,13 @@ def test_holes_are_filled_and_the_outside_stays_empty() -> None:
 
 def test_a_cutout_is_the_crop_with_the_flame_as_alpha() -> None:
     img = _image_with_disc()
-    got = cut(img, (30, 20, 60, 60), min_cover=0.08)
+    got = cut(img, (30, 20, 60, 60), CutoutConfig(min_cover=0.08))
     assert got is not None
     rgba, cover = got
     assert rgba.shape == (60, 60, 4) and np.array_equal(rgba[..., :3], img[20:80, 30:90])
     assert rgba[30, 30, 3] == 255 and rgba[0, 0, 3] == 0  # disc centre opaque, blue corner transparent
     assert 0.25 < cover < 0.45  # pi 20^2 / 60^2 = 0.35
-    assert cut(img, (100, 0, 50, 30), min_cover=0.08) is None  # only sky
+    assert cut(img, (100, 0, 50, 30), CutoutConfig(min_cover=0.08)) is None  # only sky
 
 
 WALL = (190, 110, 60)  # a warm wall lit by the fire: fire-coloured by the colour rule
@@ -73,35 +82,39 @@ def test_grabcut_cuts_the_flame_out_of_a_fire_lit_wall_the_colour_rule_takes_who
     img, truth = _flame_on_a_lit_wall()
     box = (50, 30, 60, 60)
     inside = truth[30:90, 50:110]
-    colour, cover = cut(img, box, 0.08, mask="colour")
-    grab, same_cover = cut(img, box, 0.08, mask="grabcut")
+    colour, cover = cut(img, box, CutoutConfig(mask="colour"))
+    grab, same_cover = cut(img, box, CutoutConfig(mask="grabcut"))
     assert cover == same_cover == 1.0  # the whole box passes the colour rule: the skip rule is unchanged
     assert (colour[..., 3] >= 128).all()  # a filled rectangle
     assert _iou(grab[..., 3] >= 128, inside) > 0.95 and grab[0, 0, 3] == 0 and grab[30, 30, 3] == 255
     assert np.array_equal(grab[..., :3], colour[..., :3])  # the same pixels, another alpha
-    assert cut(_image_with_disc(), (30, 20, 60, 60), 0.08)[0][0, 0, 3] == 0  # sky corner stays out (default rule)
+    assert (
+        cut(_image_with_disc(), (30, 20, 60, 60), CutoutConfig())[0][0, 0, 3] == 0
+    )  # sky corner stays out (default rule)
     with pytest.raises(ValueError, match="unknown cut-out mask rule 'snake'; choose one of colour, grabcut"):
-        cut(img, box, 0.08, mask="snake")
+        CutoutConfig(mask="snake")
 
 
 def test_grabcut_masks_are_deterministic_and_independent_of_earlier_cuts() -> None:
     img, _ = _flame_on_a_lit_wall()
     other = _image_with_disc(centre=(100, 70), r=25)
-    alone = cut(img, (50, 30, 60, 60), 0.08)[0]
-    cut(other, (75, 45, 50, 50), 0.08)  # k-means draws from OpenCV's RNG: reset before each cut
+    alone = cut(img, (50, 30, 60, 60), CutoutConfig())[0]
+    cut(other, (75, 45, 50, 50), CutoutConfig())  # k-means draws from OpenCV's RNG: reset before each cut
     cv2.setRNGSeed(12345)
-    assert cut(img, (50, 30, 60, 60), 0.08)[0].tobytes() == alone.tobytes()
+    assert cut(img, (50, 30, 60, 60), CutoutConfig())[0].tobytes() == alone.tobytes()
 
 
 def test_grabcut_keeps_the_colour_mask_without_background_to_learn_from_or_when_it_keeps_too_little() -> None:
     orange = np.zeros((40, 40, 3), np.uint8)
     orange[:] = ORANGE
     start = filled(fire_mask(orange))
-    assert grabcut_mask(orange, (0, 0, 40, 40), start) is start  # the box is the image and all flame
+    assert (
+        grabcut_mask(orange, (0, 0, 40, 40), start, CutoutConfig().context) is start
+    )  # the box is the image and all flame
     img, _ = _flame_on_a_lit_wall()
     speck = np.zeros((60, 60), bool)
     speck[0, 0] = True  # a start GrabCut reduces to under MIN_KEPT of the box
-    got = grabcut_mask(img, (50, 30, 60, 60), speck)
+    got = grabcut_mask(img, (50, 30, 60, 60), speck, CutoutConfig().context)
     assert got is speck or got.mean() >= MIN_KEPT
 
 
@@ -145,19 +158,21 @@ def labelled(tmp_path: Path) -> Path:
 def test_cutouts_skip_small_and_sky_boxes_and_other_classes(labelled: Path) -> None:
     ds = read_dataset(labelled).dataset.select_split("train")
     problems: list[Problem] = []
-    items = list(cutouts(ds, "fire", min_side=16, min_cover=0.08, problems=problems))
+    items = list(cutouts(ds, CutoutConfig(class_name="fire", min_side=16, min_cover=0.08), problems))
     assert [(Path(c.file).stem, c.box) for c in items] == [("a0", (30, 20, 60, 60)), ("a1", (75, 45, 50, 50))]
     assert not problems
-    assert [c.box for c in cutouts(ds, "Flames")] == [c.box for c in items]  # a synonym of fire
+    assert [c.box for c in cutouts(ds, CutoutConfig(class_name="Flames"))] == [
+        c.box for c in items
+    ]  # a synonym of fire
     with pytest.raises(ValueError, match=r"--class 'flamme': no such class \(classes: 'fire', 'smoke'\)"):
-        list(cutouts(ds, "flamme"))
+        list(cutouts(ds, CutoutConfig(class_name="flamme")))
 
 
 def test_an_unreadable_image_is_named_and_the_rest_is_cut(labelled: Path) -> None:
     ds = read_dataset(labelled).dataset.select_split("train")
     (labelled / "train" / "images" / "a1.png").write_bytes(b"not a png")  # broken after the listing
     problems: list[Problem] = []
-    items = list(cutouts(ds, "fire", problems=problems))
+    items = list(cutouts(ds, CutoutConfig(), problems))
     assert [Path(c.file).stem for c in items] == ["a0"]
     assert len(problems) == 1 and problems[0].path.endswith("a1.png")
 
@@ -207,6 +222,6 @@ def test_a_failed_write_removes_what_it_wrote(labelled: Path, tmp_path: Path, mo
     for out in (tmp_path / "new", tmp_path / "empty"):
         written.clear()
         with pytest.raises(OSError, match="disk full"):
-            module.write_cutouts(cutouts(ds, "fire", min_cover=0.08), out)
+            module.write_cutouts(cutouts(ds, CutoutConfig()), out)
         assert written and not written[0].exists()
     assert not (tmp_path / "new").exists() and (tmp_path / "empty").is_dir()

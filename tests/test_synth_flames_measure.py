@@ -11,6 +11,7 @@ import pytest
 
 from fuzzyfire.cli import main
 from ground.data.formats.registry import read_dataset
+from synth.flames.cutouts import CutoutConfig
 from synth.flames.measure import colour_of, flame_colour
 
 WHITE, RED, ORANGE, YELLOW, BLUE = (255, 255, 250), (230, 20, 10), (255, 128, 0), (250, 230, 40), (30, 60, 200)
@@ -46,15 +47,15 @@ def _flames(root: Path, core: tuple[int, int, int], edge: tuple[int, int, int]) 
 
 
 def test_white_cored_red_edged_flames_read_so_and_yellow_ones_do_not(tmp_path: Path) -> None:
-    photo = flame_colour(read_dataset(_flames(tmp_path / "a", WHITE, RED)).dataset)
-    sticker = flame_colour(read_dataset(_flames(tmp_path / "b", YELLOW, ORANGE)).dataset)
+    photo = flame_colour(read_dataset(_flames(tmp_path / "a", WHITE, RED)).dataset, CutoutConfig())
+    sticker = flame_colour(read_dataset(_flames(tmp_path / "b", YELLOW, ORANGE)).dataset, CutoutConfig())
     assert photo.boxes == sticker.boxes == 2 and photo.pixels > 2 * np.pi * 15**2
     assert photo.white > 0.2 and sticker.white == 0.0
     assert photo.red > 0.5 > sticker.red and photo.hue < 12 < 25 <= sticker.hue
     blank = tmp_path / "c"
     _flames(blank, BLUE, BLUE)
     with pytest.raises(ValueError, match="no 'fire' box of at least 16 px with fire colours"):
-        flame_colour(read_dataset(blank).dataset)
+        flame_colour(read_dataset(blank).dataset, CutoutConfig())
 
 
 def test_the_command_prints_both_sides_and_json(tmp_path: Path, capsys) -> None:

@@ -78,6 +78,27 @@ def test_gap_command(folders, capsys) -> None:
     assert json.loads(capsys.readouterr().out) == report
 
 
+def test_gap_settings_print_and_take_the_model_flags_into_their_model_section(tmp_path: Path, capsys) -> None:
+    import yaml
+
+    from curate.settings import EmbedderConfig
+    from ground.config.loader import to_dict
+    from synth.gap import GapConfig
+
+    assert main(["synth", "gap", "--print-config"]) == 0  # no SYNTHETIC and REAL needed to print the settings
+    assert yaml.safe_load(capsys.readouterr().out)["draws"] == GapConfig().draws
+    argv = ["synth", "gap", "--print-config", "--crops", "--nhwc", "--mean", "1,2,3", "--workers", "2"]
+    assert main([*argv, "--set", "context=0.2"]) == 0
+    (tmp_path / "gap.yaml").write_text(capsys.readouterr().out)
+    got = yaml.safe_load((tmp_path / "gap.yaml").read_text())
+    model = EmbedderConfig(layout="nhwc", mean=(1.0, 2.0, 3.0), workers=2)
+    assert got == yaml.safe_load(yaml.safe_dump(to_dict(GapConfig(crops=True, context=0.2, model=model))))
+    assert main(["synth", "gap", "--config", str(tmp_path / "gap.yaml"), "--print-config"]) == 0
+    assert yaml.safe_load(capsys.readouterr().out) == got  # the printed settings read back unchanged
+    assert main(["synth", "gap", str(tmp_path)]) == 2
+    assert "REAL is required" in capsys.readouterr().err
+
+
 def test_a_mixed_pool_gets_a_gap_per_kind(folders, tmp_path, capsys) -> None:
     """Method 2 on photos and panoramas in one pool: the gap of each kind's images beside the whole pool's."""
     import cv2

@@ -112,32 +112,6 @@ def add_cache_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--no-cache", action="store_true", help="do not read or write the embedding cache")
 
 
-def add_model_args(p: argparse.ArgumentParser) -> None:
-    """The embedding model's flags for a command without settings of its own (``synth gap``): aliases of
-    :class:`curate.settings.EmbedderConfig` keys, read by :func:`load_model_from_args`; and the cache's."""
-    from ground.cli.options import add_aliases
-
-    add_aliases(p.add_argument_group("embedding model", _USER_MODEL), EmbedderConfig, _MODEL_FLAGS)
-    add_cache_args(p)
-
-
-_MODEL_FLAGS = (*model_aliases(""), *embedding_run_aliases(""))
-
-
-def model_from_args(args: argparse.Namespace) -> EmbedderConfig:
-    """The EmbedderConfig the flags of :func:`add_model_args` give (each key not given at its default)."""
-    from ground.config.loader import build_config
-
-    flags = [(a, getattr(args, a.dest)) for a in _MODEL_FLAGS]
-    given = {k: v for a, value in flags if value is not None and value is not False for k, v in a.values(value).items()}
-    return build_config(given, EmbedderConfig)
-
-
-def load_model_from_args(args: argparse.Namespace):  # noqa: ANN201 - (OnnxEmbedder, EmbeddingCache | None)
-    """The embedder and the cache of the flags of :func:`add_model_args`."""
-    return load_model(model_from_args(args), args)
-
-
 def load_model(cfg: EmbedderConfig, args: argparse.Namespace):  # noqa: ANN201 - (OnnxEmbedder, EmbeddingCache | None)
     """The embedder of ``cfg`` (its notice on stderr) and the embedding cache of ``--cache`` / ``--no-cache``
     (None with ``--no-cache``). Preprocessing keys describe a user model: set without one, they are refused."""

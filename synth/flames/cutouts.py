@@ -5,15 +5,16 @@ much of the synthetic-to-real gap is the flames' appearance and how much the sce
 pipeline with real flames in place of simulated ones. It is also copy-paste augmentation (real flames put in
 new surroundings) for a user who has labelled fire images.
 
-Two mask rules (:data:`MASK_RULES`). ``colour``: a pixel is fire when it is warm (R > 0.5, R >= G >= 0.9 B,
-R - B > 0.25, channels in [0, 1]) or a bright core (R > 0.8, G > 0.65, R >= B); the mask is closed (5x5) and
-its holes filled. Warm or bright surfaces lit by the fire pass it too, so a box on a lit wall becomes a filled
+Two mask rules (:data:`MASK_RULES`, the ``mask`` key of :class:`CutoutConfig`). ``colour``: a pixel is fire
+when it is warm (R > 0.5, R >= G >= 0.9 B, R - B > 0.25, channels in [0, 1]) or a bright core (R > 0.8,
+G > 0.65, R >= B); the mask is closed (5x5) and its holes filled. Warm or bright surfaces lit by the fire pass it too, so a box on a lit wall becomes a filled
 rectangle. ``grabcut`` (the default): that mask only starts ``cv2.grabCut`` (its pixels probable flame, the
-box's other pixels probable background, a ring of :data:`CONTEXT` x the box's longer side around the box
+box's other pixels probable background, a ring of ``context`` x the box's longer side around the box
 background), which learns the image's own flame and background colours and cuts along their edges; when it
 keeps under :data:`MIN_KEPT` of the box (or the box has no background pixel to learn from) the colour mask is
 kept. ``experiments/cutout_masks.py`` measures both against true masks. Either mask is softened into the alpha
-channel; boxes whose colour-rule share is below ``min_cover`` are skipped.
+channel; boxes whose colour-rule share is below ``min_cover`` are skipped. Every setting is a key of
+:class:`CutoutConfig` (``fuzzyfire synth cutouts``, ``synth colour`` and the experiment's own pools).
 """
 
 from __future__ import annotations
@@ -23,6 +24,7 @@ import shutil
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Literal, get_args
 
 import cv2
 import numpy as np
@@ -39,17 +41,39 @@ from synth.flames.sprites import write_png
 #: Cut-outs per sequence folder (Method 1/2 pick a sequence, then one of its frames).
 PER_SEQUENCE = 25
 
-#: The mask rules of :func:`cut` (module docstring); ``grabcut`` is the default.
-MASK_RULES: tuple[str, ...] = ("colour", "grabcut")
-
-#: GrabCut's background ring around a box: this fraction of the box's longer side (clipped to the image).
-CONTEXT = 0.3
+#: A mask rule of :func:`cut` (module docstring).
+MaskRule = Literal["colour", "grabcut"]
+MASK_RULES: tuple[str, ...] = get_args(MaskRule)
 
 #: GrabCut iterations (colour models re-fitted, graph cut again).
 GRABCUT_ITERATIONS = 5
 
 #: A GrabCut mask keeping less than this share of the box is discarded for the colour mask.
 MIN_KEPT = 0.05
+
+
+@dataclass(frozen=True)
+class CutoutConfig:
+    """Which boxes are cut out and how: ``fuzzyfire synth cutouts`` and ``synth colour`` (its flame pixels), and,
+    at these defaults, the experiment's own cut-out pools (:mod:`fuzzyfire.cutout_pools`)."""
+
+    class_name: str = "fire"  # class whose boxes are cut out (a synonym such as Flames reads as fire)
+    min_side: int = 16  # skip boxes smaller than this on either side, pixels, >= 1
+    min_cover: float = 0.08  # skip boxes less fire-coloured (colour rule) than this share, 0..1
+    mask: MaskRule = "grabcut"  # flame mask rule: grabcut (the colour mask refined by cv2.grabCut) | colour
+    # (the colour mask alone)
+    context: float = 0.3  # grabcut: the background ring around a box, fraction of the box's longer side (clipped
+    # to the image), >= 0
+
+    def __post_init__(self) -> None:
+        if self.mask not in MASK_RULES:
+            raise ValueError(f"unknown cut-out mask rule {self.mask!r}; choose one of {', '.join(MASK_RULES)}")
+        if self.min_side < 1 or not 0.0 <= self.min_cover <= 1.0:
+            raise ValueError(f"min_side must be >= 1 and min_cover in 0..1, got {self.min_side}, {self.min_cover}")
+        if self.context < 0:
+            raise ValueError(f"context must be >= 0, got {self.context}")
+        if not self.class_name.strip():
+            raise ValueError("class_name must name a class")
 
 
 @dataclass(frozen=True)
@@ -79,14 +103,17 @@ def filled(mask: NDArray[np.bool_]) -> NDArray[np.bool_]:
     return cv2.drawContours(np.zeros_like(m), contours, -1, 1, thickness=-1).astype(bool)
 
 
-def grabcut_mask(rgb: NDArray[np.uint8], box: tuple[int, int, int, int], start: NDArray[np.bool_]) -> NDArray[np.bool_]:
+def grabcut_mask(
+    rgb: NDArray[np.uint8], box: tuple[int, int, int, int], start: NDArray[np.bool_], context: float
+) -> NDArray[np.bool_]:
     """(h, w) bool flame mask of integer box (x, y, w, h) of the (H, W, 3) RGB image ``rgb``: GrabCut started
-    from ``start`` ((h, w) bool, the colour mask) as the module docstring says; ``start`` itself when GrabCut
+    from ``start`` ((h, w) bool, the colour mask) with a background ring of ``context`` x the box's longer side,
+    as the module docstring says; ``start`` itself when GrabCut
     keeps too little or has no background to learn from. Deterministic: OpenCV draws its k-means start from the
     calling thread's RNG, which is reset before the call, so a mask never depends on what was cut before it."""
     x, y, w, h = box
     height, width = rgb.shape[:2]
-    pad = max(4, int(round(CONTEXT * max(w, h))))
+    pad = max(4, int(round(context * max(w, h))))
     x0, y0, x1, y1 = max(x - pad, 0), max(y - pad, 0), min(x + w + pad, width), min(y + h + pad, height)
     labels = np.full((y1 - y0, x1 - x0), cv2.GC_BGD, np.uint8)
     labels[y - y0 : y - y0 + h, x - x0 : x - x0 + w] = np.where(start, cv2.GC_PR_FGD, cv2.GC_PR_BGD)
@@ -101,22 +128,17 @@ def grabcut_mask(rgb: NDArray[np.uint8], box: tuple[int, int, int, int], start: 
 
 
 def cut(
-    rgb: NDArray[np.uint8],
-    box: tuple[int, int, int, int],
-    min_cover: float,
-    mask: str = "grabcut",
+    rgb: NDArray[np.uint8], box: tuple[int, int, int, int], cfg: CutoutConfig
 ) -> tuple[NDArray[np.uint8], float] | None:
     """The RGBA cut-out (h, w, 4) of integer box (x, y, w, h) of ``rgb`` and its fire share (colour rule), or
-    None when less than ``min_cover`` of the box is fire-coloured. ``mask``: one of :data:`MASK_RULES`."""
-    if mask not in MASK_RULES:
-        raise ValueError(f"unknown cut-out mask rule {mask!r}; choose one of {', '.join(MASK_RULES)}")
+    None when less than ``cfg.min_cover`` of the box is fire-coloured; the flame by the ``cfg.mask`` rule."""
     x, y, w, h = box
     crop = rgb[y : y + h, x : x + w]
     raw = fire_mask(crop)
     cover = float(raw.mean())
-    if cover < min_cover:
+    if cover < cfg.min_cover:
         return None
-    flame = filled(raw) if mask == "colour" else grabcut_mask(rgb, box, filled(raw))
+    flame = filled(raw) if cfg.mask == "colour" else grabcut_mask(rgb, box, filled(raw), cfg.context)
     alpha = cv2.GaussianBlur(flame.astype(np.float32), (0, 0), 1.0)
     return np.dstack([crop, unit_to_u8(alpha)]), cover
 
@@ -130,18 +152,11 @@ def pixel_box(bbox: tuple[float, float, float, float], width: int, height: int) 
     return x0, y0, max(x1 - x0, 0), max(y1 - y0, 0)
 
 
-def cutouts(
-    ds: Dataset,
-    category: str,
-    min_side: int = 16,
-    min_cover: float = 0.08,
-    problems: list[Problem] | None = None,
-    mask: str = "grabcut",
-) -> Iterator[Cutout]:
-    """Cut-outs of every ``category`` box of ``ds`` at least ``min_side`` pixels on both sides, image by image
-    in the dataset's order (each image read once), with the ``mask`` rule (:data:`MASK_RULES`) (:func:`cut`).
-    Unreadable images are appended to ``problems``."""
-    category = canonical_class(category)
+def cutouts(ds: Dataset, cfg: CutoutConfig, problems: list[Problem] | None = None) -> Iterator[Cutout]:
+    """Cut-outs of every ``cfg.class_name`` box of ``ds`` at least ``cfg.min_side`` pixels on both sides, image by
+    image in the dataset's order (each image read once), by :func:`cut`. Unreadable images are appended to
+    ``problems``."""
+    category, min_side = canonical_class(cfg.class_name), cfg.min_side
     check_names("class", [category], ds.category_names, str(ds.root), "classes", "--class")
     cat_ids = {c.id for c in ds.categories if c.name == category}
     boxes: dict[int, list[tuple[float, float, float, float]]] = {}
@@ -160,7 +175,7 @@ def cutouts(
         height, width = rgb.shape[:2]
         for bbox in boxes[img.id]:
             box = pixel_box(bbox, width, height)
-            got = cut(rgb, box, min_cover, mask) if min(box[2], box[3]) >= min_side else None
+            got = cut(rgb, box, cfg) if min(box[2], box[3]) >= min_side else None
             if got is not None:
                 yield Cutout(got[0], str(img.file_name), box, got[1])
 

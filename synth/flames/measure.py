@@ -2,8 +2,8 @@
 
 The flame gap (:mod:`synth.gap`, ``--crops``) is a distance between CNN embeddings; it has not ranked the flame
 looks tried on this project the way the eye does (docs/findings.md, "Does the flame look matter?"). These figures do, and they tell
-what to change. Over the flame pixels of every ``category`` box of a set - the GrabCut cut-out mask of
-:func:`synth.flames.cutouts.cutouts` (alpha >= 0.5), the same rule for a synthetic pool and a real set, so that neither
+what to change. Over the flame pixels of every ``class_name`` box of a set - the cut-out mask of
+:func:`synth.flames.cutouts.cutouts` (alpha >= 0.5; GrabCut at the :class:`~synth.flames.cutouts.CutoutConfig` defaults), the same rule for a synthetic pool and a real set, so that neither
 side is measured on truer masks than the other:
 
 - ``white``: the share of flame pixels that are near-white (HSV value > 0.9, saturation < 0.25): cores
@@ -26,7 +26,7 @@ from numpy.typing import NDArray
 
 from ground.data.dataset import Dataset
 from ground.data.problems import Problem
-from synth.flames.cutouts import cutouts
+from synth.flames.cutouts import CutoutConfig, cutouts
 
 #: HSV value and saturation bounds of a near-white pixel.
 WHITE_VALUE, WHITE_SATURATION = 0.9, 0.25
@@ -70,14 +70,16 @@ def colour_of(pixels: NDArray[np.uint8], boxes: int) -> FlameColour:
     )
 
 
-def flame_colour(ds: Dataset, category: str = "fire", problems: list[Problem] | None = None) -> FlameColour:
-    """The figures of the flame pixels of every ``category`` box of ``ds`` (at least 16 px on both sides, 8 %
-    fire-coloured: :func:`synth.flames.cutouts.cutouts`' defaults). ValueError when no box gives a cut-out; unreadable
-    images are appended to ``problems``."""
+def flame_colour(ds: Dataset, cfg: CutoutConfig, problems: list[Problem] | None = None) -> FlameColour:
+    """The figures of the flame pixels of the boxes of ``ds`` that :func:`synth.flames.cutouts.cutouts` cuts by
+    ``cfg`` (its ``class_name``, at least ``min_side`` px on both sides, ``min_cover`` fire-coloured). ValueError when
+    no box gives a cut-out; unreadable images are appended to ``problems``."""
     parts, boxes = [], 0
-    for item in cutouts(ds, category, problems=problems):
+    for item in cutouts(ds, cfg, problems):
         parts.append(item.rgba[..., :3][item.rgba[..., 3] >= 128])
         boxes += 1
     if not boxes:
-        raise ValueError(f"{ds.root}: no {category!r} box of at least 16 px with fire colours to measure")
+        raise ValueError(
+            f"{ds.root}: no {cfg.class_name!r} box of at least {cfg.min_side} px with fire colours to measure"
+        )
     return colour_of(np.concatenate(parts), boxes)

@@ -35,6 +35,20 @@ DEFAULT_SCENES = 48
 
 
 @dataclass(frozen=True)
+class ScenesConfig:
+    """``fuzzyfire synth scenes``: one preview per procedural environment, the first ``n`` of a seed's."""
+
+    n: int = DEFAULT_SCENES  # procedural environments to preview, >= 1
+    seed: int = 0  # the environments' seed (a Method 1 or 2 run of this seed builds the same rooms)
+    width: int = 320  # preview width, pixels, >= 16
+    height: int = 240  # preview height, pixels, >= 16
+
+    def __post_init__(self) -> None:
+        if self.n < 1 or self.width < 16 or self.height < 16:
+            raise ValueError(f"n must be >= 1, width and height >= 16; got n {self.n}, size {self.width}x{self.height}")
+
+
+@dataclass(frozen=True)
 class Solid:
     mesh: trimesh.Trimesh
     color: tuple[float, float, float]  # linear base colour 0..1
