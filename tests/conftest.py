@@ -1,5 +1,5 @@
 """Shared test fixtures: the path to ../shared/data (tests using it skip when it is absent), the synthesis tests'
-flame library, tiny datasets and a Ray head."""
+flame library, the built-in embedder, tiny datasets and a Ray head."""
 
 from __future__ import annotations
 
@@ -25,6 +25,17 @@ def library() -> list:
     from factories import tiny_flames
 
     return tiny_flames()
+
+
+@pytest.fixture(scope="session")
+def embedder(tmp_path_factory: pytest.TempPathFactory):  # -> curate.embed.OnnxEmbedder
+    """The built-in EfficientNet-Lite0 embedder, its ONNX export cached once per test session."""
+    from curate_helpers import use_session_cache
+
+    from curate.embed import load_embedder
+
+    use_session_cache(tmp_path_factory)
+    return load_embedder()
 
 
 @pytest.fixture(scope="session")

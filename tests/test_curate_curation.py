@@ -5,18 +5,12 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
-from curate_helpers import use_session_cache, write_scene_dataset
+from curate_helpers import write_scene_dataset
 
 from curate.curation import CurateConfig, DedupConfig, RankConfig, SplitConfig, curate
-from curate.embed import OnnxEmbedder, load_embedder
+from curate.embed import OnnxEmbedder
 from curate.sources import SourceConfig
 from curate.split import near_groups
-
-
-@pytest.fixture(scope="module")
-def embedder(tmp_path_factory: pytest.TempPathFactory) -> OnnxEmbedder:
-    use_session_cache(tmp_path_factory)
-    return load_embedder()
 
 
 @pytest.fixture(scope="module")

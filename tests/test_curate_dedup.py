@@ -6,11 +6,11 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from curate_helpers import save, scene, transformed, use_session_cache
+from curate_helpers import save, scene, transformed
 from PIL import Image
 
 from curate.dedup import UnionFind, find_duplicates
-from curate.embed import OnnxEmbedder, load_embedder
+from curate.embed import OnnxEmbedder
 from curate.scan import ScanResult, list_image_files, scan_images
 
 #: (removed, kept) for every planted copy; resolution, then file size, then path decide who stays.
@@ -21,12 +21,6 @@ ORDERED = {
     ("s5_pixels.png", "s5.png"),  # same pixels: the larger file (less compressed PNG) stays
 }
 UNORDERED = {frozenset({"s0.jpg", "s0_hflip.jpg"}), frozenset({"s3.jpg", "s3_bright.jpg"})}
-
-
-@pytest.fixture(scope="module")
-def embedder(tmp_path_factory: pytest.TempPathFactory) -> OnnxEmbedder:
-    use_session_cache(tmp_path_factory)
-    return load_embedder()
 
 
 @pytest.fixture(scope="module")

@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import torch
-from curate_helpers import GRACE_HOPPER, scene, use_session_cache
+from curate_helpers import GRACE_HOPPER, scene
 
 from curate.effnet import efficientnet_lite0
 from curate.embed import (
@@ -19,12 +19,6 @@ from curate.embed import (
     load_embedder,
 )
 from ground.image.imageio import read_image
-
-
-@pytest.fixture(scope="module")
-def embedder(tmp_path_factory: pytest.TempPathFactory) -> OnnxEmbedder:
-    use_session_cache(tmp_path_factory)
-    return load_embedder()
 
 
 def _batch() -> np.ndarray:

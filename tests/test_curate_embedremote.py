@@ -13,23 +13,17 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from curate_helpers import save, scene, transformed, use_session_cache
+from curate_helpers import save, scene, transformed
 
 from curate import embedremote
 from curate.dedupjob import dedup_options, run_dedup
-from curate.embed import OnnxEmbedder, load_embedder
+from curate.embed import OnnxEmbedder
 from curate.embedremote import TASKS_PER_GPU, task_gpus
 from curate.scan import list_image_files, scan_images
 from fuzzyfire.cli import main
 from ground.run.cluster import Cluster, ClusterError
 
 pytestmark = pytest.mark.slow
-
-
-@pytest.fixture(scope="module")
-def embedder(tmp_path_factory: pytest.TempPathFactory) -> OnnxEmbedder:
-    use_session_cache(tmp_path_factory)
-    return load_embedder()
 
 
 @pytest.fixture(scope="module")

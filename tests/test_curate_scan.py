@@ -7,18 +7,12 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from curate_helpers import save, scene, use_session_cache
+from curate_helpers import save, scene
 from factories import garbled_jpeg
 
-from curate.embed import OnnxEmbedder, load_embedder
+from curate.embed import OnnxEmbedder
 from curate.embedcache import EmbeddingCache
 from curate.scan import bounded_map, list_image_files, scan_images
-
-
-@pytest.fixture(scope="module")
-def embedder(tmp_path_factory: pytest.TempPathFactory) -> OnnxEmbedder:
-    use_session_cache(tmp_path_factory)
-    return load_embedder()
 
 
 @pytest.fixture()

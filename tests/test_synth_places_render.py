@@ -27,6 +27,16 @@ def _scene(pr, bg=(0.0, 0.0, 1.0, 1.0)):
     return scene, cam_pose
 
 
+def _quad(renderer, halves, size=(1.0, 1.0), bg=(0.0, 0.0, 1.0, 1.0)):
+    """A quad of ``size`` (m) textured with the RGBA ``halves`` before the camera, rendered: (scene, pose, colour,
+    depth)."""
+    pr = renderer.pyrender
+    scene, pose = _scene(pr, bg=bg)
+    scene.add(R.textured_quad(pr, *size, R.rgba_material(pr, halves)))
+    color, depth = renderer.color_depth(scene)
+    return scene, pose, color, depth
+
+
 def _halves(top, bottom, alpha_top=255, alpha_bottom=255, n=32):
     img = np.zeros((n, n, 4), np.uint8)
     img[: n // 2, :, :3], img[: n // 2, :, 3] = top, alpha_top
@@ -48,11 +58,7 @@ def test_ids_colors_round_trip():
 
 def test_texture_appears_upright(renderer):
     """Trap 4: pyrender flips textures on upload; textured_quad shows image row 0 at the top."""
-    pr = renderer.pyrender
-    scene, _ = _scene(pr)
-    mat = R.rgba_material(pr, _halves((255, 0, 0), (0, 255, 0)))
-    scene.add(R.textured_quad(pr, 1.0, 1.0, mat))
-    color, depth = renderer.color_depth(scene)
+    _, _, color, depth = _quad(renderer, _halves((255, 0, 0), (0, 255, 0)))
     ys, xs = np.nonzero(depth > 0)
     top, bottom = color[ys.min() + 2, xs.mean().astype(int)], color[ys.max() - 2, xs.mean().astype(int)]
     assert top[0] > 200 and top[1] < 50, top
@@ -61,11 +67,7 @@ def test_texture_appears_upright(renderer):
 
 def test_rgba_texture_is_transparent(renderer):
     """Trap 3: the alpha of an RGBA texture shows the background through (base colour alpha < 1)."""
-    pr = renderer.pyrender
-    scene, _ = _scene(pr, bg=(0.0, 0.0, 1.0, 1.0))
-    mat = R.rgba_material(pr, _halves((255, 0, 0), (0, 255, 0), alpha_top=0, alpha_bottom=255))
-    scene.add(R.textured_quad(pr, 1.0, 1.0, mat))
-    color, _ = renderer.color_depth(scene)
+    scene, _, color, _ = _quad(renderer, _halves((255, 0, 0), (0, 255, 0), alpha_top=0, alpha_bottom=255))
     quad = R.project(R.quad_corners(1.0, 1.0), scene.get_pose(scene.main_camera_node), R.intrinsics(np.pi / 3, W, H))
     x0, x1 = quad[:, 0].min(), quad[:, 0].max()
     y0, y1 = quad[:, 1].min(), quad[:, 1].max()
@@ -77,11 +79,7 @@ def test_rgba_texture_is_transparent(renderer):
 
 
 def test_projection_matches_rendered_silhouette(renderer):
-    pr = renderer.pyrender
-    scene, pose = _scene(pr)
-    mat = R.rgba_material(pr, _halves((255, 255, 255), (255, 255, 255)))
-    scene.add(R.textured_quad(pr, 0.8, 0.6, mat))
-    _, depth = renderer.color_depth(scene)
+    _, pose, _, depth = _quad(renderer, _halves((255, 255, 255), (255, 255, 255)), size=(0.8, 0.6))
     ys, xs = np.nonzero(depth > 0)
     uv = R.project(R.quad_corners(0.8, 0.6), pose, R.intrinsics(np.pi / 3, W, H))
     assert abs(xs.min() - uv[:, 0].min()) <= 1 and abs(xs.max() + 1 - uv[:, 0].max()) <= 1
