@@ -252,8 +252,8 @@ def _generate(args: argparse.Namespace, cfg: MethodConfig) -> WriteResult:
 
 
 def _workers(args: argparse.Namespace) -> int:
-    """--workers, 0 = one per core."""
-    if args.workers < 0:
+    """--workers; not given (or 0): one per core."""
+    if args.workers is not None and args.workers < 0:
         raise ValueError(f"--workers must be >= 0, got {args.workers}")
     return args.workers or os.cpu_count() or 1
 
@@ -516,8 +516,7 @@ def _dataset_arguments(
     p.add_argument(
         "--workers",
         type=int,
-        default=0,
-        help="image processes (default 0 = one per core; any number writes the same bytes)",
+        help="image processes (default: one per core; any number writes the same bytes)",
     )
     p.add_argument(
         "--executor",
