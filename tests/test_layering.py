@@ -5,6 +5,7 @@ layered by concept (docs/architecture.md)."""
 from __future__ import annotations
 
 import ast
+import re
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -168,3 +169,46 @@ def test_every_ground_floor_module_is_used_above_it(graph: dict[str, dict[str, i
     used |= {dst for src, edges in graph.items() for dst in edges if src.startswith("ground")}
     floor = [n for n in graph if n.startswith("ground.") and not _modules()[n].name == "__init__.py"]
     assert [n for n in floor if n not in used] == []
+
+
+def _trees() -> Iterator[tuple[Path, ast.AST]]:
+    for path in _modules().values():
+        yield path, ast.parse(path.read_text(encoding="utf-8"), str(path))
+
+
+def test_config_class_names_are_unique() -> None:
+    """One name per settings concept: no two ``...Config`` classes share a name anywhere in the tree."""
+    where: dict[str, list[str]] = {}
+    for path, tree in _trees():
+        for node in ast.walk(tree):
+            if isinstance(node, ast.ClassDef) and node.name.endswith("Config"):
+                where.setdefault(node.name, []).append(f"{path.relative_to(REPO)}:{node.lineno}")
+    assert len(where) > 30
+    assert {name: places for name, places in where.items() if len(places) > 1} == {}
+
+
+def test_no_config_key_is_read_with_a_default_of_its_own() -> None:
+    """``getattr(cfg, "key", default)`` on a config would take the default silently for a typo or a renamed key:
+    a key is read as an attribute of a typed config, so a wrong one fails at load or in the type check."""
+    wrong = [
+        f"{path.relative_to(REPO)}:{node.lineno}: {ast.unparse(node)}"
+        for path, tree in _trees()
+        for node in ast.walk(tree)
+        if isinstance(node, ast.Call)
+        and isinstance(node.func, ast.Name)
+        and node.func.id == "getattr"
+        and len(node.args) == 3
+        and re.search(r"cfg|config|settings", ast.unparse(node.args[0]))
+    ]
+    assert wrong == []
+
+
+def test_each_ground_floor_package_names_its_concept() -> None:
+    """Every package of the ground floor says in its docstring what it holds (docs/architecture.md has a line each)."""
+    architecture = (REPO / "docs" / "architecture.md").read_text(encoding="utf-8")
+    packages = sorted(p.parent for p in (REPO / "ground").glob("*/__init__.py"))
+    assert len(packages) >= 6
+    for package in packages:
+        doc = ast.get_docstring(ast.parse((package / "__init__.py").read_text(encoding="utf-8")))
+        assert doc and len(doc) > 40, package
+        assert f"`ground.{package.name}`" in architecture, package
