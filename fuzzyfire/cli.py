@@ -11,7 +11,7 @@ from pathlib import Path
 
 from fuzzyfire import __version__
 from ground.cli.commands import HelpFormatter, add_command
-from ground.cli.options import Alias, add_config_options
+from ground.cli.options import Alias, add_settings
 from ground.data.writer import OutputError
 
 #: Modules whose ``register(subparsers)`` adds commands, in help order (imported when the parser is built);
@@ -45,13 +45,12 @@ def cmd_experiment(args: argparse.Namespace) -> int:
     from fuzzyfire.executors import ExecutorError, build_executor
     from fuzzyfire.experiment import run_experiment
     from fuzzyfire.experiment_config import ExperimentConfig, ExperimentConfigError
-    from ground.cli.options import config_from_args, print_config
+    from ground.cli.options import command_config
     from ground.config.loader import ConfigError, located
 
     try:
-        cfg = config_from_args(args, ExperimentConfig, ALIASES)
-        if args.print_config:
-            print_config(cfg)
+        cfg = command_config(args, ExperimentConfig, ALIASES)
+        if cfg is None:
             return 0
         cfg.check()
         if cfg.executor.address and cfg.executor.name != "ray":
@@ -102,14 +101,13 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="the whole study: curate, synth, mix, train each mixture x seed, score, tables and report",
         description=_DESCRIPTION,
     )
-    add_config_options(p, _experiment_config, ALIASES, "docs/config.md#experiment", required=True)
+    add_settings(p, _experiment_config, ALIASES, cmd_experiment, required=True)
     p.add_argument("--out", type=Path, help="experiment folder (default: out/<config name>); rerun to resume")
     p.add_argument(
         "--report-only",
         action="store_true",
         help="train nothing: tables and report from the runs finished so far (e.g. while a cluster works)",
     )
-    p.set_defaults(func=cmd_experiment)
 
 
 def build_parser() -> argparse.ArgumentParser:

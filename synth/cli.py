@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING
 
 from curate.cli.dedup import add_cache_args, embedding_run_aliases, model_aliases
 from ground.cli.commands import add_command
-from ground.cli.options import Alias, one_of
+from ground.cli.options import Alias, add_settings, one_of
 from ground.run.cluster import EXECUTOR_CHOICES, open_cluster
 
 if TYPE_CHECKING:
@@ -29,15 +29,14 @@ def parse_size(text: str) -> tuple[int, int]:
 
 
 def cmd_flames(args: argparse.Namespace) -> int:
-    from ground.cli.options import config_from_args, print_config
+    from ground.cli.options import command_config
     from ground.run.progress import progress
     from synth.flames.library import FlameLibraryConfig, build_library
     from synth.flames.preview import write_preview
     from synth.flames.sprites import save_sequence
 
-    cfg = config_from_args(args, FlameLibraryConfig, FLAME_ALIASES)
-    if args.print_config:
-        print_config(cfg)
+    cfg = command_config(args, FlameLibraryConfig, FLAME_ALIASES)
+    if cfg is None:
         return 0
     if cfg.folders or cfg.source != "simulated":
         raise ValueError("synth flames simulates flames: folders and source cutouts have nothing to simulate")
@@ -195,13 +194,12 @@ METHOD2_ALIASES: tuple[Alias, ...] = (
 def _built(args: argparse.Namespace, schema: type, aliases: Sequence[Alias]):
     """The config of a dataset command, or None after ``--print-config`` printed it; the output folder and the
     places are checked before the flame library is made."""
-    from ground.cli.options import config_from_args, print_config
+    from ground.cli.options import command_config
     from ground.data.writer import check_output_target
     from synth.places.envfile import find_environment_files
 
-    cfg = config_from_args(args, schema, aliases)
-    if args.print_config:
-        print_config(cfg)
+    cfg = command_config(args, schema, aliases)
+    if cfg is None:
         return None
     if args.out is None:
         raise ValueError("--out is required (the output dataset folder)")
@@ -391,8 +389,6 @@ def _add_pair(p: argparse.ArgumentParser, synthetic_help: str, real_help: str) -
 
 
 def _register_colour(sub: argparse._SubParsersAction) -> None:
-    from ground.cli.options import add_config_options
-
     p = add_command(
         sub,
         "colour",
@@ -406,8 +402,7 @@ def _register_colour(sub: argparse._SubParsersAction) -> None:
     )
     _add_pair(p, "synthetic dataset, any labelled format", "real dataset, any labelled format")
     p.add_argument("--json", action="store_true", help="print one JSON object")
-    add_config_options(p, _cutout_config, COLOUR_ALIASES, "docs/config.md#synth-cutouts", flag="--config")
-    p.set_defaults(func=cmd_colour)
+    add_settings(p, _cutout_config, COLOUR_ALIASES, cmd_colour, section="synth cutouts", flag="--config")
 
 
 def _cutout_config() -> type:
@@ -447,8 +442,6 @@ def _method2_config() -> type:
 
 
 def _register_flames(sub: argparse._SubParsersAction) -> None:
-    from ground.cli.options import add_config_options
-
     p = add_command(
         sub,
         "flames",
@@ -461,13 +454,11 @@ def _register_flames(sub: argparse._SubParsersAction) -> None:
         "  fuzzyfire synth flames --out out/flames-exposed --exposed --set rare=0",
     )
     p.add_argument("--out", required=True, type=Path, help="folder for the sequence folders")
-    add_config_options(p, _flame_library_config, FLAME_ALIASES, "docs/config.md#flame-library")
-    p.set_defaults(func=cmd_flames)
+    add_settings(p, _flame_library_config, FLAME_ALIASES, cmd_flames, section="flame library")
 
 
 def _register_cutouts(sub: argparse._SubParsersAction) -> None:
     from ground.cli.commands import add_reader_args
-    from ground.cli.options import add_config_options
 
     p = add_command(
         sub,
@@ -485,13 +476,10 @@ def _register_cutouts(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--out", type=Path, help="new folder for the sequence folders (required unless --print-config)")
     p.add_argument("--split", help="only this split (default: every image)")
     add_reader_args(p, source=False)
-    add_config_options(p, _cutout_config, CUTOUT_ALIASES, "docs/config.md#synth-cutouts", flag="--config")
-    p.set_defaults(func=cmd_cutouts)
+    add_settings(p, _cutout_config, CUTOUT_ALIASES, cmd_cutouts, flag="--config")
 
 
 def _register_scenes(sub: argparse._SubParsersAction) -> None:
-    from ground.cli.options import add_config_options
-
     p = add_command(
         sub,
         "scenes",
@@ -500,17 +488,17 @@ def _register_scenes(sub: argparse._SubParsersAction) -> None:
         "example:\n  fuzzyfire synth scenes --out out/scenes --n 48 --size 320x240",
     )
     p.add_argument("--out", type=Path, help="folder for the preview PNGs (required unless --print-config)")
-    add_config_options(p, _scenes_config, SCENES_ALIASES, "docs/config.md#synth-scenes")
-    p.set_defaults(func=cmd_scenes)
+    add_settings(p, _scenes_config, SCENES_ALIASES, cmd_scenes)
 
 
 def _dataset_arguments(
-    p: argparse.ArgumentParser, schema: Callable[[], type], aliases: Sequence[Alias], anchor: str
+    p: argparse.ArgumentParser,
+    schema: Callable[[], type],
+    aliases: Sequence[Alias],
+    func: Callable[[argparse.Namespace], int],
 ) -> None:
-    """Method 1 and Method 2's options: the run's own (--out, --overwrite, --workers) and the settings (``schema``
-    imports the config class only when the help is printed)."""
-    from ground.cli.options import add_config_options
-
+    """Method 1 and Method 2's options: the run's own (--out, --overwrite, --workers), then the settings
+    (``schema`` imports the config class only when the help is printed) and ``func``, what the command runs."""
     p.add_argument("--out", type=Path, help="output dataset folder (required unless --print-config)")
     p.add_argument("--overwrite", action="store_true", help="replace a fuzzyfire dataset already at --out")
     p.add_argument(
@@ -525,7 +513,7 @@ def _dataset_arguments(
         "storage every node sees)",
     )
     p.add_argument("--address", help="with --executor ray: a running cluster (HOST:6379); default a local Ray")
-    add_config_options(p, schema, aliases, f"docs/config.md#{anchor}")
+    add_settings(p, schema, aliases, func)
 
 
 def _register_method1(sub: argparse._SubParsersAction) -> None:
@@ -543,8 +531,7 @@ def _register_method1(sub: argparse._SubParsersAction) -> None:
         "  fuzzyfire synth method1 configs/synth-method1.yaml --set n=200 --out out/m1-yaml\n"
         "  fuzzyfire synth audit out/m1 --json",
     )
-    _dataset_arguments(p, _method1_config, METHOD1_ALIASES, "synth-method1")
-    p.set_defaults(func=cmd_method1)
+    _dataset_arguments(p, _method1_config, METHOD1_ALIASES, cmd_method1)
 
 
 def _register_method2(sub: argparse._SubParsersAction) -> None:
@@ -565,8 +552,7 @@ def _register_method2(sub: argparse._SubParsersAction) -> None:
         "  fuzzyfire synth method2 configs/synth-method2.yaml --set n=200 --set flames.exposed=true --out out/m2-yaml\n"
         "  fuzzyfire synth audit out/m2 --json",
     )
-    _dataset_arguments(p, _method2_config, METHOD2_ALIASES, "synth-method2")
-    p.set_defaults(func=cmd_method2)
+    _dataset_arguments(p, _method2_config, METHOD2_ALIASES, cmd_method2)
 
 
 def _register_audit(sub: argparse._SubParsersAction) -> None:
@@ -585,8 +571,6 @@ def _register_audit(sub: argparse._SubParsersAction) -> None:
 
 
 def _register_gap(sub: argparse._SubParsersAction) -> None:
-    from ground.cli.options import add_config_options
-
     p = add_command(
         sub,
         "gap",
@@ -607,8 +591,7 @@ def _register_gap(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("--json", action="store_true", help="print one JSON object")
     add_cache_args(p)
-    add_config_options(p, _gap_config, GAP_ALIASES, "docs/config.md#synth-gap", flag="--config")
-    p.set_defaults(func=cmd_gap)
+    add_settings(p, _gap_config, GAP_ALIASES, cmd_gap, flag="--config")
 
 
 def register(sub: argparse._SubParsersAction) -> None:

@@ -10,6 +10,7 @@ from detector_factories import oracle_model
 
 from eval.cli import options as O
 from eval.config import PredictConfig, ScoreConfig
+from ground.cli.options import add_config_options, command_config
 from ground.config.loader import ConfigError
 
 
@@ -26,12 +27,12 @@ def test_parsers():
 def _parser(schema, aliases) -> argparse.ArgumentParser:
     p = argparse.ArgumentParser()
     p.add_argument("model")
-    O.add_settings(p, lambda: schema, aliases, "score")
+    add_config_options(p, lambda: schema, aliases, "docs/config.md#score", flag="--config")
     return p
 
 
 def _settings(schema, aliases, *argv: str):
-    return O.settings(_parser(schema, aliases).parse_args(["m.onnx", *argv]), schema, aliases)
+    return command_config(_parser(schema, aliases).parse_args(["m.onnx", *argv]), schema, aliases)
 
 
 def test_flags_set_their_keys_and_the_file_goes_under_them(tmp_path):

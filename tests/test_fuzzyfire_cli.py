@@ -112,6 +112,21 @@ def test_every_option_with_a_default_shows_it_in_help(capsys: pytest.CaptureFixt
     assert checked > 50
 
 
+def test_every_commands_settings_name_a_section_of_the_reference() -> None:
+    """The help of each command's CONFIG.yaml names the docs/config.md section documenting its keys: a heading there."""
+    from test_docs import anchors
+
+    headings = anchors((REPO / "docs" / "config.md").read_text(encoding="utf-8"))
+    sections = {}
+    for argv, parser in _commands(build_parser()):
+        for action in parser._actions:
+            found = re.search(r"every key: docs/config\.md#([\w-]+)", action.help or "")
+            if action.dest == "config" and found:
+                sections[" ".join(argv)] = found.group(1)
+    assert len(sections) == 17 and sections["synth method2"] == "synth-method2"
+    assert {name: s for name, s in sections.items() if s not in headings} == {}
+
+
 #: What a flag that is no setting defaults to: nothing (an input, an output, a switch, a repeatable option).
 NO_DEFAULT = (None, False, [], argparse.SUPPRESS)
 

@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 import yaml
 
-from ground.cli.options import Alias, add_config_options, config_from_args, key_default, print_config
+from ground.cli.options import Alias, add_config_options, add_settings, config_from_args, key_default, print_config
 from ground.config.loader import ConfigError
 
 
@@ -103,6 +103,45 @@ def test_the_file_may_be_an_option_for_a_command_whose_positionals_are_inputs(tm
     assert config_from_args(p.parse_args(["m.onnx"]), Settings, ALIASES) == Settings()
     with pytest.raises(ConfigError, match=r"nope\.yaml: does not exist, not a settings file$"):
         config_from_args(p.parse_args(["m.onnx", "--config", str(tmp_path / "nope.yaml")]), Settings, ALIASES)
+
+
+def test_a_commands_settings_follow_its_own_arguments_and_name_its_section(tmp_path: Path) -> None:
+    """add_settings: the settings after the command's own arguments, what it runs, and the docs/config.md section
+    of the command as typed (``synth toy`` -> ``#synth-toy``) unless one is named."""
+    from ground.cli.commands import add_command
+
+    def run(args: argparse.Namespace) -> int:
+        return 0
+
+    parser = argparse.ArgumentParser(prog="fuzzyfire")
+    sub = parser.add_subparsers(dest="command")
+    p = add_command(sub, "toy", help="a toy", description="A toy.")
+    p.add_argument("--out")
+    add_settings(p, lambda: Settings, ALIASES, run, required=True)
+    inner = add_command(sub, "synth", help="a group", description="A group.").add_subparsers(dest="inner")
+    q = add_command(inner, "toy", help="a toy", description="A toy.")
+    q.add_argument("src")
+    add_settings(q, Settings, ALIASES, run, flag="--config")
+    r = add_command(inner, "other", help="a toy", description="A toy.")
+    add_settings(r, Settings, ALIASES, run, section="flame library")
+
+    def reference(parser: argparse.ArgumentParser) -> str:
+        help = next(a.help for a in parser._actions if a.dest == "config")
+        return help.partition("every key: ")[2].partition(")")[0]
+
+    assert [reference(x) for x in (p, q, r)] == [
+        "docs/config.md#toy",
+        "docs/config.md#synth-toy",
+        "docs/config.md#flame-library",
+    ]
+    assert [a.dest for a in p._actions][:4] == ["help", "out", "config", "set"]
+    assert [a.dest for a in q._actions][:4] == ["help", "src", "config", "set"]
+    (tmp_path / "c.yaml").write_text("name: b\n")
+    args = parser.parse_args(["toy", str(tmp_path / "c.yaml"), "--n", "4"])
+    assert args.func is run and config_from_args(args, Settings, ALIASES) == Settings(n=4, name="b")
+    assert parser.parse_args(["synth", "toy", "s"]).config is None
+    with pytest.raises(SystemExit):
+        parser.parse_args(["toy"])  # CONFIG.yaml required
 
 
 def test_printed_config_reads_back_as_the_same_settings(tmp_path: Path) -> None:

@@ -7,7 +7,7 @@ import sys
 from pathlib import Path
 
 from ground.cli.commands import add_command
-from ground.cli.options import Alias
+from ground.cli.options import Alias, add_settings
 from ground.data.formats.registry import FORMATS
 
 _EXAMPLE = """example:
@@ -178,7 +178,6 @@ def cmd_train(args: argparse.Namespace) -> int:
 
 def register(sub: argparse._SubParsersAction) -> None:
     """Add ``train`` to the ``fuzzyfire`` parser."""
-    from ground.cli.options import add_config_options
     from train.config import TrainConfig
 
     p = add_command(
@@ -205,5 +204,4 @@ def register(sub: argparse._SubParsersAction) -> None:
         metavar="NAME",
         help="drop a class in both sets (repeatable or a,b)",
     )
-    add_config_options(p, TrainConfig, ALIASES, "docs/config.md#train")
-    p.set_defaults(func=cmd_train)
+    add_settings(p, TrainConfig, ALIASES, cmd_train)

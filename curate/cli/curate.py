@@ -10,7 +10,7 @@ from curate.cli.dataset import IMAGES_ALIAS
 from curate.cli.dedup import EXECUTOR_ALIASES, SEARCH_ALIASES, add_cache_args, embedding_run_aliases
 from curate.curation import CurateConfig
 from ground.cli.commands import add_command
-from ground.cli.options import Alias
+from ground.cli.options import Alias, add_settings
 
 #: Flags of ``fuzzyfire curate``: aliases of :class:`curate.curation.CurateConfig` keys (their defaults are the keys').
 ALIASES: tuple[Alias, ...] = (
@@ -51,8 +51,6 @@ def cmd_curate(args: argparse.Namespace) -> int:
 
 def register(sub: argparse._SubParsersAction) -> None:
     """Add ``curate`` to the ``fuzzyfire`` parser."""
-    from ground.cli.options import add_config_options
-
     p = add_command(
         sub,
         "curate",
@@ -69,5 +67,4 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--out", type=Path, help="output dataset folder")
     p.add_argument("--overwrite", action="store_true", help="replace a fuzzyfire dataset already at --out")
     add_cache_args(p)
-    add_config_options(p, CurateConfig, ALIASES, "docs/config.md#curate", required=True)
-    p.set_defaults(func=cmd_curate)
+    add_settings(p, CurateConfig, ALIASES, cmd_curate, required=True)

@@ -18,7 +18,7 @@ from ground.cli.commands import (
     read_from_args,
     write_dataset_or_report,
 )
-from ground.cli.options import Alias, one_of
+from ground.cli.options import Alias, add_settings, one_of
 from ground.data.formats.images import NEGATIVES_ONLY
 from ground.data.problems import count_levels, has_errors
 from ground.data.writer import DEFAULT_IMAGE_MODE, IMAGE_MODES, OUTPUT_FORMATS
@@ -181,8 +181,6 @@ def _register_inspect(sub: argparse._SubParsersAction) -> None:
 
 
 def _register_merge(sub: argparse._SubParsersAction) -> None:
-    from ground.cli.options import add_config_options
-
     p = add_command(
         sub,
         "merge",
@@ -194,5 +192,4 @@ def _register_merge(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("--out", type=Path, help="output folder")
     p.add_argument("--overwrite", action="store_true", help="replace a fuzzyfire dataset already at --out")
-    add_config_options(p, MergeConfig, MERGE_ALIASES, "docs/config.md#merge", required=True)
-    p.set_defaults(func=cmd_merge)
+    add_settings(p, MergeConfig, MERGE_ALIASES, cmd_merge, required=True)

@@ -17,7 +17,7 @@ from curate.rank import RANK_METHODS
 from curate.search import BACKENDS
 from curate.settings import PREPROCESSING, DedupJobConfig, EmbedderConfig, LeakageJobConfig
 from ground.cli.commands import add_command
-from ground.cli.options import Alias, one_of
+from ground.cli.options import Alias, add_settings, one_of
 from ground.run.cluster import EXECUTOR_CHOICES, Cluster, open_cluster
 from ground.run.device import parse_device
 
@@ -263,8 +263,6 @@ def cmd_leakage(args: argparse.Namespace) -> int:
 
 def register(sub: argparse._SubParsersAction) -> None:
     """Add ``dedup`` and ``leakage`` to the ``fuzzyfire`` parser."""
-    from ground.cli.options import add_config_options
-
     p = add_command(
         sub,
         "dedup",
@@ -286,8 +284,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--apply", choices=APPLY_MODES, help="materialise the selected images in --to")
     p.add_argument("--to", type=Path, help="target folder for --apply (new or empty)")
     add_cache_args(p)
-    add_config_options(p, DedupJobConfig, DEDUP_ALIASES, "docs/config.md#dedup", flag="--config")
-    p.set_defaults(func=cmd_dedup)
+    add_settings(p, DedupJobConfig, DEDUP_ALIASES, cmd_dedup, flag="--config")
 
     p = add_command(
         sub,
@@ -303,5 +300,4 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("b", type=Path, nargs="?", metavar="B", help="second image folder (e.g. the test images)")
     p.add_argument("--json", type=Path, help="write every pair to this JSON file")
     add_cache_args(p)
-    add_config_options(p, LeakageJobConfig, LEAKAGE_ALIASES, "docs/config.md#leakage", flag="--config")
-    p.set_defaults(func=cmd_leakage)
+    add_settings(p, LeakageJobConfig, LEAKAGE_ALIASES, cmd_leakage, flag="--config")

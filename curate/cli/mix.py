@@ -19,7 +19,7 @@ from curate.mix import (
     write_mixture,
 )
 from ground.cli.commands import add_command
-from ground.cli.options import Alias, one_of
+from ground.cli.options import Alias, add_settings, one_of
 from ground.data.dataset import Dataset
 from ground.data.formats.registry import FORMATS
 from ground.data.load import pick_split
@@ -153,8 +153,6 @@ def cmd_mix(args: argparse.Namespace) -> int:
 
 def register(sub: argparse._SubParsersAction) -> None:
     """Add ``mix`` to the ``fuzzyfire`` parser."""
-    from ground.cli.options import add_config_options
-
     p = add_command(
         sub,
         "mix",
@@ -171,5 +169,4 @@ def register(sub: argparse._SubParsersAction) -> None:
         "e.g. the real set's valid split; its class ids must be the mixture's",
     )
     p.add_argument("--overwrite", action="store_true", help="replace mixtures already at --out")
-    add_config_options(p, MixConfig, ALIASES, "docs/config.md#mix")
-    p.set_defaults(func=cmd_mix)
+    add_settings(p, MixConfig, ALIASES, cmd_mix)

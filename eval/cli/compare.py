@@ -10,12 +10,12 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from eval.cli.options import SCORING_ALIASES, add_settings, fmt, load_test_set, report_problems, score_model, settings
+from eval.cli.options import SCORING_ALIASES, fmt, load_test_set, report_problems, score_model
 from eval.errors import ALARM_CONF
 from eval.imagelevel import IMAGE_RECALL, IMAGE_RECALL_AT_CONF
 from eval.operating import RECALL_AT_ALARMS
 from ground.cli.commands import add_command
-from ground.cli.options import Alias
+from ground.cli.options import Alias, add_settings, command_config
 
 if TYPE_CHECKING:
     from eval.config import CompareConfig
@@ -98,7 +98,7 @@ def cmd_compare(args: argparse.Namespace) -> int:
     from eval.stats import MatchTable, paired_bootstrap
     from ground.detect.cocoeval import ClassMatchError
 
-    cfg = settings(args, _compare_config(), ALIASES, required=("--data",))
+    cfg = command_config(args, _compare_config(), ALIASES, {"--data": args.data})
     if cfg is None:
         return 0
     sides = (args.model_a, args.model_b)
@@ -386,5 +386,4 @@ def register(sub: argparse._SubParsersAction) -> None:
         action="store_true",
         help='print {"A": {"model", "AP", "AP50", "runs"}, "B", "images", "delta": {"AP": ...}, ...}',
     )
-    add_settings(p, _compare_config, ALIASES, "compare")
-    p.set_defaults(func=cmd_compare)
+    add_settings(p, _compare_config, ALIASES, cmd_compare, flag="--config")

@@ -1,14 +1,15 @@
 """What the commands that run a detector ONNX (``score``, ``compare``, ``predict``) share: their flags, each an
 alias of a key of :mod:`eval.config` (the model, how it runs, the test set), the parsers of the flags' values,
-and the settings, detector, test set and scores those build. ``--config CONFIG.yaml`` is an option here, not the
-positional of other commands: these commands' positionals are their models and inputs."""
+and the detector, test set and scores the settings build. Their ``--config CONFIG.yaml`` is an option
+(``flag`` of :func:`ground.cli.options.add_settings`), not the positional of other commands: these commands'
+positionals are their models and inputs."""
 
 from __future__ import annotations
 
 import argparse
 import sys
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, TypeVar
+from typing import TYPE_CHECKING, Any
 
 from eval.onnx_model import FORMATS
 from ground.cli.options import Alias
@@ -22,11 +23,6 @@ if TYPE_CHECKING:  # the parser is built without importing onnxruntime
     from eval.score import ScoreResult, TestSet
     from ground.data.dataset import Dataset
     from ground.data.problems import Problem
-
-T = TypeVar("T")
-
-#: Where every key of these commands is documented.
-REFERENCE = "docs/config.md"
 
 
 def parse_names(text: str) -> list[str]:
@@ -102,35 +98,6 @@ SCORING_ALIASES: tuple[Alias, ...] = (
     *DATA_ALIASES,
     Alias("--seed", ("seed",), "seed of the bootstrap's image resamples", {"type": int}),
 )
-
-
-def add_settings(p: argparse.ArgumentParser, schema: Any, aliases: tuple[Alias, ...], section: str) -> None:
-    """``--config CONFIG.yaml``, ``--set``, ``--print-config`` and the ``aliases`` of ``schema`` (a function
-    returning the dataclass: it is imported when the help or the settings are needed); ``section`` names the
-    command's table in :data:`REFERENCE`."""
-    from ground.cli.options import add_config_options
-
-    add_config_options(p, schema, aliases, f"{REFERENCE}#{section}", flag="--config")
-
-
-def settings(
-    args: argparse.Namespace, schema: type[T], aliases: tuple[Alias, ...], required: tuple[str, ...] = ()
-) -> T | None:
-    """The command's settings from ``--config``, its flags and ``--set``; None once ``--print-config`` printed
-    them (the command then stops). The options ``required`` (e.g. ``--data``) are needed only when it does not:
-    ValueError names those missing."""
-    from ground.cli.options import config_from_args, print_config
-
-    cfg = config_from_args(args, schema, aliases)
-    if args.print_config:
-        print_config(cfg)
-        return None
-    missing = [flag for flag in required if getattr(args, flag.lstrip("-").replace("-", "_")) is None]
-    if missing:
-        raise ValueError(
-            f"{' and '.join(missing)} {'is' if len(missing) == 1 else 'are'} required (unless --print-config)"
-        )
-    return cfg
 
 
 def open_detector(path: Path, model: OnnxModelConfig, inference: InferenceConfig) -> OnnxDetector:

@@ -8,9 +8,9 @@ import sys
 from collections.abc import Sequence
 from pathlib import Path
 
-from eval.cli.options import MODEL_ALIASES, add_settings, open_detector, parse_names, settings
+from eval.cli.options import MODEL_ALIASES, open_detector, parse_names
 from ground.cli.commands import add_command
-from ground.cli.options import Alias
+from ground.cli.options import Alias, add_settings, command_config
 
 #: Flags of ``fuzzyfire predict``: aliases of :class:`eval.config.PredictConfig` keys (their defaults are the keys').
 ALIASES: tuple[Alias, ...] = (
@@ -70,7 +70,7 @@ def cmd_predict(args: argparse.Namespace) -> int:
     from eval.video import VideoError
     from ground.cli.commands import print_problems
 
-    cfg = settings(args, _predict_config(), ALIASES, required=("--out",))
+    cfg = command_config(args, _predict_config(), ALIASES, {"--out": args.out})
     if cfg is None:
         return 0
     refused = check_output(args.out, args.source, args.overwrite)
@@ -108,5 +108,4 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("source", type=Path, metavar="IMAGES|VIDEO", help="image folder (recursive), image, or video")
     p.add_argument("--out", type=Path, help="folder for the drawn pictures and detections.json (required)")
     p.add_argument("--overwrite", action="store_true", help="write into a non-empty --out")
-    add_settings(p, _predict_config, ALIASES, "predict")
-    p.set_defaults(func=cmd_predict)
+    add_settings(p, _predict_config, ALIASES, cmd_predict, flag="--config")

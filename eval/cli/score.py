@@ -8,9 +8,9 @@ import json
 import sys
 from pathlib import Path
 
-from eval.cli.options import SCORING_ALIASES, add_settings, fmt, load_test_set, report_problems, score_model, settings
+from eval.cli.options import SCORING_ALIASES, fmt, load_test_set, report_problems, score_model
 from ground.cli.commands import add_command
-from ground.cli.options import Alias
+from ground.cli.options import Alias, add_settings, command_config
 
 #: Flags of ``fuzzyfire score``: aliases of :class:`eval.config.ScoreConfig` keys (their defaults are the keys').
 ALIASES: tuple[Alias, ...] = (
@@ -68,7 +68,7 @@ def cmd_score(args: argparse.Namespace) -> int:
     from ground.cli.commands import print_problems
     from ground.detect.cocoeval import ClassMatchError
 
-    cfg = settings(args, _score_config(), ALIASES, required=("--data",))
+    cfg = command_config(args, _score_config(), ALIASES, {"--data": args.data})
     if cfg is None:
         return 0
     try:
@@ -191,5 +191,4 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="also write predictions.json, metrics.json, pr_curve.png, matches.npz (with --errors: errors.json "
         "and errors/, pictures of the worst false alarms and misses)",
     )
-    add_settings(p, _score_config, ALIASES, "score")
-    p.set_defaults(func=cmd_score)
+    add_settings(p, _score_config, ALIASES, cmd_score, flag="--config")

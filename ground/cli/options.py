@@ -1,10 +1,11 @@
 """One way to configure a command: an optional ``CONFIG.yaml`` of its dataclass, ``--set key=value`` overrides and
 a few short flags, each an alias of one or more keys with the keys' own defaults.
 
-A command declares its :class:`Alias` list; :func:`add_config_options` adds the positional ``config``, ``--set``,
-``--print-config`` and the aliases (their help shows the dataclass default, so the help and the code cannot
-disagree); :func:`config_from_args` builds the dataclass from the file, then the flags given, then ``--set``
-(later wins), validating every value before any work (:mod:`ground.config.loader`).
+A command declares its :class:`Alias` list; :func:`add_settings` (its settings after its own arguments, and what it
+runs) adds through :func:`add_config_options` the positional ``config``, ``--set``, ``--print-config`` and the
+aliases (their help shows the dataclass default, so the help and the code cannot disagree);
+:func:`command_config` builds the dataclass from the file, then the flags given, then ``--set`` (later wins,
+:func:`config_from_args`), validating every value before any work (:mod:`ground.config.loader`).
 """
 
 from __future__ import annotations
@@ -114,6 +115,30 @@ def add_config_options(
     add_aliases(
         p.add_argument_group("settings (each an alias of a config key; defaults are the keys')"), schema, aliases
     )
+
+
+#: The page documenting every settings key, a section per command (``## synth method2``).
+CONFIG_REFERENCE = "docs/config.md"
+
+
+def add_settings(
+    p: argparse.ArgumentParser,
+    schema: type | Callable[[], type],
+    aliases: Sequence[Alias],
+    func: Callable[[argparse.Namespace], int],
+    *,
+    section: str | None = None,
+    flag: str | None = None,
+    required: bool = False,
+) -> None:
+    """The settings of command ``p`` (:func:`add_config_options`: ``CONFIG.yaml``, positional or the option
+    ``flag``, ``required`` or not; ``--set``, ``--print-config``, the ``aliases`` of ``schema``) and ``func``, what
+    it runs. Added after the command's own arguments, they come after them in its usage and help. The keys are
+    documented under the heading ``section`` of :data:`CONFIG_REFERENCE`: by default the command as typed after
+    the program's name (``curate``, ``synth method2``)."""
+    heading = section or p.prog.partition(" ")[2]
+    add_config_options(p, schema, aliases, f"{CONFIG_REFERENCE}#{heading.replace(' ', '-')}", required, flag)
+    p.set_defaults(func=func)
 
 
 def add_aliases(group: Any, schema: type | Callable[[], type], aliases: Sequence[Alias]) -> None:
