@@ -27,6 +27,18 @@ from ground.image.imageio import ImageError, read_image
 Image = NDArray[np.uint8]
 
 
+def hflip(img: Image) -> Image:
+    """``img`` mirrored left to right, (H, W, 3)."""
+    return np.ascontiguousarray(img[:, ::-1])
+
+
+def centre_crop(img: Image, parts: int) -> Image:
+    """``img`` less ``H // parts`` rows at the top and bottom and ``W // parts`` columns at each side."""
+    h, w = img.shape[:2]
+    dy, dx = h // parts, w // parts
+    return np.ascontiguousarray(img[dy : h - dy, dx : w - dx])
+
+
 def _crop(img: Image, rng: np.random.Generator, keep: float) -> Image:
     h, w = img.shape[:2]
     ch, cw = max(1, round(h * keep)), max(1, round(w * keep))
@@ -61,7 +73,7 @@ def _bright(img: Image, factor: float) -> Image:
 
 #: name -> f(image (H, W, 3) uint8 RGB, rng) -> new image; parameters drawn from ``rng`` in the given ranges.
 AUGMENTATIONS: dict[str, Callable[[Image, np.random.Generator], Image]] = {
-    "hflip": lambda im, rng: np.ascontiguousarray(im[:, ::-1]),
+    "hflip": lambda im, rng: hflip(im),
     "crop": lambda im, rng: _crop(im, rng, float(rng.uniform(0.8, 0.95))),
     "resize": lambda im, rng: _resize(im, float(rng.uniform(0.5, 0.9))),
     "jpeg": lambda im, rng: _jpeg(im, int(rng.integers(30, 80))),

@@ -20,7 +20,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from curate.calibrate import _bright, _jpeg, _noise, _resize, _rotate
+from curate.calibrate import _bright, _jpeg, _noise, _resize, _rotate, centre_crop, hflip
 from curate.dedup import DEFAULT_THRESHOLD, UnionFind, find_duplicates
 from curate.embed import load_embedder
 from curate.rank import k_center
@@ -33,12 +33,10 @@ TRANSFORMS = ("hflip", "crop80", "resize50", "jpeg30", "noise10", "bright30", "r
 
 
 def transform(img: np.ndarray, kind: str, k: int, rng: np.random.Generator) -> np.ndarray:
-    h, w = img.shape[:2]
     if kind == "hflip":
-        return np.ascontiguousarray(img[:, ::-1])
+        return hflip(img)
     if kind == "crop80":
-        dy, dx = h // 10, w // 10
-        return np.ascontiguousarray(img[dy : h - dy, dx : w - dx])
+        return centre_crop(img, 10)
     if kind == "resize50":
         return _resize(img, 0.5)
     if kind == "jpeg30":

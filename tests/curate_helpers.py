@@ -15,6 +15,8 @@ import pytest
 from numpy.typing import NDArray
 from PIL import Image
 
+from curate.calibrate import centre_crop, hflip
+
 MPL_SAMPLE = Path(__import__("matplotlib").get_data_path()) / "sample_data"
 GRACE_HOPPER = MPL_SAMPLE / "grace_hopper.jpg"  # ImageNet class 652 "military uniform"
 
@@ -53,10 +55,9 @@ def transformed(img: NDArray[np.uint8], kind: str) -> NDArray[np.uint8]:
     """A near-duplicate copy: ``hflip``, ``crop`` (90 %), ``resize`` (75 %), ``bright`` (+15 %)."""
     h, w = img.shape[:2]
     if kind == "hflip":
-        return np.ascontiguousarray(img[:, ::-1])
+        return hflip(img)
     if kind == "crop":
-        dy, dx = h // 20, w // 20
-        return np.ascontiguousarray(img[dy : h - dy, dx : w - dx])
+        return centre_crop(img, 20)
     if kind == "resize":
         return cv2.resize(img, (w * 3 // 4, h * 3 // 4), interpolation=cv2.INTER_AREA)
     if kind == "bright":

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from curate_helpers import save, scene, use_session_cache
 
-from curate.calibrate import AUGMENTATIONS, augment, calibrate_threshold, threshold_at_precision
+from curate.calibrate import AUGMENTATIONS, augment, calibrate_threshold, centre_crop, hflip, threshold_at_precision
 from curate.embed import load_embedder
 
 
@@ -22,6 +22,13 @@ def test_augmentations_return_new_images(kind: str) -> None:
     assert np.array_equal(img, before)  # input untouched
     again = augment(img, kind, np.random.default_rng(0))
     assert np.array_equal(out, again)  # seeded
+
+
+def test_hflip_and_centre_crop_are_exact() -> None:
+    img = scene(2, size=(41, 30))  # (30, 41, 3): odd width
+    assert np.array_equal(hflip(hflip(img)), img) and np.array_equal(hflip(img)[:, 0], img[:, -1])
+    crop = centre_crop(img, 10)  # 30 // 10 = 3 rows, 41 // 10 = 4 columns off each side
+    assert crop.shape == (24, 33, 3) and np.array_equal(crop, img[3:27, 4:37]) and crop.flags.c_contiguous
 
 
 def test_unknown_augmentation() -> None:
