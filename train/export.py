@@ -17,6 +17,7 @@ Contract (what a scorer may rely on; the YOLOv5 layout, which ``fuzzyfire score`
 
 from __future__ import annotations
 
+import io
 import json
 import warnings
 from collections.abc import Sequence
@@ -63,28 +64,33 @@ def onnx_metadata(class_names: Sequence[str], imgsz: int) -> dict[str, str]:
     }
 
 
+def torch_to_onnx(module: nn.Module, imgsz: int, target: str | io.BytesIO, output_names: Sequence[str] = ()) -> None:
+    """Trace ``module`` on one (1, 3, imgsz, imgsz) input named ``images`` into ``target`` (a file path or a
+    buffer): the batch dimension of the input and of each of ``output_names`` dynamic, opset :data:`OPSET`, the
+    TorchScript exporter (deprecated, but it needs no onnxscript; its warning silenced)."""
+    with warnings.catch_warnings(), torch.no_grad():
+        warnings.simplefilter("ignore")
+        torch.onnx.export(
+            module,
+            (torch.zeros(1, 3, imgsz, imgsz),),
+            target,
+            input_names=["images"],
+            output_names=list(output_names) or None,
+            dynamic_axes={name: {0: "batch"} for name in ("images", *output_names)},
+            opset_version=OPSET,
+            do_constant_folding=True,
+            dynamo=False,
+        )
+
+
 def export_onnx(model: Detector, path: Path | str, imgsz: int, class_names: Sequence[str]) -> Path:
     """Write ``model`` (eval mode, CPU) to ``path`` following the contract above; returns the path."""
     if len(class_names) != model.num_classes:
         raise ValueError(f"{len(class_names)} class names for a model of {model.num_classes} classes")
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    wrapper = _Decoded(model).eval()
-    dummy = torch.zeros(1, 3, imgsz, imgsz)
     tmp = path.with_suffix(".onnx.tmp")
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")  # the TorchScript exporter is deprecated but needs no onnxscript
-        torch.onnx.export(
-            wrapper,
-            (dummy,),
-            str(tmp),
-            input_names=["images"],
-            output_names=["output"],
-            dynamic_axes={"images": {0: "batch"}, "output": {0: "batch"}},
-            opset_version=OPSET,
-            do_constant_folding=True,
-            dynamo=False,
-        )
+    torch_to_onnx(_Decoded(model).eval(), imgsz, str(tmp), ["output"])
     proto = onnx.load(str(tmp))
     for key, value in onnx_metadata(class_names, imgsz).items():
         entry = proto.metadata_props.add()

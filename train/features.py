@@ -17,7 +17,6 @@ through, with augmentation drawn afresh every epoch.
 from __future__ import annotations
 
 import io
-import warnings
 from collections.abc import Iterator, Sequence
 
 import numpy as np
@@ -29,6 +28,7 @@ from ground.data.dataset import ImageRecord
 from ground.detect.letterbox import to_nchw_float
 from ground.run.progress import progress
 from train.data import LetterboxedImage, TrainBatches, prefetched
+from train.export import torch_to_onnx
 from train.model import Detector
 
 Features = tuple[Tensor, ...]
@@ -69,17 +69,7 @@ def _ort_session(module: nn.Module, imgsz: int, threads: int):
     import onnxruntime as ort
 
     buffer = io.BytesIO()
-    with warnings.catch_warnings(), torch.no_grad():
-        warnings.simplefilter("ignore")
-        torch.onnx.export(
-            module,
-            (torch.zeros(1, 3, imgsz, imgsz),),
-            buffer,
-            input_names=["images"],
-            dynamic_axes={"images": {0: "batch"}},
-            opset_version=17,
-            dynamo=False,
-        )
+    torch_to_onnx(module, imgsz, buffer)
     opts = ort.SessionOptions()
     if threads > 0:
         opts.intra_op_num_threads = threads
