@@ -16,7 +16,18 @@ from eval.draw import draw_boxes
 from eval.errors import ALARMS
 from eval.imagelevel import IMAGE_LABELLED, IMAGE_RECALL, IMAGELEVEL, image_operating_curve
 from eval.operating import ALARM_BUDGET, OPERATING, RECALL_AT_ALARMS, Alarms, curve_at_rates, recall_at_rates
-from eval.tables import METRIC_LABELS, Table, heading, marks, shown_scale, to_csv, to_latex, to_markdown
+from eval.tables import (
+    CLASS_METRICS,
+    METRIC_LABELS,
+    Table,
+    class_metric,
+    heading,
+    marks,
+    shown_scale,
+    to_csv,
+    to_latex,
+    to_markdown,
+)
 from ground.data.dataset import Dataset
 from ground.image.imageio import ImageError, read_image
 
@@ -463,7 +474,9 @@ def table_metrics(results: Sequence[Mapping[str, Any]]) -> tuple[str, ...]:
     says."""
     fire = [r for r in results if ALARMS not in r and not r.get(IMAGE_LABELLED)]
     extra = [m for m in ("AP25", RECALL_AT_ALARMS, IMAGE_RECALL) if fire and all(r.get(m) is not None for r in fire)]
-    return ("AP", "AP50", *extra)
+    names = dict.fromkeys(name for r in fire for name in r.get("classes", ()))
+    per_class = [class_metric(k, name) for name in names for k in CLASS_METRICS]
+    return ("AP", "AP50", *per_class, *extra)
 
 
 def _slug(label: str) -> str:

@@ -161,6 +161,14 @@ class MatchTable:
         prec = self.precision(weights)
         return {"AP": _mean_valid(prec), "AP50": _mean_valid(prec[:1])}
 
+    def of_class(self, k: int) -> MatchTable:
+        """The table of the ``k``-th class of :attr:`cat_ids` alone (same images, same weights): its AP and AP50
+        are that class's (``CocoMetrics.per_class``), and a paired bootstrap of two such tables compares one class."""
+        table = MatchTable.__new__(MatchTable)
+        table.image_ids, table.cat_ids, table.rec_thrs = self.image_ids, [self.cat_ids[k]], self.rec_thrs
+        table.classes = [self.classes[k]]
+        return table
+
     def restricted(self, thresholds: Sequence[int], keep: NDArray[np.bool_]) -> MatchTable:
         """The table at the IoU thresholds of index ``thresholds`` only, and with only the detections and boxes
         of the images ``keep`` (I,) (the others weigh 0: an AP on those images, computed faster). Image order is

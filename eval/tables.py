@@ -62,6 +62,15 @@ def shown_scale(metric: str, scale: float) -> float:
     return 1.0 if metric == ALARMS else scale
 
 
+#: The metrics a result row carries per class when its test set boxes more than one class.
+CLASS_METRICS: tuple[str, ...] = ("AP50",)
+
+
+def class_metric(metric: str, name: str) -> str:
+    """The key of ``metric`` for the class ``name`` alone in a result row, and its column's title: ``AP50 smoke``."""
+    return f"{metric} {name}"
+
+
 def heading(column: tuple[str, str]) -> str:
     """``"<test set> <metric>"`` as a column is titled."""
     return f"{column[0]} {METRIC_LABELS.get(column[1], column[1])}"

@@ -26,6 +26,7 @@ from eval.operating import (
     paired_recall_bootstrap,
     pooled,
 )
+from eval.tables import CLASS_METRICS, class_metric
 from fuzzyfire.controls import CONTROL, CONTROL_TABLE, control_label
 from fuzzyfire.datasets import DataRef, Datasets
 from fuzzyfire.experiment_config import ExperimentConfig
@@ -97,15 +98,28 @@ def result_rows(
                       IMAGE_RECALL_AT_CONF: hits.recall(ALARM_CONF), IMAGELEVEL: level,
                       **({IMAGE_LABELLED: True} if m.get(IMAGE_LABELLED) else {})}  # fmt: skip
             ap = ap if fire >= min_fire_images else {"AP": None, "AP50": None}
+        classes = {} if negatives else per_class_ap(m, ap["AP50"] is not None)
         rows.append({
             "mixture": spec.mixture, "method": spec.method or "-", "seed": spec.seed, "test_set": test.name,
-            **ap, "AP25": ap25, **({ALARMS: m[ALARMS]} if negatives else {}),
+            **ap, "AP25": ap25, **classes, **({ALARMS: m[ALARMS]} if negatives else {}),
             **({RECALL_AT_ALARMS: point.recall, "threshold_at_alarms": point.threshold, OPERATING: operating}
                if point else {}), **images,
             "run": spec.out.relative_to(out).as_posix(), "tables": list(spec.tables),
             "matches": (folder / "matches.npz").as_posix(), LEARNING: flags[spec.out],
         })  # fmt: skip
     return silenced(rows)
+
+
+def per_class_ap(scored: Mapping, defined: bool) -> dict:
+    """For a test set that boxes more than one class (``scored``: a run's results entry): ``classes`` (their names
+    in category order, as its match table holds them) and each class's :data:`eval.tables.CLASS_METRICS` (0..1; None
+    when the set's AP is not ``defined``); nothing for a one-class set."""
+    per_class = scored.get("per_class") or {}
+    if len(per_class) < 2:
+        return {}
+    metrics = {class_metric(k, name): (per_class[name].get(k) if defined else None)
+               for name in per_class for k in CLASS_METRICS}  # fmt: skip
+    return {"classes": list(per_class), **metrics}
 
 
 SILENT = "silent"  # a result row's key: True when its run detects nothing at ALARM_CONF on any of its test sets
@@ -207,6 +221,7 @@ def comparisons(cfg: ExperimentConfig, rows: Sequence[dict]) -> list[dict]:
     rngs = {"table2": np.random.default_rng(0), CONTROL_TABLE: np.random.default_rng(1)}  # controls leave the rest
     at_budget = np.random.default_rng(2)  # the recall comparisons draw apart: the AP ones stay as they were
     frames = np.random.default_rng(3)
+    by_class = np.random.default_rng(4)  # per-class AP50 draws apart: a one-class study's comparisons stay as they were
     matches = functools.cache(lambda path: MatchTable.load(Path(path)))  # each run's once, whatever its pairs
     for test in dict.fromkeys(r["test_set"] for r in scored if "table2" in r["tables"]):
         runs: dict[tuple[str, str], list[dict]] = {}
@@ -222,6 +237,10 @@ def comparisons(cfg: ExperimentConfig, rows: Sequence[dict]) -> list[dict]:
             if not a[0].get(IMAGE_LABELLED) and all(r.get("fire_images", enough) >= enough for r in a + b):
                 tables = [[matches(r["matches"]) for r in side] for side in (a, b)]
                 deltas = paired_bootstrap(*tables, rngs[table], cfg.report.bootstrap, seeds=paired)
+                for k, name in enumerate(a[0].get("classes", ())):
+                    one = [[t.of_class(k) for t in side] for side in tables]
+                    deltas[class_metric("AP50", name)] = paired_bootstrap(*one, by_class, cfg.report.bootstrap,
+                                                                          seeds=paired)["AP50"]  # fmt: skip
             pa, pb = [r.get(OPERATING) for r in a], [r.get(OPERATING) for r in b]
             if None not in pa + pb:  # every run on both sides scored on the sets without fire
                 deltas[RECALL_AT_ALARMS] = paired_recall_bootstrap(pa, pb, at_budget, cfg.report.bootstrap)  # type: ignore[arg-type]

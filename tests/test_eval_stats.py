@@ -59,6 +59,19 @@ def test_unit_weights_reproduce_pycocotools_exactly(tmp_path, seed):
     assert table.ap() == {"AP": ev.stats[0], "AP50": ev.stats[1]}
 
 
+def test_a_class_table_gives_that_class_ap_as_pycocotools_does(tmp_path):
+    ds, records = make_case(tmp_path, 3)
+    ev = run_cocoeval(ds, records, [1, 2])
+    table = MatchTable(ev)
+    for k in range(2):
+        alone = table.of_class(k)
+        assert alone.cat_ids == [k + 1] and np.array_equal(alone.image_ids, table.image_ids)
+        np.testing.assert_array_equal(alone.precision()[:, :, 0], ev.eval["precision"][:, :, k, 0, -1])
+    weights = np.random.default_rng(0).integers(0, 3, len(table.image_ids))
+    both = table.precision(weights)
+    np.testing.assert_array_equal(np.concatenate([table.of_class(k).precision(weights) for k in range(2)], 2), both)
+
+
 def accumulate_every_pair(table: MatchTable, w: np.ndarray) -> np.ndarray:
     """(T, R, K) precision the way pycocotools accumulates it: cumulative TP/FP over every (threshold,
     detection) pair, precision made monotone from the right, read at the recall thresholds."""

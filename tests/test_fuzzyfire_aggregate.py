@@ -242,3 +242,45 @@ def test_ap25_of_a_run_scored_before_it_is_kept_with_the_digest_of_its_predictio
     assert run_ap25(Loader(), folder, ref, {}) == pytest.approx(1.0) and Loader.reads == 2  # type: ignore[arg-type]
     (folder / LOOSE_FILE).write_text(json.dumps({"AP25": 0.1}), encoding="utf-8")  # kept before the digest
     assert run_ap25(Loader(), folder, ref, {}) == pytest.approx(1.0) and Loader.reads == 3  # type: ignore[arg-type]
+
+
+def _two_class_matches(tmp_path: Path, name: str, found_smoke: bool) -> Path:
+    """A match table of 4 images (2 fire boxes, 2 smoke boxes): every fire found; the smoke found or not."""
+    from eval.stats import MatchTable
+    from ground.data.dataset import DatasetBuilder
+    from ground.detect.cocoeval import run_cocoeval
+
+    b = DatasetBuilder(tmp_path, ["fire", "smoke"])
+    records = []
+    for i, cls in enumerate(("fire", "fire", "smoke", "smoke")):
+        image_id = b.add_image(f"{i}.jpg", 100, 100)
+        b.add_box(image_id, cls, (10.0, 10.0, 30.0, 30.0))
+        if cls == "fire" or found_smoke:
+            records.append({"image_id": image_id, "category_id": 1 + (cls == "smoke"), "bbox": [10, 10, 30, 30],
+                            "score": 0.9})  # fmt: skip
+    return MatchTable(run_cocoeval(b.build(), records, [1, 2])).save(tmp_path / f"{name}.npz")
+
+
+def test_a_two_class_set_gives_per_class_columns_and_comparisons(tmp_path: Path) -> None:
+    """Rows of a set boxing fire and smoke carry each class's AP50; the comparison adds a paired delta per class:
+    here smoke gains the whole AP50 and fire nothing."""
+    from eval.report import table_metrics
+    from fuzzyfire.aggregate import per_class_ap
+
+    scored = {"AP50": 0.5, "per_class": {"fire": {"AP50": 1.0}, "smoke": {"AP50": 0.0}}}
+    assert per_class_ap(scored, True) == {"classes": ["fire", "smoke"], "AP50 fire": 1.0, "AP50 smoke": 0.0}
+    assert per_class_ap(scored, False)["AP50 smoke"] is None  # too few fire images: no AP of any class
+    assert per_class_ap({"per_class": {"fire": {"AP50": 1.0}}}, True) == {}  # one class: the set's AP is its AP
+    rows = [
+        {"mixture": mixture, "seed": 0, "test_set": "common", "tables": ["table2"], "fire_images": 4,
+         "AP": ap, "AP50": ap, **per_class_ap({"per_class": {"fire": {"AP50": 1.0}, "smoke": {"AP50": ap * 2 - 1}}},
+                                             True),
+         "matches": _two_class_matches(tmp_path, mixture, found).as_posix()}
+        for mixture, ap, found in (("R12_S0", 0.5, False), ("R6_S6", 1.0, True))
+    ]  # fmt: skip
+    assert table_metrics(rows) == ("AP", "AP50", "AP50 fire", "AP50 smoke")
+    out = {c["metric"]: c for c in comparisons(toy_config(mixtures=["R12_S0", "R6_S6"]), rows)}
+    assert set(out) == {"AP", "AP50", "AP50 fire", "AP50 smoke"}
+    assert out["AP50 fire"]["delta"]["value"] == 0.0 and out["AP50 smoke"]["delta"]["value"] == 1.0
+    assert out["AP50"]["delta"]["value"] == 0.5  # the mean over the two classes
+    assert out["AP50 smoke"]["seeds"] == [{"seed": 0, "delta": 1.0}]

@@ -53,6 +53,20 @@ def test_with_a_control_the_flames_share_comes_first() -> None:
     assert "not read: a run in it did not converge" in flagged
 
 
+def test_each_class_of_a_two_class_set_gets_its_delta_on_the_first_screen() -> None:
+    c = _cmp("R200_S200", "R200_S0", 0.03, 0.01, 0.05, [0.02, 0.03, 0.04])
+    fire = {**_cmp("R200_S200", "R200_S0", 0.004, -0.02, 0.029, [0.0] * 3), "metric": "AP50 fire"}
+    smoke = {**_cmp("R200_S200", "R200_S0", 0.061, 0.012, 0.11, [0.06] * 3), "metric": "AP50 smoke"}
+    (line,) = fs.headline_lines(_rows(), [c, fire, smoke], lambda test: "AP50", "R200_S0")
+    assert "Per class: fire +0.4 [-2.0, +2.9], smoke +6.1 [+1.2, +11.0]." in line
+    ctrl = _cmp("R200_S200", "R200_S200 copies", 0.02, 0.0, 0.04, [0.02] * 3)
+    smoke_ctrl = {**ctrl, "metric": "AP50 smoke", "delta": {"value": 0.05, "low": 0.01, "high": 0.09}}
+    (line,) = fs.headline_lines(_rows(), [c, fire, smoke, ctrl, smoke_ctrl], lambda test: "AP50", "R200_S0")
+    assert line.endswith("Per class: smoke +5.0 [+1.0, +9.0].")  # beyond the control: its own per-class deltas
+    (line,) = fs.headline_lines(_rows(), [c], lambda test: "AP50", "R200_S0")
+    assert "Per class" not in line  # one class: the set's AP50 is the class's
+
+
 def test_a_pool_is_said_in_plain_words(tmp_path: Path) -> None:
     per_image = [{"photo": "a.jpg", "frame_boxes": [[0, 0, 5, 5]], "flames": [{}, {}]}] * 87
     per_image += [{"photo": "free.jpg", "flames": []}] * 113
