@@ -281,6 +281,7 @@ def test_a_two_class_set_gives_per_class_columns_and_comparisons(tmp_path: Path)
     assert table_metrics(rows) == ("AP", "AP50", "AP50 fire", "AP50 smoke")
     out = {c["metric"]: c for c in comparisons(toy_config(mixtures=["R12_S0", "R6_S6"]), rows)}
     assert set(out) == {"AP", "AP50", "AP50 fire", "AP50 smoke"}
+    assert {(c["mixture"], c["baseline"]) for c in out.values()} == {("R6_S6", "R12_S0")}
     assert out["AP50 fire"]["delta"]["value"] == 0.0 and out["AP50 smoke"]["delta"]["value"] == 1.0
     assert out["AP50"]["delta"]["value"] == 0.5  # the mean over the two classes
     assert out["AP50 smoke"]["seeds"] == [{"seed": 0, "delta": 1.0}]
