@@ -28,14 +28,15 @@ def delta_text(d: Mapping[str, float]) -> str:
     return f"{100 * d['value']:+.1f} [{100 * d['low']:+.1f}, {100 * d['high']:+.1f}]"
 
 
-def per_class_text(comparisons: Sequence[Mapping[str, Any]], c: Mapping[str, Any]) -> str:
+def per_class_text(comparisons: Sequence[Mapping[str, Any]], c: Mapping[str, Any], against: str = "") -> str:
     """The per-class deltas of comparison ``c`` (same set, mixture, baseline; metric ``"<c's metric> <class>"``,
-    :func:`eval.tables.class_metric`): `` Per class: fire +0.4 [-2.0, +2.9], smoke +6.1 [+1.2, +11.0].``; empty for
-    a set of one class."""
+    :func:`eval.tables.class_metric`): `` Per class: fire +0.4 [-2.0, +2.9], smoke +6.1 [+1.2, +11.0].``, ``against``
+    saying what they are measured against when the sentence before names another baseline; empty for a set of one
+    class."""
     parts = [f"{x['metric'][len(c['metric']) + 1:]} {delta_text(x['delta'])}" for x in comparisons
              if x["test_set"] == c["test_set"] and x["mixture"] == c["mixture"] and x["baseline"] == c["baseline"]
              and x["metric"].startswith(f"{c['metric']} ")]  # fmt: skip
-    return f" Per class: {', '.join(parts)}." if parts else ""
+    return f" Per class{against}: {', '.join(parts)}." if parts else ""
 
 
 def unlearned_mixtures(rows: Sequence[Mapping[str, Any]]) -> set[str]:
@@ -158,7 +159,7 @@ def headline_lines(
                 f"points beyond flame-free copies of the same real images (the control; "
                 f"{seeds_text(control) or 'one seed'}): {verdict(control, bad_control)}. Against {baseline} the "
                 f"mixture reads {delta_text(c['delta'])}; the flame-free copies alone (more images and steps) about "
-                f"{100 * copies:+.1f}.{per_class_text(comparisons, control)}"
+                f"{100 * copies:+.1f}.{per_class_text(comparisons, control, ' beyond the control')}"
             )
             continue
         mix, base = parse_mixture(c["mixture"]), parse_mixture(baseline or c["mixture"])

@@ -62,7 +62,7 @@ def test_each_class_of_a_two_class_set_gets_its_delta_on_the_first_screen() -> N
     ctrl = _cmp("R200_S200", "R200_S200 copies", 0.02, 0.0, 0.04, [0.02] * 3)
     smoke_ctrl = {**ctrl, "metric": "AP50 smoke", "delta": {"value": 0.05, "low": 0.01, "high": 0.09}}
     (line,) = fs.headline_lines(_rows(), [c, fire, smoke, ctrl, smoke_ctrl], lambda test: "AP50", "R200_S0")
-    assert line.endswith("Per class: smoke +5.0 [+1.0, +9.0].")  # beyond the control: its own per-class deltas
+    assert line.endswith("Per class beyond the control: smoke +5.0 [+1.0, +9.0].")  # not against R200_S0
     (line,) = fs.headline_lines(_rows(), [c], lambda test: "AP50", "R200_S0")
     assert "Per class" not in line  # one class: the set's AP50 is the class's
 
