@@ -410,7 +410,26 @@ def studied_classes(cfg: ExperimentConfig, data: Prepared, datasets: Datasets) -
     _say(f"data   classes studied: {', '.join(classes)} ({'config' if given else 'the classes the real data boxes'})")
     for line in reading_lines(cfg, data, datasets):
         _say(line)
-    return cfg, datasets
+    return pools_box_classes(cfg), datasets
+
+
+def pools_box_classes(cfg: ExperimentConfig) -> ExperimentConfig:
+    """``cfg`` whose synthetic pools box smoke exactly when smoke is a studied class (``smoke_class`` of each
+    method follows ``classes``: a pool of a fire + smoke study labels its plumes and its frames' smoke, a fire-only
+    one neither); ExperimentConfigError when a method sets ``smoke_class: true`` in a study without smoke."""
+    smoke = "smoke" in (cfg.classes or ())
+    sections = {}
+    for method in METHODS:
+        section = cfg.synth.section(method)
+        if section is None or section.smoke_class == smoke:
+            continue
+        if section.smoke_class:
+            raise ExperimentConfigError(
+                f"synth.{method}.smoke_class is true but smoke is not a studied class ({', '.join(cfg.classes or ())}):"
+                " a pool boxes the classes the study has; add smoke to classes or drop the key"
+            )
+        sections[method] = replace(section, smoke_class=True)
+    return replace(cfg, synth=replace(cfg.synth, **sections)) if sections else cfg
 
 
 def reading_lines(cfg: ExperimentConfig, data: Prepared, datasets: Datasets) -> list[str]:

@@ -239,9 +239,9 @@ def content_identity(cfg: MethodConfig) -> dict[str, Any]:
     if given.backgrounds:
         out["backgrounds"] = photo_fingerprints(given.backgrounds, given.background_holdout)
     if given.labelled_frames:
-        from synth.places.frames import frame_fingerprints
+        from synth.places.frames import frame_classes, frame_fingerprints
 
-        out["frames"] = frame_fingerprints(given.labelled_frames)
+        out["frames"] = frame_fingerprints(given.labelled_frames, frame_classes(cfg.smoke_class))
     return out
 
 

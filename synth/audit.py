@@ -77,16 +77,16 @@ def visibility_summary(folder: Path) -> dict[str, Any] | None:
     }
 
 
-def _frame_boxes(folder: Path, images: int) -> list[int]:
-    """Per image (in ``annotations.json`` order), how many of its last fire boxes are a labelled frame's own
-    (``frame_boxes`` in the manifest's per-image records, :mod:`synth.places.frames`): labels without a flame mask,
-    not audited."""
+def _frame_boxes(folder: Path, images: int, key: str = "frame_boxes") -> list[int]:
+    """Per image (in ``annotations.json`` order), how many of its last fire boxes (``key`` frame_boxes) or smoke
+    boxes (frame_smoke_boxes) are a labelled frame's own (in the manifest's per-image records,
+    :mod:`synth.places.frames`): labels without a mask, not audited."""
     path = folder / "manifest.json"
     manifest = json.loads(path.read_text(encoding="utf-8")) if path.is_file() else {}
     per_image = manifest.get("args", {}).get("per_image")
     if not per_image or len(per_image) != images:
         return [0] * images
-    return [len(meta.get("frame_boxes", [])) for meta in per_image]
+    return [len(meta.get(key, [])) for meta in per_image]
 
 
 def audit_dataset(folder: Path) -> dict[str, Any]:
@@ -105,6 +105,7 @@ def audit_dataset(folder: Path) -> dict[str, Any]:
     smoke_ious: list[float] = []
     mode_ious: dict[str, list[float]] = {}
     frames = _frame_boxes(folder, len(coco["images"]))
+    smoke_frames = _frame_boxes(folder, len(coco["images"]), "frame_smoke_boxes")
     for k, img in enumerate(coco["images"]):
         mask_path = folder / "masks" / Path(img["file_name"]).relative_to("images").with_suffix(".png")
         truths = _truths(mask_path)
@@ -113,10 +114,11 @@ def audit_dataset(folder: Path) -> dict[str, Any]:
         for mode, boxes in modes.get(img["file_name"], {}).items():
             mode_ious.setdefault(mode, []).extend(_ious(boxes, truths))
         if smoke is not None:
-            smoke_ious += _ious(smoke[img["id"]], _truths(mask_path.with_suffix(".smoke.png")))
+            plumes = smoke[img["id"]][: len(smoke[img["id"]]) - smoke_frames[k]]
+            smoke_ious += _ious(plumes, _truths(mask_path.with_suffix(".smoke.png")))
     result = _summary(ious, len(coco["images"]))
-    if any(frames):
-        result["frame_boxes"] = sum(frames)
+    if any(frames) or any(smoke_frames):
+        result["frame_boxes"] = sum(frames) + sum(smoke_frames)
     if mode_ious:
         result["modes"] = {m: _summary(v, len(coco["images"])) for m, v in sorted(mode_ious.items())}
     if smoke is not None:

@@ -23,7 +23,7 @@ from synth.flames.sprites import SpriteSequence
 from synth.method_config import MethodConfig
 from synth.places import render
 from synth.places.envfile import EnvironmentFile, find_environment_files
-from synth.places.frames import Box, load_frames
+from synth.places.frames import FrameLabels, frame_classes, load_frames
 from synth.places.panorama import PanoramaBackgrounds
 from synth.places.photos import PhotoBackgrounds, keep_in_pool
 from synth.places.views import ViewCache, environment_index
@@ -52,7 +52,7 @@ class Job:
     files: tuple[EnvironmentFile, ...]
     photo_files: tuple[Path, ...]
     panoramas: tuple[Path, ...]
-    frames: dict[Path, tuple[Box, ...]] = field(default_factory=dict)  # labelled frames' fire boxes, by photo
+    frames: dict[Path, FrameLabels] = field(default_factory=dict)  # labelled frames' boxes by class, by photo
 
 
 @contextmanager
@@ -221,7 +221,7 @@ def generate(
     files = find_environment_files(places.meshes) if places.meshes else []
     photo_files = keep_in_pool(places.photos, given.background_holdout)
     unreadable: list = []
-    frames = load_frames(given.labelled_frames, unreadable)  # labelled frames: photos keeping their fire boxes
+    frames = load_frames(given.labelled_frames, unreadable, frame_classes(cfg.smoke_class))  # photos keeping their boxes
     for problem in places.problems:  # unreadable files among the places and frames: named, never composited on
         print(f"{problem.path}: skipped background ({problem.reason})", file=sys.stderr)
     if note := places.panorama_note():

@@ -258,6 +258,7 @@ def make_image(cfg: Method2Config, i: int, library: Sequence[SpriteSequence], vi
     if not cfg.smoke_class:
         return image, kept, record, None
     smoke, record["smoke_boxes"], _ = boxes_from_masks(result.smoke, cfg.min_box_px)
+    record["smoke_boxes"] += view_meta.get("frame_smoke_boxes", [])  # a frame's own smoke, last (no mask: audit)
     return image, kept, record, smoke
 
 

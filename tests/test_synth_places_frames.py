@@ -10,14 +10,23 @@ import numpy as np
 import pytest
 from factories import write_frames
 
-from synth.places.frames import MIN_KEPT, crop_boxes, frame_fingerprints, load_frames
+from synth.places.frames import MIN_KEPT, crop_boxes, frame_classes, frame_fingerprints, load_frames
 
 
 def test_frames_keep_only_their_fire_boxes_in_pixels(tmp_path: Path) -> None:
     frames = load_frames([write_frames(tmp_path)])
     assert len(frames) == 3 and all(p.is_file() for p in frames)
-    assert sorted(len(b) for b in frames.values()) == [1, 2, 3]  # smoke is not a frame's label
-    assert all(b[1:] == (50.0, 20.0, 30.0) for boxes in frames.values() for b in boxes)
+    assert all(set(labels) == {"fire"} for labels in frames.values())  # smoke is not a fire-only pool's label
+    assert sorted(len(labels["fire"]) for labels in frames.values()) == [1, 2, 3]
+    assert all(b[1:] == (50.0, 20.0, 30.0) for labels in frames.values() for b in labels["fire"])
+
+
+def test_a_pool_that_boxes_smoke_keeps_its_frames_smoke(tmp_path: Path) -> None:
+    root = write_frames(tmp_path)
+    both = load_frames([root], classes=frame_classes(True))
+    assert all(labels["smoke"] == ((2.0, 2.0, 30.0, 20.0),) for labels in both.values())
+    assert [labels["fire"] for labels in both.values()] == [labels["fire"] for labels in load_frames([root]).values()]
+    assert frame_fingerprints([root], frame_classes(True)) != frame_fingerprints([root])  # its smoke is content
 
 
 def test_an_unreadable_frame_is_skipped_and_named(tmp_path: Path) -> None:
@@ -66,5 +75,5 @@ def test_a_frame_without_fire_stays_a_frame(tmp_path: Path) -> None:
     write_yolo_dataset(tmp_path / "ds")  # a: fire + smoke, b: fire, c: no box, d: no label file
     only_smoke = tmp_path / "ds" / "train" / "labels" / "b.txt"
     only_smoke.write_text("1 0.125 0.75 0.25 0.1\n")  # b now holds smoke alone
-    frames = {p.stem: boxes for p, boxes in load_frames([tmp_path / "ds"]).items()}
+    frames = {p.stem: labels["fire"] for p, labels in load_frames([tmp_path / "ds"]).items()}
     assert sorted(frames) == ["a", "b", "c", "d"] and frames["b"] == () and len(frames["a"]) == 1

@@ -135,10 +135,12 @@ def test_a_labelled_photo_carries_its_boxes_through_the_crop(tmp_path: Path) -> 
 
     a, b = write_image(tmp_path / "a.jpg", 160, 120, seed=1), write_image(tmp_path / "b.jpg", 160, 120, seed=2)
     boxes = [(40.0, 60.0, 30.0, 40.0)]
-    photos = PhotoBackgrounds([a, b], 64, 48, seed=0, labels={a: boxes})
+    smoke = [(10.0, 5.0, 100.0, 50.0)]
+    photos = PhotoBackgrounds([a, b], 64, 48, seed=0, labels={a: {"fire": boxes, "smoke": smoke}})
     for view in range(4):
         _, _, meta = photos.background(view)
         if meta["photo"].endswith("a.jpg"):
             assert meta["frame_boxes"] == crop_boxes(boxes, meta["crop"], 64, 48)
+            assert meta["frame_smoke_boxes"] == crop_boxes(smoke, meta["crop"], 64, 48)
         else:
-            assert "frame_boxes" not in meta  # an unlabelled photo's metadata is as before
+            assert "frame_boxes" not in meta and "frame_smoke_boxes" not in meta  # an unlabelled photo's as before

@@ -1,7 +1,8 @@
 """Labelled frames as Method 2 backgrounds: the images of a labelled dataset (e.g. a user's own CCTV frames with
 their fire boxes, or the real training images of a mixture) are composited on like photos (:mod:`synth.places.photos`:
-sites, random crops), and each keeps its own fire boxes: they are carried through the crop into the composite's
-labels, and no flame is placed over them. A frame is a site whose ground is estimated (or read
+sites, random crops), and each keeps its own boxes of the pool's classes (fire, and smoke when the pool boxes smoke:
+:func:`frame_classes`): they are carried through the crop into the composite's labels, and no flame is placed over
+its fires. A frame whose smoke a fire-only pool cannot label keeps it unlabelled, as a fire-only study counts smoke. A frame is a site whose ground is estimated (or read
 from a sidecar) like a photo's.
 
 A frame's box survives a crop when at least :data:`MIN_KEPT` of its area and :data:`MIN_SIDE_PX` pixels of each
@@ -20,48 +21,64 @@ from ground.data.problems import Problem
 #: A box [x, y, w, h] in pixels of the image it is in.
 Box = tuple[float, float, float, float]
 
-#: The class whose boxes a frame keeps.
+#: A frame's boxes [x, y, w, h] px by class: ``fire``, and ``smoke`` when the pool boxes smoke.
+FrameLabels = dict[str, tuple[Box, ...]]
+
+#: The class whose boxes every frame keeps ...
 FIRE = "fire"
+#: ... and the one it keeps too when the pool boxes smoke (``smoke_class``).
+SMOKE = "smoke"
 
 UNREADABLE = "unreadable image"  # how every dataset reader's problem for an image it skipped begins
 MIN_KEPT = 0.2  # share of a frame box's area a crop must keep for the box to stay a label
 MIN_SIDE_PX = 2.0  # pixels of each side of a kept box, in the output image
 
 
-def load_frames(paths: Iterable[Path | str], problems: list[Problem] | None = None) -> dict[Path, tuple[Box, ...]]:
-    """Every image of the labelled datasets at ``paths`` (any format the toolkit reads, every split) and its
-    ``fire`` boxes [x, y, w, h] px (other classes dropped; an image without fire boxes is a frame too, with
-    none), in the datasets' order; ValueError when a dataset has no images. The images the reader skipped as
-    unreadable are appended to ``problems`` (when given), as the reader names them."""
+def frame_classes(smoke: bool) -> tuple[str, ...]:
+    """The classes a frame keeps: fire, and smoke when the pool boxes ``smoke``."""
+    return (FIRE, SMOKE) if smoke else (FIRE,)
+
+
+def load_frames(
+    paths: Iterable[Path | str], problems: list[Problem] | None = None, classes: Sequence[str] = (FIRE,)
+) -> dict[Path, FrameLabels]:
+    """Every image of the labelled datasets at ``paths`` (any format the toolkit reads, every split) and its boxes
+    [x, y, w, h] px of each of ``classes`` (:func:`frame_classes`; other classes dropped; an image without such
+    boxes is a frame too, with none), in the datasets' order; ValueError when a dataset has no images. The images
+    the reader skipped as unreadable are appended to ``problems`` (when given), as the reader names them."""
     from ground.data.formats.registry import read_dataset
 
-    out: dict[Path, tuple[Box, ...]] = {}
+    out: dict[Path, FrameLabels] = {}
     for path in paths:
         result = read_dataset(path)
         if problems is not None:
             problems += [p for p in result.problems if p.reason.startswith(UNREADABLE)]
-        ds = fire_only(result.dataset, path)
-        boxes = ds.annotations_by_image()
+        ds = kept_classes(result.dataset, path, classes)
+        boxes, names = ds.annotations_by_image(), {c.id: c.name for c in ds.categories}
         for img in ds.images:
-            out[ds.image_path(img)] = tuple(tuple(float(v) for v in a.bbox) for a in boxes[img.id])  # type: ignore[misc]
+            out[ds.image_path(img)] = {
+                name: tuple(tuple(float(v) for v in a.bbox) for a in boxes[img.id] if names[a.category_id] == name)  # type: ignore[misc]
+                for name in classes
+            }
     return out
 
 
-def frame_fingerprints(paths: Iterable[Path | str]) -> list[dict[str, Any]]:
-    """Each labelled dataset at ``paths`` by content (:func:`ground.data.fingerprint.fingerprint` of its fire
-    boxes and image bytes): what a pool composited on it is made of, wherever the folder lies."""
+def frame_fingerprints(paths: Iterable[Path | str], classes: Sequence[str] = (FIRE,)) -> list[dict[str, Any]]:
+    """Each labelled dataset at ``paths`` by content (:func:`ground.data.fingerprint.fingerprint` of its boxes of
+    ``classes`` and image bytes): what a pool composited on it is made of, wherever the folder lies."""
     from ground.data.fingerprint import fingerprint
     from ground.data.load import load_split
 
-    return [fingerprint(fire_only(load_split(path), path)).to_dict() for path in paths]
+    return [fingerprint(kept_classes(load_split(path), path, classes)).to_dict() for path in paths]
 
 
-def fire_only(ds: Dataset, where: Path | str) -> Dataset:
-    """``ds`` (every image) with its fire boxes alone: a frame whose boxes are all of other classes stays a frame,
-    with none (their classes count as negatives, :func:`ground.data.load.with_classes`)."""
+def kept_classes(ds: Dataset, where: Path | str, classes: Sequence[str]) -> Dataset:
+    """``ds`` (every image) with its boxes of ``classes`` alone: a frame whose boxes are all of other classes stays
+    a frame, with none (their classes count as negatives, :func:`ground.data.load.with_classes`)."""
     from ground.data.load import prepare
 
-    return prepare(ds, None, [FIRE], where=where, negatives=[n for n in ds.category_names if n != FIRE])
+    others = [n for n in ds.category_names if n not in classes]
+    return prepare(ds, None, list(classes), where=where, negatives=others)
 
 
 def crop_boxes(boxes: Sequence[Box], crop: Sequence[int], width: int, height: int) -> list[list[float]]:

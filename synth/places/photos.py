@@ -19,7 +19,7 @@ from numpy.typing import NDArray
 from curate.scan import list_image_files
 from ground.data.holdout import held_out
 from ground.image.imageio import ImageError, read_image
-from synth.places.frames import Box, crop_boxes
+from synth.places.frames import FrameLabels, crop_boxes
 from synth.places.sites import Site, estimate_site, read_site_sidecar, sidecar_files
 
 
@@ -78,8 +78,8 @@ def crop_to(image: NDArray[np.uint8], width: int, height: int, rng: np.random.Ge
 class PhotoBackgrounds:
     """Background ``v`` is photo ``perm[v % n]`` (module docstring) cropped by ``default_rng([seed, 5, v])``;
     unreadable photos are skipped (the next one in the order is used) and named in :attr:`problems`. ``labels``:
-    the fire boxes [x, y, w, h] px of the photos that are labelled frames (:mod:`synth.places.frames`), carried into
-    each view's ``frame_boxes``."""
+    the boxes [x, y, w, h] px by class of the photos that are labelled frames (:mod:`synth.places.frames`), carried
+    into each view's ``frame_boxes`` (fire) and ``frame_smoke_boxes`` (smoke, when the labels have that class)."""
 
     def __init__(
         self,
@@ -87,7 +87,7 @@ class PhotoBackgrounds:
         width: int,
         height: int,
         seed: int,
-        labels: Mapping[Path, Sequence[Box]] | None = None,
+        labels: Mapping[Path, FrameLabels] | None = None,
     ) -> None:
         if not photos:
             raise ValueError("no background photos")
@@ -137,5 +137,8 @@ class PhotoBackgrounds:
             "people": people,
         }
         if path in self.labels:  # a labelled frame: its own fires are labels, and no flame stands on them
-            meta["frame_boxes"] = crop_boxes(self.labels[path], [x, y, cw, ch], self.width, self.height)
+            labels = self.labels[path]
+            meta["frame_boxes"] = crop_boxes(labels["fire"], [x, y, cw, ch], self.width, self.height)
+            if "smoke" in labels:
+                meta["frame_smoke_boxes"] = crop_boxes(labels["smoke"], [x, y, cw, ch], self.width, self.height)
         return rgb, depth, meta
