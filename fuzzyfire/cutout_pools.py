@@ -1,4 +1,6 @@
-"""Method 2 pools whose flames are each mixture's own real flames (``synth.method2.flames.source: cutouts``).
+"""Method 2 pools whose flames are each mixture's own real flames (``synth.method2.flames.source: cutouts``), and whose
+plumes are its own labelled smoke (``synth.method2.smoke.source: cutouts``, when smoke is studied: each smoke box
+matted into a soft sprite, :mod:`synth.smoke.matte`).
 
 For a mixture R<m>_S<n> with m > 0 and a seed, the real training subset is the m real images the mixture trains
 on (:func:`curate.mix.real_subset`, drawn from ``real.train_split`` only). Its fire boxes are cut out
@@ -42,14 +44,24 @@ PoolKey = tuple[str, str, int]
 
 
 def simulated(cfg: Method2Config) -> Method2Config:
-    """``cfg`` with simulated flames on its own places only (``flames.source: simulated``, no ``own_frames``): the
-    experiment's shared pool, which R0 mixtures and the report's samples and gap use."""
-    return replace(cfg, flames=replace(cfg.flames, source="simulated"), own_frames=0.0)
+    """``cfg`` with simulated flames and plumes on its own places only (``flames.source`` and ``smoke.source``
+    simulated, no ``own_frames``): the experiment's shared pool, which R0 mixtures and the report's samples and gap
+    use."""
+    flames, smoke = replace(cfg.flames, source="simulated"), replace(cfg.smoke, source="simulated")
+    return replace(cfg, flames=flames, smoke=smoke, own_frames=0.0)
 
 
 def is_own(cfg: Method2Config | None) -> bool:
-    """Whether mixtures with real images get pools of their own (own cut-out flames or own frames)."""
-    return cfg is not None and (cfg.flames.source != "simulated" or cfg.own_frames > 0)
+    """Whether mixtures with real images get pools of their own (own cut-out flames, own smoke or own frames)."""
+    return cfg is not None and (bool(cut_classes(cfg)) or cfg.own_frames > 0)
+
+
+def cut_classes(cfg: Method2Config) -> tuple[str, ...]:
+    """The classes an own pool of ``cfg`` cuts out of its mixture's images: fire with ``flames.source: cutouts``,
+    smoke with ``smoke.source: cutouts`` when the pool lays plumes."""
+    fire = ("fire",) if cfg.flames.source == "cutouts" else ()
+    smoke = ("smoke",) if cfg.smoke.source == "cutouts" and cfg.smoke.plumes else ()
+    return fire + smoke
 
 
 def frames_stage(root: Path, subset: Dataset) -> Stage:
@@ -62,60 +74,77 @@ def frames_stage(root: Path, subset: Dataset) -> Stage:
     return cached_stage(root, "frames", identity, lambda out: write_dataset(subset, out, ("coco",), "symlink"))
 
 
-def cut_settings() -> CutoutConfig:
-    """The own pools' cut-out settings: ``fuzzyfire synth cutouts``' defaults (fire boxes, the grabcut rule)."""
+def cut_settings(category: str = "fire") -> CutoutConfig:
+    """The own pools' cut-out settings for ``category``: ``fuzzyfire synth cutouts``' defaults (the grabcut rule
+    for fire; smoke boxes are matted)."""
     from synth.flames.cutouts import CutoutConfig
 
-    return CutoutConfig()
+    return CutoutConfig(class_name=category)
+
+
+#: Version of the cut-out rules beyond the keys in :func:`mask_identity`: 2 = flames windowed (no rectangle), smoke
+#: matted (synth.smoke.matte).
+CUT_VERSION = 2
 
 
 def mask_identity(cut: CutoutConfig) -> dict[str, Any]:
     """The cut-out mask rule of ``cut`` and its parameters (in every cut-out stage's identity)."""
     from synth.flames import cutouts
+    from synth.smoke import matte
 
     return {
         "rule": cut.mask,
         "context": cut.context,
         "iterations": cutouts.GRABCUT_ITERATIONS,
         "min_kept": cutouts.MIN_KEPT,
+        "window": list(cutouts.FLAME_WINDOW),
+        "matte": {"keep_haze": matte.KEEP_HAZE, "patch": matte.PATCH, "min_luma": matte.MIN_LUMA,
+                  "min_opacity": matte.MIN_OPACITY, "window": matte.WINDOW_INNER},  # fmt: skip
+        "version": CUT_VERSION,
     }
 
 
-def cutout_stage(root: Path, subset: Dataset) -> Stage:
-    """The cut-outs of ``subset``'s fire boxes (``fuzzyfire synth cutouts`` layout, ``cutouts.json`` naming each
-    one's image), as a cached stage; ValueError when no box gives one."""
+def cutout_stage(root: Path, subset: Dataset, classes: Sequence[str] = ("fire",)) -> Stage:
+    """The cut-outs of ``subset``'s boxes of ``classes`` (fire and/or smoke; ``fuzzyfire synth cutouts`` layout,
+    ``cutouts.json`` naming each one's class and image), as a cached stage; ValueError when a class gives none."""
+    import itertools
     import json
 
     from ground.data.fingerprint import fingerprint
     from synth.flames.cutouts import cutouts, write_cutouts
 
-    settings = cut_settings()
+    settings = [cut_settings(c) for c in classes]
     identity = {
         "kind": "cutouts",
         "real": fingerprint(subset).to_dict(),
-        "class": settings.class_name,
-        "min_side": settings.min_side,
-        "min_cover": settings.min_cover,
-        "mask": mask_identity(settings),
+        "classes": list(classes),
+        "min_side": settings[0].min_side,
+        "min_cover": settings[0].min_cover,
+        "mask": mask_identity(settings[0]),
     }
 
     def cut(out: Path) -> int:
-        return write_cutouts(cutouts(subset, settings), out)
+        return write_cutouts(itertools.chain.from_iterable(cutouts(subset, s) for s in settings), out)
 
     stage = cached_stage(root, "cutouts", identity, cut)
-    if not json.loads((stage.folder / "cutouts.json").read_text(encoding="utf-8")):
-        raise ValueError(
-            f"flames.source: the {len(subset.images)} real images of a mixture give no cut-out ({settings.class_name} "
-            f"boxes of at least {settings.min_side} px and {settings.min_cover:.0%} fire colour): use flames.source "
-            f"simulated ({stage.folder})"
-        )
+    index = json.loads((stage.folder / "cutouts.json").read_text(encoding="utf-8"))
+    for s in settings:
+        if not any(e["class"] == s.class_name for e in index):
+            what = "fire colour" if s.class_name == "fire" else "light smoke to matte"
+            raise ValueError(
+                f"{s.class_name} cut-outs: the {len(subset.images)} real images of a mixture give none ({s.class_name} "
+                f"boxes of at least {s.min_side} px and enough {what}): use {'flames' if s.class_name == 'fire' else 'smoke'}"
+                f".source simulated ({stage.folder})"
+            )
     return stage
 
 
 def own_pool(root: Path, cfg: Method2Config, subset: Dataset, base: Path) -> tuple[Stage | None, Stage, DataRef]:
     """(cut-out stage or None, pool stage, pool reference) of the Method 2 pool of the real ``subset``: its flames
-    (``flames.source: cutouts``) and/or its images as frames (``own_frames``)."""
-    cut = cutout_stage(root, subset) if cfg.flames.source == "cutouts" else None
+    (``flames.source: cutouts``), its plumes (``smoke.source: cutouts``) and/or its images as frames
+    (``own_frames``)."""
+    classes = cut_classes(cfg)
+    cut = cutout_stage(root, subset, classes) if classes else None
     if cfg.own_frames > 0:
         frames = frames_stage(root, subset).folder
         cfg = replace(cfg, labelled_frames=(frames,), photo_share=cfg.own_frames, panorama_share=1 - cfg.own_frames)
@@ -138,9 +167,9 @@ def cutout_pools(
     m2 = cfg.synth.method2
     if m2 is None or not is_own(m2):
         return {}
-    fire = cut_settings().class_name
-    if fire not in cfg.classes:
-        raise ValueError(f"own Method 2 pools take '{fire}' boxes, but classes are {list(cfg.classes)}")
+    for name in cut_classes(m2):
+        if name not in cfg.classes:
+            raise ValueError(f"own Method 2 pools cut '{name}' boxes, but classes are {list(cfg.classes)}")
     entries = list(dict.fromkeys(mixtures))
     kept = [name for name in entries if parse_mixture(name).real == 0]
     if kept:

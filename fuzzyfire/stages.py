@@ -197,9 +197,8 @@ def synth_stage(root: Path, cfg: MethodConfig, base: Path, cutouts: Stage | None
     runs) again. ``cutouts``: a stage of real flame cut-outs (:mod:`fuzzyfire.cutout_pools`) for a ``flames.source:
     cutouts`` pool, named ``<method>-cutouts-<hash>``; its hash enters the pool's identity. The pool is made in one
     process per core."""
-    from synth.flames.library import build_library
     from synth.flames.sprites import load_library
-    from synth.generate import generate
+    from synth.generate import generate, run_library
 
     method = cfg.method
     cfg = cfg.with_paths(lambda p: _absolute(p, base))
@@ -213,7 +212,7 @@ def synth_stage(root: Path, cfg: MethodConfig, base: Path, cutouts: Stage | None
         {"kind": method, "config": {**config, **files, **flames}},
         lambda out: generate(
             cfg,
-            build_library(cfg.flames, load_library([cutouts.folder]) if cutouts else ()),
+            run_library(cfg, load_library([cutouts.folder]) if cutouts else ()),
             out,
             workers=os.cpu_count() or 1,  # the same bytes from any number of processes
         ),

@@ -237,10 +237,9 @@ def cmd_method2(args: argparse.Namespace) -> int:
 def _generate(args: argparse.Namespace, cfg: MethodConfig) -> WriteResult:
     """``cfg``'s dataset at ``--out`` with the flame library of ``cfg.flames``, in ``--workers`` processes or on
     the Ray cluster of ``--executor ray``."""
-    from synth.flames.library import build_library
-    from synth.generate import generate
+    from synth.generate import generate, run_library
 
-    library = build_library(cfg.flames)
+    library = run_library(cfg)
     cluster = open_cluster(args.executor or "local", args.address)
     try:
         return generate(cfg, library, args.out, overwrite=args.overwrite, workers=_workers(args), cluster=cluster)

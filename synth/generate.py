@@ -83,6 +83,18 @@ def opened_views(job: Job) -> Iterator[tuple[ViewCache, list[dict[str, str]]]]:
         yield views, [source.problems for source in (photos, panoramas) if source is not None]
 
 
+def run_library(cfg: MethodConfig, cutouts: Sequence[SpriteSequence] = ()) -> list[SpriteSequence]:
+    """The sequences a run of ``cfg`` draws from: the flames of ``cfg.flames`` (its cut-outs: the flame sequences
+    among ``cutouts``, :func:`synth.flames.library.build_library`) and, for Method 2, the plumes of ``cfg.smoke``
+    (its cut-outs: the smoke sequences among ``cutouts``, :func:`synth.smoke.library.smoke_library`)."""
+    from synth.flames.library import build_library
+    from synth.smoke.library import smoke_library, split_library
+
+    flames, smoke = split_library(cutouts)
+    library = build_library(cfg.flames, flames)
+    return library + smoke_library(cfg.smoke, smoke) if isinstance(cfg, method2.Method2Config) else library
+
+
 def _make_images(job: Job, todo: Sequence[int]) -> dict[str, str]:
     """Make and stage images ``todo`` in this process (a progress bar); the backgrounds skipped, with reasons."""
     staging = Staging(job.out)

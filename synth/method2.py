@@ -3,6 +3,12 @@ many times; each flame's box is the box of its final visible mask (after clippin
 restricted to the pixels whose contrast a person would notice (:mod:`synth.compose.visibility`); a flame with too few
 such pixels is erased from the image (composited again without it), so no visible flame goes unboxed.
 
+Smoke (``smoke``: :mod:`synth.smoke`): plumes above flames or alone, laid before the flames. When the pool boxes
+smoke (``smoke_class``), each plume's and each flame sprite's smoke is judged like a flame at the smoke threshold
+(:data:`synth.compose.visibility.SMOKE_DELTA_E`): its box is its seen part, and smoke too faint to see is erased (a
+plume is dropped, a flame's soot taken off its sprite), never left unboxed. Plumes draw from their own
+``default_rng([seed, 2, i, 3])``.
+
 Image ``i`` uses view ``i // images_per_view`` (on a photo, a photo view of its own: see :mod:`synth.places.views`) and
 its own rng ``default_rng([seed, 2, i])``, so any image can be (re)made alone: runs resume and are byte-reproducible.
 Auto exposure draws from ``default_rng([seed, 2, i, 2])`` (:func:`metering`).
@@ -11,23 +17,25 @@ Auto exposure draws from ``default_rng([seed, 2, i, 2])`` (:func:`metering`).
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import ClassVar
+from typing import ClassVar, NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
 
 from ground.data.boxes import mask_to_xywh, xywh_overlaps_any
-from synth.compose.composite import BLEND_MODES, Placement, composite
+from synth.compose.composite import BLEND_MODES, Composited, Placement, composite
 from synth.compose.effects import Effects, apply_effects, expose, sample_effects, scale_light
 from synth.compose.metering import draw_radiance, flame_share, mean_linear_luma, metered_gain
-from synth.compose.visibility import delta_e, measure
+from synth.compose.visibility import SMOKE_DELTA_E, Visibility, delta_e, measure
 from synth.flames.library import flame_draws
 from synth.flames.sprites import Sprite, SpriteSequence, flame_extent
 from synth.method_config import MethodConfig, PoolPlaces
 from synth.places import render
 from synth.places.views import ViewCache
+from synth.smoke.library import SmokeConfig, split_library
+from synth.smoke.placement import Plume, plan_plumes
 from synth.staging import boxes_from_masks
 
 SITE_MAX_HEIGHT = 0.6  # tallest flame on a photo or panorama site, fraction of the image height
@@ -63,6 +71,7 @@ class Method2Config(MethodConfig):
     # flames: hard negatives of your own kind, 0..1; null = negatives (labelled frames and other places keep that)
     auto_exposure: bool = False  # the camera meters each frame with its flames in view: bright flames lower the
     # exposure of the scene around them (synth.compose.metering)
+    smoke: SmokeConfig = field(default_factory=SmokeConfig)  # smoke plumes above flames and alone (synth.smoke)
 
     def __post_init__(self) -> None:
         super().__post_init__()
@@ -172,34 +181,64 @@ def kept_clear(meta: dict) -> list:
     return [*meta.get("people", []), *meta.get("frame_boxes", [])]
 
 
+class Shown(NamedTuple):
+    """What :func:`visible_composite` kept: the camera's ``image`` (H, W, 3) uint8, the ``result`` composite (plumes'
+    layers first, then the flames'), the ``flames`` kept (a sublist of the planned ones, soot taken off where it was
+    too faint) and their ``seen`` :class:`~synth.compose.visibility.Visibility`, the ``plumes`` kept, and ``smoke``:
+    per layer of ``result`` the visibility of its smoke (None: no smoke, or smoke not judged)."""
+
+    image: NDArray[np.uint8]
+    result: Composited
+    flames: list[tuple[Placement, str]]
+    seen: list[Visibility]
+    plumes: list[Plume]
+    smoke: list[Visibility | None]
+
+
+def _boxable(v: Visibility | None, min_box_px: int) -> bool:
+    return v is not None and v.visible and min(mask_to_xywh(v.part)[2:]) >= min_box_px
+
+
+def without_smoke(p: Placement) -> Placement:
+    """``p`` whose sprite's smoke layer is erased (a flame's soot too faint to see)."""
+    return replace(p, sprite=replace(p.sprite, over=np.zeros_like(p.sprite.over)))
+
+
 def visible_composite(
     scene: NDArray[np.uint8],
     planned: Sequence[tuple[Placement, str]],
     effects,
     min_box_px: int,
     meter: Callable[[NDArray[np.uint8], list[Placement]], NDArray[np.uint8]] | None = None,
-):
-    """Composite ``planned`` on the exposed ``scene`` and take it through the camera (``effects``), erasing every
-    flame that cannot be seen (:mod:`synth.compose.visibility`: contrast against the plate, the scene through the same
-    camera without flames) or whose seen part is smaller than ``min_box_px``, and compositing again without it
-    until every flame left is seen (erasing one can unhide another). ``meter(scene, placements)``: the scene as
-    the camera exposes it with those flames in view (:mod:`synth.compose.metering`; the plate is that scene too), redone
-    for the flames left after each erasure. Returns (image (H, W, 3) uint8, the composite, the flames kept (a
-    sublist of ``planned``), their :class:`synth.compose.visibility.Visibility`)."""
+    plumes: Sequence[Plume] = (),
+    judge_smoke: bool = False,
+) -> Shown:
+    """Composite ``plumes`` then ``planned`` flames on the exposed ``scene`` and take it through the camera
+    (``effects``), erasing every flame that cannot be seen (:mod:`synth.compose.visibility`: contrast against the
+    plate, the scene through the same camera without flames) or whose seen part is smaller than ``min_box_px``, and
+    compositing again without it until every flame left is seen (erasing one can unhide another). With
+    ``judge_smoke`` the smoke is judged the same way at the smoke threshold: an unseen plume is dropped, a flame's
+    unseen soot erased. ``meter(scene, placements)``: the scene as the camera exposes it with those flames in view
+    (:mod:`synth.compose.metering`; the plate is that scene too), redone for the flames left after each erasure."""
     plate = apply_effects(scene, effects) if meter is None else None
-    shown = list(planned)
+    shown, kept_plumes = list(planned), list(plumes)
     while True:
         lit = scene if meter is None else meter(scene, [p for p, _ in shown])
         if meter is not None:
             plate = apply_effects(lit, effects)
-        result = composite(lit, [p for p, _ in shown])
+        result = composite(lit, [q.placement for q in kept_plumes] + [p for p, _ in shown])
         image = apply_effects(result.image, effects)
         delta = delta_e(image, plate)
-        seen = [measure(delta, m) for m in result.flames]
-        keep = [k for k, v in enumerate(seen) if v.visible and min(mask_to_xywh(v.part)[2:]) >= min_box_px]
-        if len(keep) == len(shown):
-            return image, result, shown, seen
-        shown = [shown[k] for k in keep]
+        first = len(kept_plumes)
+        seen = [measure(delta, m) for m in result.flames[first:]]
+        smoke = [measure(delta, m, SMOKE_DELTA_E) if judge_smoke and m.any() else None for m in result.smoke]
+        keep = [k for k, v in enumerate(seen) if _boxable(v, min_box_px)]
+        plumes_kept = [q for q, v in zip(kept_plumes, smoke) if not judge_smoke or _boxable(v, min_box_px)]
+        faint = {k for k in keep if smoke[first + k] is not None and not _boxable(smoke[first + k], min_box_px)}
+        if len(keep) == len(shown) and len(plumes_kept) == len(kept_plumes) and not faint:
+            return Shown(image, result, shown, seen, kept_plumes, smoke)
+        shown = [(without_smoke(shown[k][0]) if k in faint else shown[k][0], shown[k][1]) for k in keep]
+        kept_plumes = plumes_kept
 
 
 def negative_share(cfg: Method2Config, view_meta: dict) -> float:
@@ -240,26 +279,36 @@ def make_image(cfg: Method2Config, i: int, library: Sequence[SpriteSequence], vi
     None when smoke is not a class). A flame nobody could see is erased, not left unboxed
     (:func:`visible_composite`); a kept flame's mask and box are its seen part."""
     background, depth, view_meta = views.image_background(i, cfg.images_per_view)
+    flame_library, plume_library = split_library(library)
     rng = np.random.default_rng([cfg.seed, 2, i])
     avoid = kept_clear(view_meta) if view_meta.get("site") else None
     yfov = view_meta["camera"]["yfov"]
-    planned = plan_flames(cfg, library, depth, yfov, rng, avoid, negative_share(cfg, view_meta))
+    planned = plan_flames(cfg, flame_library, depth, yfov, rng, avoid, negative_share(cfg, view_meta))
     effects: Effects = sample_effects(rng, cfg.camera)
     scene = expose(background, effects)
     meter = metering(cfg, i, scene) if cfg.auto_exposure else None
-    image, result, shown, seen = visible_composite(scene, planned, effects, cfg.min_box_px, meter)
-    kept, boxes, index = boxes_from_masks([v.part for v in seen], cfg.min_box_px)
-    flames = [flame_record(shown[k][0], shown[k][1], seen[k]) for k in index]
-    meta = {**view_meta, "flames": flames, "erased": len(planned) - len(shown), "effects": effects.to_json()}
+    plumes = []
+    if cfg.smoke.plumes and plume_library:
+        fy = float(render.intrinsics(yfov, cfg.width, cfg.height)[1, 1])
+        smoke_rng = np.random.default_rng([cfg.seed, 2, i, 3])
+        plumes = plan_plumes(cfg.smoke, plume_library, [p for p, _ in planned], scene, depth, fy, smoke_rng)
+    shown = visible_composite(scene, planned, effects, cfg.min_box_px, meter, plumes, cfg.smoke_class)
+    kept, boxes, index = boxes_from_masks([v.part for v in shown.seen], cfg.min_box_px)
+    flames = [flame_record(shown.flames[k][0], shown.flames[k][1], shown.seen[k]) for k in index]
+    meta = {**view_meta, "flames": flames, "erased": len(planned) - len(shown.flames), "effects": effects.to_json()}
+    if plumes:
+        meta["plumes"] = [q.record() for q in shown.plumes]
+        meta["plumes_erased"] = len(plumes) - len(shown.plumes)
     if meter is not None:
-        meta["exposure_gain"] = round(meter.gain([p for p, _ in shown]), 4)
+        meta["exposure_gain"] = round(meter.gain([p for p, _ in shown.flames]), 4)
     boxes += view_meta.get("frame_boxes", [])  # a labelled frame's own fires, after the flames (no mask: audit)
     record = {"width": cfg.width, "height": cfg.height, "boxes": boxes, "meta": meta}
     if not cfg.smoke_class:
-        return image, kept, record, None
-    smoke, record["smoke_boxes"], _ = boxes_from_masks(result.smoke, cfg.min_box_px)
+        return shown.image, kept, record, None
+    parts = [v.part for v in shown.smoke if v is not None]
+    smoke, record["smoke_boxes"], _ = boxes_from_masks(parts, cfg.min_box_px)
     record["smoke_boxes"] += view_meta.get("frame_smoke_boxes", [])  # a frame's own smoke, last (no mask: audit)
-    return image, kept, record, smoke
+    return shown.image, kept, record, smoke
 
 
 def flame_record(p: Placement, name: str, seen) -> dict:

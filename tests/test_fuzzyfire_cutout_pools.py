@@ -174,14 +174,14 @@ def test_a_rebuild_elsewhere_gives_the_same_stages_byte_for_byte(built, tmp_path
 
 def test_a_subset_without_cutouts_or_a_grid_without_fire_is_refused_in_one_line(tmp_path: Path) -> None:
     with pytest.raises(
-        ValueError, match=r"the 4 real images of a mixture give no cut-out \(fire boxes of at least 16 px"
+        ValueError, match=r"fire cut-outs: the 4 real images of a mixture give none \(fire boxes of at least 16 px"
     ):
         cutout_stage(tmp_path / "data", tiny_pool(tmp_path / "tiny", 4, "real:tiny"))  # 16x12 images, 4-8 px boxes
     d = toy_dict(mixtures=["R6_S6"], table1=[], seeds=[0])
     d["classes"], d["synth"]["method1"] = ["smoke"], None
     d["synth"]["method2"]["flames"] = {**d["synth"]["method2"]["flames"], "source": "cutouts"}
     cfg = build_config(d, ExperimentConfig)
-    with pytest.raises(ValueError, match=r"own Method 2 pools take 'fire' boxes, but classes are \['smoke'\]"):
+    with pytest.raises(ValueError, match=r"own Method 2 pools cut 'fire' boxes, but classes are \['smoke'\]"):
         cutout_pools(cfg, ["R6_S6"], None, Datasets(cfg.classes), tmp_path, tmp_path)
 
 

@@ -85,7 +85,8 @@ def test_grabcut_cuts_the_flame_out_of_a_fire_lit_wall_the_colour_rule_takes_who
     colour, cover = cut(img, box, CutoutConfig(mask="colour"))
     grab, same_cover = cut(img, box, CutoutConfig(mask="grabcut"))
     assert cover == same_cover == 1.0  # the whole box passes the colour rule: the skip rule is unchanged
-    assert (colour[..., 3] >= 128).all()  # a filled rectangle
+    assert (colour[8:52, 8:52, 3] >= 128).all()  # the whole box, softened at its sides ...
+    assert _no_straight_side(colour[..., 3])  # ... so no rectangle of the source frame shows
     assert _iou(grab[..., 3] >= 128, inside) > 0.95 and grab[0, 0, 3] == 0 and grab[30, 30, 3] == 255
     assert np.array_equal(grab[..., :3], colour[..., :3])  # the same pixels, another alpha
     assert (
@@ -93,6 +94,22 @@ def test_grabcut_cuts_the_flame_out_of_a_fire_lit_wall_the_colour_rule_takes_who
     )  # sky corner stays out (default rule)
     with pytest.raises(ValueError, match="unknown cut-out mask rule 'snake'; choose one of colour, grabcut"):
         CutoutConfig(mask="snake")
+
+
+def _no_straight_side(alpha: np.ndarray) -> bool:
+    """Whether the (h, w) alpha is 0 on the box's outer rows and columns and in its corners' 1/12 squares."""
+    h, w = alpha.shape
+    ch, cw = max(h // 12, 1), max(w // 12, 1)
+    sides = [alpha[0], alpha[-1], alpha[:, 0], alpha[:, -1], alpha[:ch, :cw], alpha[-ch:, -cw:]]
+    return all(int(part.max()) == 0 for part in sides)
+
+
+@pytest.mark.parametrize("rule", ["colour", "grabcut"])
+def test_a_flame_filling_its_box_is_no_rectangular_patch(rule: str) -> None:
+    img = np.zeros((100, 100, 3), np.uint8)
+    img[:] = ORANGE  # fire fills the frame, so its box: both rules keep the whole box
+    rgba, _ = cut(img, (20, 20, 60, 40), CutoutConfig(mask=rule))
+    assert _no_straight_side(rgba[..., 3]) and rgba[20, 30, 3] == 255
 
 
 def test_grabcut_masks_are_deterministic_and_independent_of_earlier_cuts() -> None:

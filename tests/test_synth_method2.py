@@ -100,13 +100,14 @@ def test_an_unseen_flame_is_erased_and_a_seen_one_boxed():
     faint = (Placement(_plain_flame((40, 12, 0)), 4, 4, 8, 12, glow=0.3), "faint")
     bright = (Placement(_plain_flame((255, 200, 60)), 24, 20, 8, 12, glow=0.3), "bright")
     effects = Effects(noise_sigma=3.0, noise_seed=1, jpeg_quality=80)
-    image, result, shown, seen = M.visible_composite(wall, [faint, bright], effects, 4)
-    assert [name for _, name in shown] == ["bright"] and len(result.flames) == len(seen) == 1
+    shown = M.visible_composite(wall, [faint, bright], effects, 4)
+    seen = shown.seen
+    assert [name for _, name in shown.flames] == ["bright"] and len(shown.result.flames) == len(seen) == 1
     assert seen[0].visible and M.mask_to_xywh(seen[0].part).tolist() == [24, 20, 8, 12]
-    alone, *_ = M.visible_composite(wall, [bright], effects, 4)
-    assert np.array_equal(image, alone)  # the faint flame and its glow are gone, not left unboxed
-    plate, _, none, _ = M.visible_composite(wall, [faint], effects, 4)
-    assert none == [] and np.array_equal(plate, M.apply_effects(wall, effects))
+    alone = M.visible_composite(wall, [bright], effects, 4).image
+    assert np.array_equal(shown.image, alone)  # the faint flame and its glow are gone, not left unboxed
+    none = M.visible_composite(wall, [faint], effects, 4)
+    assert none.flames == [] and np.array_equal(none.image, M.apply_effects(wall, effects))
 
 
 def test_audit_reports_the_visibility_of_the_boxes(written):

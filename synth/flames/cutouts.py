@@ -13,7 +13,13 @@ box's other pixels probable background, a ring of ``context`` x the box's longer
 background), which learns the image's own flame and background colours and cuts along their edges; when it
 keeps under :data:`MIN_KEPT` of the box (or the box has no background pixel to learn from) the colour mask is
 kept. ``experiments/cutout_masks.py`` measures both against true masks. Either mask is softened into the alpha
-channel; boxes whose colour-rule share is below ``min_cover`` are skipped. Every setting is a key of
+channel and multiplied by a super-elliptical window (:data:`FLAME_WINDOW`): where fire fills its box, the mask is
+the whole box, and without the window the pasted flame showed as a rectangular patch of its source frame. Boxes
+whose colour-rule share is below ``min_cover`` are skipped.
+
+``class_name: smoke`` cuts smoke instead: each smoke box is *matted* (:func:`synth.smoke.matte.matte`: a soft
+opacity by the dark channel prior, never a cut edge), and the cut-outs are written as smoke sprite sequences
+(:func:`synth.flames.sprites.save_sequence`, ``kind: smoke``), which Method 2 lays as plumes. Every setting is a key of
 :class:`CutoutConfig` (``fuzzyfire synth cutouts``, ``synth colour`` and the experiment's own pools).
 """
 
@@ -36,7 +42,7 @@ from ground.data.names import check_names
 from ground.data.problems import Problem
 from ground.image.imageio import ImageError, read_image, unit_to_u8
 from ground.run.progress import progress
-from synth.flames.sprites import write_png
+from synth.flames.sprites import Sprite, SpriteSequence, save_sequence, write_png
 
 #: Cut-outs per sequence folder (Method 1/2 pick a sequence, then one of its frames).
 PER_SEQUENCE = 25
@@ -51,13 +57,18 @@ GRABCUT_ITERATIONS = 5
 #: A GrabCut mask keeping less than this share of the box is discarded for the colour mask.
 MIN_KEPT = 0.05
 
+#: A flame cut-out's alpha window (:func:`synth.smoke.matte.window`): (inner share, super-ellipse power): 1 inside
+#: 0.8 of the way to the box's edge, 0 on it and in the corners.
+FLAME_WINDOW = (0.8, 4.0)
+
 
 @dataclass(frozen=True)
 class CutoutConfig:
     """Which boxes are cut out and how: ``fuzzyfire synth cutouts`` and ``synth colour`` (its flame pixels), and,
     at these defaults, the experiment's own cut-out pools (:mod:`fuzzyfire.cutout_pools`)."""
 
-    class_name: str = "fire"  # class whose boxes are cut out (a synonym such as Flames reads as fire)
+    class_name: str = "fire"  # class whose boxes are cut out (a synonym such as Flames reads as fire); smoke boxes
+    # are matted into soft smoke sprites (synth.smoke.matte)
     min_side: int = 16  # skip boxes smaller than this on either side, pixels, >= 1
     min_cover: float = 0.08  # skip boxes less fire-coloured (colour rule) than this share, 0..1
     mask: MaskRule = "grabcut"  # flame mask rule: grabcut (the colour mask refined by cv2.grabCut) | colour
@@ -79,12 +90,14 @@ class CutoutConfig:
 @dataclass(frozen=True)
 class Cutout:
     """One cut-out: ``rgba`` (h, w, 4) uint8 straight alpha, cropped to its source ``box`` (x, y, w, h pixels,
-    integer, inside the image) of image ``file``; ``cover`` the fire-coloured share of the box."""
+    integer, inside the image) of image ``file``; ``cover`` the fire-coloured share of the box (a smoke cut-out:
+    its mean opacity); ``category`` fire or smoke."""
 
     rgba: NDArray[np.uint8]
     file: str
     box: tuple[int, int, int, int]
     cover: float
+    category: str = "fire"
 
 
 def fire_mask(rgb: NDArray[np.uint8]) -> NDArray[np.bool_]:
@@ -138,8 +151,10 @@ def cut(
     cover = float(raw.mean())
     if cover < cfg.min_cover:
         return None
+    from synth.smoke.matte import window
+
     flame = filled(raw) if cfg.mask == "colour" else grabcut_mask(rgb, box, filled(raw), cfg.context)
-    alpha = cv2.GaussianBlur(flame.astype(np.float32), (0, 0), 1.0)
+    alpha = cv2.GaussianBlur(flame.astype(np.float32), (0, 0), 1.0) * window(h, w, *FLAME_WINDOW)
     return np.dstack([crop, unit_to_u8(alpha)]), cover
 
 
@@ -154,14 +169,20 @@ def pixel_box(bbox: tuple[float, float, float, float], width: int, height: int) 
 
 def cutouts(ds: Dataset, cfg: CutoutConfig, problems: list[Problem] | None = None) -> Iterator[Cutout]:
     """Cut-outs of every ``cfg.class_name`` box of ``ds`` at least ``cfg.min_side`` pixels on both sides, image by
-    image in the dataset's order (each image read once), by :func:`cut`. Unreadable images are appended to
+    image in the dataset's order (each image read once), by :func:`cut` (fire) or
+    :func:`synth.smoke.matte.matte` (smoke, its image's fire boxes kept clear). Unreadable images are appended to
     ``problems``."""
+    from synth.smoke.matte import matte
+
     category, min_side = canonical_class(cfg.class_name), cfg.min_side
     check_names("class", [category], ds.category_names, str(ds.root), "classes", "--class")
-    cat_ids = {c.id for c in ds.categories if c.name == category}
+    names = {c.id: c.name for c in ds.categories}
     boxes: dict[int, list[tuple[float, float, float, float]]] = {}
+    fires: dict[int, list[tuple[float, float, float, float]]] = {}
     for a in ds.annotations:
-        if a.category_id in cat_ids and not a.iscrowd and min(a.bbox[2], a.bbox[3]) >= min_side:
+        if names[a.category_id] == "fire":
+            fires.setdefault(a.image_id, []).append(tuple(a.bbox))
+        if names[a.category_id] == category and not a.iscrowd and min(a.bbox[2], a.bbox[3]) >= min_side:
             boxes.setdefault(a.image_id, []).append(tuple(a.bbox))
     images = [img for img in ds.images if img.id in boxes]
     for img in progress(images, total=len(images), desc="cut-outs", unit="img"):
@@ -173,16 +194,21 @@ def cutouts(ds: Dataset, cfg: CutoutConfig, problems: list[Problem] | None = Non
                 problems.append(Problem(str(path), f"skipped: {exc.reason}"))
             continue
         height, width = rgb.shape[:2]
+        clear = [pixel_box(b, width, height) for b in fires.get(img.id, [])]
         for bbox in boxes[img.id]:
             box = pixel_box(bbox, width, height)
-            got = cut(rgb, box, cfg) if min(box[2], box[3]) >= min_side else None
+            if min(box[2], box[3]) < min_side:
+                continue
+            got = matte(rgb, box, clear) if category == "smoke" else cut(rgb, box, cfg)
             if got is not None:
-                yield Cutout(got[0], str(img.file_name), box, got[1])
+                yield Cutout(got[0], str(img.file_name), box, got[1], category)
 
 
 def write_cutouts(items: Iterator[Cutout], out: Path, per_sequence: int = PER_SEQUENCE) -> int:
-    """Write ``items`` as RGBA PNG sequence folders ``out/real-KKK/NNNNN.png`` (``per_sequence`` each) and
-    ``out/cutouts.json`` (source file, box, cover of each PNG); returns the count. ``out`` must be new or empty
+    """Write ``items`` as sequence folders of ``per_sequence`` each and ``out/cutouts.json`` (class, source file,
+    box, cover of each); returns the count. Flames: RGBA PNGs ``out/real-KKK/NNNNN.png``; smoke: smoke sprite
+    sequences ``out/smoke-KKK/`` (:func:`synth.flames.sprites.save_sequence`, ``kind: smoke``, frame j its j-th
+    cut-out). ``out`` must be new or empty
     (:class:`FileExistsError` otherwise); when writing fails, what was written is removed."""
     if (out / "cutouts.json").exists():
         raise FileExistsError(f"{out}: holds cut-outs already (cutouts.json); choose an empty folder")
@@ -198,12 +224,37 @@ def write_cutouts(items: Iterator[Cutout], out: Path, per_sequence: int = PER_SE
 
 
 def _write_sequences(items: Iterator[Cutout], out: Path, per_sequence: int) -> int:
-    index = []
-    for n, item in enumerate(items):
+    index: list[dict] = []
+    smoke: list[Cutout] = []
+    for item in items:
+        if item.category == "smoke":
+            smoke.append(item)
+            if len(smoke) == per_sequence:
+                _write_smoke(out, smoke, index, per_sequence)
+                smoke = []
+            continue
+        n = sum(e["class"] == "fire" for e in index)
         name = f"real-{n // per_sequence:03d}/{n:05d}.png"
         (out / name).parent.mkdir(parents=True, exist_ok=True)
         write_png(out / name, item.rgba)
-        index.append({"png": name, "file": item.file, "box": list(item.box), "cover": round(item.cover, 4)})
+        index.append({"class": "fire", "png": name, "file": item.file, "box": list(item.box), "cover": round(item.cover, 4)})
+    if smoke:
+        _write_smoke(out, smoke, index, per_sequence)
     out.mkdir(parents=True, exist_ok=True)
     (out / "cutouts.json").write_text(json.dumps(index, indent=1) + "\n", encoding="utf-8")
     return len(index)
+
+
+def _write_smoke(out: Path, items: list[Cutout], index: list[dict], per_sequence: int) -> None:
+    """One smoke sprite sequence of ``items`` (mattes laid over, no flame, no emission), entries added to ``index``."""
+    from synth.smoke.plume import SMOKE_KIND
+
+    k = sum(e["class"] == "smoke" for e in index) // per_sequence
+    name = f"smoke-{k:03d}"
+    sprites = tuple(
+        Sprite(c.rgba, np.zeros((*c.rgba.shape[:2], 3), np.uint8), np.zeros(c.rgba.shape[:2], bool)) for c in items
+    )
+    save_sequence(out / name, SpriteSequence(name, sprites, {"generator": "smoke-cutouts", "kind": SMOKE_KIND}))
+    for j, c in enumerate(items):
+        entry = {"class": "smoke", "sequence": name, "frame": j, "file": c.file, "box": list(c.box)}
+        index.append({**entry, "cover": round(c.cover, 4)})

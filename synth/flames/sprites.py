@@ -3,7 +3,9 @@
 A :class:`Sprite` of size (h, w) holds
 - ``over``: (h, w, 4) uint8 straight-alpha RGBA laid *over* the background (smoke, or a user's RGBA render),
 - ``emission``: (h, w, 3) uint8 sRGB light *added* on top (the flame's glow),
-- ``mask``: (h, w) bool, the flame itself (the box comes from here, never from the smoke).
+- ``mask``: (h, w) bool, the flame itself (the box comes from here, never from the smoke),
+- ``smoke``: whether the part of ``over`` that is not flame is smoke (False for a flame cut out of a photo, whose
+  ``over`` is the flame and the dim edge around it: :func:`load_rgba_folder`).
 
 Composite of one sprite: ``out = bg * (1 - a) + rgb * a``, then ``out = blend(out, emission)``.
 
@@ -49,14 +51,15 @@ class Sprite:
     over: NDArray[np.uint8]
     emission: NDArray[np.uint8]
     mask: NDArray[np.bool_]
+    smoke: bool = True
 
     def __post_init__(self) -> None:
         h, w = self.mask.shape
         assert self.over.shape == (h, w, 4) and self.emission.shape == (h, w, 3), "sprite layers differ in size"
 
     def smoke_mask(self) -> NDArray[np.bool_]:
-        """(h, w) bool: smoke pixels (``over`` alpha >= :data:`SMOKE_ALPHA`, not flame)."""
-        return (self.over[..., 3] >= round(SMOKE_ALPHA * 255)) & ~self.mask
+        """(h, w) bool: smoke pixels (``over`` alpha >= :data:`SMOKE_ALPHA`, not flame; none unless ``smoke``)."""
+        return (self.over[..., 3] >= round(SMOKE_ALPHA * 255)) & ~self.mask & self.smoke
 
     @property
     def size(self) -> tuple[int, int]:
@@ -122,7 +125,7 @@ def crop_sprite(sprite: Sprite, rect: tuple[int, int, int, int]) -> Sprite:
     """The part (x0, y0, x1, y1) of ``sprite`` (sprite pixels, end exclusive), copied."""
     x0, y0, x1, y1 = (int(v) for v in rect)
     cut = (slice(y0, y1), slice(x0, x1))
-    return Sprite(sprite.over[cut].copy(), sprite.emission[cut].copy(), sprite.mask[cut].copy())
+    return Sprite(sprite.over[cut].copy(), sprite.emission[cut].copy(), sprite.mask[cut].copy(), sprite.smoke)
 
 
 def flatten_rgba(sprite: Sprite) -> NDArray[np.uint8]:
@@ -140,16 +143,17 @@ def flatten_rgba(sprite: Sprite) -> NDArray[np.uint8]:
     return np.round(out * 255.0).astype(np.uint8)
 
 
-def sprite_from_rgba(rgba: NDArray[np.uint8], flame_threshold: float = 0.55) -> Sprite:
+def sprite_from_rgba(rgba: NDArray[np.uint8], flame_threshold: float = 0.55, smoke: bool = True) -> Sprite:
     """A sprite from a user's (h, w, 4) straight-alpha RGBA render: laid over as is, no added emission; the flame
-    mask is where alpha >= 0.5 and the brightest channel >= ``flame_threshold`` (bright, not grey smoke)."""
+    mask is where alpha >= 0.5 and the brightest channel >= ``flame_threshold`` (bright, not grey smoke); ``smoke``:
+    whether the rest of it is smoke (a render's grey plume) or not (a cut-out's dim flame edge)."""
     if rgba.ndim != 3 or rgba.shape[2] != 4:
         raise ValueError(f"expected an RGBA image, got shape {rgba.shape}")
     rgb = rgba[..., :3].astype(np.float32) / 255.0
     bright = rgb.max(axis=-1)
     saturated = bright - rgb.min(axis=-1) > 0.15
     mask = (rgba[..., 3] >= 128) & (bright >= flame_threshold) & (saturated | (bright > 0.9))
-    return Sprite(np.ascontiguousarray(rgba), np.zeros(rgba.shape[:2] + (3,), np.uint8), mask)
+    return Sprite(np.ascontiguousarray(rgba), np.zeros(rgba.shape[:2] + (3,), np.uint8), mask, smoke)
 
 
 def write_png(path: Path, array: NDArray[np.uint8]) -> None:
@@ -208,7 +212,8 @@ def _read_over(folder: Path, i: int, shape: tuple[int, int]) -> NDArray[np.uint8
 def load_rgba_folder(folder: Path) -> SpriteSequence:
     """A user's RGBA sequence (or a ``synth cutouts`` sequence): every ``*.png`` in ``folder`` with an alpha channel,
     cropped to its content; frames with no flame pixel are skipped. ``meta["files"]``: the PNG of each kept
-    sprite."""
+    sprite. A cut-out sequence (its parent holds ``cutouts.json``) is flame alone: its sprites carry no smoke."""
+    cut = (folder.parent / "cutouts.json").is_file()
     paths = sorted(p for p in folder.glob("*.png") if p.is_file())
     if not paths:
         raise FileNotFoundError(f"{folder}: no sequence.json and no PNG frames")
@@ -217,7 +222,7 @@ def load_rgba_folder(folder: Path) -> SpriteSequence:
         rgba = _read_png(path)
         if rgba.ndim != 3 or rgba.shape[2] != 4:
             raise ImageError(path, "has no alpha channel (RGBA PNG needed)")
-        kept = shown_part(sprite_from_rgba(rgba))
+        kept = shown_part(sprite_from_rgba(rgba, smoke=not cut))
         if kept is not None:
             sprites.append(kept)
             files.append(path.name)

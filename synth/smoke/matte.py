@@ -1,0 +1,86 @@
+"""A labelled smoke box of a real image as a soft-alpha sprite: smoke has no edge, so it is matted, not cut.
+
+Smoke is modelled as haze is (Koschmieder's law): ``I = J t + A (1 - t)`` per pixel, ``J`` what is behind it, ``A``
+the smoke's colour, ``t`` its transmission, so the sprite's opacity is ``1 - t``. The opacity comes from the *dark
+channel prior* of He, Sun & Tang (2009, "Single image haze removal using dark channel prior", CVPR): in a clear
+patch some channel is near black, so ``1 - t = w * min over the patch and channels of I / A`` (``w`` =
+:data:`KEEP_HAZE`); the patch is :data:`PATCH` of the box's shorter side, and the blocky result is refined by a
+guided filter on the image (He, Sun & Tang 2013). ``A`` is the mean of the box's pixels of highest dark channel (the
+top :data:`CORE_SHARE`), as He et al. estimate the airlight. The prior needs light smoke: a box whose ``A`` has a
+luma below :data:`MIN_LUMA` (black soot, which darkens what is behind it like a shadow) or whose smoke covers less
+than :data:`MIN_OPACITY` on average is not matted. Fire-coloured pixels and the image's fire boxes get opacity 0,
+softly and a little beyond them (a flame inside a plume is no smoke, and would be pasted unlabelled).
+
+The sprite shows no rectangle and no halo of its source frame: where it is opaque its RGB is the image's (the
+smoke's own texture), where it is thin it is ``A`` (never the background behind it), and its opacity is multiplied
+by an elliptical window, 1 inside :data:`WINDOW_INNER` of the way from the box's centre to its edge and 0 on it (a
+labelled box is drawn loosely around smoke; no straight side may show).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import cv2
+import numpy as np
+from numpy.typing import NDArray
+
+from ground.image.imageio import unit_to_u8
+from synth.compose.ramps import smoothstep
+from synth.flames.cutouts import fire_mask
+
+KEEP_HAZE = 0.95  # He et al.'s w: a little haze is left, so distant objects keep their depth
+PATCH = 0.06  # dark-channel patch, x the box's shorter side (at least 3 px, odd)
+CORE_SHARE = 0.01  # share of the box's pixels of highest dark channel whose mean is the smoke's colour A
+MIN_LUMA = 0.35  # smoke darker than this (luma of A, 0..1) is not matted: the prior needs light smoke
+MIN_OPACITY = 0.15  # mean opacity inside the window a matted box needs
+OWN_TEXTURE = (0.45, 0.85)  # opacity over which the sprite's RGB goes from A to the image's own pixels
+WINDOW_INNER = 0.55  # the elliptical window is 1 inside this share of the way from the box's centre to its edge
+
+
+def window(height: int, width: int, inner: float = WINDOW_INNER, power: float = 2.0) -> NDArray[np.float32]:
+    """(height, width) float32 in [0, 1]: 1 inside ``inner`` of the way from the centre to the edge of the
+    super-ellipse ``|u|^power + |v|^power = 1`` inscribed in the box (u, v = -1 and 1 at the centres of its outer
+    pixels), falling smoothly to 0 on it (0 outside it: the corners, and every outer pixel). ``power`` 2 is an
+    ellipse; a larger power keeps more of the box's corners."""
+    v = np.linspace(-1.0, 1.0, height, dtype=np.float32) if height > 1 else np.zeros(1, np.float32)
+    u = np.linspace(-1.0, 1.0, width, dtype=np.float32) if width > 1 else np.zeros(1, np.float32)
+    r = (np.abs(u[None, :]) ** power + np.abs(v[:, None]) ** power) ** (1.0 / power)
+    return (1.0 - smoothstep(r, inner, 1.0)).astype(np.float32)
+
+
+def dark_channel(image: NDArray[np.float32], patch: int) -> NDArray[np.float32]:
+    """(h, w) minimum over the channels and a ``patch`` x ``patch`` square of the (h, w, 3) float ``image``."""
+    return cv2.erode(image.min(axis=-1), np.ones((patch, patch), np.uint8))
+
+
+def matte(
+    rgb: NDArray[np.uint8], box: tuple[int, int, int, int], fires: Sequence[tuple[int, int, int, int]] = ()
+) -> tuple[NDArray[np.uint8], float] | None:
+    """The (h, w, 4) uint8 straight-alpha RGBA smoke sprite of integer box (x, y, w, h) of the (H, W, 3) uint8 RGB
+    image and its mean opacity inside the window, or None when the box cannot be matted (dark smoke, or too
+    little of it): module docstring. ``fires``: the image's fire boxes (x, y, w, h px), opacity 0 inside them."""
+    x, y, w, h = box
+    crop = rgb[y : y + h, x : x + w]
+    image = crop.astype(np.float32) / 255.0
+    patch = max(int(PATCH * min(w, h)) | 1, 3)
+    raw_dark = dark_channel(image, patch)
+    top = raw_dark >= np.quantile(raw_dark, 1.0 - CORE_SHARE)
+    airlight = image[top].mean(axis=0)
+    if float(airlight @ np.array([0.299, 0.587, 0.114], np.float32)) < MIN_LUMA:
+        return None
+    haze = KEEP_HAZE * dark_channel(image / np.maximum(airlight, 0.05)[None, None, :], patch)
+    guide = cv2.cvtColor(crop, cv2.COLOR_RGB2GRAY).astype(np.float32) / 255.0
+    alpha = cv2.ximgproc.guidedFilter(guide, np.clip(haze, 0.0, 1.0).astype(np.float32), 2 * patch, 1e-3)
+    clear = fire_mask(crop).astype(np.float32)
+    for fx, fy, fw, fh in fires:
+        clear[max(fy - y, 0) : max(fy + fh - y, 0), max(fx - x, 0) : max(fx + fw - x, 0)] = 1.0
+    clear = np.clip(2.0 * cv2.GaussianBlur(clear, (0, 0), patch / 2.0), 0.0, 1.0)  # soft, and wider than the fire
+    shape = window(h, w)
+    alpha = np.clip(alpha, 0.0, 1.0) * shape * (1.0 - clear)
+    opacity = float((alpha * shape).sum() / max(float(shape.sum()), 1e-6))
+    if opacity < MIN_OPACITY:
+        return None
+    own = smoothstep(alpha, *OWN_TEXTURE)[..., None]
+    colour = own * image + (1.0 - own) * airlight[None, None, :]
+    return np.dstack([unit_to_u8(colour), unit_to_u8(alpha)]), opacity
