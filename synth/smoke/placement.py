@@ -1,12 +1,12 @@
 """Where a plume goes in a Method 2 image, how big, and in what colour and light.
 
 - **Above a flame** (``smoke.above`` of the flames): the plume's source sits a third of the way down from the top
-  of the flame's visible body, so the smoke rises out of its tips; it is 1.2-2.5 times the flame's width and keeps
-  its sprite's shape. It is laid before the flames, which stay in front of their own smoke.
+  of the flame's visible body, so the smoke rises out of its tips; it is 2-4 times the flame's width (a plume's
+  source is its narrow lower part) and keeps its sprite's shape. It is laid before the flames, which stay in front of their own smoke.
 - **Alone** (probability ``smoke.alone`` per image): smouldering, or a distant fire whose flames do not show. When
   the view has sky (:func:`ground.image.sky.sky_mask`, at least :data:`MIN_SKY` of the image) a share ``smoke.sky``
-  of them rise into it from the sky's lower edge at a random column (a plume over a ridge or a roof), 8-30 % of the
-  image wide; the others stand on a ground pixel (depth > 0), ``smoke.height_m`` high at that depth.
+  of them rise into it from the sky's lower edge at a random column (a plume over a ridge or a roof), 15-45 % of
+  the image wide; the others stand on a ground pixel (depth > 0), ``smoke.height_m`` high at that depth.
 - **Colour**: white steam (weight 0.35, grey level 0.85-1.0), grey smoke (0.4, 0.45-0.75) or black soot (0.25,
   0.08-0.3) for a simulated plume (:data:`FAMILIES`); a matted plume keeps its own colour. Either is **lit by the
   scene**: multiplied by ``clip(0.35 + 1.3 L, 0.35, 1)``, ``L`` the mean luma (0..1) of the background under it, and
@@ -115,7 +115,7 @@ def plan_plumes(
         sx, sy = f.width / f.sprite.size[0], f.height / f.sprite.size[1]
         fx0, fy0, fx1, fy1 = f.x + span[0] * sx, f.y + span[1] * sy, f.x + (span[2] + 1) * sx, f.y + (span[3] + 1) * sy
         sprite, name, simulated = _draw_sprite(plumes, rng)
-        w = max(int((fx1 - fx0) * rng.uniform(1.2, 2.5)), 8)
+        w = max(int((fx1 - fx0) * rng.uniform(2.0, 4.0)), 8)
         h = max(int(w * sprite.size[1] / sprite.size[0]), 8)
         base = fy0 + (fy1 - fy0) / 3.0
         rect = [int((fx0 + fx1) / 2 - w / 2), int(base - h), w, h]
@@ -128,7 +128,7 @@ def plan_plumes(
             cols = np.flatnonzero(sky.any(axis=0))
             col = int(cols[rng.integers(len(cols))])
             edge = int(np.flatnonzero(sky[:, col])[-1])  # the sky's lower edge in that column
-            w = max(int(width * rng.uniform(0.08, 0.3)), 8)
+            w = max(int(width * rng.uniform(0.15, 0.45)), 8)
             h = max(int(w * aspect), 8)
             out.append(_plume(sprite, [col - w // 2, edge + h // 20 - h, w, h], simulated, background, name, "sky", rng))
         else:

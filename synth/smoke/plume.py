@@ -3,13 +3,13 @@
 The plume follows the shape of a turbulent buoyant plume (Morton, Taylor & Turner 1956, "Turbulent gravitational
 convection from maintained and instantaneous sources", Proc. R. Soc. A 234): its half-width grows linearly with
 height, ``b(z) = b0 + spread z`` (the entrainment law b = 6/5 alpha z with alpha ~ 0.1 gives spread ~ 0.12; a visible
-plume edge reads wider: :func:`sample_plume` draws a growth of 0.12-0.26 of the canvas width over its height,
-a canvas 1.7 times taller than wide), its centreline bends downwind (``wind z^1.5``: a
+plume edge reads wider: :func:`sample_plume` draws a growth of 0.18-0.28 of the canvas width over its height,
+a canvas 4/3 times taller than wide, from a half-width of 0.06-0.1 at the source), its centreline bends downwind (``wind z^1.5``: a
 plume in a cross wind bends over), and its density thins with height (``exp(-z / thinning)``). Inside this envelope
 the smoke is *advected noise* (Perlin & Neyret 2001, "Flow noise", SIGGRAPH Technical Sketches): fractal value noise
 scrolled upwards frame by frame at the plume's rise speed and warped sideways by a slower noise (the billows), so
 the frames of a sequence are the same plume moving, as the flame sequences are a flame burning. No fluid is solved:
-a 96 x 160 grid of eight frames takes ~10 ms, so a library is made on the fly.
+a 96 x 128 grid of eight frames takes ~10 ms, so a library is made on the fly.
 
 A frame is a :class:`synth.flames.sprites.Sprite` with an empty flame mask and no emission: its ``over`` layer is
 the smoke, straight-alpha RGBA whose RGB is a white shading (self-shadowed billows darker) that the compositor tints
@@ -37,10 +37,10 @@ SMOKE_KIND = "smoke"
 class PlumeParams:
     """One plume sequence. ``rows`` x ``cols`` grid cells (one output pixel each); fractions are of the grid."""
 
-    rows: int = 160
+    rows: int = 128
     cols: int = 96
     frames: int = 8  # frames kept
-    base: float = 0.12  # half-width at the source, fraction of cols
+    base: float = 0.15  # half-width at the source, fraction of cols
     spread: float = 0.2  # half-width growth from the source to the top, fraction of cols
     wind: float = 0.0  # centreline drift at the top, fraction of cols (signed)
     thinning: float = 0.6  # height over which density falls by 1/e, fraction of rows
@@ -58,11 +58,11 @@ class PlumeParams:
 def sample_plume(rng: np.random.Generator, frames: int = 8) -> PlumeParams:
     """A random plume: spread, drift, thinning and density drawn from ``rng`` in that order (ranges in the module
     docstring and :class:`PlumeParams`)."""
-    spread = float(rng.uniform(0.12, 0.26))
+    spread = float(rng.uniform(0.18, 0.28))
     wind = float(rng.choice([-1.0, 1.0]) * rng.uniform(0.0, 0.2))
     thinning = float(rng.uniform(0.5, 1.5))
-    density = float(rng.uniform(1.0, 4.0))
-    base = float(rng.uniform(0.08, 0.16))
+    density = float(rng.uniform(2.0, 5.0))
+    base = float(rng.uniform(0.06, 0.1))
     return PlumeParams(base=base, spread=spread, wind=wind, thinning=thinning, density=density, frames=frames)
 
 
@@ -89,11 +89,11 @@ def plume_alpha(p: PlumeParams, turbulence: NDArray[np.float32], warp: NDArray[n
     centre = 0.5 + p.wind * z**1.5
     half = p.base + p.spread * z
     across = (x - centre + 0.35 * half * (warp - 0.5)) / half
-    envelope = np.exp(-2.0 * across**2)
+    envelope = np.exp(-3.0 * across**2)
     column = np.exp(-z / p.thinning) * smoothstep(z, 0.0, 0.06)
-    body = smoothstep(turbulence, 0.15, 0.8)
+    body = smoothstep(turbulence, 0.3, 0.75)
     edge = smoothstep(np.minimum(x, 1 - x), 0.0, 0.08) * smoothstep(1 - z, 0.0, 0.08)  # never cut at the canvas
-    depth = p.density * envelope * column * (0.2 + 0.8 * body) * edge
+    depth = p.density * envelope * column * (0.15 + 0.85 * body) * edge
     return (1.0 - np.exp(-depth)).astype(np.float32)
 
 
