@@ -8,7 +8,7 @@ patch some channel is near black, so ``1 - t = w * min over the patch and channe
 guided filter on the image (He, Sun & Tang 2013). ``A`` is the mean of the box's pixels of highest dark channel (the
 top :data:`CORE_SHARE`), as He et al. estimate the airlight. The prior needs light smoke: a box whose ``A`` has a
 luma below :data:`MIN_LUMA` (black soot, which darkens what is behind it like a shadow) or whose smoke covers less
-than :data:`MIN_OPACITY` on average is not matted. Fire-coloured pixels and the image's fire boxes get opacity 0,
+than :data:`MIN_OPACITY` on average is not matted. Warm fire-coloured pixels and the image's fire boxes get opacity 0,
 softly and a little beyond them (a flame inside a plume is no smoke, and would be pasted unlabelled).
 
 The sprite shows no rectangle and no halo of its source frame: where it is opaque its RGB is the image's (the
@@ -35,6 +35,8 @@ CORE_SHARE = 0.01  # share of the box's pixels of highest dark channel whose mea
 MIN_LUMA = 0.35  # smoke darker than this (luma of A, 0..1) is not matted: the prior needs light smoke
 MIN_OPACITY = 0.15  # mean opacity inside the window a matted box needs
 OWN_TEXTURE = (0.45, 0.85)  # opacity over which the sprite's RGB goes from A to the image's own pixels
+WARM = 0.15  # a fire-coloured pixel (synth.flames.cutouts.fire_mask) kept out of a matte is also this much redder
+# than blue (R - B, 0..1): white smoke passes the fire rule's bright-core test
 WINDOW_INNER = 0.55  # the elliptical window is 1 inside this share of the way from the box's centre to its edge
 
 
@@ -72,10 +74,11 @@ def matte(
     haze = KEEP_HAZE * dark_channel(image / np.maximum(airlight, 0.05)[None, None, :], patch)
     guide = cv2.cvtColor(crop, cv2.COLOR_RGB2GRAY).astype(np.float32) / 255.0
     alpha = cv2.ximgproc.guidedFilter(guide, np.clip(haze, 0.0, 1.0).astype(np.float32), 2 * patch, 1e-3)
-    clear = fire_mask(crop).astype(np.float32)
+    warm = image[..., 0] - image[..., 2] > WARM  # a flame's white core passes the fire rule, and so would white smoke
+    clear = (fire_mask(crop) & warm).astype(np.float32)
     for fx, fy, fw, fh in fires:
         clear[max(fy - y, 0) : max(fy + fh - y, 0), max(fx - x, 0) : max(fx + fw - x, 0)] = 1.0
-    clear = np.clip(2.0 * cv2.GaussianBlur(clear, (0, 0), patch / 2.0), 0.0, 1.0)  # soft, and wider than the fire
+    clear = np.maximum(clear, np.clip(2.0 * cv2.GaussianBlur(clear, (0, 0), patch / 2.0), 0.0, 1.0))  # and softly beyond
     shape = window(h, w)
     alpha = np.clip(alpha, 0.0, 1.0) * shape * (1.0 - clear)
     opacity = float((alpha * shape).sum() / max(float(shape.sum()), 1e-6))

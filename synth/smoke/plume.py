@@ -84,8 +84,8 @@ def plume_alpha(p: PlumeParams, turbulence: NDArray[np.float32], warp: NDArray[n
     """(rows, cols) opacity in [0, 1) of one frame: ``1 - exp(-depth)`` (Beer-Lambert) of the optical depth of the
     envelope of ``p`` (module docstring), its across coordinate warped by ``warp`` and its density modulated by
     ``turbulence`` (both (rows, cols) in [0, 1])."""
-    z = (p.rows - 1 - np.arange(p.rows, dtype=np.float32))[:, None] / p.rows  # height above the source, 0..1
-    x = np.arange(p.cols, dtype=np.float32)[None, :] / p.cols
+    z = (p.rows - 1 - np.arange(p.rows, dtype=np.float32))[:, None] / (p.rows - 1)  # height above the source, 0..1
+    x = np.arange(p.cols, dtype=np.float32)[None, :] / (p.cols - 1)
     centre = 0.5 + p.wind * z**1.5
     half = p.base + p.spread * z
     across = (x - centre + 0.35 * half * (warp - 0.5)) / half
