@@ -360,3 +360,16 @@ def test_image_labelled_test_sets_report_image_recall_and_an_undeclared_folder_s
         assert [line.split(",")[3] for line in compared if line.startswith(f"{name},")] == [IMAGE_RECALL]
     table = (tmp_path / "out" / "tables" / "table2.md").read_text()
     assert "broad" in table and "declared" in table
+
+
+def test_pools_box_smoke_exactly_when_smoke_is_a_studied_class() -> None:
+    from fuzzyfire.experiment_config import ExperimentConfigError
+
+    cfg = toy_config(mixtures=["R6_S6"], table1=[], seeds=[0])
+    fire = replace(cfg, classes=("fire",))
+    assert experiment.pools_box_classes(fire) == fire and not fire.synth.method2.smoke_class
+    both = experiment.pools_box_classes(replace(cfg, classes=("fire", "smoke")))
+    assert all(both.synth.section(m).smoke_class for m in ("method1", "method2") if both.synth.section(m))
+    told = replace(fire, synth=replace(fire.synth, method2=replace(fire.synth.method2, smoke_class=True)))
+    with pytest.raises(ExperimentConfigError, match="synth.method2.smoke_class is true but smoke is not a studied"):
+        experiment.pools_box_classes(told)

@@ -21,6 +21,7 @@ from synth.flames.cutouts import (
     fire_mask,
     grabcut_mask,
     pixel_box,
+    write_cutouts,
 )
 from synth.flames.sprites import load_library, write_png
 
@@ -242,3 +243,33 @@ def test_a_failed_write_removes_what_it_wrote(labelled: Path, tmp_path: Path, mo
             module.write_cutouts(cutouts(ds, CutoutConfig()), out)
         assert written and not written[0].exists()
     assert not (tmp_path / "new").exists() and (tmp_path / "empty").is_dir()
+
+
+def test_smoke_boxes_become_soft_smoke_sequences_and_flame_cutouts_carry_no_smoke(tmp_path: Path) -> None:
+    """A light plume over a textured scene, boxed as smoke beside a flame box: ``class_name: smoke`` mattes it into a
+    smoke sprite sequence (no flame, soft alpha, no side showing) that loads as smoke; the flames cut beside it load
+    as flames whose dim edge is no smoke."""
+    from synth.smoke.plume import is_smoke
+
+    rng = np.random.default_rng(0)
+    img = _image_with_disc(centre=(30, 90), r=14)  # a flame at the lower left
+    img[:, 60:] = rng.integers(40, 120, (120, 100, 3))  # a textured wall on the right ...
+    yy, xx = np.mgrid[0:120, 0:100]
+    alpha = 0.9 * np.exp(-(((xx - 50) / 25.0) ** 2 + ((yy - 50) / 30.0) ** 2))[..., None]
+    img[:, 60:] = (img[:, 60:] * (1 - alpha) + 230 * alpha).astype(np.uint8)  # ... with white smoke over it
+
+    def row(cls: int, x: int, y: int, w: int, h: int) -> str:
+        return f"{cls} {(x + w / 2) / 160:.9f} {(y + h / 2) / 120:.9f} {w / 160:.9f} {h / 120:.9f}"
+
+    _write_yolo(tmp_path / "real", {"s0": (img, [row(0, 16, 76, 28, 28), row(1, 70, 5, 80, 90)])})
+    ds = read_dataset(tmp_path / "real").dataset
+    smoke = list(cutouts(ds, CutoutConfig(class_name="smoke")))
+    assert [(c.category, c.box) for c in smoke] == [("smoke", (70, 5, 80, 90))]
+    fire = list(cutouts(ds, CutoutConfig()))
+    assert write_cutouts(iter(fire + smoke), tmp_path / "cut") == 2
+    index = json.loads((tmp_path / "cut" / "cutouts.json").read_text())
+    assert [(e["class"], e.get("sequence")) for e in index] == [("fire", None), ("smoke", "smoke-000")]
+    flames, plumes = ([s for s in load_library([tmp_path / "cut"]) if is_smoke(s) == k] for k in (False, True))
+    (plume,) = plumes[0].sprites
+    assert not plume.mask.any() and plume.smoke_mask().any() and plume.over[0, :, 3].max() == 0
+    assert all(not sp.smoke and not sp.smoke_mask().any() for seq in flames for sp in seq.sprites)

@@ -230,3 +230,73 @@ def test_n_images_on_at_least_n_photos_use_n_distinct_photos(tmp_path, library):
     assert photos[14:28] == photos[:14]
     generate(cfg, library, two, workers=2)
     assert dataset_files(one) == dataset_files(two)
+
+
+def _plume(rgb: tuple[int, int, int], x: int = 10, y: int = 5):
+    """A planned plume of a flat-coloured, dense plume sprite at (x, y), 24 x 30 px."""
+    from dataclasses import replace
+
+    from synth.smoke.placement import Plume, smoke_placement
+    from synth.smoke.plume import plume_library
+
+    sprite = plume_library(1, seed=0, frames=1)[0].sprites[0]
+    over = sprite.over.copy()
+    over[..., :3] = rgb
+    flat = replace(sprite, over=over)
+    return Plume(smoke_placement(flat, [x, y, 24, 30]), "plume/0", "sky", "grey")
+
+
+def test_a_plume_on_a_sky_of_its_own_colour_gets_no_box_and_a_seen_one_is_boxed_where_seen():
+    from synth.compose.effects import Effects
+
+    sky = np.full((48, 48, 3), (150, 160, 170), np.uint8)
+    effects = Effects(noise_sigma=2.0, noise_seed=1)
+    same = M.visible_composite(sky, [], effects, 4, None, [_plume((150, 160, 170))], judge_smoke=True)
+    assert same.plumes == [] and np.array_equal(same.image, M.apply_effects(sky, effects))  # erased, not unboxed
+    dark = M.visible_composite(sky, [], effects, 4, None, [_plume((40, 40, 45))], judge_smoke=True)
+    (seen,) = [v for v in dark.smoke if v is not None]
+    assert len(dark.plumes) == 1 and seen.visible and seen.part.any()
+    assert (seen.part <= dark.result.smoke[0]).all()  # the box covers the seen part of the smoke mask only
+    assert (M.delta_e(dark.image, M.apply_effects(sky, effects))[seen.part] >= M.SMOKE_DELTA_E).all()
+    unjudged = M.visible_composite(sky, [], effects, 4, None, [_plume((150, 160, 170))])
+    assert len(unjudged.plumes) == 1 and unjudged.smoke == [None]  # a pool that boxes no smoke judges none
+
+
+def test_a_pool_with_smoke_boxes_every_seen_plume_exactly_and_reruns_byte_identically(tmp_path, library):
+    from dataclasses import replace
+
+    from synth.smoke.library import SmokeConfig, smoke_library
+
+    cfg = replace(CFG, n=6, smoke_class=True, smoke=SmokeConfig(above=1.0, alone=1.0, sequences=2, frames=2))
+    full = library + smoke_library(cfg.smoke)
+    generate(cfg, full, tmp_path / "a")
+    report = audit_dataset(tmp_path / "a")
+    assert report["smoke"]["boxes"] >= 3 and report["smoke"]["min_iou"] == 1.0 and report["min_iou"] == 1.0
+    per_image = json.loads((tmp_path / "a" / "manifest.json").read_text())["args"]["per_image"]
+    assert all("plumes" in m and m["plumes_erased"] >= 0 for m in per_image)
+    assert {p["where"] for m in per_image for p in m["plumes"]} >= {"above"}
+    generate(cfg, full, tmp_path / "b")
+    assert dataset_files(tmp_path / "a") == dataset_files(tmp_path / "b")
+
+
+def test_a_pool_that_boxes_smoke_keeps_its_frames_smoke_boxes_last_and_unaudited(tmp_path, library):
+    from dataclasses import replace
+
+    from factories import write_frames
+
+    frames = write_frames(tmp_path)
+    cfg = replace(CFG, n=4, scenes=0, labelled_frames=(frames,), width=128, height=96, images_per_view=1,
+                  smoke_class=True)  # fmt: skip
+    generate(cfg, library, tmp_path / "a")
+    coco = json.loads((tmp_path / "a" / "annotations.json").read_text())
+    smoke_id = next(c["id"] for c in coco["categories"] if c["name"] == "smoke")
+    per_image = json.loads((tmp_path / "a" / "manifest.json").read_text())["args"]["per_image"]
+    for img, meta in zip(coco["images"], per_image):
+        smoke = [a["bbox"] for a in coco["annotations"] if a["image_id"] == img["id"] and a["category_id"] == smoke_id]
+        own = meta["frame_smoke_boxes"]
+        assert smoke[len(smoke) - len(own) :] == own  # the frame's own smoke, cropped with it, last
+    assert sum(len(m["frame_smoke_boxes"]) for m in per_image) >= 2  # (a crop can cut the corner box off)
+    report = audit_dataset(tmp_path / "a")
+    assert report["smoke"]["min_iou"] == 1.0 and report["frame_boxes"] == sum(
+        len(m["frame_boxes"]) + len(m["frame_smoke_boxes"]) for m in per_image
+    )
