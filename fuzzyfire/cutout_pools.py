@@ -98,8 +98,7 @@ def mask_identity(cut: CutoutConfig) -> dict[str, Any]:
         "iterations": cutouts.GRABCUT_ITERATIONS,
         "min_kept": cutouts.MIN_KEPT,
         "window": list(cutouts.FLAME_WINDOW),
-        "matte": {"keep_haze": matte.KEEP_HAZE, "patch": matte.PATCH, "min_luma": matte.MIN_LUMA,
-                  "min_opacity": matte.MIN_OPACITY, "window": matte.WINDOW_INNER},  # fmt: skip
+        "matte": [matte.KEEP_HAZE, matte.PATCH, matte.MIN_LUMA, matte.MIN_OPACITY, matte.WINDOW_INNER, matte.WARM],
         "version": CUT_VERSION,
     }
 

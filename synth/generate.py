@@ -233,7 +233,8 @@ def generate(
     files = find_environment_files(places.meshes) if places.meshes else []
     photo_files = keep_in_pool(places.photos, given.background_holdout)
     unreadable: list = []
-    frames = load_frames(given.labelled_frames, unreadable, frame_classes(cfg.smoke_class))  # photos keeping their boxes
+    # labelled frames: photos keeping their boxes (fire, and smoke when the pool boxes it)
+    frames = load_frames(given.labelled_frames, unreadable, frame_classes(cfg.smoke_class))
     for problem in places.problems:  # unreadable files among the places and frames: named, never composited on
         print(f"{problem.path}: skipped background ({problem.reason})", file=sys.stderr)
     if note := places.panorama_note():

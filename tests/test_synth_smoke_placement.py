@@ -62,6 +62,8 @@ def test_plumes_are_lit_by_their_scene_and_placed_reproducibly() -> None:
     scene, depth = np.full((80, 80, 3), 90, np.uint8), np.full((80, 80), 4.0, np.float32)
     args = (SmokeConfig(above=0.5, alone=0.5), PLUMES, [_flame(30, 20, 10, 40)], scene, depth, 100.0)
     a, b = (plan_plumes(*args, np.random.default_rng(5)) for _ in range(2))
-    assert [q.record() for q in a] == [q.record() for q in b] and [q.placement.x for q in a] == [q.placement.x for q in b]
+    assert [q.record() for q in a] == [q.record() for q in b] and [q.placement.x for q in a] == [
+        q.placement.x for q in b
+    ]
     assert plan_plumes(SmokeConfig(), *args[1:], np.random.default_rng(5)) == []  # no plumes asked: none
     assert smoke_placement(sprite, rect).width == 60

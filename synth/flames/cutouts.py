@@ -237,7 +237,9 @@ def _write_sequences(items: Iterator[Cutout], out: Path, per_sequence: int) -> i
         name = f"real-{n // per_sequence:03d}/{n:05d}.png"
         (out / name).parent.mkdir(parents=True, exist_ok=True)
         write_png(out / name, item.rgba)
-        index.append({"class": "fire", "png": name, "file": item.file, "box": list(item.box), "cover": round(item.cover, 4)})
+        index.append(
+            {"class": "fire", "png": name, "file": item.file, "box": list(item.box), "cover": round(item.cover, 4)}
+        )
     if smoke:
         _write_smoke(out, smoke, index, per_sequence)
     out.mkdir(parents=True, exist_ok=True)

@@ -78,7 +78,8 @@ def matte(
     clear = (fire_mask(crop) & warm).astype(np.float32)
     for fx, fy, fw, fh in fires:
         clear[max(fy - y, 0) : max(fy + fh - y, 0), max(fx - x, 0) : max(fx + fw - x, 0)] = 1.0
-    clear = np.maximum(clear, np.clip(2.0 * cv2.GaussianBlur(clear, (0, 0), patch / 2.0), 0.0, 1.0))  # and softly beyond
+    soft = np.clip(2.0 * cv2.GaussianBlur(clear, (0, 0), patch / 2.0), 0.0, 1.0)
+    clear = np.maximum(clear, soft)  # the fire, and softly beyond it
     shape = window(h, w)
     alpha = np.clip(alpha, 0.0, 1.0) * shape * (1.0 - clear)
     opacity = float((alpha * shape).sum() / max(float(shape.sum()), 1e-6))

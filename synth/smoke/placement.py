@@ -130,7 +130,9 @@ def plan_plumes(
             edge = int(np.flatnonzero(sky[:, col])[-1])  # the sky's lower edge in that column
             w = max(int(width * rng.uniform(0.15, 0.45)), 8)
             h = max(int(w * aspect), 8)
-            out.append(_plume(sprite, [col - w // 2, edge + h // 20 - h, w, h], simulated, background, name, "sky", rng))
+            out.append(
+                _plume(sprite, [col - w // 2, edge + h // 20 - h, w, h], simulated, background, name, "sky", rng)
+            )
         else:
             ground = np.flatnonzero(depth > 0)
             if len(ground):

@@ -50,7 +50,9 @@ class PlumeParams:
 
     def __post_init__(self) -> None:
         if self.rows < 8 or self.cols < 8 or self.frames < 1:
-            raise ValueError(f"a plume needs at least 8 x 8 cells and one frame, got {self.rows}x{self.cols}, {self.frames}")
+            raise ValueError(
+                f"a plume needs at least 8 x 8 cells and one frame, got {self.rows}x{self.cols}, {self.frames}"
+            )
         if self.density <= 0 or self.thinning <= 0 or self.grain <= 1:
             raise ValueError("density, thinning must be > 0 and grain > 1")
 
@@ -66,7 +68,9 @@ def sample_plume(rng: np.random.Generator, frames: int = 8) -> PlumeParams:
     return PlumeParams(base=base, spread=spread, wind=wind, thinning=thinning, density=density, frames=frames)
 
 
-def value_noise(shape: tuple[int, int], grain: float, rng: np.random.Generator, octaves: int = 3) -> NDArray[np.float32]:
+def value_noise(
+    shape: tuple[int, int], grain: float, rng: np.random.Generator, octaves: int = 3
+) -> NDArray[np.float32]:
     """(rows, cols) fractal value noise in [0, 1]: ``octaves`` random grids, the first with cells ``grain`` wide,
     each next twice as fine and half as strong, bicubically upsampled and summed, then stretched to [0, 1]."""
     rows, cols = shape
