@@ -19,7 +19,11 @@ default: cut here from the train split of ``../shared/data/fire-cctv-416``) comp
 the study's own-cut-out pools: an RGBA cut-out emits no light, so its glow is no blur (the same bytes; a cut-out
 drawn thousands of pixels large used to stall a worker for minutes).
 
-Usage: ``python bench/bench_synth.py [--n 200] [--only flames,composite,method2,method1,cutouts]
+``--only smoke``: Method 2 on ``--photos`` at 416x416 in one process, ``--n`` images without and with smoke (plumes
+above half the flames and alone in half the images, boxed and judged: :mod:`synth.smoke`); the ratio of their
+times per image is smoke's cost (target <= 1.30).
+
+Usage: ``python bench/bench_synth.py [--n 200] [--only flames,composite,method2,method1,cutouts,smoke]
 [--environments P] [--photos DIR] [--cutouts DIR] [--workers 0]``.
 Figures depend on the machine and on other load: take them on an otherwise idle machine.
 """
@@ -32,6 +36,7 @@ import tempfile
 import threading
 import time
 from collections.abc import Callable
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -126,6 +131,24 @@ def bench_run(name: str, run: Callable[[Path], object], n: int, size: str = "640
     print(f"{name}_rss_peak: {max(mb for _, mb in rss.samples):.0f} MB")
 
 
+def bench_smoke(library, photos: Path, n: int) -> None:
+    """Method 2 on fire-free photos (416 px, one process) without and with smoke (a plume above half the flames, a
+    lone plume in half the images, smoke boxed and judged): seconds per image of both and their ratio (the smoke's
+    cost; target <= 1.30)."""
+    from synth.smoke.library import SmokeConfig, smoke_library
+
+    base = Method2Config(n=n, width=416, height=416, backgrounds=(photos,), images_per_view=2)
+    smoky = replace(base, smoke_class=True, smoke=SmokeConfig(above=0.5, alone=0.5))
+    took = {}
+    for name, cfg, lib in (("plain", base, library), ("smoke", smoky, [*library, *smoke_library(smoky.smoke)])):
+        with tempfile.TemporaryDirectory() as tmp:
+            t = time.perf_counter()
+            generate(cfg, lib, Path(tmp) / "out", workers=1)
+            took[name] = (time.perf_counter() - t) / n
+        print(f"method2_{name}_416_s_per_image: {took[name]:.3f} s")
+    print(f"method2_smoke_time_ratio: {took['smoke'] / took['plain']:.2f} x")
+
+
 def bench_cutouts(n: int, cutouts: Path | None, real: Path, photos: Path, workers: int) -> None:
     from fuzzyfire.cli import main as cli
     from synth.flames.sprites import load_library
@@ -150,7 +173,7 @@ def main() -> None:
     ap.add_argument("--environments", type=Path, help="3D files / folders / sidecars instead of procedural scenes")
     data = Path(__file__).resolve().parents[2] / "shared" / "data"
     photos = data / "fire-free"
-    ap.add_argument("--photos", type=Path, default=photos, help=f"--only cutouts: photos (default {photos})")
+    ap.add_argument("--photos", type=Path, default=photos, help=f"--only cutouts, smoke: photos (default {photos})")
     ap.add_argument("--cutouts", type=Path, help="--only cutouts: a synth cutouts folder (default: cut them here)")
     ap.add_argument(
         "--workers", type=int, default=0, help="image processes of the Method runs (default 0 = one per core)"
@@ -172,6 +195,8 @@ def main() -> None:
     print(f"flame_library_12x240_steps: {time.perf_counter() - t:.1f} s")
     if "composite" in only:
         bench_composite(library)
+    if "smoke" in only:
+        bench_smoke(library, args.photos, args.n)
     if "method2" in only:
         cfg2 = Method2Config(n=args.n, width=640, height=480, **scenes)
         bench_run(f"method2{tag}", lambda out: generate(cfg2, library, out, workers=workers), args.n)

@@ -469,14 +469,15 @@ def image_operating_figures(results: Sequence[Mapping[str, Any]], folder: Path) 
 def table_metrics(results: Sequence[Mapping[str, Any]]) -> tuple[str, ...]:
     """The paper's AP and AP50, then AP25 (:mod:`ground.detect.cocoeval`; runs scored before it existed lack it),
     the recall at 10 alarms per 100 images without fire (:mod:`eval.operating`; only studies with a set without
-    fire have it) and the image recall (:mod:`eval.imagelevel`), each when every row of a set with boxes has it;
-    the sets without fire have their alarm column and the image-labelled sets their image recall whatever this
-    says."""
+    fire have it) and the image recall (:mod:`eval.imagelevel`), each when every row of a set with boxes has it,
+    then in a study of several classes each class's image recall; the sets without fire have their alarm columns
+    and the image-labelled sets their image recall whatever this says."""
     fire = [r for r in results if ALARMS not in r and not r.get(IMAGE_LABELLED)]
     extra = [m for m in ("AP25", RECALL_AT_ALARMS, IMAGE_RECALL) if fire and all(r.get(m) is not None for r in fire)]
     names = dict.fromkeys(name for r in fire for name in r.get("classes", ()))
     per_class = [class_metric(k, name) for name in names for k in CLASS_METRICS]
-    return ("AP", "AP50", *per_class, *extra)
+    recall = [class_metric(IMAGE_RECALL, n) for n in names if IMAGE_RECALL in extra]
+    return ("AP", "AP50", *per_class, *extra, *(k for k in recall if any(r.get(k) is not None for r in fire)))
 
 
 def _slug(label: str) -> str:

@@ -59,7 +59,7 @@ class Table:
 
 def shown_scale(metric: str, scale: float) -> float:
     """The factor a metric is shown with: ``scale`` for a fraction (AP), 1 for a rate already per 100 images."""
-    return 1.0 if metric == ALARMS else scale
+    return 1.0 if metric == ALARMS or metric.startswith(f"{ALARMS} ") else scale
 
 
 #: The metrics a result row carries per class when its test set boxes more than one class.
@@ -72,8 +72,9 @@ def class_metric(metric: str, name: str) -> str:
 
 
 def heading(column: tuple[str, str]) -> str:
-    """``"<test set> <metric>"`` as a column is titled."""
-    return f"{column[0]} {METRIC_LABELS.get(column[1], column[1])}"
+    """``"<test set> <metric>"`` as a column is titled (a class's metric: ``"<test set> <metric> <class>"``)."""
+    metric, _, name = column[1].partition(" ")
+    return f"{column[0]} {METRIC_LABELS.get(metric, metric)}{f' {name}' if name else ''}"
 
 
 def marks(table: Table, scale: float = 100.0, digits: int = 1) -> dict[Key, str]:
@@ -111,14 +112,15 @@ def strategy(mix: Mixture) -> str:
 
 def _columns(results: Sequence[Mapping[str, Any]], test_sets, metrics) -> tuple[tuple[str, str], ...]:
     """Test set x ``metrics``; a set without fire (its results carry :data:`eval.errors.ALARMS`) has the alarm
-    column alone, an image-labelled set (:data:`eval.imagelevel.IMAGE_LABELLED`: no boxes) its image recall."""
+    columns alone (all classes', then each class's), an image-labelled set (:data:`eval.imagelevel.IMAGE_LABELLED`: no boxes) its image recall."""
     sets = list(test_sets) if test_sets else list(dict.fromkeys(r["test_set"] for r in results))
     negatives = {r["test_set"] for r in results if ALARMS in r}
     labelled = {r["test_set"] for r in results if r.get(IMAGE_LABELLED)}
 
     def shown(s: str) -> Sequence[str]:
-        if s in negatives:
-            return (ALARMS,)
+        if s in negatives:  # its false alarms, and each class's in a study of several (class_metric)
+            per_class = dict.fromkeys(k for r in results if r["test_set"] == s for k in r if k.startswith(f"{ALARMS} "))
+            return (ALARMS, *per_class)
         return [m for m in metrics if m != ALARMS and (s not in labelled or m == IMAGE_RECALL)]
 
     return tuple((s, m) for s in sets for m in shown(s))

@@ -8,6 +8,7 @@ import functools
 import json
 from collections.abc import Iterator, Mapping, Sequence
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -76,7 +77,8 @@ def result_rows(
     under ``min_fire_images`` fire images (``report.min_fire_images``) its AP and AP50 are None. A run also scored on sets without
     fire carries :data:`eval.operating.RECALL_AT_ALARMS`, the share of its boxes found at the threshold where it
     raises at most :data:`eval.operating.ALARM_BUDGET` alarms per 100 of those images, and that
-    ``threshold_at_alarms``."""
+    ``threshold_at_alarms``. A study of several classes also gets each class's false alarms on a set without fire
+    and image recall on a set with boxes (:func:`per_class_images`)."""
     rows = []
     flags = {s.out: (f.text() if (f := run_flag(s.out)) else None) for s, r in zip(specs, results) if r}
     alarms = {} if datasets is None else {s.out: run_alarms(datasets, s, r) for s, r in zip(specs, results) if r}
@@ -99,6 +101,9 @@ def result_rows(
                       **({IMAGE_LABELLED: True} if m.get(IMAGE_LABELLED) else {})}  # fmt: skip
             ap = ap if fire >= min_fire_images else {"AP": None, "AP50": None}
         classes = {} if negatives else per_class_ap(m, ap["AP50"] is not None)
+        if datasets is not None and len(datasets.classes) > 1 and (negatives or m.get("boxes")):
+            level = images.get(IMAGELEVEL, (None, None))[1]
+            classes.update(per_class_images(datasets, folder, test.data, level, m if negatives else None))
         rows.append({
             "mixture": spec.mixture, "method": spec.method or "-", "seed": spec.seed, "test_set": test.name,
             **ap, "AP25": ap25, **classes, **({ALARMS: m[ALARMS]} if negatives else {}),
@@ -122,6 +127,32 @@ def per_class_ap(scored: Mapping, defined: bool) -> dict:
     return {"classes": list(per_class), **metrics}
 
 
+def per_class_images(datasets: Datasets, folder: Path, test: DataRef, level, negatives: Mapping | None) -> dict:
+    """Per studied class, from a run's predictions on ``test`` (scored into ``folder``): on a set without fire
+    (``negatives``: its results entry) the class's false alarms (:data:`eval.errors.ALARMS` of its detections alone,
+    per 100 images); on a set with boxes the class's image recall (its images found by a detection of the class)
+    at the run's operating threshold of ``level`` (the per-image alarms of every class, or a confidence: the same
+    threshold as the row's :data:`eval.imagelevel.IMAGE_RECALL`) and that class's ``IMAGELEVEL`` (hits, ``level``)
+    for the paired comparisons."""
+    from eval.imagelevel import image_hits
+
+    ds = datasets.get(test)
+    ids = {c.name: c.id for c in ds.categories}
+    records = _predictions(folder)
+    out: dict[str, Any] = {}
+    for name in datasets.classes:
+        mine = [r for r in records if r["category_id"] == ids[name]]
+        if negatives is not None:
+            count = sum(r["score"] >= ALARM_CONF for r in mine)
+            out[class_metric(ALARMS, name)] = 100.0 * count / len(ds.images)
+            continue
+        hits = image_hits(ds, mine, [ids[name]])
+        threshold = level.threshold(ALARM_BUDGET) if isinstance(level, Alarms) else level
+        out[class_metric(IMAGE_RECALL, name)] = hits.recall(threshold) if hits.fire.any() else None
+        out[class_metric(IMAGELEVEL, name)] = (hits, level) if hits.fire.any() else None
+    return out
+
+
 SILENT = "silent"  # a result row's key: True when its run detects nothing at ALARM_CONF on any of its test sets
 
 
@@ -134,7 +165,8 @@ def silenced(rows: Sequence[dict]) -> list[dict]:
         level = r.get(IMAGELEVEL)
         found = level is not None and level[0].recall(ALARM_CONF) > 0
         confident[r["run"]] = confident.get(r["run"], False) or found or bool(r.get(ALARMS))
-    return [{**r, SILENT: True, **({ALARMS: None} if ALARMS in r else {})} if not confident[r["run"]] else r
+    quiet = [ALARMS, *(class_metric(ALARMS, name) for r in rows for name in r.get("classes", ()))]
+    return [{**r, SILENT: True, **{k: None for k in quiet if k in r}} if not confident[r["run"]] else r
             for r in rows]  # fmt: skip
 
 
@@ -222,6 +254,7 @@ def comparisons(cfg: ExperimentConfig, rows: Sequence[dict]) -> list[dict]:
     at_budget = np.random.default_rng(2)  # the recall comparisons draw apart: the AP ones stay as they were
     frames = np.random.default_rng(3)
     by_class = np.random.default_rng(4)  # per-class AP50 draws apart: a one-class study's comparisons stay as they were
+    by_class_images = np.random.default_rng(5)  # and per-class image recall apart from both
     matches = functools.cache(lambda path: MatchTable.load(Path(path)))  # each run's once, whatever its pairs
     for test in dict.fromkeys(r["test_set"] for r in scored if "table2" in r["tables"]):
         runs: dict[tuple[str, str], list[dict]] = {}
@@ -233,6 +266,7 @@ def comparisons(cfg: ExperimentConfig, rows: Sequence[dict]) -> list[dict]:
             if not a or not b:
                 continue
             paired = [r["seed"] for r in a] == [r["seed"] for r in b]  # the same seeds: resample them too
+            classes = a[0].get("classes", ())
             deltas = {}
             if not a[0].get(IMAGE_LABELLED) and all(r.get("fire_images", enough) >= enough for r in a + b):
                 tables = [[matches(r["matches"]) for r in side] for side in (a, b)]
@@ -244,10 +278,12 @@ def comparisons(cfg: ExperimentConfig, rows: Sequence[dict]) -> list[dict]:
             pa, pb = [r.get(OPERATING) for r in a], [r.get(OPERATING) for r in b]
             if None not in pa + pb:  # every run on both sides scored on the sets without fire
                 deltas[RECALL_AT_ALARMS] = paired_recall_bootstrap(pa, pb, at_budget, cfg.report.bootstrap)  # type: ignore[arg-type]
-            ia, ib = [r.get(IMAGELEVEL) for r in a], [r.get(IMAGELEVEL) for r in b]
-            if None not in ia + ib:
-                deltas[IMAGE_RECALL] = paired_image_recall(ia, ib, frames, cfg.report.bootstrap, ALARM_BUDGET,  # type: ignore[arg-type]
-                                                           seeds=paired)  # fmt: skip
+            for key, rng in ((IMAGELEVEL, frames), *((class_metric(IMAGELEVEL, c), by_class_images) for c in classes)):
+                ia, ib = [r.get(key) for r in a], [r.get(key) for r in b]
+                if None not in ia + ib:
+                    metric = IMAGE_RECALL + key[len(IMAGELEVEL) :]  # image_recall, or image_recall <class>
+                    deltas[metric] = paired_image_recall(ia, ib, rng, cfg.report.bootstrap, ALARM_BUDGET,  # type: ignore[arg-type]
+                                                         seeds=paired)  # fmt: skip
             for metric, d in deltas.items():
                 out.append({"test_set": test, "mixture": name, "baseline": base_label, "metric": metric,
                             "delta": d.to_dict(), "seeds": seed_deltas(a, b, metric)})  # fmt: skip
@@ -549,7 +585,8 @@ def write_summary(cfg: ExperimentConfig, specs, results, rows, out: Path, standi
         doc["notice"] = STANDIN_NOTICE
     (out / "experiment.json").write_text(json.dumps(doc, indent=1) + "\n", encoding="utf-8")
     lines = [
-        json.dumps({k: v for k, v in r.items() if k not in ("matches", OPERATING, IMAGELEVEL)}, sort_keys=True)
+        json.dumps({k: v for k, v in r.items() if k not in ("matches", OPERATING) and not k.startswith(IMAGELEVEL)},
+                   sort_keys=True)  # fmt: skip
         for r in rows
     ]
     (out / "results.jsonl").write_text("".join(line + "\n" for line in lines), encoding="utf-8")

@@ -96,6 +96,7 @@ def test_a_set_with_fire_carries_its_recall_at_the_alarm_budget(tmp_path: Path) 
 
     class Loader:  # Datasets.get: the test sets' images and boxes; counts the reads of sets with fire
         reads = 0
+        classes = ("fire",)
 
         def get(self, ref: DataRef):
             if ref == free_ref:
@@ -155,6 +156,8 @@ def test_the_recall_at_the_alarm_budget_is_compared_when_every_run_has_it(
     free_ref = DataRef(Path("/free"), {"kind": "free"})
 
     class Loader:  # Datasets.get
+        classes = ("fire",)
+
         def get(self, ref: DataRef):
             return free_images if ref == free_ref else common
 
@@ -285,3 +288,50 @@ def test_a_two_class_set_gives_per_class_columns_and_comparisons(tmp_path: Path)
     assert out["AP50 fire"]["delta"]["value"] == 0.0 and out["AP50 smoke"]["delta"]["value"] == 1.0
     assert out["AP50"]["delta"]["value"] == 0.5  # the mean over the two classes
     assert out["AP50 smoke"]["seeds"] == [{"seed": 0, "delta": 1.0}]
+
+
+def test_each_class_gets_its_false_alarms_and_image_recall(tmp_path: Path) -> None:
+    """From a run's predictions: on a set without fire, each class's detections at ALARM_CONF per 100 images; on a
+    set with boxes, each class's images found by a detection of that class at the run's operating threshold."""
+    from fuzzyfire.aggregate import per_class_images
+    from fuzzyfire.datasets import DataRef, Datasets
+    from ground.data.dataset import DatasetBuilder
+    from ground.data.writer import write_dataset
+    from ground.image.imageio import unit_to_u8
+
+    import json
+
+    import cv2
+    import numpy as np
+
+    def written(name: str, classes: list[str]) -> DataRef:
+        b = DatasetBuilder(tmp_path / f"src-{name}", ["fire", "smoke"])
+        (tmp_path / f"src-{name}").mkdir()
+        for i, cls in enumerate(classes):
+            cv2.imwrite(str(tmp_path / f"src-{name}" / f"{i}.png"), unit_to_u8(np.full((100, 100, 3), 0.5)))
+            image_id = b.add_image(f"{i}.png", 100, 100)
+            if cls:
+                b.add_box(image_id, cls, (10.0, 10.0, 30.0, 30.0))
+        write_dataset(b.build(), tmp_path / name, ("coco",), "copy")
+        return DataRef(tmp_path / name, {"kind": name}, "coco")
+
+    boxed, free = written("boxed", ["fire", "smoke", "smoke", "smoke"]), written("free", ["", "", "", ""])
+    datasets = Datasets(["fire", "smoke"])
+    ids = {c.name: c.id for c in datasets.get(boxed).categories}
+    folder = tmp_path / "scores"
+    folder.mkdir()
+
+    def det(image: int, cls: str, score: float) -> dict:
+        return {"image_id": image, "category_id": ids[cls], "bbox": [10, 10, 30, 30], "score": score}
+
+    images = sorted(i.id for i in datasets.get(boxed).images)
+    found = [det(images[0], "fire", 0.9), det(images[1], "smoke", 0.8), det(images[2], "fire", 0.9)]  # a fire on smoke
+    (folder / "predictions.json").write_text(json.dumps(found), encoding="utf-8")
+    out = per_class_images(datasets, folder, boxed, 0.5, None)
+    assert out["image_recall fire"] == 1.0 and out["image_recall smoke"] == pytest.approx(1 / 3)
+    assert out["imagelevel smoke"][1] == 0.5 and out["imagelevel smoke"][0].fire.sum() == 3
+    negatives = sorted(i.id for i in datasets.get(free).images)
+    alarms = [det(negatives[0], "smoke", 0.3), det(negatives[1], "smoke", 0.2), det(negatives[2], "fire", 0.9)]
+    (folder / "predictions.json").write_text(json.dumps(alarms), encoding="utf-8")
+    out = per_class_images(datasets, folder, free, None, {"alarms_per_100": 50.0})
+    assert out == {"alarms_per_100 fire": 25.0, "alarms_per_100 smoke": 25.0}  # the 0.2 one is below ALARM_CONF
