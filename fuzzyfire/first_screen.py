@@ -48,7 +48,7 @@ def pool_sentence(manifest: Path, flames: str, size: int | None = None) -> str:
     """What a Method 2 pool's images are, from its ``manifest.json`` (each image's metadata): how many carry
     pasted flames on the user's labelled frames, on fire-free photos or on rendered places, how many are photos
     left as they are (negatives), and whether the flames are simulated or cut out of the real images
-    (``flames``: the pool's ``flames.source``). ``size``: the images a mixture draws of it, when fewer."""
+    (``flames``: the pool's ``flames.source``), and its plumes of smoke (:mod:`synth.smoke`) when it has any. ``size``: the images a mixture draws of it, when fewer."""
     meta = json.loads(manifest.read_text(encoding="utf-8"))["args"].get("per_image", [])
     kind = "cut-out flames (from the real training images)" if flames == "cutouts" else "simulated flames"
     counts = {"frames": 0, "frames_plain": 0, "photos": 0, "photos_plain": 0, "places": 0, "places_plain": 0}
@@ -69,7 +69,9 @@ def pool_sentence(manifest: Path, flames: str, size: int | None = None) -> str:
             f"{counts['places'] + counts['places_plain']} rendered places ({counts['places_plain']} without flames)"
         )
     drawn = f"; a mixture draws {size} of its {len(meta)}" if size is not None and size < len(meta) else ""
-    return f"{len(meta)} images: {', '.join(parts) or 'none'}; {flames_n} {kind}{drawn}"
+    plumes = [p["where"] for m in meta for p in m.get("plumes", ())]
+    smoke = f"; {len(plumes)} plumes of smoke ({plumes.count('above')} above flames)" if plumes else ""
+    return f"{len(meta)} images: {', '.join(parts) or 'none'}; {flames_n} {kind}{smoke}{drawn}"
 
 
 def curation_sentence(folder: Path) -> str | None:

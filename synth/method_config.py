@@ -69,7 +69,8 @@ class MethodConfig:
     negatives: float = 0.1  # fraction of images without flames, 0..1
     flame_height_m: tuple[float, float] = (0.3, 2.5)  # flame height in the scene, metres [lo, hi]
     min_box_px: int = 4  # visible flames smaller than this on either side are not annotated, pixels, >= 1
-    smoke_class: bool = False  # also annotate smoke (class 'smoke': the seen part of a sprite's alpha >= 0.25)
+    smoke_class: bool = False  # also annotate smoke (class 'smoke': a sprite's alpha >= 0.25, in Method 2 only its
+    # part seen at ΔE 5, synth.compose.visibility); an experiment sets it when smoke is a studied class
     camera: CameraConfig = field(default_factory=CameraConfig)  # probabilities of the stronger camera effects
     flames: FlameLibraryConfig = field(default_factory=FlameLibraryConfig)  # the flame library
 
