@@ -52,7 +52,7 @@ def cmd_experiment(args: argparse.Namespace) -> int:
         cfg = command_config(args, ExperimentConfig, ALIASES)
         if cfg is None:
             return 0
-        cfg.check()
+        cfg.resolved(Path(args.config).resolve().parent)  # every check, the holdout shares' too, named by the file
         if cfg.executor.address and cfg.executor.name != "ray":
             raise ExperimentConfigError("--address (executor.address) needs --executor ray")
         e = cfg.executor

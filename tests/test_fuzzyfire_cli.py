@@ -70,6 +70,15 @@ def test_bad_arguments_fail_before_any_work(
     assert not (tmp_path / "out").exists()
 
 
+def test_a_holdout_conflict_is_named_by_its_file_before_any_work(tmp_path: Path, capsys) -> None:
+    config = REPO / "configs" / "own-flames.yaml"
+    extra = ["--set", "synth.method2.background_holdout=0.1"]  # the fire-free test set holds out 0.25
+    assert main(["experiment", str(config), "--out", str(tmp_path / "out"), *extra]) == 2
+    err = capsys.readouterr().err
+    assert "own-flames.yaml" in err and "background_holdout 0.1 and tests.fire-free.holdout 0.25" in err
+    assert not (tmp_path / "out").exists()
+
+
 def test_missing_real_folder_is_named(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     config = REPO / "configs" / "paper.yaml"
     code = main(["experiment", str(config), "--out", str(tmp_path / "out"), "--set", "real.path=/no/such/folder"])
