@@ -105,6 +105,12 @@ def _collect(results: Sequence[Mapping[str, Any]], row_of, metrics: Sequence[str
     return {key: mean_std(v) for key, v in values.items()}
 
 
+def _with_alarms(results: Sequence[Mapping[str, Any]], metrics: Sequence[str]) -> tuple[str, ...]:
+    """``metrics``, the false alarms of the sets without fire and, in a study of several classes, each class's."""
+    per_class = (k for r in results for k in r if k.startswith(f"{ALARMS} "))
+    return tuple(dict.fromkeys((*metrics, ALARMS, *per_class)))
+
+
 def strategy(mix: Mixture) -> str:
     """The paper's strategy of a mixture: real only, real + synthetic, or synthetic only."""
     return STRATEGIES[0] if mix.synth == 0 else STRATEGIES[2] if mix.real == 0 else STRATEGIES[1]
@@ -139,7 +145,7 @@ def table2(
         for s in STRATEGIES
         if any(strategy(m) == s for m in mixtures)
     )
-    cells = _collect(results, lambda r: r["mixture"], tuple(dict.fromkeys((*metrics, ALARMS))))
+    cells = _collect(results, lambda r: r["mixture"], _with_alarms(results, metrics))
     return Table(
         "Table 2: AP by training mixture (mean ± std over seeds)",
         groups,
@@ -165,7 +171,7 @@ def control_table(
     by flame-free copies of its own real images, by synthetic share; columns as :func:`table2`."""
     mixtures = sorted({parse_mixture(r["mixture"]) for r in results}, key=lambda m: (m.synth, m.real))
     names = tuple(m.name for m in mixtures)
-    cells = _collect(results, lambda r: r["mixture"], tuple(dict.fromkeys((*metrics, ALARMS))))
+    cells = _collect(results, lambda r: r["mixture"], _with_alarms(results, metrics))
     return Table(
         "Controls: AP by training mixture, its synthetic images replaced by flame-free copies of its real images",
         (("real + copies of the real", names),),
@@ -189,7 +195,7 @@ def table1(
         mixes = sorted({parse_mixture(r["mixture"]) for r in results if r["method"] == method}, key=lambda m: m.synth)
         label = METHOD_LABELS.get(method, method)
         groups.append((label, tuple(f"{label} {m.name}" for m in mixes)))
-    cells = _collect(results, row, tuple(dict.fromkeys((*metrics, ALARMS))))
+    cells = _collect(results, row, _with_alarms(results, metrics))
     labels = {key: key.split(" ")[-1] for _, rows in groups for key in rows}
     title = "Table 1: synthetic-only training, Method 1 vs Method 2 (mean ± std over seeds)"
     return Table(title, tuple(groups), _columns(results, test_sets, metrics), cells, labels)

@@ -94,6 +94,17 @@ def test_a_set_without_fire_has_one_column_its_alarm_rate_lowest_best():
     assert table2(results()).columns == table2(_with_fire_free(results())).columns[:4]  # the other sets unchanged
 
 
+def test_a_study_of_several_classes_shows_each_classs_false_alarms_per_100_images():
+    rows = [{**r, f"{ALARMS} fire": 1.0, f"{ALARMS} smoke": r[ALARMS] - 1.0} if r["test_set"] == "fire-free" else r
+            for r in _with_fire_free(results())]  # fmt: skip
+    t = table2(rows, metrics=("AP", "AP50"))
+    shown = [c[1] for c in t.columns if c[0] == "fire-free"]
+    assert shown == [ALARMS, f"{ALARMS} fire", f"{ALARMS} smoke"]
+    assert t.cell("R750_S250", ("fire-free", f"{ALARMS} smoke")).mean == pytest.approx(4.0)
+    assert "fire-free alarms/100 smoke |" in to_markdown(t).splitlines()[2]  # per 100 images, not in percent
+    assert "4.0 ± 1.4" in to_markdown(t)
+
+
 def test_table1_has_the_alarm_column_too():
     res = [
         dict(r, method=m)
