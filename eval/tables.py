@@ -57,9 +57,15 @@ class Table:
         return self.cells.get((row, "/".join(column)))
 
 
+def is_alarms(metric: str) -> bool:
+    """Whether ``metric`` is a false-alarm rate (:data:`eval.errors.ALARMS`, or a class's): per 100 images, lower is
+    better."""
+    return metric == ALARMS or metric.startswith(f"{ALARMS} ")
+
+
 def shown_scale(metric: str, scale: float) -> float:
     """The factor a metric is shown with: ``scale`` for a fraction (AP), 1 for a rate already per 100 images."""
-    return 1.0 if metric == ALARMS or metric.startswith(f"{ALARMS} ") else scale
+    return 1.0 if is_alarms(metric) else scale
 
 
 #: The metrics a result row carries per class when its test set boxes more than one class.
@@ -87,7 +93,7 @@ def marks(table: Table, scale: float = 100.0, digits: int = 1) -> dict[Key, str]
         values = {row: round(c.mean * f, digits) for row in table.rows if (c := table.cell(row, col)) is not None}
         if len(values) < 2:
             continue
-        ranked = sorted(set(values.values()), reverse=col[1] != ALARMS)
+        ranked = sorted(set(values.values()), reverse=not is_alarms(col[1]))
         for row, v in values.items():
             if v == ranked[0]:
                 out[(row, "/".join(col))] = "best"
@@ -107,7 +113,7 @@ def _collect(results: Sequence[Mapping[str, Any]], row_of, metrics: Sequence[str
 
 def _with_alarms(results: Sequence[Mapping[str, Any]], metrics: Sequence[str]) -> tuple[str, ...]:
     """``metrics``, the false alarms of the sets without fire and, in a study of several classes, each class's."""
-    per_class = (k for r in results for k in r if k.startswith(f"{ALARMS} "))
+    per_class = (k for r in results for k in r if is_alarms(k))
     return tuple(dict.fromkeys((*metrics, ALARMS, *per_class)))
 
 
@@ -125,8 +131,7 @@ def _columns(results: Sequence[Mapping[str, Any]], test_sets, metrics) -> tuple[
 
     def shown(s: str) -> Sequence[str]:
         if s in negatives:  # its false alarms, and each class's in a study of several (class_metric)
-            per_class = dict.fromkeys(k for r in results if r["test_set"] == s for k in r if k.startswith(f"{ALARMS} "))
-            return (ALARMS, *per_class)
+            return tuple(dict.fromkeys(k for r in results if r["test_set"] == s for k in (ALARMS, *r) if is_alarms(k)))
         return [m for m in metrics if m != ALARMS and (s not in labelled or m == IMAGE_RECALL)]
 
     return tuple((s, m) for s in sets for m in shown(s))

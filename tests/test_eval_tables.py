@@ -103,6 +103,7 @@ def test_a_study_of_several_classes_shows_each_classs_false_alarms_per_100_image
     assert t.cell("R750_S250", ("fire-free", f"{ALARMS} smoke")).mean == pytest.approx(4.0)
     assert "fire-free alarms/100 smoke |" in to_markdown(t).splitlines()[2]  # per 100 images, not in percent
     assert "4.0 ± 1.4" in to_markdown(t)
+    assert marks(t)[("R750_S250", f"fire-free/{ALARMS} smoke")] == "best"  # the fewest alarms, as for all classes
 
 
 def test_table1_has_the_alarm_column_too():
