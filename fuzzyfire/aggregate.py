@@ -585,8 +585,10 @@ def write_summary(cfg: ExperimentConfig, specs, results, rows, out: Path, standi
         doc["notice"] = STANDIN_NOTICE
     (out / "experiment.json").write_text(json.dumps(doc, indent=1) + "\n", encoding="utf-8")
     lines = [
-        json.dumps({k: v for k, v in r.items() if k not in ("matches", OPERATING) and not k.startswith(IMAGELEVEL)},
-                   sort_keys=True)  # fmt: skip
+        json.dumps(
+            {k: v for k, v in r.items() if k not in ("matches", OPERATING) and not k.startswith(IMAGELEVEL)},
+            sort_keys=True,
+        )  # fmt: skip
         for r in rows
     ]
     (out / "results.jsonl").write_text("".join(line + "\n" for line in lines), encoding="utf-8")

@@ -293,16 +293,16 @@ def test_a_two_class_set_gives_per_class_columns_and_comparisons(tmp_path: Path)
 def test_each_class_gets_its_false_alarms_and_image_recall(tmp_path: Path) -> None:
     """From a run's predictions: on a set without fire, each class's detections at ALARM_CONF per 100 images; on a
     set with boxes, each class's images found by a detection of that class at the run's operating threshold."""
+    import json
+
+    import cv2
+    import numpy as np
+
     from fuzzyfire.aggregate import per_class_images
     from fuzzyfire.datasets import DataRef, Datasets
     from ground.data.dataset import DatasetBuilder
     from ground.data.writer import write_dataset
     from ground.image.imageio import unit_to_u8
-
-    import json
-
-    import cv2
-    import numpy as np
 
     def written(name: str, classes: list[str]) -> DataRef:
         b = DatasetBuilder(tmp_path / f"src-{name}", ["fire", "smoke"])

@@ -76,7 +76,9 @@ def test_a_pool_is_said_in_plain_words(tmp_path: Path) -> None:
                     "(negatives); 174 cut-out flames (from the real training images)")  # fmt: skip
     per_image[0] = {**per_image[0], "plumes": [{"where": "above"}, {"where": "sky"}]}
     (tmp_path / "manifest.json").write_text(json.dumps({"args": {"per_image": per_image}}))
-    assert fs.pool_sentence(tmp_path / "manifest.json", "cutouts").endswith("images); 2 plumes of smoke (1 above flames)")
+    assert fs.pool_sentence(tmp_path / "manifest.json", "cutouts").endswith(
+        "images); 2 plumes of smoke (1 above flames)"
+    )
 
 
 def test_classes_curation_and_alarm_resolution_are_said(tmp_path: Path) -> None:

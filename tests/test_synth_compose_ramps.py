@@ -19,3 +19,11 @@ def test_smoothstep_is_flat_outside_its_bounds_monotone_and_symmetric_between() 
 def test_smoothstep_keeps_the_float_type() -> None:
     assert smoothstep(np.zeros(3, np.float32)).dtype == np.float32
     assert smoothstep(np.zeros(3, np.float64), 0.1, 0.2).dtype == np.float64
+
+
+def test_the_window_is_one_inside_and_zero_on_the_boxs_sides_and_corners() -> None:
+    from synth.compose.ramps import window
+
+    w = window(9, 9, 0.55)
+    assert w[4, 4] == 1.0 and w[0].max() == w[:, 0].max() == w[-1].max() == 0.0 and w.min() >= 0.0
+    assert window(9, 9, 0.55, power=4.0)[1, 1] >= w[1, 1]  # a larger power keeps more of the corners

@@ -4,8 +4,9 @@ from __future__ import annotations
 
 import pytest
 
+from synth.flames.sprites import is_smoke
 from synth.smoke.library import SmokeConfig, smoke_library, split_library
-from synth.smoke.plume import is_smoke, plume_library
+from synth.smoke.plume import plume_library
 
 
 def test_simulated_plumes_or_own_smoke_and_none_without_plumes(library) -> None:

@@ -6,7 +6,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from synth.smoke.plume import PlumeParams, is_smoke, plume_library, plume_sequence, sample_plume, value_noise
+from synth.flames.sprites import is_smoke
+from synth.smoke.plume import PlumeParams, plume_library, plume_sequence, sample_plume, value_noise
 
 LIBRARY = plume_library(8, seed=0)
 

@@ -42,7 +42,9 @@ from ground.data.names import check_names
 from ground.data.problems import Problem
 from ground.image.imageio import ImageError, read_image, unit_to_u8
 from ground.run.progress import progress
-from synth.flames.sprites import Sprite, SpriteSequence, save_sequence, write_png
+from synth.compose.ramps import window
+from synth.flames.firepixels import fire_mask
+from synth.flames.sprites import SMOKE_KIND, Sprite, SpriteSequence, save_sequence, write_png
 
 #: Cut-outs per sequence folder (Method 1/2 pick a sequence, then one of its frames).
 PER_SEQUENCE = 25
@@ -57,7 +59,7 @@ GRABCUT_ITERATIONS = 5
 #: A GrabCut mask keeping less than this share of the box is discarded for the colour mask.
 MIN_KEPT = 0.05
 
-#: A flame cut-out's alpha window (:func:`synth.smoke.matte.window`): (inner share, super-ellipse power): 1 inside
+#: A flame cut-out's alpha window (:func:`synth.compose.ramps.window`): (inner share, super-ellipse power): 1 inside
 #: 0.8 of the way to the box's edge, 0 on it and in the corners.
 FLAME_WINDOW = (0.8, 4.0)
 
@@ -98,15 +100,6 @@ class Cutout:
     box: tuple[int, int, int, int]
     cover: float
     category: str = "fire"
-
-
-def fire_mask(rgb: NDArray[np.uint8]) -> NDArray[np.bool_]:
-    """(h, w) bool: fire-coloured pixels of an (h, w, 3) RGB image (the rule in the module docstring)."""
-    f = rgb.astype(np.float32) / 255.0
-    r, g, b = f[..., 0], f[..., 1], f[..., 2]
-    warm = (r > 0.5) & (r >= g) & (g >= 0.9 * b) & (r - b > 0.25)
-    core = (r > 0.8) & (g > 0.65) & (r >= b)
-    return warm | core
 
 
 def filled(mask: NDArray[np.bool_]) -> NDArray[np.bool_]:
@@ -151,8 +144,6 @@ def cut(
     cover = float(raw.mean())
     if cover < cfg.min_cover:
         return None
-    from synth.smoke.matte import window
-
     flame = filled(raw) if cfg.mask == "colour" else grabcut_mask(rgb, box, filled(raw), cfg.context)
     alpha = cv2.GaussianBlur(flame.astype(np.float32), (0, 0), 1.0) * window(h, w, *FLAME_WINDOW)
     return np.dstack([crop, unit_to_u8(alpha)]), cover
@@ -249,8 +240,6 @@ def _write_sequences(items: Iterator[Cutout], out: Path, per_sequence: int) -> i
 
 def _write_smoke(out: Path, items: list[Cutout], index: list[dict], per_sequence: int) -> None:
     """One smoke sprite sequence of ``items`` (mattes laid over, no flame, no emission), entries added to ``index``."""
-    from synth.smoke.plume import SMOKE_KIND
-
     k = sum(e["class"] == "smoke" for e in index) // per_sequence
     name = f"smoke-{k:03d}"
     sprites = tuple(

@@ -37,6 +37,9 @@ from ground.image.imageio import ImageError
 #: (a quarter of the background hidden), not the faint haze at the plume's edges. Smoke boxes come from here.
 SMOKE_ALPHA = 0.25
 
+#: ``meta["kind"]`` of a smoke sequence (a plume, a smoke matte; flames have none): Method 2 lays these as plumes.
+SMOKE_KIND = "smoke"
+
 #: What each file of a sequence folder holds (written into ``sequence.json`` for whoever opens the folder).
 LAYER_FILES: dict[str, str] = {
     "NNNN_emission.png": "the flame's light on black, added on top of the background (what the flame looks like)",
@@ -72,6 +75,11 @@ class SpriteSequence:
     name: str
     sprites: tuple[Sprite, ...]
     meta: Mapping[str, Any]
+
+
+def is_smoke(seq: SpriteSequence) -> bool:
+    """Whether ``seq`` is a smoke sequence (a plume or a smoke matte) rather than a flame."""
+    return seq.meta.get("kind") == SMOKE_KIND
 
 
 def mask_span(sprite: Sprite) -> tuple[int, int, int, int] | None:

@@ -9,9 +9,9 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Literal
 
-from synth.flames.sprites import SpriteSequence
+from synth.flames.sprites import SpriteSequence, is_smoke
 from synth.schema import check_range
-from synth.smoke.plume import is_smoke, plume_library
+from synth.smoke.plume import plume_library
 
 #: Where a pool's plumes come from (``SmokeConfig.source``).
 SMOKE_SOURCES: tuple[str, ...] = ("simulated", "cutouts")

@@ -26,8 +26,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ground.image.imageio import unit_to_u8
-from synth.compose.ramps import smoothstep
-from synth.flames.cutouts import fire_mask
+from synth.compose.ramps import smoothstep, window
+from synth.flames.firepixels import fire_mask
 
 KEEP_HAZE = 0.95  # He et al.'s w: a little haze is left, so distant objects keep their depth
 PATCH = 0.06  # dark-channel patch, x the box's shorter side (at least 3 px, odd)
@@ -35,20 +35,9 @@ CORE_SHARE = 0.01  # share of the box's pixels of highest dark channel whose mea
 MIN_LUMA = 0.35  # smoke darker than this (luma of A, 0..1) is not matted: the prior needs light smoke
 MIN_OPACITY = 0.15  # mean opacity inside the window a matted box needs
 OWN_TEXTURE = (0.45, 0.85)  # opacity over which the sprite's RGB goes from A to the image's own pixels
-WARM = 0.15  # a fire-coloured pixel (synth.flames.cutouts.fire_mask) kept out of a matte is also this much redder
+WARM = 0.15  # a fire-coloured pixel (synth.flames.firepixels.fire_mask) kept out of a matte is also this much redder
 # than blue (R - B, 0..1): white smoke passes the fire rule's bright-core test
 WINDOW_INNER = 0.55  # the elliptical window is 1 inside this share of the way from the box's centre to its edge
-
-
-def window(height: int, width: int, inner: float = WINDOW_INNER, power: float = 2.0) -> NDArray[np.float32]:
-    """(height, width) float32 in [0, 1]: 1 inside ``inner`` of the way from the centre to the edge of the
-    super-ellipse ``|u|^power + |v|^power = 1`` inscribed in the box (u, v = -1 and 1 at the centres of its outer
-    pixels), falling smoothly to 0 on it (0 outside it: the corners, and every outer pixel). ``power`` 2 is an
-    ellipse; a larger power keeps more of the box's corners."""
-    v = np.linspace(-1.0, 1.0, height, dtype=np.float32) if height > 1 else np.zeros(1, np.float32)
-    u = np.linspace(-1.0, 1.0, width, dtype=np.float32) if width > 1 else np.zeros(1, np.float32)
-    r = (np.abs(u[None, :]) ** power + np.abs(v[:, None]) ** power) ** (1.0 / power)
-    return (1.0 - smoothstep(r, inner, 1.0)).astype(np.float32)
 
 
 def dark_channel(image: NDArray[np.float32], patch: int) -> NDArray[np.float32]:
@@ -80,7 +69,7 @@ def matte(
         clear[max(fy - y, 0) : max(fy + fh - y, 0), max(fx - x, 0) : max(fx + fw - x, 0)] = 1.0
     soft = np.clip(2.0 * cv2.GaussianBlur(clear, (0, 0), patch / 2.0), 0.0, 1.0)
     clear = np.maximum(clear, soft)  # the fire, and softly beyond it
-    shape = window(h, w)
+    shape = window(h, w, WINDOW_INNER)
     alpha = np.clip(alpha, 0.0, 1.0) * shape * (1.0 - clear)
     opacity = float((alpha * shape).sum() / max(float(shape.sum()), 1e-6))
     if opacity < MIN_OPACITY:

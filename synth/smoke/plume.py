@@ -27,10 +27,7 @@ from numpy.typing import NDArray
 
 from ground.image.imageio import unit_to_u8
 from synth.compose.ramps import smoothstep
-from synth.flames.sprites import Sprite, SpriteSequence
-
-#: ``meta["kind"]`` of a smoke sequence in a library (flames have none): Method 2 draws plumes from these only.
-SMOKE_KIND = "smoke"
+from synth.flames.sprites import SMOKE_KIND, Sprite, SpriteSequence
 
 
 @dataclass(frozen=True)
@@ -127,8 +124,3 @@ def plume_library(n: int, seed: int, frames: int = 8) -> list[SpriteSequence]:
         rng = np.random.default_rng([seed, 7, k])
         out.append(plume_sequence(f"plume-{seed}-{k:03d}", sample_plume(rng, frames), rng))
     return out
-
-
-def is_smoke(seq: SpriteSequence) -> bool:
-    """Whether ``seq`` is a smoke sequence (a plume or a smoke matte) rather than a flame."""
-    return seq.meta.get("kind") == SMOKE_KIND
