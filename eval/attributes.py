@@ -19,6 +19,12 @@ Each image gets one value per attribute (None where it has none, e.g. the fire c
 - ``blur``: the variance of the Laplacian of the grey image at 256 px on the long side (:func:`curate.scan.
   sharpness`): ``blurred`` < 50 <= ``soft`` < 200 <= ``sharp``.
 - ``source``: the image's ``source`` field (its dataset, when merged from several; ``-`` when unset).
+- ``smoke_colour`` and ``smoke_density``, for an image with smoke boxes (class ``smoke``; the attributes above
+  read its ``fire`` boxes, or every box of a set without a ``fire`` class): the median luma (Rec. 601, 0..255) of
+  the pixels inside its smoke boxes, ``black`` < 80 <= ``grey`` < 170 <= ``white``; and how its smoke stands out,
+  the median CIE76 ΔE*ab of those pixels against the median colour of a ring around each box (15 % of the box's
+  longer side, at least 2 px): ``thin`` < 15 <= ``dense`` (15 is about the 25th percentile of fire-smoke-608's
+  labelled smoke: ``experiments/smoke_contrast.py``); None where no ring is left (a box filling the image).
 
 Images are read at 256 px on the long side (boxes scaled with them), so the attributes of a set cost a fraction
 of its scoring. A user's own attributes come from a CSV (:func:`read_attributes_csv`).
@@ -53,7 +59,11 @@ ATTRIBUTES: dict[str, tuple[str, ...]] = {
     "sky": ("no sky", "sky"),
     "blur": ("blurred", "soft", "sharp"),
     "source": (),
+    "smoke_colour": ("white", "grey", "black"),
+    "smoke_density": ("thin", "dense"),
 }
+SMOKE_LUMA = (80.0, 170.0)  # median luma (0..255) inside smoke boxes: black below, white from the second up
+DENSE_DELTA_E = 15.0  # median ΔE*ab of a smoke box's pixels against its ring from which its smoke is dense
 WORK_SIDE = 256  # long side, pixels, the attributes are computed at
 COCO_SIZES = (("small", 0.0, SMALL_AREA**0.5), ("medium", SMALL_AREA**0.5, LARGE_AREA**0.5),
               ("large", LARGE_AREA**0.5, float("inf")))  # box sides of COCO's area ranges  # fmt: skip
@@ -69,11 +79,15 @@ Attributes = dict[int, dict[str, str | None]]  # image id -> attribute -> value
 
 
 def image_attributes(
-    image: NDArray[np.uint8], boxes: NDArray[np.float64], source: str = "", scale: float = 1.0
+    image: NDArray[np.uint8],
+    boxes: NDArray[np.float64],
+    source: str = "",
+    scale: float = 1.0,
+    smoke: NDArray[np.float64] | None = None,
 ) -> dict[str, str | None]:
     """The attributes (module docstring) of one (H, W, 3) uint8 RGB image with its fire ``boxes`` (N, 4)
-    [x, y, w, h] in pixels of that image; ``scale``: its pixels per pixel of the original image (a picture read
-    smaller), so the sizes are the original's."""
+    [x, y, w, h] in pixels of that image and its ``smoke`` boxes (M, 4) likewise; ``scale``: its pixels per pixel
+    of the original image (a picture read smaller), so the sizes are the original's."""
     grey = cv2.cvtColor(image, cv2.COLOR_RGB2GRAY)
     mean = float(grey.mean())
     out: dict[str, str | None] = {
@@ -81,8 +95,10 @@ def image_attributes(
         "sky": "sky" if float(sky_mask(_small(image, SKY_SIDE)).mean()) >= SKY_SHARE else "no sky",
         "blur": bucket(BLUR, sharpness(image)),
         "source": source or "-",
-        "size": None, "size_fine": None, "fires": None, "colour": None,
+        "size": None, "size_fine": None, "fires": None, "colour": None, "smoke_colour": None, "smoke_density": None,
     }  # fmt: skip
+    if smoke is not None and len(smoke):
+        out["smoke_colour"], out["smoke_density"] = smoke_look(image, smoke)
     if len(boxes):
         side = float(np.sqrt((boxes[:, 2] * boxes[:, 3]).max())) / scale
         out["size"] = bucket(COCO_SIZES, side)
@@ -120,6 +136,35 @@ def fire_colour(image: NDArray[np.uint8], boxes: NDArray[np.float64]) -> str | N
     return "orange-red"
 
 
+def smoke_look(image: NDArray[np.uint8], boxes: NDArray[np.float64]) -> tuple[str | None, str | None]:
+    """(``smoke_colour``, ``smoke_density``) (module docstring) of the smoke ``boxes`` (M, 4) [x, y, w, h] px of the
+    (H, W, 3) uint8 RGB ``image``; None for what its boxes cannot tell."""
+    h, w = image.shape[:2]
+    lab = cv2.cvtColor(image.astype(np.float32) / 255.0, cv2.COLOR_RGB2Lab)
+    luma = cv2.cvtColor(image, cv2.COLOR_RGB2GRAY)
+    inside = np.zeros((h, w), bool)
+    contrasts = []
+    for x, y, bw, bh in boxes:
+        x0, y0 = int(max(np.floor(x), 0)), int(max(np.floor(y), 0))
+        x1, y1 = int(min(np.ceil(x + bw), w)), int(min(np.ceil(y + bh), h))
+        if x1 <= x0 or y1 <= y0:
+            continue
+        inside[y0:y1, x0:x1] = True
+        pad = max(2, int(0.15 * max(x1 - x0, y1 - y0)))
+        rx0, ry0, rx1, ry1 = max(x0 - pad, 0), max(y0 - pad, 0), min(x1 + pad, w), min(y1 + pad, h)
+        ring = np.ones((ry1 - ry0, rx1 - rx0), bool)
+        ring[y0 - ry0 : y1 - ry0, x0 - rx0 : x1 - rx0] = False
+        if ring.sum() >= 8:
+            median = np.median(lab[ry0:ry1, rx0:rx1][ring], axis=0)
+            contrasts.append(float(np.median(np.sqrt(((lab[y0:y1, x0:x1] - median) ** 2).sum(-1)))))
+    if not inside.any():
+        return None, None
+    level = float(np.median(luma[inside]))
+    colour = "black" if level < SMOKE_LUMA[0] else "grey" if level < SMOKE_LUMA[1] else "white"
+    density = None if not contrasts else "dense" if np.median(contrasts) >= DENSE_DELTA_E else "thin"
+    return colour, density
+
+
 def _small(image: NDArray[np.uint8], side: int) -> NDArray[np.uint8]:
     """``image`` (H, W, 3) shrunk to ``side`` px on its long side (as it is when already smaller). Bilinear: a
     JPEG is decoded at most 2x larger (:func:`ground.image.imageio.read_image` ``min_side``), where it matches area
@@ -132,9 +177,13 @@ def _small(image: NDArray[np.uint8], side: int) -> NDArray[np.uint8]:
 
 
 def dataset_attributes(ds: Dataset, workers: int = 0) -> Attributes:
-    """:func:`image_attributes` of every image of ``ds`` (its boxes of every class it keeps are its fires), read at
-    :data:`WORK_SIDE` px; an image that cannot be read raises ValueError naming it."""
+    """:func:`image_attributes` of every image of ``ds`` (its ``fire`` boxes are its fires, or every box of a set
+    without a ``fire`` class; its ``smoke`` boxes its smoke), read at :data:`WORK_SIDE` px; an image that cannot be
+    read raises ValueError naming it."""
     by_image = ds.annotations_by_image()
+    names = {c.id: c.name for c in ds.categories}
+    fire_ids = {i for i, n in names.items() if n == "fire"} or set(names)
+    smoke_ids = {i for i, n in names.items() if n == "smoke"} - fire_ids
 
     def one(img) -> dict[str, str | None]:
         path = ds.image_path(img)
@@ -144,7 +193,10 @@ def dataset_attributes(ds: Dataset, workers: int = 0) -> Attributes:
             raise ValueError(f"{path}: cannot read it for its attributes ({exc})") from None
         pixels = _small(pixels, WORK_SIDE)
         scale = pixels.shape[1] / img.width
-        out = image_attributes(pixels, _boxes(by_image.get(img.id, []), scale), img.source, scale)
+        anns = by_image.get(img.id, [])
+        fires = _boxes([a for a in anns if a.category_id in fire_ids], scale)
+        smoke = _boxes([a for a in anns if a.category_id in smoke_ids], scale)
+        out = image_attributes(pixels, fires, img.source, scale, smoke)
         if img.labels and out["colour"] is None:  # no box: the fire's colour is read over the whole image
             out["colour"] = fire_colour(pixels, np.asarray([[0, 0, pixels.shape[1], pixels.shape[0]]], np.float64))
         return out

@@ -26,7 +26,7 @@ from fuzzyfire.datasets import DataRef, Datasets
 from fuzzyfire.kept import keep, kept
 from fuzzyfire.stages import digest
 
-ATTRIBUTES_VERSION = 4  # bumped when an attribute's definition changes: kept attributes are computed again
+ATTRIBUTES_VERSION = 5  # bumped when an attribute's definition changes: kept attributes are computed again
 HITS_FILE = "image_hits.json"
 MATCHES25_FILE = "matches25.npz"
 SLICES_FILE = "slices.csv"

@@ -135,3 +135,24 @@ def test_an_image_labelled_photo_gets_its_fire_colour_from_the_whole_image_and_n
     labelled, free = dataset_attributes(b.build()).values()
     assert labelled["colour"] == "orange-red" and labelled["size"] is labelled["fires"] is None
     assert free["colour"] is None  # no fire: no colour
+
+
+def test_smoke_colour_and_density_from_the_smoke_boxes_and_fire_attributes_from_the_fire_boxes(tmp_path: Path) -> None:
+    rng = np.random.default_rng(0)
+    scene = _textured(110, rng)
+    white, black, faint = scene.copy(), scene.copy(), scene.copy()
+    white[20:80, 40:120] = 235
+    black[20:80, 40:120] = 30
+    faint[20:80, 40:120] = np.clip(scene[20:80, 40:120].astype(int) + 4, 0, 255)  # barely there
+    box = np.asarray([[40.0, 20.0, 80.0, 60.0]])
+    assert image_attributes(white, NONE, smoke=box)[("smoke_colour")] == "white"
+    assert (image_attributes(black, NONE, smoke=box)["smoke_colour"], image_attributes(black, NONE, smoke=box)[
+        "smoke_density"]) == ("black", "dense")  # fmt: skip
+    assert image_attributes(faint, NONE, smoke=box)["smoke_density"] == "thin"
+    assert image_attributes(white, NONE)["smoke_colour"] is None  # no smoke box: no smoke attributes
+    builder = DatasetBuilder(tmp_path, ["fire", "smoke"])
+    cv2.imwrite(str(tmp_path / "s.png"), cv2.cvtColor(white, cv2.COLOR_RGB2BGR))
+    image_id = builder.add_image("s.png", 160, 120)
+    builder.add_box(image_id, "smoke", (40.0, 20.0, 80.0, 60.0))
+    attrs = dataset_attributes(builder.build())[image_id]
+    assert attrs["smoke_colour"] == "white" and attrs["size"] is None and attrs["colour"] is None  # smoke is no fire
