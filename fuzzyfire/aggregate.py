@@ -271,7 +271,7 @@ def comparisons(cfg: ExperimentConfig, rows: Sequence[dict]) -> list[dict]:
             if not a[0].get(IMAGE_LABELLED) and all(r.get("fire_images", enough) >= enough for r in a + b):
                 tables = [[matches(r["matches"]) for r in side] for side in (a, b)]
                 deltas = paired_bootstrap(*tables, rngs[table], cfg.report.bootstrap, seeds=paired)
-                for k, cls in enumerate(a[0].get("classes", ())):
+                for k, cls in enumerate(classes):
                     one = [[t.of_class(k) for t in side] for side in tables]
                     deltas[class_metric("AP50", cls)] = paired_bootstrap(*one, by_class, cfg.report.bootstrap,
                                                                           seeds=paired)["AP50"]  # fmt: skip

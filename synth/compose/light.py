@@ -10,6 +10,8 @@ from numpy.typing import NDArray
 GAMMA = 2.2
 #: Rec. 709 luminance weights of (R, G, B).
 REC709 = np.asarray([0.2126, 0.7152, 0.0722], np.float32)
+#: Rec. 601 luma weights of (R, G, B): OpenCV's grey conversion, which the smoke's colour and light are read with.
+REC601 = np.asarray([0.299, 0.587, 0.114], np.float32)
 
 
 def to_linear(img: NDArray[np.uint8]) -> NDArray[np.float32]:

@@ -26,6 +26,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ground.image.imageio import unit_to_u8
+from synth.compose.light import REC601
 from synth.compose.ramps import smoothstep, window
 from synth.flames.firepixels import fire_mask
 
@@ -58,7 +59,7 @@ def matte(
     raw_dark = dark_channel(image, patch)
     top = raw_dark >= np.quantile(raw_dark, 1.0 - CORE_SHARE)
     airlight = image[top].mean(axis=0)
-    if float(airlight @ np.array([0.299, 0.587, 0.114], np.float32)) < MIN_LUMA:
+    if float(airlight @ REC601) < MIN_LUMA:
         return None
     haze = KEEP_HAZE * dark_channel(image / np.maximum(airlight, 0.05)[None, None, :], patch)
     guide = cv2.cvtColor(crop, cv2.COLOR_RGB2GRAY).astype(np.float32) / 255.0

@@ -27,6 +27,7 @@ from numpy.typing import NDArray
 from ground.image.imageio import unit_to_u8
 from ground.image.sky import sky_mask
 from synth.compose.composite import Placement
+from synth.compose.light import REC601
 from synth.flames.sprites import Sprite, SpriteSequence, mask_span
 from synth.smoke.library import SmokeConfig
 
@@ -37,7 +38,6 @@ FAMILIES: tuple[tuple[str, float, tuple[float, float]], ...] = (
     ("black", 0.25, (0.08, 0.3)),
 )
 MIN_SKY = 0.05  # share of the image that must be sky for a plume to rise into it
-LUMA = np.array([0.299, 0.587, 0.114], np.float32)
 
 
 @dataclass(frozen=True)
@@ -61,7 +61,7 @@ def lit(sprite: Sprite, grey: float | None, background: NDArray[np.uint8], rect:
     height, width = background.shape[:2]
     under = background[max(y, 0) : min(y + h, height), max(x, 0) : min(x + w, width)]
     mean = under.reshape(-1, 3).mean(axis=0) / 255.0 if under.size else np.full(3, 0.5)
-    light = float(np.clip(0.35 + 1.3 * float(mean @ LUMA), 0.35, 1.0))
+    light = float(np.clip(0.35 + 1.3 * float(mean @ REC601), 0.35, 1.0))
     tint = 0.8 + 0.2 * mean / max(float(mean.mean()), 1e-3)
     rgb = sprite.over[..., :3].astype(np.float32) / 255.0 * (grey if grey is not None else 1.0)
     over = np.dstack([unit_to_u8(np.clip(rgb * light * tint, 0.0, 1.0)), sprite.over[..., 3]])
