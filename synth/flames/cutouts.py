@@ -217,6 +217,7 @@ def write_cutouts(items: Iterator[Cutout], out: Path, per_sequence: int = PER_SE
 def _write_sequences(items: Iterator[Cutout], out: Path, per_sequence: int) -> int:
     index: list[dict] = []
     smoke: list[Cutout] = []
+    flames = 0
     for item in items:
         if item.category == "smoke":
             smoke.append(item)
@@ -224,8 +225,8 @@ def _write_sequences(items: Iterator[Cutout], out: Path, per_sequence: int) -> i
                 _write_smoke(out, smoke, index, per_sequence)
                 smoke = []
             continue
-        n = sum(e["class"] == "fire" for e in index)
-        name = f"real-{n // per_sequence:03d}/{n:05d}.png"
+        name = f"real-{flames // per_sequence:03d}/{flames:05d}.png"
+        flames += 1
         (out / name).parent.mkdir(parents=True, exist_ok=True)
         write_png(out / name, item.rgba)
         index.append(
