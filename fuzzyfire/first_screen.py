@@ -140,10 +140,15 @@ def verdict(row: Mapping[str, Any], unlearned: bool) -> str:
 
 
 def headline_lines(
-    rows: Sequence[Mapping[str, Any]], comparisons: Sequence[Mapping[str, Any]], metric_of, baseline: str | None
+    rows: Sequence[Mapping[str, Any]],
+    comparisons: Sequence[Mapping[str, Any]],
+    metric_of,
+    baseline: str | None,
+    added: str = "flames",
 ) -> list[str]:
     """Per test set with a headline metric (``metric_of(test)``): each mixture with synthetic images against the
-    baseline, and, where it has a control, the flames' share beyond that control first."""
+    baseline, and, where it has a control, the share of what its pool pastes (``added``: ``flames``, or ``flames
+    and smoke`` for a pool that lays plumes) beyond that control first."""
     lines = []
     unlearned = unlearned_mixtures(rows)
     for c in comparisons:
@@ -157,30 +162,32 @@ def headline_lines(
             bad_control = bad or f"{c['mixture']} copies" in unlearned
             copies = c["delta"]["value"] - control["delta"]["value"]
             lines.append(
-                f"On {c['test_set']}, the flames of {c['mixture']} add {metric_name(c['metric'])} {delta_text(control['delta'])} "
-                f"points beyond flame-free copies of the same real images (the control; "
+                f"On {c['test_set']}, the {added} of {c['mixture']} add {metric_name(c['metric'])} "
+                f"{delta_text(control['delta'])} points beyond copies of the same real images with nothing pasted "
+                f"(the control; "
                 f"{seeds_text(control) or 'one seed'}): {verdict(control, bad_control)}. Against {baseline} the "
-                f"mixture reads {delta_text(c['delta'])}; the flame-free copies alone (more images and steps) about "
+                f"mixture reads {delta_text(c['delta'])}; the copies alone (more images and steps) about "
                 f"{100 * copies:+.1f}.{per_class_text(comparisons, control, ' beyond the control')}"
             )
             continue
         mix, base = parse_mixture(c["mixture"]), parse_mixture(baseline or c["mixture"])
         synthetic = mix.synth > base.synth
         lines.append(
-            f"On {c['test_set']}, {added_text(mix.real - base.real, mix.synth - base.synth)} "
+            f"On {c['test_set']}, {added_text(mix.real - base.real, mix.synth - base.synth, added)} "
             f"({c['mixture']} vs {baseline}): {metric_name(c['metric'])} {delta_text(c['delta'])} points"
             f"{'; ' + sure if sure else ''}: {verdict(c, bad)}."
             + per_class_text(comparisons, c)
-            + (" No control was trained, so the flames' share is unknown: grid.control=true trains flame-free copies "
-               "to separate them." if synthetic else "")
+            + (f" No control was trained, so the share of the {added} is unknown: grid.control=true trains copies with "
+               "nothing pasted to separate them." if synthetic else "")
         )  # fmt: skip
     return lines
 
 
-def added_text(real: int, synth: int) -> str:
-    """What a mixture adds to the baseline, ``real`` and ``synth`` images more (or fewer, negative):
-    ``200 synthetic images (flames and more images together) against none``, ``200 more real images``."""
-    parts = [f"{synth} synthetic images (flames and more images together) against none"] if synth > 0 else []
+def added_text(real: int, synth: int, added: str = "flames") -> str:
+    """What a mixture adds to the baseline, ``real`` and ``synth`` images more (or fewer, negative), its pool
+    pasting ``added``: ``200 synthetic images (flames and more images together) against none``, ``200 more real
+    images``."""
+    parts = [f"{synth} synthetic images ({added} and more images together) against none"] if synth > 0 else []
     parts += [f"{abs(synth)} fewer synthetic images"] if synth < 0 else []
     parts += [f"{real} more real images"] if real > 0 else [f"{-real} fewer real images"] if real < 0 else []
     return " and ".join(parts) or "the same images"

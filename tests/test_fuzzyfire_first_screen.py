@@ -35,7 +35,9 @@ def test_without_a_control_the_gain_is_worded_as_flames_and_more_images() -> Non
     c = _cmp("R200_S200", "R200_S0", 0.148, 0.127, 0.178, [0.14, 0.15, 0.16])
     (line,) = fs.headline_lines(_rows(), [c], lambda test: "AP50", "R200_S0")
     assert line.startswith("On common, 200 synthetic images (flames and more images together) against none")
-    assert "No control was trained" in line and "grid.control=true" in line
+    assert "No control was trained, so the share of the flames is unknown" in line and "grid.control=true" in line
+    (smoke,) = fs.headline_lines(_rows(), [c], lambda test: "AP50", "R200_S0", "flames and smoke")
+    assert "(flames and smoke and more images together)" in smoke and "share of the flames and smoke" in smoke
     more = _cmp("R400_S0", "R200_S0", 0.08, 0.05, 0.1, [0.07, 0.08, 0.09])  # a real-only mixture: more real images
     (line,) = fs.headline_lines(_rows(), [more], lambda test: "AP50", "R200_S0")
     assert line.startswith("On common, 200 more real images (R400_S0 vs R200_S0): AP50 +8.0") and "control" not in line
@@ -47,8 +49,10 @@ def test_with_a_control_the_flames_share_comes_first() -> None:
     c = _cmp("R200_S200", "R200_S0", 0.148, 0.127, 0.178, [0.14, 0.15, 0.16])
     ctrl = _cmp("R200_S200", "R200_S200 copies", 0.092, 0.06, 0.12, [0.08, 0.09, 0.1])
     (line,) = fs.headline_lines(_rows(), [c, ctrl], lambda test: "AP50", "R200_S0")
-    assert line.startswith("On common, the flames of R200_S200 add AP50 +9.2 [+6.0, +12.0] points beyond flame-free")
-    assert "it helps" in line and "the flame-free copies alone (more images and steps) about +5.6" in line
+    assert line.startswith("On common, the flames of R200_S200 add AP50 +9.2 [+6.0, +12.0] points beyond copies of")
+    assert "it helps" in line and "the copies alone (more images and steps) about +5.6" in line
+    (smoke,) = fs.headline_lines(_rows(), [c, ctrl], lambda test: "AP50", "R200_S0", "flames and smoke")
+    assert smoke.startswith("On common, the flames and smoke of R200_S200 add AP50 +9.2")
     (flagged,) = fs.headline_lines(_rows("R200_S200 copies"), [c, ctrl], lambda test: "AP50", "R200_S0")
     assert "not read: a run in it did not converge" in flagged
 
