@@ -53,6 +53,7 @@ def cmd_cutouts(args: argparse.Namespace) -> int:
 
     from ground.cli.commands import print_problems, read_from_args
     from ground.cli.options import command_config
+    from ground.data.classes import canonical_class
     from ground.data.load import SplitError, pick_split
     from synth.flames.cutouts import CutoutConfig, cutouts, write_cutouts
 
@@ -69,9 +70,10 @@ def cmd_cutouts(args: argparse.Namespace) -> int:
         return 2
     if problems:
         print_problems(problems, sys.stderr, limit=20)
-    print(
-        f"wrote {n} cut-outs of {cfg.class_name!r} from {len(ds.images)} images to {args.out} (use: --flames {args.out})"
-    )
+    use = f"--flames {args.out}"
+    if canonical_class(cfg.class_name) == "smoke":
+        use += " beside a flame folder, in synth method2 with --set smoke.source=cutouts --set smoke.alone=0.5"
+    print(f"wrote {n} cut-outs of {cfg.class_name!r} from {len(ds.images)} images to {args.out} (use: {use})")
     return 0
 
 

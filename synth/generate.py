@@ -87,13 +87,26 @@ def opened_views(job: Job) -> Iterator[tuple[ViewCache, list[dict[str, str]]]]:
 def run_library(cfg: MethodConfig, cutouts: Sequence[SpriteSequence] = ()) -> list[SpriteSequence]:
     """The sequences a run of ``cfg`` draws from: the flames of ``cfg.flames`` (its cut-outs: the flame sequences
     among ``cutouts``, :func:`synth.flames.library.build_library`) and, for Method 2, the plumes of ``cfg.smoke``
-    (its cut-outs: the smoke sequences among ``cutouts``, :func:`synth.smoke.library.smoke_library`)."""
+    (its cut-outs: the smoke sequences among ``cutouts`` and among the folders of ``flames.folders``, as
+    ``fuzzyfire synth cutouts --class smoke`` writes them; :func:`synth.smoke.library.smoke_library`). ValueError
+    when smoke cut-outs are given to a run that lays none (Method 1, no plumes, or ``smoke.source`` simulated) or
+    no flame is left."""
     from synth.flames.library import build_library
     from synth.smoke.library import smoke_library, split_library
 
     flames, smoke = split_library(cutouts)
-    library = build_library(cfg.flames, flames)
-    return library + smoke_library(cfg.smoke, smoke) if isinstance(cfg, method2.Method2Config) else library
+    library, folder_smoke = split_library(build_library(cfg.flames, flames))
+    smoke += folder_smoke
+    m2 = isinstance(cfg, method2.Method2Config)
+    if smoke and not (m2 and cfg.smoke.plumes and cfg.smoke.source == "cutouts"):  # type: ignore[union-attr]
+        names = ", ".join(s.name for s in smoke[:3]) + (" ..." if len(smoke) > 3 else "")
+        raise ValueError(
+            f"smoke cut-outs given ({names}) but the run lays no plumes of them: they are Method 2 plumes with "
+            "smoke.source cutouts and smoke.above or smoke.alone above 0"
+        )
+    if not library:
+        raise ValueError("the flame library is empty: the flame folders hold smoke cut-outs only (give flames too)")
+    return library + smoke_library(cfg.smoke, smoke) if m2 else library  # type: ignore[union-attr]
 
 
 def _make_images(job: Job, todo: Sequence[int]) -> dict[str, str]:

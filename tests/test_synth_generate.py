@@ -153,3 +153,36 @@ def test_a_failure_in_a_process_is_raised_and_keeps_the_staged_images(tmp_path):
     assert staged.is_dir() and not (staged / "records" / "000005.json").exists()
     generate(cfg, _library(), out, workers=2, make_image=_make_image)
     assert len(read_dataset(out).dataset.images) == cfg.n and not staged.exists()
+
+
+def test_smoke_cutouts_among_the_flame_folders_are_method2_plumes_or_refused(tmp_path):
+    """``synth cutouts --class smoke`` writes smoke sequences; given in ``flames.folders`` beside flames they are the
+    plumes of a Method 2 run with ``smoke.source: cutouts``, never flames; a run that lays no plumes of them, or is
+    left without flames, says so."""
+    from dataclasses import replace
+
+    from factories import tiny_flames
+
+    from synth.flames.library import FlameLibraryConfig
+    from synth.flames.sprites import is_smoke, save_sequence
+    from synth.generate import run_library
+    from synth.method1 import Method1Config
+    from synth.method2 import Method2Config
+    from synth.smoke.library import SmokeConfig
+    from synth.smoke.plume import plume_library
+
+    for seq in tiny_flames(1):
+        save_sequence(tmp_path / "flames" / seq.name, seq)
+    plume = plume_library(1, seed=0, frames=2)[0]
+    save_sequence(tmp_path / "smoke" / plume.name, plume)
+    both = FlameLibraryConfig(folders=(tmp_path / "flames", tmp_path / "smoke"))
+    own = SmokeConfig(alone=0.5, source="cutouts")
+    library = run_library(Method2Config(flames=both, smoke=own))
+    assert [(s.name, is_smoke(s)) for s in library] == [("f0", False), (plume.name, True)]
+    for cfg in (Method2Config(flames=both), Method2Config(flames=both, smoke=replace(own, source="simulated")),
+                Method1Config(flames=both)):  # fmt: skip
+        with pytest.raises(ValueError, match=rf"smoke cut-outs given \({plume.name}\) but the run lays no plumes"):
+            run_library(cfg)
+    alone = FlameLibraryConfig(folders=(tmp_path / "smoke",))
+    with pytest.raises(ValueError, match="the flame folders hold smoke cut-outs only"):
+        run_library(Method2Config(flames=alone, smoke=own))
