@@ -127,12 +127,12 @@ def plan_plumes(
         out.append(_plume(sprite, rect, simulated, background, name, "above", rng))
     if rng.random() < cfg.alone:
         sprite, name, simulated = _draw_sprite(plumes, rng)
-        aspect = sprite.size[1] / sprite.size[0]
         if cfg.alone_size == "labels" and shapes:
             x, y, w, h = shapes[int(rng.integers(len(shapes)))]
             rect = [int(x * width), int(y * height), max(int(w * width), 8), max(int(h * height), 8)]
             out.append(_plume(sprite, rect, simulated, background, name, "labels", rng))
             return out
+        aspect = sprite.size[1] / sprite.size[0]
         sky = sky_mask(background)
         if sky.mean() >= MIN_SKY and rng.random() < cfg.sky:
             cols = np.flatnonzero(sky.any(axis=0))
