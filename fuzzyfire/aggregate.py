@@ -383,7 +383,7 @@ def first_screen(
     from fuzzyfire import first_screen as fs
     from fuzzyfire.answer import headline_metric
 
-    lines = [line for line in (fs.unlearned_line(rows),) if line]
+    lines = [line for line in (fs.unlearned_line(rows, cfg.train.epochs),) if line]
     lines.append(compared_line(cfg, data, specs, own))
     baseline = next((c["baseline"] for c in compared if not c["baseline"].endswith(" copies")), cfg.report.baseline)
     added = "flames and smoke" if cfg.synth.method2.smoke.plumes else "flames"

@@ -194,9 +194,11 @@ def added_text(real: int, synth: int, added: str = "flames") -> str:
 
 
 def how_sure_line(rows: Sequence[Mapping[str, Any]], comparisons: Sequence[Mapping[str, Any]], epochs: int) -> str:
-    """Seeds per mixture, what the intervals resample, and the training length."""
-    mixtures = list(dict.fromkeys(r["mixture"] for r in rows))
-    seeds = max((len({r["seed"] for r in rows if r["mixture"] == m}) for m in mixtures), default=0)
+    """Seeds per mixture (a mixture trained on fewer seeds is named with its count), what the intervals resample,
+    and the training length."""
+    counts = {m: len({r["seed"] for r in rows if r["mixture"] == m}) for m in dict.fromkeys(r["mixture"] for r in rows)}
+    seeds = max(counts.values(), default=0)
+    fewer = [f"{m} {n}" for m, n in counts.items() if n < seeds]
     two = sorted({metric_name(c["metric"]) for c in comparisons if c["delta"].get("resampled") == "images and seeds"})
     one = sorted({metric_name(c["metric"]) for c in comparisons if c["delta"].get("resampled", "images") == "images"})
     if two:
@@ -207,12 +209,19 @@ def how_sure_line(rows: Sequence[Mapping[str, Any]], comparisons: Sequence[Mappi
                      "training of the same mixture would land")  # fmt: skip
     else:
         resampled = "nothing (no comparison)"
-    return (f"How sure: {seeds} seed{'s' * (seeds != 1)} per mixture, {epochs} epoch{'s' * (epochs != 1)} each; the "
-            f"95 % intervals resample {resampled}.")  # fmt: skip
+    per = f" ({', '.join(fewer)} only)" if fewer else ""
+    return (f"How sure: {seeds} seed{'s' * (seeds != 1)} per mixture{per}, {epochs} epoch{'s' * (epochs != 1)} each; "
+            f"the 95 % intervals resample {resampled}.")  # fmt: skip
 
 
-def unlearned_line(rows: Sequence[Mapping[str, Any]]) -> str | None:
-    """The first caveat when runs did not learn: which, why, and the key that fixes it."""
+def longer(epochs: int) -> int:
+    """The training length to suggest after ``epochs`` did not converge: half as long again, in tens (5 -> 10,
+    40 -> 60, 100 -> 150)."""
+    return max(10, -(-3 * epochs // 20) * 10)
+
+
+def unlearned_line(rows: Sequence[Mapping[str, Any]], epochs: int) -> str | None:
+    """The first caveat when runs did not learn in ``epochs``: which, why, and the key that fixes it."""
     flagged = {(r["mixture"], r["seed"]): r["learning"] for r in rows if r.get("learning")}
     if not flagged:
         return None
@@ -220,7 +229,7 @@ def unlearned_line(rows: Sequence[Mapping[str, Any]]) -> str | None:
     (mixture, seed), why = next(iter(flagged.items()))
     return (f"Caveat first: {len(flagged)} of {runs} runs did not converge ({mixture} seed {seed} {why}); their "
             "figures are not results and no verdict is drawn from them: train longer (train.epochs, e.g. "
-            "SET=\"train.epochs=40\").")  # fmt: skip
+            f"SET=\"train.epochs={longer(epochs)}\").")  # fmt: skip
 
 
 def silent_line(rows: Sequence[Mapping[str, Any]]) -> str | None:

@@ -107,6 +107,16 @@ def test_how_sure_says_what_each_interval_resamples() -> None:
                     "seeds (a two-level paired bootstrap); recall@10 alarms/100: test images only.")  # fmt: skip
     only = fs.how_sure_line(_rows(), [one], 1)
     assert "1 epoch each" in only and "test images only (paired bootstrap): with fewer than 3 seeds" in only
+    short = [r for r in _rows() if not (r["mixture"] == "R200_S200 copies" and r["seed"] == 2)]
+    assert fs.how_sure_line(short, [two], 40).startswith("How sure: 3 seeds per mixture (R200_S200 copies 2 only), 40")
+
+
+def test_runs_that_did_not_converge_are_told_to_train_longer_than_they_did() -> None:
+    assert fs.unlearned_line(_rows(), 40) is None
+    said = fs.unlearned_line(_rows("R200_S200"), 40)
+    assert said == ("Caveat first: 3 of 9 runs did not converge (R200_S200 seed 0 x); their figures are not results "
+                    "and no verdict is drawn from them: train longer (train.epochs, e.g. SET=\"train.epochs=60\").")  # fmt: skip
+    assert [fs.longer(e) for e in (1, 5, 7, 40, 100)] == [10, 10, 20, 60, 150]
 
 
 def test_runs_that_detect_nothing_are_named() -> None:
