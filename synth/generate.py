@@ -23,7 +23,7 @@ from synth.flames.sprites import SpriteSequence
 from synth.method_config import MethodConfig
 from synth.places import render
 from synth.places.envfile import EnvironmentFile, find_environment_files
-from synth.places.frames import FrameLabels, Shape, frame_classes, load_frames
+from synth.places.frames import FrameLabels, frame_classes, load_frames
 from synth.places.panorama import PanoramaBackgrounds
 from synth.places.photos import PhotoBackgrounds, keep_in_pool
 from synth.places.views import ViewCache, environment_index
@@ -53,7 +53,6 @@ class Job:
     photo_files: tuple[Path, ...]
     panoramas: tuple[Path, ...]
     frames: dict[Path, FrameLabels] = field(default_factory=dict)  # labelled frames' boxes by class, by photo
-    smoke_shapes: tuple[Shape, ...] = ()  # the frames' smoke boxes, as shares of their images
 
 
 @contextmanager
@@ -63,7 +62,7 @@ def opened_views(job: Job) -> Iterator[tuple[ViewCache, list[dict[str, str]]]]:
     cfg, places = job.cfg, job.cfg.places()
     with render.Renderer(cfg.width, cfg.height, job.platform) as renderer:
         photos = (
-            PhotoBackgrounds(list(job.photo_files), cfg.width, cfg.height, cfg.seed, job.frames, job.smoke_shapes)
+            PhotoBackgrounds(list(job.photo_files), cfg.width, cfg.height, cfg.seed, job.frames)
             if job.photo_files
             else None
         )
@@ -248,8 +247,7 @@ def generate(
     photo_files = keep_in_pool(places.photos, given.background_holdout)
     unreadable: list = []
     # labelled frames: photos keeping their boxes (fire, and smoke when the pool boxes it)
-    shapes: list[Shape] = []
-    frames = load_frames(given.labelled_frames, unreadable, frame_classes(cfg.smoke_class), shapes)
+    frames = load_frames(given.labelled_frames, unreadable, frame_classes(cfg.smoke_class))
     for problem in places.problems:  # unreadable files among the places and frames: named, never composited on
         print(f"{problem.path}: skipped background ({problem.reason})", file=sys.stderr)
     if note := places.panorama_note():
@@ -261,7 +259,7 @@ def generate(
     args = {**to_json(cfg), "flame_sequences": [s.name for s in library]}
     staging = Staging(out, args)
     job = Job(cfg, make_image, tuple(library), out, platform, tuple(files), tuple(photo_files),
-              tuple(places.panoramas), frames, tuple(shapes))  # fmt: skip
+              tuple(places.panoramas), frames)  # fmt: skip
     try:
         todo = [i for i in range(cfg.n) if not staging.done(i)]
         workers = min(workers, len(todo) // MIN_IMAGES_PER_WORKER)

@@ -300,27 +300,3 @@ def test_a_pool_that_boxes_smoke_keeps_its_frames_smoke_boxes_last_and_unaudited
     assert report["smoke"]["min_iou"] == 1.0 and report["frame_boxes"] == sum(
         len(m["frame_boxes"]) + len(m["frame_smoke_boxes"]) for m in per_image
     )
-
-
-def test_with_alone_size_labels_a_lone_plume_fills_a_labelled_frames_smoke_box(tmp_path, library):
-    from dataclasses import replace
-
-    from factories import write_frames
-
-    from synth.smoke.library import SmokeConfig, smoke_library
-
-    frames = write_frames(tmp_path, width=128, height=96)  # one smoke box each: [2, 2, 30, 20] px
-    smoke = SmokeConfig(alone=1.0, alone_size="labels", sequences=2, frames=2)
-    cfg = replace(CFG, n=4, scenes=0, labelled_frames=(frames,), width=128, height=96, images_per_view=1,
-                  smoke_class=True, smoke=smoke, negatives=1.0)  # fmt: skip
-    generate(cfg, library + smoke_library(smoke), tmp_path / "a")
-    per_image = json.loads((tmp_path / "a" / "manifest.json").read_text())["args"]["per_image"]
-    assert all(len(m.get("plumes", ())) + m["plumes_erased"] == 1 for m in per_image)  # one lone plume each
-    kept = [p["where"] for m in per_image for p in m.get("plumes", ())]
-    assert kept and set(kept) == {"labels"}
-    coco = json.loads((tmp_path / "a" / "annotations.json").read_text())
-    smoke_id = next(c["id"] for c in coco["categories"] if c["name"] == "smoke")
-    for img, meta in zip(coco["images"], per_image):
-        boxes = [a["bbox"] for a in coco["annotations"] if a["image_id"] == img["id"] and a["category_id"] == smoke_id]
-        for x, y, w, h in boxes[: len(boxes) - len(meta["frame_smoke_boxes"])]:  # the plume's: inside [2, 2, 30, 20]
-            assert x >= 2 and y >= 2 and x + w <= 32 and y + h <= 22

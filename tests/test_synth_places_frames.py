@@ -27,12 +27,6 @@ def test_a_pool_that_boxes_smoke_keeps_its_frames_smoke(tmp_path: Path) -> None:
     assert all(labels["smoke"] == ((2.0, 2.0, 30.0, 20.0),) for labels in both.values())
     assert [labels["fire"] for labels in both.values()] == [labels["fire"] for labels in load_frames([root]).values()]
     assert frame_fingerprints([root], frame_classes(True)) != frame_fingerprints([root])  # its smoke is content
-    shapes: list = []
-    load_frames([root], classes=frame_classes(True), smoke_shapes=shapes)  # 128 x 96 frames, one smoke box each
-    assert shapes == [(2 / 128, 2 / 96, 30 / 128, 20 / 96)] * 3
-    none: list = []
-    load_frames([root], smoke_shapes=none)  # a fire-only pool has no smoke shapes
-    assert none == []
 
 
 def test_an_unreadable_frame_is_skipped_and_named(tmp_path: Path) -> None:

@@ -52,21 +52,6 @@ def test_a_lone_plume_rises_into_the_sky_or_stands_on_the_ground() -> None:
     assert where == {"sky", "ground"}
 
 
-def test_a_lone_plume_takes_the_place_of_a_labelled_smoke_box_with_alone_size_labels() -> None:
-    scene, depth = np.full((100, 200, 3), 90, np.uint8), np.full((100, 200), 4.0, np.float32)
-    shapes = [(0.1, 0.2, 0.5, 0.6), (0.0, 0.0, 1.0, 1.0)]
-    cfg = SmokeConfig(alone=1.0, alone_size="labels")
-    rects = set()
-    for seed in range(8):
-        (q,) = plan_plumes(cfg, PLUMES, [], scene, depth, 150.0, np.random.default_rng(seed), shapes)
-        p = q.placement
-        assert q.where == "labels"
-        rects.add((p.x, p.y, p.width, p.height))
-    assert rects == {(20, 20, 100, 60), (0, 0, 200, 100)}  # each box as shares of the image, both drawn
-    (scene_rule,) = plan_plumes(cfg, PLUMES, [], scene, depth, 150.0, np.random.default_rng(0))  # no labelled smoke
-    assert scene_rule.where in ("sky", "ground")
-
-
 def test_plumes_are_lit_by_their_scene_and_placed_reproducibly() -> None:
     sprite = PLUMES[0].sprites[0]
     dark, bright = np.full((100, 100, 3), 15, np.uint8), np.full((100, 100, 3), 200, np.uint8)

@@ -21,9 +21,6 @@ from ground.data.problems import Problem
 #: A box [x, y, w, h] in pixels of the image it is in.
 Box = tuple[float, float, float, float]
 
-#: A box [x, y, w, h] as shares (0..1) of its image's width and height.
-Shape = tuple[float, float, float, float]
-
 #: A frame's boxes [x, y, w, h] px by class: ``fire``, and ``smoke`` when the pool boxes smoke.
 FrameLabels = dict[str, tuple[Box, ...]]
 
@@ -43,16 +40,12 @@ def frame_classes(smoke: bool) -> tuple[str, ...]:
 
 
 def load_frames(
-    paths: Iterable[Path | str],
-    problems: list[Problem] | None = None,
-    classes: Sequence[str] = (FIRE,),
-    smoke_shapes: list[Shape] | None = None,
+    paths: Iterable[Path | str], problems: list[Problem] | None = None, classes: Sequence[str] = (FIRE,)
 ) -> dict[Path, FrameLabels]:
     """Every image of the labelled datasets at ``paths`` (any format the toolkit reads, every split) and its boxes
     [x, y, w, h] px of each of ``classes`` (:func:`frame_classes`; other classes dropped; an image without such
     boxes is a frame too, with none), in the datasets' order; ValueError when a dataset has no images. The images
-    the reader skipped as unreadable are appended to ``problems`` (when given), as the reader names them; the
-    smoke boxes (when ``classes`` has smoke) to ``smoke_shapes`` (when given) as :data:`Shape` of their image."""
+    the reader skipped as unreadable are appended to ``problems`` (when given), as the reader names them."""
     from ground.data.formats.registry import read_dataset
 
     out: dict[Path, FrameLabels] = {}
@@ -63,14 +56,10 @@ def load_frames(
         ds = kept_classes(result.dataset, path, classes)
         boxes, names = ds.annotations_by_image(), {c.id: c.name for c in ds.categories}
         for img in ds.images:
-            labels: FrameLabels = {
+            out[ds.image_path(img)] = {
                 name: tuple(tuple(float(v) for v in a.bbox) for a in boxes[img.id] if names[a.category_id] == name)  # type: ignore[misc]
                 for name in classes
             }
-            out[ds.image_path(img)] = labels
-            if smoke_shapes is not None:
-                smoke_shapes += [(x / img.width, y / img.height, w / img.width, h / img.height)
-                                 for x, y, w, h in labels.get(SMOKE, ())]  # fmt: skip
     return out
 
 

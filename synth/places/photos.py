@@ -19,7 +19,7 @@ from numpy.typing import NDArray
 from curate.scan import list_image_files
 from ground.data.holdout import held_out
 from ground.image.imageio import ImageError, read_image
-from synth.places.frames import FrameLabels, Shape, crop_boxes
+from synth.places.frames import FrameLabels, crop_boxes
 from synth.places.sites import Site, estimate_site, read_site_sidecar, sidecar_files
 
 
@@ -79,9 +79,7 @@ class PhotoBackgrounds:
     """Background ``v`` is photo ``perm[v % n]`` (module docstring) cropped by ``default_rng([seed, 5, v])``;
     unreadable photos are skipped (the next one in the order is used) and named in :attr:`problems`. ``labels``:
     the boxes [x, y, w, h] px by class of the photos that are labelled frames (:mod:`synth.places.frames`), carried
-    into each view's ``frame_boxes`` (fire) and ``frame_smoke_boxes`` (smoke, when the labels have that class);
-    ``smoke_shapes``: those frames' smoke boxes as shares of their images (a lone plume's place with
-    ``smoke.alone_size: labels``)."""
+    into each view's ``frame_boxes`` (fire) and ``frame_smoke_boxes`` (smoke, when the labels have that class)."""
 
     def __init__(
         self,
@@ -90,13 +88,11 @@ class PhotoBackgrounds:
         height: int,
         seed: int,
         labels: Mapping[Path, FrameLabels] | None = None,
-        smoke_shapes: Sequence[Shape] = (),
     ) -> None:
         if not photos:
             raise ValueError("no background photos")
         self.photos, self.width, self.height, self.seed = list(photos), width, height, seed
         self.labels = dict(labels or {})
-        self.smoke_shapes = tuple(smoke_shapes)
         self.order = np.random.default_rng([seed, 8]).permutation(len(self.photos))
         self.problems: dict[str, str] = {}
 

@@ -15,8 +15,6 @@ from synth.smoke.plume import plume_library
 
 #: Where a pool's plumes come from (``SmokeConfig.source``).
 SMOKE_SOURCES: tuple[str, ...] = ("simulated", "cutouts")
-#: How a plume without flames is placed and sized (``SmokeConfig.alone_size``).
-ALONE_SIZES: tuple[str, ...] = ("scene", "labels")
 
 
 @dataclass(frozen=True)
@@ -29,9 +27,6 @@ class SmokeConfig:
     sky: float = 0.5  # share of the plumes without flames that rise into the view's sky from its horizon, when it
     # has sky (a plume over a ridge; a flame in the sky is not plausible, smoke is), 0..1
     height_m: tuple[float, float] = (1.0, 8.0)  # height of a plume standing on the ground, metres [lo, hi]
-    alone_size: Literal["scene", "labels"] = "scene"  # a plume without flames: scene: in the sky or on the ground,
-    # sized by depth | labels: at the place and size of a smoke box drawn from the pool's labelled frames (own_frames:
-    # the mixture's own smoke labels), as the data boxes smoke; the scene rule in a pool without such boxes
     source: Literal["simulated", "cutouts"] = "simulated"  # simulated plumes | cutouts: the mixture's own labelled
     # smoke matted into sprites (fuzzyfire experiment only: fuzzyfire.cutout_pools)
     sequences: int = 12  # simulated plume sequences, >= 1
@@ -42,8 +37,6 @@ class SmokeConfig:
         for name, share in (("above", self.above), ("alone", self.alone), ("sky", self.sky)):
             if not 0.0 <= share <= 1.0:
                 raise ValueError(f"smoke.{name} must be in 0..1, got {share}")
-        if self.alone_size not in ALONE_SIZES:
-            raise ValueError(f"unknown smoke.alone_size {self.alone_size!r}; choose one of {', '.join(ALONE_SIZES)}")
         if self.source not in SMOKE_SOURCES:
             raise ValueError(f"unknown smoke.source {self.source!r}; choose one of {', '.join(SMOKE_SOURCES)}")
         if self.sequences < 1 or self.frames < 1:

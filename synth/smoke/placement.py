@@ -6,9 +6,7 @@
 - **Alone** (probability ``smoke.alone`` per image): smouldering, or a distant fire whose flames do not show. When
   the view has sky (:func:`ground.image.sky.sky_mask`, at least :data:`MIN_SKY` of the image) a share ``smoke.sky``
   of them rise into it from the sky's lower edge at a random column (a plume over a ridge or a roof), 15-45 % of
-  the image wide; the others stand on a ground pixel (depth > 0), ``smoke.height_m`` high at that depth. With
-  ``smoke.alone_size: labels`` and labelled frames with smoke boxes in the pool, a plume alone instead fills the
-  place and size of one of those boxes drawn at random (as shares of the image: the data's own framing of smoke).
+  the image wide; the others stand on a ground pixel (depth > 0), ``smoke.height_m`` high at that depth.
 - **Colour**: white steam (weight 0.35, grey level 0.85-1.0), grey smoke (0.4, 0.45-0.75) or black soot (0.25,
   0.08-0.3) for a simulated plume (:data:`FAMILIES`); a matted plume keeps its own colour. Either is **lit by the
   scene**: multiplied by ``clip(0.35 + 1.3 L, 0.35, 1)``, ``L`` the mean luma (0..1) of the background under it, and
@@ -31,7 +29,6 @@ from ground.image.sky import sky_mask
 from synth.compose.composite import Placement
 from synth.compose.light import REC601
 from synth.flames.sprites import Sprite, SpriteSequence, mask_span
-from synth.places.frames import Shape
 from synth.smoke.library import SmokeConfig
 
 #: Smoke colours of a simulated plume: (name, weight, grey level range).
@@ -45,7 +42,7 @@ MIN_SKY = 0.05  # share of the image that must be sky for a plume to rise into i
 
 @dataclass(frozen=True)
 class Plume:
-    """A planned plume: its placement, the name of its sprite (``sequence/frame``), ``where`` (above, ground, sky, labels)
+    """A planned plume: its placement, the name of its sprite (``sequence/frame``), ``where`` (above, ground, sky)
     and ``colour`` (a family of :data:`FAMILIES`, or ``own`` for a matte)."""
 
     placement: Placement
@@ -101,12 +98,10 @@ def plan_plumes(
     depth: NDArray[np.float32],
     fy: float,
     rng: np.random.Generator,
-    shapes: Sequence[Shape] = (),
 ) -> list[Plume]:
     """The plumes of one image (module docstring): one above each of ``flames`` drawn at ``cfg.above``, then one
     alone at ``cfg.alone``; ``background`` (H, W, 3) uint8 the scene as exposed, ``depth`` (H, W) metres (0 off the
-    ground), ``fy`` the focal length in pixels; ``shapes``: the smoke boxes of the pool's labelled frames, for
-    ``alone_size: labels``. None without ``plumes``."""
+    ground), ``fy`` the focal length in pixels. None without ``plumes``."""
     if not plumes or not cfg.plumes:
         return []
     height, width = background.shape[:2]
@@ -127,11 +122,6 @@ def plan_plumes(
         out.append(_plume(sprite, rect, simulated, background, name, "above", rng))
     if rng.random() < cfg.alone:
         sprite, name, simulated = _draw_sprite(plumes, rng)
-        if cfg.alone_size == "labels" and shapes:
-            x, y, w, h = shapes[int(rng.integers(len(shapes)))]
-            rect = [int(x * width), int(y * height), max(int(w * width), 8), max(int(h * height), 8)]
-            out.append(_plume(sprite, rect, simulated, background, name, "labels", rng))
-            return out
         aspect = sprite.size[1] / sprite.size[0]
         sky = sky_mask(background)
         if sky.mean() >= MIN_SKY and rng.random() < cfg.sky:
