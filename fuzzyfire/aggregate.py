@@ -320,7 +320,7 @@ def write_report(
     :func:`report_pools` (``own``: the own cut-out pools by (mixture, method, seed),
     :func:`fuzzyfire.cutout_pools.cutout_pools`)."""
     from eval.report import write_study_report
-    from fuzzyfire.answer import answer
+    from fuzzyfire.answer import answer, positives_name
     from fuzzyfire.slicing import SLICES_FILE, forest_figures, slices_csv, study_slices
 
     t2 = [r for r in rows if "table2" in r["tables"]]
@@ -346,8 +346,9 @@ def write_report(
         (out / "tables").mkdir(parents=True, exist_ok=True)
         (out / "tables" / SLICES_FILE).write_text(slices_csv(sliced), encoding="utf-8")
     labelled = t2 + [{**r, "mixture": control_label(r["mixture"])} for r in controls]  # a control is its own row
-    notes = [*leak_notes(data, cfg.leakage.action, rows, cfg.report.min_fire_images), *too_few_notes(sets)]
-    said = answer(labelled, compared, sliced, notes)
+    positives = positives_name(datasets.classes)
+    notes = [*leak_notes(data, cfg.leakage.action, rows, cfg.report.min_fire_images), *too_few_notes(sets, positives)]
+    said = answer(labelled, compared, sliced, notes, positives)
     first = first_screen(cfg, data, datasets, labelled, compared, specs, own or {}, classes_from_data)
     (out / ANSWER_FILE).write_text(answer_markdown(first, said), encoding="utf-8")
     return write_study_report(
@@ -464,14 +465,15 @@ def leak_notes(data: Prepared, action: str, rows: Sequence[dict], min_fire_image
     return notes
 
 
-def too_few_notes(sets: Mapping[str, Sequence[Mapping]]) -> list[str]:
-    """One sentence listing the slices left uncompared for too few fire images, when there are any."""
+def too_few_notes(sets: Mapping[str, Sequence[Mapping]], positives: str = "fire images") -> list[str]:
+    """One sentence listing the slices left uncompared for too few ``positives`` (images holding a studied class),
+    when there are any."""
     from eval.slices import MIN_FIRE_IMAGES
 
     few = [f"{t}: {s['slice']} ({s['fire_images']})" for t, rows in sets.items() for s in rows if s["too_few"]]
     if not few:
         return []
-    return [f"Not compared (fewer than {MIN_FIRE_IMAGES} fire images even after merging): {', '.join(few)}."]
+    return [f"Not compared (fewer than {MIN_FIRE_IMAGES} {positives} even after merging): {', '.join(few)}."]
 
 
 def answer_text(out: Path) -> str:

@@ -40,10 +40,12 @@ def answer(
     comparisons: Sequence[Mapping[str, Any]],
     slices: Sequence[Mapping[str, Any]] = (),
     notes: Sequence[str] = (),
+    positives: str = "fire images",
 ) -> list[str]:
     """The answer's sentences (module docstring). ``rows``: Table 2's rows (:func:`fuzzyfire.aggregate.result_rows`);
     ``comparisons``: :func:`fuzzyfire.aggregate.comparisons`; ``slices``: :func:`fuzzyfire.slicing.study_slices`'s
-    comparison rows; ``notes``: caveats known elsewhere (leaked test images dropped), appended as they are."""
+    comparison rows; ``notes``: caveats known elsewhere (leaked test images dropped), appended as they are;
+    ``positives``: what a slice's ``fire_images`` count (:func:`positives_name`)."""
     lines = []
     tests = list(dict.fromkeys(r["test_set"] for r in rows))
     mixtures = list(dict.fromkeys(r["mixture"] for r in rows))
@@ -65,7 +67,7 @@ def answer(
         lines.append(f"On {c['test_set']}, {c['mixture']} against {c['baseline']}: {metric_name(metric)} "
                      f"{delta_text(c['delta'])} points{', ' + sure if sure else ''}, "
                      f"{comparison_verdict(c, bool({c['mixture'], c['baseline']} & unlearned))}.")  # fmt: skip
-    lines += _slice_lines(slices, unlearned)
+    lines += _slice_lines(slices, unlearned, positives)
     lines += _alarm_lines(rows, tests, mixtures)
     seeds = max((len({r["seed"] for r in rows if r["mixture"] == m}) for m in mixtures), default=0)
     if 0 < seeds < MIN_SEEDS_RESAMPLED:
@@ -84,9 +86,19 @@ def _cell(rows: Sequence[Mapping[str, Any]], mixture: str, test: str, metric: st
     return f"{mixture} {100 * mean:.1f}{spread}"
 
 
-def _slice_lines(slices: Sequence[Mapping[str, Any]], unlearned: set[str] = frozenset()) -> list[str]:  # type: ignore[assignment]
-    """Per (comparison, test set): the slices helped and hurt after Holm's correction, or that none is; a
-    comparison with a mixture in ``unlearned`` (a run that did not converge) is said not to be read."""
+def positives_name(classes: Sequence[str]) -> str:
+    """What the images holding a studied class are called: ``fire images``, or ``images with fire or smoke``."""
+    return "fire images" if len(classes) < 2 else f"images with {' or '.join(classes)}"
+
+
+def _slice_lines(
+    slices: Sequence[Mapping[str, Any]],
+    unlearned: set[str] = frozenset(),
+    positives: str = "fire images",  # type: ignore[assignment]
+) -> list[str]:
+    """Per (comparison, test set): the slices helped and hurt after Holm's correction, or that none is, each slice
+    with its count of ``positives``; a comparison with a mixture in ``unlearned`` (a run that did not converge) is
+    said not to be read."""
     groups: dict[tuple[str, str, str], list[Mapping[str, Any]]] = {}
     for r in slices:
         groups.setdefault((r["test_set"], r["mixture"], r["baseline"]), []).append(r)
@@ -102,7 +114,7 @@ def _slice_lines(slices: Sequence[Mapping[str, Any]], unlearned: set[str] = froz
             these = _strongest([r for r in found if r["verdict"] == verdict])
             if not these:
                 continue
-            text = "; ".join(f"{r['slice']} ({r['fire_images']} fire images) {metric_name(r['metric'])} "
+            text = "; ".join(f"{r['slice']} ({r['fire_images']} {positives}) {metric_name(r['metric'])} "
                              f"{delta_text(r['delta'])}" for r in these[:SHOWN_SLICES])  # fmt: skip
             more = len(these) - SHOWN_SLICES
             rest = f"; and {more} more slice{'s' * (more > 1)} (tables/slices.csv)" if more > 0 else ""

@@ -10,7 +10,7 @@ import pytest
 from factories_experiment import toy_config
 
 from eval.config import InferenceConfig
-from fuzzyfire.aggregate import comparisons, result_rows
+from fuzzyfire.aggregate import comparisons, result_rows, too_few_notes
 from fuzzyfire.runs import EvalSet, RunSpec
 from fuzzyfire.stages import DataRef
 from train.config import TrainConfig
@@ -335,3 +335,12 @@ def test_each_class_gets_its_false_alarms_and_image_recall(tmp_path: Path) -> No
     (folder / "predictions.json").write_text(json.dumps(alarms), encoding="utf-8")
     out = per_class_images(datasets, folder, free, None, {"alarms_per_100": 50.0})
     assert out == {"alarms_per_100 fire": 25.0, "alarms_per_100 smoke": 25.0}  # the 0.2 one is below ALARM_CONF
+
+
+def test_slices_left_uncompared_are_counted_in_the_studys_positive_images() -> None:
+    sets = {"common": [{"slice": "colour=orange-red", "fire_images": 3, "too_few": True},
+                       {"slice": "colour=red", "fire_images": 40, "too_few": False}]}  # fmt: skip
+    assert too_few_notes(sets) == ["Not compared (fewer than 20 fire images even after merging): common: "
+                                   "colour=orange-red (3)."]  # fmt: skip
+    assert "fewer than 20 images with fire or smoke" in too_few_notes(sets, "images with fire or smoke")[0]
+    assert too_few_notes({"common": sets["common"][1:]}) == []
