@@ -6,12 +6,13 @@ the test images or a slice are too few. The report's first screen and ``fuzzyfir
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
+from collections.abc import Set as AbstractSet
 from typing import Any
 
 from eval.errors import ALARMS
 from eval.imagelevel import IMAGE_RECALL
 from eval.stats import MIN_SEEDS_RESAMPLED, mean_std
-from fuzzyfire.first_screen import delta_text, metric_name, seeds_text, unlearned_mixtures
+from fuzzyfire.first_screen import delta_text, metric_name, seed_counts, seeds_text, unlearned_mixtures
 from fuzzyfire.first_screen import verdict as comparison_verdict
 
 SHOWN_SLICES = 4  # slices named per comparison and direction (the largest differences); the rest are counted
@@ -69,7 +70,7 @@ def answer(
                      f"{comparison_verdict(c, bool({c['mixture'], c['baseline']} & unlearned))}.")  # fmt: skip
     lines += _slice_lines(slices, unlearned, positives)
     lines += _alarm_lines(rows, tests, mixtures)
-    seeds = max((len({r["seed"] for r in rows if r["mixture"] == m}) for m in mixtures), default=0)
+    seeds = max(seed_counts(rows).values(), default=0)
     if 0 < seeds < MIN_SEEDS_RESAMPLED:
         lines.append(f"Caveat: {seeds} seed{'s' * (seeds != 1)} per mixture; the intervals cover the test images and "
                      "the mean of these seeds, not how another training of the same mixture would land.")  # fmt: skip
@@ -91,11 +92,7 @@ def positives_name(classes: Sequence[str]) -> str:
     return "fire images" if len(classes) < 2 else f"images with {' or '.join(classes)}"
 
 
-def _slice_lines(
-    slices: Sequence[Mapping[str, Any]],
-    unlearned: set[str] = frozenset(),
-    positives: str = "fire images",  # type: ignore[assignment]
-) -> list[str]:
+def _slice_lines(slices: Sequence[Mapping[str, Any]], unlearned: AbstractSet[str], positives: str) -> list[str]:
     """Per (comparison, test set): the slices helped and hurt after Holm's correction, or that none is, each slice
     with its count of ``positives``; a comparison with a mixture in ``unlearned`` (a run that did not converge) is
     said not to be read."""

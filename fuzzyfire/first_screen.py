@@ -193,10 +193,15 @@ def added_text(real: int, synth: int, added: str = "flames") -> str:
     return " and ".join(parts) or "the same images"
 
 
+def seed_counts(rows: Sequence[Mapping[str, Any]]) -> dict[str, int]:
+    """The number of seeds each mixture of ``rows`` was trained on, in the rows' order."""
+    return {m: len({r["seed"] for r in rows if r["mixture"] == m}) for m in dict.fromkeys(r["mixture"] for r in rows)}
+
+
 def how_sure_line(rows: Sequence[Mapping[str, Any]], comparisons: Sequence[Mapping[str, Any]], epochs: int) -> str:
     """Seeds per mixture (a mixture trained on fewer seeds is named with its count), what the intervals resample,
     and the training length."""
-    counts = {m: len({r["seed"] for r in rows if r["mixture"] == m}) for m in dict.fromkeys(r["mixture"] for r in rows)}
+    counts = seed_counts(rows)
     seeds = max(counts.values(), default=0)
     fewer = [f"{m} {n}" for m, n in counts.items() if n < seeds]
     two = sorted({metric_name(c["metric"]) for c in comparisons if c["delta"].get("resampled") == "images and seeds"})
