@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import argparse
+import errno
 import importlib
 import sys
 from collections.abc import Sequence
@@ -138,9 +139,22 @@ def main(argv: Sequence[str] | None = None) -> int:
     except (FileNotFoundError, FileExistsError, NotADirectoryError, PermissionError, ValueError, OutputError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
+    except (RuntimeError, OSError) as exc:
+        if not link_loop(exc):
+            raise
+        print(f"error: {exc}: a symbolic link on that path leads back to itself; mend or remove it", file=sys.stderr)
+        return 2
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)
         return 130
+
+
+def link_loop(exc: BaseException) -> bool:
+    """Whether ``exc`` is a path that cannot be resolved for a symbolic link loop: ``Path.resolve`` raises
+    ``RuntimeError('Symlink loop from ...')`` up to Python 3.12 and ``OSError`` with ``ELOOP`` from 3.13 on."""
+    if isinstance(exc, OSError):
+        return exc.errno == errno.ELOOP
+    return isinstance(exc, RuntimeError) and str(exc).startswith("Symlink loop")
 
 
 if __name__ == "__main__":

@@ -4,6 +4,7 @@ experiment``: help with examples, clear errors before any work (exit code 2); th
 from __future__ import annotations
 
 import argparse
+import errno
 import re
 from pathlib import Path
 
@@ -12,7 +13,7 @@ import yaml
 from conftest import REPO
 from factories_experiment import write_toy_config
 
-from fuzzyfire.cli import build_parser, main
+from fuzzyfire.cli import build_parser, link_loop, main
 from fuzzyfire.experiment_config import ExperimentConfig, RealConfig
 from ground.config.loader import to_dict
 
@@ -83,6 +84,21 @@ def test_missing_real_folder_is_named(tmp_path: Path, capsys: pytest.CaptureFixt
     config = REPO / "configs" / "paper.yaml"
     code = main(["experiment", str(config), "--out", str(tmp_path / "out"), "--set", "real.path=/no/such/folder"])
     assert code == 2 and "/no/such/folder" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("key", ["synth.method2.backgrounds=[{}]", "real.path={}"])
+def test_a_symbolic_link_loop_is_named_not_a_traceback(tmp_path: Path, capsys, key: str) -> None:
+    (tmp_path / "shared").symlink_to("shared")  # ../shared pointing at itself
+    config = REPO / "configs" / "own-flames.yaml"
+    where = tmp_path / "shared" / "data"
+    assert main(["experiment", str(config), "--out", str(tmp_path / "out"), "--set", key.format(where)]) == 2
+    err = capsys.readouterr().err
+    assert str(where) in err and "leads back to itself" in err and "Traceback" not in err
+
+
+def test_other_runtime_errors_are_not_taken_for_a_link_loop() -> None:
+    assert link_loop(RuntimeError("Symlink loop from '/a'")) and link_loop(OSError(errno.ELOOP, "Too many levels"))
+    assert not link_loop(RuntimeError("CUDA out of memory")) and not link_loop(OSError(errno.ENOSPC, "No space"))
 
 
 def _commands(parser, prefix=()):
