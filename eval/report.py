@@ -16,6 +16,7 @@ from eval.draw import draw_boxes
 from eval.errors import ALARMS
 from eval.imagelevel import IMAGE_LABELLED, IMAGE_RECALL, IMAGELEVEL, image_operating_curve
 from eval.operating import ALARM_BUDGET, OPERATING, RECALL_AT_ALARMS, Alarms, curve_at_rates, recall_at_rates
+from eval.slices import MIN_FIRE_IMAGES
 from eval.tables import (
     CLASS_METRICS,
     METRIC_LABELS,
@@ -253,6 +254,7 @@ def write_study_report(
     slices: Sequence[Mapping[str, Any]] = (),
     slice_sets: Mapping[str, Sequence[Mapping[str, Any]]] | None = None,
     forests: Sequence[tuple[Path, str]] = (),
+    positives: str = "fire images",
 ) -> Path:
     """Write ``out/tables/table{1,2}.{md,csv,tex}`` (AP, AP50 and, when every run has it, AP25),
     ``out/figures/figure5_{AP,AP50}.png``, sample thumbnails and ``out/report.html``, and remove the table files of
@@ -269,7 +271,8 @@ def write_study_report(
     (:func:`operating_figures`). ``answer``: the study's answer in sentences, the page's first section, and
     ``answer_details`` the rest of it, folded below;
     ``slices``: the slice comparisons (:func:`slices_html`), ``slice_sets`` the slices of each test set
-    (:func:`slice_sets_html`) and ``forests`` their forest plots with captions, the section after Table 2."""
+    (:func:`slice_sets_html`) and ``forests`` their forest plots with captions, the section after Table 2;
+    ``positives``: what a slice's count is called (:func:`eval.slices.positives_name`)."""
     from eval.plots import plot_figure5
     from eval.tables import control_table, table1, table2
 
@@ -287,8 +290,8 @@ def write_study_report(
         write_table_files(t2, out / "tables", "table2")
         sections.append(("Table 2 — training mixtures", table_html(t2) + TABLE2_LEGEND))
         if slices or slice_sets:
-            body = "".join(figure_html(f, out, c) for f, c in forests) + slices_html(slices)
-            sections.append(("On which fires — slices", body + slice_sets_html(slice_sets or {})))
+            body = "".join(figure_html(f, out, c) for f, c in forests) + slices_html(slices, positives)
+            sections.append((f"On which {positives} — slices", body + slice_sets_html(slice_sets or {}, positives)))
     if method_results:
         t1 = table1(method_results, metrics=table_metrics(method_results))
         write_table_files(t1, out / "tables", "table1")
@@ -340,17 +343,17 @@ TABLE2_LEGEND = (
 )
 
 
-def slices_html(rows: Sequence[Mapping[str, Any]]) -> str:
+def slices_html(rows: Sequence[Mapping[str, Any]], positives: str = "fire images") -> str:
     """The slice comparisons (:func:`eval.slices.compare_slices` rows with ``test_set``, ``mixture``,
     ``baseline``): one row per (comparison, test set, slice), a column per metric with Δ and its 95 % interval in
-    points, bold where Holm's correction keeps it (helps or hurts)."""
+    points, bold where Holm's correction keeps it (helps or hurts); the slice's count headed ``positives``."""
     if not rows:
         return ""
     metrics = list(dict.fromkeys(r["metric"] for r in rows))
     grouped: dict[tuple[str, str, str, str], dict[str, Mapping[str, Any]]] = {}
     for r in rows:
         grouped.setdefault((r["test_set"], r["mixture"], r["baseline"], r["slice"]), {})[r["metric"]] = r
-    head = "<tr><th>test set</th><th>mixture</th><th>vs</th><th>slice</th><th>fire images</th>"
+    head = f"<tr><th>test set</th><th>mixture</th><th>vs</th><th>slice</th><th>{html.escape(positives)}</th>"
     head += "".join(f"<th>Δ {html.escape(METRIC_LABELS.get(m, m))}</th>" for m in metrics) + "</tr>"
     body = []
     for (test, mixture, base, name), by_metric in grouped.items():
@@ -372,8 +375,9 @@ def slices_html(rows: Sequence[Mapping[str, Any]]) -> str:
     return f"<table>{caption}{head}{''.join(body)}</table>"
 
 
-def slice_sets_html(sets: Mapping[str, Sequence[Mapping[str, Any]]]) -> str:
-    """The slices of each test set (images, fire images); those with too few fire images to compare are marked."""
+def slice_sets_html(sets: Mapping[str, Sequence[Mapping[str, Any]]], positives: str = "fire images") -> str:
+    """The slices of each test set (images, and ``positives``: fire images, or images with fire or smoke); those
+    with too few of them to compare are marked."""
     body = []
     for test, rows in sets.items():
         for r in rows:
@@ -383,8 +387,9 @@ def slice_sets_html(sets: Mapping[str, Sequence[Mapping[str, Any]]]) -> str:
     if not body:
         return ""
     caption = ("<caption>The slices: attributes computed from each image and its boxes (docs/scoring.md); slices "
-               "with fewer than 20 fire images are merged with a neighbour or into 'other'.</caption>")  # fmt: skip
-    head = "<tr><th>test set</th><th>slice</th><th>images</th><th>fire images</th></tr>"
+               f"with fewer than {MIN_FIRE_IMAGES} {html.escape(positives)} are merged with a neighbour or into "
+               "'other'.</caption>")  # fmt: skip
+    head = f"<tr><th>test set</th><th>slice</th><th>images</th><th>{html.escape(positives)}</th></tr>"
     return f"<details><summary>Slices of each test set</summary><table>{caption}{head}{''.join(body)}</table></details>"
 
 

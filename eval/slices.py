@@ -39,6 +39,12 @@ ALPHA = 0.05  # family-wise error rate of Holm's correction
 METRICS = ("AP50", "AP25", "image_recall")
 
 
+def positives_name(classes: Sequence[str]) -> str:
+    """What a slice's ``fire_images`` count is called in a study of ``classes``: ``fire images``, or ``images with
+    fire or smoke`` (an image holding any studied class)."""
+    return "fire images" if len(classes) < 2 else f"images with {' or '.join(classes)}"
+
+
 @dataclass(frozen=True)
 class Slice:
     """The images of one value (or merged values) of an attribute: ``mask`` (I,) over the test images in the

@@ -320,7 +320,8 @@ def write_report(
     :func:`report_pools` (``own``: the own cut-out pools by (mixture, method, seed),
     :func:`fuzzyfire.cutout_pools.cutout_pools`)."""
     from eval.report import write_study_report
-    from fuzzyfire.answer import answer, positives_name
+    from eval.slices import positives_name
+    from fuzzyfire.answer import answer
     from fuzzyfire.slicing import SLICES_FILE, forest_figures, slices_csv, study_slices
 
     t2 = [r for r in rows if "table2" in r["tables"]]
@@ -356,8 +357,8 @@ def write_report(
         gaps=realism_gaps(cfg, data, datasets, out, pools),
         comparisons=compared, errors=error_rows(datasets, specs, results), samples=shown,
         run_columns=columns, notice=STANDIN_NOTICE if data.standin else "", title=title,
-        answer=first, answer_details=said, slices=sliced, slice_sets=sets,
-        forests=forest_figures(sliced, out / "figures"),
+        answer=first, answer_details=said, slices=sliced, slice_sets=sets, positives=positives,
+        forests=forest_figures(sliced, out / "figures", positives),
     )  # fmt: skip
 
 

@@ -46,7 +46,7 @@ def answer(
     """The answer's sentences (module docstring). ``rows``: Table 2's rows (:func:`fuzzyfire.aggregate.result_rows`);
     ``comparisons``: :func:`fuzzyfire.aggregate.comparisons`; ``slices``: :func:`fuzzyfire.slicing.study_slices`'s
     comparison rows; ``notes``: caveats known elsewhere (leaked test images dropped), appended as they are;
-    ``positives``: what a slice's ``fire_images`` count (:func:`positives_name`)."""
+    ``positives``: what a slice's ``fire_images`` count (:func:`eval.slices.positives_name`)."""
     lines = []
     tests = list(dict.fromkeys(r["test_set"] for r in rows))
     mixtures = list(dict.fromkeys(r["mixture"] for r in rows))
@@ -85,11 +85,6 @@ def _cell(rows: Sequence[Mapping[str, Any]], mixture: str, test: str, metric: st
     mean, std, n = _mean(rows, mixture, test, metric)
     spread = f" ± {100 * std:.1f}" if std is not None else ""
     return f"{mixture} {100 * mean:.1f}{spread}"
-
-
-def positives_name(classes: Sequence[str]) -> str:
-    """What the images holding a studied class are called: ``fire images``, or ``images with fire or smoke``."""
-    return "fire images" if len(classes) < 2 else f"images with {' or '.join(classes)}"
 
 
 def _slice_lines(slices: Sequence[Mapping[str, Any]], unlearned: AbstractSet[str], positives: str) -> list[str]:

@@ -157,9 +157,12 @@ def slices_csv(rows: Sequence[Mapping[str, Any]]) -> str:
     return text.getvalue()
 
 
-def forest_figures(rows: Sequence[Mapping[str, Any]], folder: Path) -> list[tuple[Path, str]]:
+def forest_figures(
+    rows: Sequence[Mapping[str, Any]], folder: Path, positives: str = "fire images"
+) -> list[tuple[Path, str]]:
     """``folder/forest_<mixture>_vs_<baseline>_<test set>.png`` per (comparison, test set) of the slice ``rows``
-    (:func:`eval.plots.plot_forest`, one panel per metric), with their captions."""
+    (:func:`eval.plots.plot_forest`, one panel per metric; each slice's count named ``positives``,
+    :func:`eval.slices.positives_name`), with their captions."""
     from eval.plots import plot_forest
 
     groups: dict[tuple[str, str, str], dict[str, list[Mapping[str, Any]]]] = {}
@@ -168,7 +171,7 @@ def forest_figures(rows: Sequence[Mapping[str, Any]], folder: Path) -> list[tupl
     out = []
     for (mixture, baseline, test), panels in groups.items():
         name = "_".join("".join(c if c.isalnum() else "-" for c in p) for p in (mixture, "vs", baseline, test))
-        title = f"{mixture} − {baseline} on {test}, by slice (fire images)"
+        title = f"{mixture} − {baseline} on {test}, by slice ({positives})"
         path = plot_forest(panels, folder / f"forest_{name}.png", title)
         caption = (f"{mixture} minus {baseline} on {test}, slice by slice: 95 % paired bootstrap intervals over "
                    "images and seeds; filled: the interval's p-value holds after Holm's correction")  # fmt: skip

@@ -11,6 +11,8 @@ from eval.report import (
     render_page,
     runs_html,
     samples_html,
+    slice_sets_html,
+    slices_html,
     table_html,
     write_study_report,
 )
@@ -235,3 +237,15 @@ def test_the_page_lists_every_run_once_explains_its_marks_and_captions_figures_i
     assert (
         "<figcaption>Figure 5 — AP per training mixture" in page and "<figcaption>figure5_AP</figcaption>" not in page
     )
+
+
+def test_the_slice_tables_name_what_a_slice_counts() -> None:
+    delta = {"value": 0.05, "low": -0.01, "high": 0.1}
+    rows = [{"test_set": "t", "mixture": "B", "baseline": "A", "slice": "smoke_colour=grey", "fire_images": 31,
+             "metric": "AP50", "delta": delta, "verdict": "-"}]  # fmt: skip
+    sets = {"t": [{"slice": "smoke_colour=grey", "images": 40, "fire_images": 31, "too_few": False}]}
+    two = slices_html(rows, "images with fire or smoke") + slice_sets_html(sets, "images with fire or smoke")
+    assert "fire images" not in two and two.count("<th>images with fire or smoke</th>") == 2
+    assert "<td>31</td>" in two and "fewer than 20 images with fire or smoke" in two
+    one = slices_html(rows) + slice_sets_html(sets)
+    assert one.count("<th>fire images</th>") == 2

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from eval.imagelevel import image_hits
-from eval.slices import Side, compare_slices, holm, make_slices
+from eval.slices import Side, compare_slices, holm, make_slices, positives_name
 from eval.stats import MatchTable
 from ground.data.dataset import DatasetBuilder
 from ground.detect.cocoeval import LOOSE_IOU, run_cocoeval
@@ -91,3 +91,8 @@ def test_a_restricted_table_gives_the_ap_of_its_images(tmp_path: Path) -> None:
     table = b.ap50[0]
     weights = night.mask.astype(float)
     assert table.restricted([0], night.mask).precision(weights)[0] == pytest.approx(table.precision(weights)[0])
+
+
+def test_a_slice_counts_the_images_of_every_studied_class_and_says_so() -> None:
+    assert positives_name(["fire"]) == "fire images"
+    assert positives_name(["fire", "smoke"]) == "images with fire or smoke"

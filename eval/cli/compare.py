@@ -244,7 +244,7 @@ def _compare_slices(
 
     from eval.attributes import dataset_attributes, merged, read_attributes_csv
     from eval.score import scored_images
-    from eval.slices import Side, compare_slices, make_slices
+    from eval.slices import Side, compare_slices, make_slices, positives_name
     from eval.stats import MatchTable
     from ground.detect.cocoeval import LOOSE_IOU, run_cocoeval
 
@@ -264,7 +264,8 @@ def _compare_slices(
         panels: dict[str, list[dict]] = {}
         for r in rows:
             panels.setdefault(r["metric"], []).append(r)
-        plot_forest(panels, args.forest, "B − A by slice (fire images)")
+        positives = positives_name([c.name for c in ds.categories if c.id in cat_ids])
+        plot_forest(panels, args.forest, f"B − A by slice ({positives})")
     if not args.json:
         few = [f"{s.name} ({s.fire_images})" for s in slices if s.too_few]
         print("slice                          fire  Δ AP50               Δ AP25               Δ image recall")
