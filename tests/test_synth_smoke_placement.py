@@ -67,18 +67,3 @@ def test_plumes_are_lit_by_their_scene_and_placed_reproducibly() -> None:
     ]
     assert plan_plumes(SmokeConfig(), *args[1:], np.random.default_rng(5)) == []  # no plumes asked: none
     assert smoke_placement(sprite, rect).width == 60
-
-
-def test_a_haze_covers_much_of_the_view_and_leaves_the_other_plumes_as_they_were() -> None:
-    scene, depth = np.full((90, 160, 3), 110, np.uint8), np.full((90, 160), 6.0, np.float32)
-    args = (PLUMES, [_flame(30, 20, 10, 40)], scene, depth, 100.0)
-    for seed in range(8):
-        plain = plan_plumes(SmokeConfig(above=1.0, alone=1.0), *args, np.random.default_rng(seed))
-        hazy = plan_plumes(SmokeConfig(above=1.0, alone=1.0, haze=1.0), *args, np.random.default_rng(seed))
-        assert [q.record() for q in hazy[:-1]] == [q.record() for q in plain]  # drawn last: the rest unchanged
-        h = hazy[-1].placement
-        assert hazy[-1].where == "haze" and hazy[-1].colour in ("white", "grey", "black")
-        assert 0.3 * 160 - 1 <= h.width <= 0.9 * 160 and 0.3 * 90 - 1 <= h.height <= 0.9 * 90
-        assert h.x >= 0 and h.y >= 0 and h.x + h.width <= 160 and h.y + h.height <= 90  # inside the view
-    (only,) = plan_plumes(SmokeConfig(haze=1.0), *args, np.random.default_rng(0))
-    assert only.where == "haze"

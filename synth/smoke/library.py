@@ -24,8 +24,6 @@ class SmokeConfig:
 
     above: float = 0.0  # share of the flames with a plume rising from their tips, 0..1
     alone: float = 0.0  # probability that an image gets a plume without flames (smouldering, or far away), 0..1
-    haze: float = 0.0  # probability that an image gets a haze: smoke over 30-90 % of the view's width and height
-    # (a smoky room, a street under smoke: synth.smoke.haze), 0..1
     sky: float = 0.5  # share of the plumes without flames that rise into the view's sky from its horizon, when it
     # has sky (a plume over a ridge; a flame in the sky is not plausible, smoke is), 0..1
     height_m: tuple[float, float] = (1.0, 8.0)  # height of a plume standing on the ground, metres [lo, hi]
@@ -36,7 +34,7 @@ class SmokeConfig:
     seed: int = 0  # plume library seed
 
     def __post_init__(self) -> None:
-        for name, share in (("above", self.above), ("alone", self.alone), ("haze", self.haze), ("sky", self.sky)):
+        for name, share in (("above", self.above), ("alone", self.alone), ("sky", self.sky)):
             if not 0.0 <= share <= 1.0:
                 raise ValueError(f"smoke.{name} must be in 0..1, got {share}")
         if self.source not in SMOKE_SOURCES:
@@ -47,8 +45,8 @@ class SmokeConfig:
 
     @property
     def plumes(self) -> bool:
-        """Whether images get plumes (or haze) of their own."""
-        return self.above > 0 or self.alone > 0 or self.haze > 0
+        """Whether images get plumes of their own."""
+        return self.above > 0 or self.alone > 0
 
 
 def smoke_library(cfg: SmokeConfig, cutouts: Sequence[SpriteSequence] = ()) -> list[SpriteSequence]:

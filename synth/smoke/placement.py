@@ -7,9 +7,6 @@
   the view has sky (:func:`ground.image.sky.sky_mask`, at least :data:`MIN_SKY` of the image) a share ``smoke.sky``
   of them rise into it from the sky's lower edge at a random column (a plume over a ridge or a roof), 15-45 % of
   the image wide; the others stand on a ground pixel (depth > 0), ``smoke.height_m`` high at that depth.
-- **Haze** (probability ``smoke.haze`` per image, :mod:`synth.smoke.haze`): a veil over a rectangle 30-90 % of
-  the image wide and high (:data:`HAZE_SIZE`, anywhere in the view), of peak opacity 0.25-0.75
-  (:data:`HAZE_OPACITY`), in a simulated plume's colours whatever the plume source.
 - **Colour**: white steam (weight 0.35, grey level 0.85-1.0), grey smoke (0.4, 0.45-0.75) or black soot (0.25,
   0.08-0.3) for a simulated plume (:data:`FAMILIES`); a matted plume keeps its own colour. Either is **lit by the
   scene**: multiplied by ``clip(0.35 + 1.3 L, 0.35, 1)``, ``L`` the mean luma (0..1) of the background under it, and
@@ -32,7 +29,6 @@ from ground.image.sky import sky_mask
 from synth.compose.composite import Placement
 from synth.compose.light import REC601
 from synth.flames.sprites import Sprite, SpriteSequence, mask_span
-from synth.smoke.haze import haze_sprite
 from synth.smoke.library import SmokeConfig
 
 #: Smoke colours of a simulated plume: (name, weight, grey level range).
@@ -42,13 +38,11 @@ FAMILIES: tuple[tuple[str, float, tuple[float, float]], ...] = (
     ("black", 0.25, (0.08, 0.3)),
 )
 MIN_SKY = 0.05  # share of the image that must be sky for a plume to rise into it
-HAZE_SIZE = (0.3, 0.9)  # a haze's width and height, shares of the image's [lo, hi]
-HAZE_OPACITY = (0.25, 0.75)  # a haze's peak opacity [lo, hi]
 
 
 @dataclass(frozen=True)
 class Plume:
-    """A planned plume: its placement, the name of its sprite (``sequence/frame``), ``where`` (above, ground, sky, haze)
+    """A planned plume: its placement, the name of its sprite (``sequence/frame``), ``where`` (above, ground, sky)
     and ``colour`` (a family of :data:`FAMILIES`, or ``own`` for a matte)."""
 
     placement: Placement
@@ -106,7 +100,7 @@ def plan_plumes(
     rng: np.random.Generator,
 ) -> list[Plume]:
     """The plumes of one image (module docstring): one above each of ``flames`` drawn at ``cfg.above``, then one
-    alone at ``cfg.alone``, then a haze at ``cfg.haze``; ``background`` (H, W, 3) uint8 the scene as exposed, ``depth`` (H, W) metres (0 off the
+    alone at ``cfg.alone``; ``background`` (H, W, 3) uint8 the scene as exposed, ``depth`` (H, W) metres (0 off the
     ground), ``fy`` the focal length in pixels. None without ``plumes``."""
     if not plumes or not cfg.plumes:
         return []
@@ -146,16 +140,4 @@ def plan_plumes(
                 h = int(np.clip(fy * rng.uniform(*cfg.height_m) / float(depth[row, col]), 24, 0.8 * height))
                 w = max(int(h / aspect), 8)
                 out.append(_plume(sprite, [col - w // 2, row - h, w, h], simulated, background, name, "ground", rng))
-    if cfg.haze > 0 and rng.random() < cfg.haze:
-        out.append(_haze(background, rng))
     return out
-
-
-def _haze(background: NDArray[np.uint8], rng: np.random.Generator) -> Plume:
-    """A haze over a random rectangle of the (H, W, 3) ``background`` (module docstring)."""
-    height, width = background.shape[:2]
-    w, h = int(width * rng.uniform(*HAZE_SIZE)), int(height * rng.uniform(*HAZE_SIZE))
-    rect = [int(rng.integers(0, width - w + 1)), int(rng.integers(0, height - h + 1)), w, h]
-    sprite = haze_sprite(float(rng.uniform(*HAZE_OPACITY)), rng)
-    colour, grey = _draw_colour(rng)
-    return Plume(smoke_placement(lit(sprite, grey, background, rect), rect), "haze", "haze", colour)
