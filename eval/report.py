@@ -16,7 +16,7 @@ from eval.draw import draw_boxes
 from eval.errors import ALARMS
 from eval.imagelevel import IMAGE_LABELLED, IMAGE_RECALL, IMAGELEVEL, image_operating_curve
 from eval.operating import ALARM_BUDGET, OPERATING, RECALL_AT_ALARMS, Alarms, curve_at_rates, recall_at_rates
-from eval.slices import MIN_FIRE_IMAGES
+from eval.slices import FIRE_IMAGES, MIN_FIRE_IMAGES
 from eval.tables import (
     CLASS_METRICS,
     METRIC_LABELS,
@@ -254,7 +254,7 @@ def write_study_report(
     slices: Sequence[Mapping[str, Any]] = (),
     slice_sets: Mapping[str, Sequence[Mapping[str, Any]]] | None = None,
     forests: Sequence[tuple[Path, str]] = (),
-    positives: str = "fire images",
+    positives: str = FIRE_IMAGES,
 ) -> Path:
     """Write ``out/tables/table{1,2}.{md,csv,tex}`` (AP, AP50 and, when every run has it, AP25),
     ``out/figures/figure5_{AP,AP50}.png``, sample thumbnails and ``out/report.html``, and remove the table files of
@@ -343,7 +343,7 @@ TABLE2_LEGEND = (
 )
 
 
-def slices_html(rows: Sequence[Mapping[str, Any]], positives: str = "fire images") -> str:
+def slices_html(rows: Sequence[Mapping[str, Any]], positives: str = FIRE_IMAGES) -> str:
     """The slice comparisons (:func:`eval.slices.compare_slices` rows with ``test_set``, ``mixture``,
     ``baseline``): one row per (comparison, test set, slice), a column per metric with Δ and its 95 % interval in
     points, bold where Holm's correction keeps it (helps or hurts); the slice's count headed ``positives``."""
@@ -375,7 +375,7 @@ def slices_html(rows: Sequence[Mapping[str, Any]], positives: str = "fire images
     return f"<table>{caption}{head}{''.join(body)}</table>"
 
 
-def slice_sets_html(sets: Mapping[str, Sequence[Mapping[str, Any]]], positives: str = "fire images") -> str:
+def slice_sets_html(sets: Mapping[str, Sequence[Mapping[str, Any]]], positives: str = FIRE_IMAGES) -> str:
     """The slices of each test set (images, and ``positives``: fire images, or images with fire or smoke); those
     with too few of them to compare are marked."""
     body = []

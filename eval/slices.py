@@ -37,12 +37,13 @@ FIRE_ATTRIBUTES = ("size", "size_fine", "fires", "colour")  # attributes only im
 ORDERED = ("size", "size_fine", "fires", "light", "blur")  # attributes whose values have an order (merged in it)
 ALPHA = 0.05  # family-wise error rate of Holm's correction
 METRICS = ("AP50", "AP25", "image_recall")
+FIRE_IMAGES = "fire images"  # what a slice's positive images are called in a fire-only study (positives_name)
 
 
 def positives_name(classes: Sequence[str]) -> str:
     """What a slice's ``fire_images`` count is called in a study of ``classes``: ``fire images``, or ``images with
     fire or smoke`` (an image holding any studied class)."""
-    return "fire images" if len(classes) < 2 else f"images with {' or '.join(classes)}"
+    return FIRE_IMAGES if len(classes) < 2 else f"images with {' or '.join(classes)}"
 
 
 @dataclass(frozen=True)

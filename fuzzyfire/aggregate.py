@@ -27,6 +27,7 @@ from eval.operating import (
     paired_recall_bootstrap,
     pooled,
 )
+from eval.slices import FIRE_IMAGES
 from eval.tables import CLASS_METRICS, class_metric
 from fuzzyfire.controls import CONTROL, CONTROL_TABLE, control_label
 from fuzzyfire.datasets import DataRef, Datasets
@@ -466,7 +467,7 @@ def leak_notes(data: Prepared, action: str, rows: Sequence[dict], min_fire_image
     return notes
 
 
-def too_few_notes(sets: Mapping[str, Sequence[Mapping]], positives: str = "fire images") -> list[str]:
+def too_few_notes(sets: Mapping[str, Sequence[Mapping]], positives: str = FIRE_IMAGES) -> list[str]:
     """One sentence listing the slices left uncompared for too few ``positives`` (images holding a studied class),
     when there are any."""
     from eval.slices import MIN_FIRE_IMAGES

@@ -11,6 +11,7 @@ from typing import Any
 
 from eval.errors import ALARMS
 from eval.imagelevel import IMAGE_RECALL
+from eval.slices import FIRE_IMAGES
 from eval.stats import MIN_SEEDS_RESAMPLED, mean_std
 from fuzzyfire.first_screen import delta_text, metric_name, seed_counts, seeds_text, unlearned_mixtures
 from fuzzyfire.first_screen import verdict as comparison_verdict
@@ -41,7 +42,7 @@ def answer(
     comparisons: Sequence[Mapping[str, Any]],
     slices: Sequence[Mapping[str, Any]] = (),
     notes: Sequence[str] = (),
-    positives: str = "fire images",
+    positives: str = FIRE_IMAGES,
 ) -> list[str]:
     """The answer's sentences (module docstring). ``rows``: Table 2's rows (:func:`fuzzyfire.aggregate.result_rows`);
     ``comparisons``: :func:`fuzzyfire.aggregate.comparisons`; ``slices``: :func:`fuzzyfire.slicing.study_slices`'s

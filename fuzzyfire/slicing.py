@@ -20,7 +20,7 @@ import numpy as np
 
 from eval.attributes import Attributes, dataset_attributes, merged, read_attributes_csv
 from eval.imagelevel import IMAGE_LABELLED, IMAGE_RECALL, IMAGELEVEL, ImageHits, image_hits
-from eval.slices import METRICS, Side, compare_slices, make_slices, slice_table
+from eval.slices import FIRE_IMAGES, METRICS, Side, compare_slices, make_slices, slice_table
 from eval.stats import MatchTable
 from fuzzyfire.datasets import DataRef, Datasets
 from fuzzyfire.kept import keep, kept
@@ -158,7 +158,7 @@ def slices_csv(rows: Sequence[Mapping[str, Any]]) -> str:
 
 
 def forest_figures(
-    rows: Sequence[Mapping[str, Any]], folder: Path, positives: str = "fire images"
+    rows: Sequence[Mapping[str, Any]], folder: Path, positives: str = FIRE_IMAGES
 ) -> list[tuple[Path, str]]:
     """``folder/forest_<mixture>_vs_<baseline>_<test set>.png`` per (comparison, test set) of the slice ``rows``
     (:func:`eval.plots.plot_forest`, one panel per metric; each slice's count named ``positives``,
