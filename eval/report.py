@@ -255,6 +255,7 @@ def write_study_report(
     slice_sets: Mapping[str, Sequence[Mapping[str, Any]]] | None = None,
     forests: Sequence[tuple[Path, str]] = (),
     positives: str = FIRE_IMAGES,
+    min_positives: int = 50,
 ) -> Path:
     """Write ``out/tables/table{1,2}.{md,csv,tex}`` (AP, AP50 and, when every run has it, AP25),
     ``out/figures/figure5_{AP,AP50}.png``, sample thumbnails and ``out/report.html``, and remove the table files of
@@ -272,7 +273,8 @@ def write_study_report(
     ``answer_details`` the rest of it, folded below;
     ``slices``: the slice comparisons (:func:`slices_html`), ``slice_sets`` the slices of each test set
     (:func:`slice_sets_html`) and ``forests`` their forest plots with captions, the section after Table 2;
-    ``positives``: what a slice's count is called (:func:`eval.slices.positives_name`)."""
+    ``positives``: what a slice's count is called (:func:`eval.slices.positives_name`); ``min_positives``: how many
+    of them a set needs for AP (``report.min_fire_images``), as Table 2's legend says."""
     from eval.plots import plot_figure5
     from eval.tables import control_table, table1, table2
 
@@ -288,7 +290,7 @@ def write_study_report(
         metrics = table_metrics(results)
         t2 = table2(results, metrics=metrics)
         write_table_files(t2, out / "tables", "table2")
-        sections.append(("Table 2 — training mixtures", table_html(t2) + TABLE2_LEGEND))
+        sections.append(("Table 2 — training mixtures", table_html(t2) + table2_legend(positives, min_positives)))
         if slices or slice_sets:
             body = "".join(figure_html(f, out, c) for f, c in forests) + slices_html(slices, positives)
             sections.append((f"On which {positives} — slices", body + slice_sets_html(slice_sets or {}, positives)))
@@ -305,9 +307,12 @@ def write_study_report(
         figures = [plot_figure5(results, out / "figures" / f"figure5_{m}.png", m) for m in shown]
         captions = [_figure5_caption(m) for m in shown]
         sections.append(("Figure 5", "".join(figure_html(f, out, c) for f, c in zip(figures, captions))))
-        if curves := operating_figures(results, out / "figures") + image_operating_figures(results, out / "figures"):
+        curves = operating_figures(results, out / "figures") + image_operating_figures(
+            results, out / "figures", positives
+        )
+        if curves:
             caption = f"the dotted line: {ALARM_BUDGET:g} alarms per 100, where Table 2 reads the recall"
-            sections.append(("Fire found against false alarms", "".join(figure_html(f, out, caption) for f in curves)))
+            sections.append((found_title(positives), "".join(figure_html(f, out, caption) for f in curves)))
     if controls:
         tc = control_table(controls, metrics=table_metrics(controls))
         write_table_files(tc, out / "tables", "controls")
@@ -335,12 +340,28 @@ def write_study_report(
     return page
 
 
-TABLE2_LEGEND = (
-    '<p class="legend">image recall: the share of fire images with a detection on their fire (IoU ≥ 0.1 with a box, '
-    "or its centre inside one) at the threshold where at most 10 of 100 fire-free images raise an alarm (at "
-    "confidence 0.25 without a fire-free set); it does not hang on how a set's boxes are drawn. A set with fewer "
-    "than 50 fire images has no AP or AP50 (–): too few for an interval that tells mixtures apart.</p>"
-)
+def table2_legend(positives: str = FIRE_IMAGES, min_positives: int = 50) -> str:
+    """The legend under Table 2, its counts called ``positives`` (:func:`eval.slices.positives_name`: ``fire
+    images``, or ``images with fire or smoke`` in a study of two classes); a set with fewer than ``min_positives``
+    of them has no AP (``report.min_fire_images``)."""
+    what = "their fire" if positives == FIRE_IMAGES else "a box of the detection's class"
+    return (
+        f'<p class="legend">image recall: the share of {html.escape(positives)} with a detection on {what} (IoU ≥ 0.1 '
+        "with a box, or its centre inside one) at the threshold where at most 10 of 100 fire-free images raise an "
+        "alarm (at confidence 0.25 without a fire-free set); it does not hang on how a set's boxes are drawn. A set "
+        f"with fewer than {min_positives} {html.escape(positives)} has no AP or AP50 (–): too few for an interval that tells "
+        "mixtures apart.</p>"
+    )
+
+
+def found_title(positives: str = FIRE_IMAGES) -> str:
+    """The title of the section of operating curves: ``Fire found against false alarms``, or ``Images with fire or
+    smoke found against false alarms`` in a study of two classes."""
+    return (
+        "Fire found against false alarms"
+        if positives == FIRE_IMAGES
+        else f"{positives.capitalize()} found against false alarms"
+    )
 
 
 def slices_html(rows: Sequence[Mapping[str, Any]], positives: str = FIRE_IMAGES) -> str:
@@ -449,10 +470,13 @@ def operating_figures(results: Sequence[Mapping[str, Any]], folder: Path) -> lis
     ]  # fmt: skip
 
 
-def image_operating_figures(results: Sequence[Mapping[str, Any]], folder: Path) -> list[Path]:
+def image_operating_figures(
+    results: Sequence[Mapping[str, Any]], folder: Path, positives: str = FIRE_IMAGES
+) -> list[Path]:
     """``folder/image_operating_<test set>.png`` per set with fire whose rows carry
     :data:`eval.imagelevel.IMAGELEVEL` with per-image alarms: each mixture's image recall against false-alarm
-    images per 100 images without fire (:func:`eval.imagelevel.image_operating_curve`, seeds' mean and range)."""
+    images per 100 images without fire (:func:`eval.imagelevel.image_operating_curve`, seeds' mean and range);
+    ``positives``: what the detected images are called in the title and axis."""
     from eval.plots import plot_operating_curves
 
     by_test: dict[str, dict[str, list]] = {}
@@ -465,8 +489,8 @@ def image_operating_figures(results: Sequence[Mapping[str, Any]], folder: Path) 
     return [
         plot_operating_curves({m: np.stack(c) for m, c in curves.items()}, OPERATING_RATES,
                               folder / f"image_operating_{_slug(test)}.png", ALARM_BUDGET,
-                              f"{test}: fire images detected against false-alarm images",
-                              ("fire-free images with a false alarm, per 100", "fire images detected (%)"))
+                              f"{test}: {positives} detected against false-alarm images",
+                              ("fire-free images with a false alarm, per 100", f"{positives} detected (%)"))
         for test, curves in by_test.items()
     ]  # fmt: skip
 

@@ -359,6 +359,7 @@ def write_report(
         comparisons=compared, errors=error_rows(datasets, specs, results), samples=shown,
         run_columns=columns, notice=STANDIN_NOTICE if data.standin else "", title=title,
         answer=first, answer_details=said, slices=sliced, slice_sets=sets, positives=positives,
+        min_positives=cfg.report.min_fire_images,
         forests=forest_figures(sliced, out / "figures", positives),
     )  # fmt: skip
 
