@@ -6,11 +6,19 @@ matplotlib's object API only (``Figure``), so plotting touches no global state.
 
 from __future__ import annotations
 
+import textwrap
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
 import numpy as np
 from numpy.typing import NDArray
+
+TITLE_CHARS = 56  # a line plot's title wraps past this many characters (wider is cut off at the figure's edges)
+
+
+def wrapped(title: str) -> str:
+    """``title`` broken into lines of at most :data:`TITLE_CHARS` characters at spaces."""
+    return textwrap.fill(title, TITLE_CHARS)
 
 
 def plot_pr_curves(
@@ -29,12 +37,12 @@ def plot_pr_curves(
 
 
 def _save_lines(fig, ax, path: Path, labels: tuple[str, str], title: str, legend: str | None) -> Path:
-    """Finish a line plot: axis ``labels`` (x, y), a light grid, ``title``, the legend at ``legend`` (None: no
+    """Finish a line plot: axis ``labels`` (x, y), a light grid, ``title`` (:func:`wrapped`), the legend at ``legend`` (None: no
     legend); write ``fig`` to ``path`` (its folder made)."""
     ax.set_xlabel(labels[0])
     ax.set_ylabel(labels[1])
     ax.grid(alpha=0.3)
-    ax.set_title(title)
+    ax.set_title(wrapped(title))
     if legend is not None:
         ax.legend(loc=legend, fontsize=8)
     fig.tight_layout()

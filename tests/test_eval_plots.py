@@ -66,3 +66,20 @@ def test_operating_curves_draw_a_line_per_label_and_a_band_over_several_runs(tmp
     curves = {"two runs": np.stack([rates / 200, rates / 100]), "one run": rates[None] / 150}
     w, h = _png(plot_operating_curves(curves, rates, tmp_path / "op.png", 10.0))
     assert w > 300 and h > 300 and bands == [11]  # the range of the two runs; one run has none
+
+
+def test_a_long_title_is_wrapped_within_the_figure_and_keeps_its_words(tmp_path, monkeypatch):
+    from matplotlib.axes import Axes
+
+    from eval.plots import TITLE_CHARS, plot_operating_curves
+
+    titles: list[str] = []
+    original = Axes.set_title
+    monkeypatch.setattr(Axes, "set_title", lambda self, text, **k: titles.append(text) or original(self, text, **k))
+    title = "fire-smoke: images with fire or smoke detected against false-alarm images"
+    rates = np.linspace(0, 100, 11)
+    plot_operating_curves({"a": rates[None] / 100}, rates, tmp_path / "op.png", 10.0, title)
+    assert len(titles) == 1 and "\n" in titles[0] and titles[0].split() == title.split()
+    assert max(len(line) for line in titles[0].splitlines()) <= TITLE_CHARS
+    plot_operating_curves({"a": rates[None] / 100}, rates, tmp_path / "short.png", 10.0, "common: fire found")
+    assert titles[1] == "common: fire found"
