@@ -37,8 +37,8 @@ def plot_pr_curves(
 
 
 def _save_lines(fig, ax, path: Path, labels: tuple[str, str], title: str, legend: str | None) -> Path:
-    """Finish a line plot: axis ``labels`` (x, y), a light grid, ``title`` (:func:`wrapped`), the legend at ``legend`` (None: no
-    legend); write ``fig`` to ``path`` (its folder made)."""
+    """Finish a line plot: axis ``labels`` (x, y), a light grid, ``title`` (:func:`wrapped`), the legend at
+    ``legend`` (None: no legend); write ``fig`` to ``path`` (its folder made)."""
     ax.set_xlabel(labels[0])
     ax.set_ylabel(labels[1])
     ax.grid(alpha=0.3)

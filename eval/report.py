@@ -20,6 +20,7 @@ from eval.slices import FIRE_IMAGES, MIN_FIRE_IMAGES
 from eval.tables import (
     CLASS_METRICS,
     METRIC_LABELS,
+    MIN_AP_IMAGES,
     Table,
     class_metric,
     heading,
@@ -255,7 +256,7 @@ def write_study_report(
     slice_sets: Mapping[str, Sequence[Mapping[str, Any]]] | None = None,
     forests: Sequence[tuple[Path, str]] = (),
     positives: str = FIRE_IMAGES,
-    min_positives: int = 50,
+    min_positives: int = MIN_AP_IMAGES,
 ) -> Path:
     """Write ``out/tables/table{1,2}.{md,csv,tex}`` (AP, AP50 and, when every run has it, AP25),
     ``out/figures/figure5_{AP,AP50}.png``, sample thumbnails and ``out/report.html``, and remove the table files of
@@ -340,17 +341,17 @@ def write_study_report(
     return page
 
 
-def table2_legend(positives: str = FIRE_IMAGES, min_positives: int = 50) -> str:
+def table2_legend(positives: str = FIRE_IMAGES, min_positives: int = MIN_AP_IMAGES) -> str:
     """The legend under Table 2, its counts called ``positives`` (:func:`eval.slices.positives_name`: ``fire
     images``, or ``images with fire or smoke`` in a study of two classes); a set with fewer than ``min_positives``
     of them has no AP (``report.min_fire_images``)."""
     what = "their fire" if positives == FIRE_IMAGES else "a box of the detection's class"
     return (
-        f'<p class="legend">image recall: the share of {html.escape(positives)} with a detection on {what} (IoU ≥ 0.1 '
-        "with a box, or its centre inside one) at the threshold where at most 10 of 100 fire-free images raise an "
-        "alarm (at confidence 0.25 without a fire-free set); it does not hang on how a set's boxes are drawn. A set "
-        f"with fewer than {min_positives} {html.escape(positives)} has no AP or AP50 (–): too few for an interval that tells "
-        "mixtures apart.</p>"
+        f'<p class="legend">image recall: the share of {html.escape(positives)} with a detection on {what} '
+        "(IoU ≥ 0.1 with a box, or its centre inside one) at the threshold where at most 10 of 100 fire-free images "
+        "raise an alarm (at confidence 0.25 without a fire-free set); it does not hang on how a set's boxes are "
+        f"drawn. A set with fewer than {min_positives} {html.escape(positives)} has no AP or AP50 (–): too few for "
+        "an interval that tells mixtures apart.</p>"
     )
 
 

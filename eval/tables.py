@@ -26,6 +26,8 @@ from eval.operating import ALARM_BUDGET, RECALL_AT_ALARMS
 from eval.stats import MeanStd, mean_std
 
 Key = tuple[str, str]  # (row label, column label)
+MIN_AP_IMAGES = 50  # a test set with fewer images holding a studied class has no AP or AP50 (–): too few for an
+# interval that tells mixtures apart (the default of ``report.min_fire_images``)
 STRATEGIES: tuple[str, ...] = ("Real only", "Real + synthetic", "Synthetic only")
 METHOD_LABELS: Mapping[str, str] = {"method1": "Method 1 (3D)", "method2": "Method 2 (2D)"}
 METRIC_LABELS: Mapping[str, str] = {

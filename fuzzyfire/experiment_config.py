@@ -19,6 +19,7 @@ from curate.dedup import DEFAULT_THRESHOLD
 from curate.frechet import DRAWS
 from curate.sources import SourceConfig
 from eval.config import InferenceConfig
+from eval.tables import MIN_AP_IMAGES
 from fuzzyfire.engine import EngineConfig, EngineError
 from synth.method1 import Method1Config
 from synth.method2 import Method2Config
@@ -186,8 +187,8 @@ class ReportConfig:
     baseline: Optional[str] = None  # mixture the others are compared with (default: largest real-only one)
     samples: bool = True  # sample thumbnails with boxes (8 per dataset) in report.html
     gap_draws: int = DRAWS  # realism gap of each synthetic pool (synth gap) over this many draws; 0 = none
-    min_fire_images: int = 50  # a test set with fewer fire images gets no AP or AP50 (their interval is too wide
-    # to tell mixtures apart): its AP25 and image recall, with intervals, instead
+    min_fire_images: int = MIN_AP_IMAGES  # a test set with fewer fire images gets no AP or AP50 (their interval
+    # is too wide to tell mixtures apart): its AP25 and image recall, with intervals, instead
     attributes: dict[str, Path] = field(default_factory=dict)  # test-set label -> CSV image,attribute,value of your
     # own attributes of its images (e.g. {common: cameras.csv}): slices beside the computed ones
 
