@@ -453,22 +453,35 @@ def drop_stale_tables(folder: Path, written: Collection[str], comparisons: bool)
 OPERATING_RATES = np.linspace(0.0, 100.0, 401)  # alarms per 100 images at which the operating curves are drawn
 
 
+def found_objects(results: Sequence[Mapping[str, Any]]) -> str:
+    """What the boxes of the sets ``results`` score are called: ``fire``, or their rows' ``classes`` joined, e.g.
+    ``fire or smoke`` in a study of two classes (:func:`fuzzyfire.aggregate.per_class_ap` gives a row its
+    classes)."""
+    names = dict.fromkeys(name for r in results for name in r.get("classes", ()))
+    return " or ".join(names) if len(names) > 1 else "fire"
+
+
 def operating_figures(results: Sequence[Mapping[str, Any]], folder: Path) -> list[Path]:
     """``folder/operating_<test set>.png`` per set with fire whose rows carry :data:`eval.operating.OPERATING`:
-    each mixture's recall against false alarms per 100 images without fire (:func:`eval.plots.plot_operating_curves`,
-    its seeds' mean and range), up to 100 alarms per 100 images."""
+    each mixture's recall of the set's boxes (every class's, pooled) against false alarms per 100 images without
+    them (:func:`eval.plots.plot_operating_curves`, its seeds' mean and range), up to 100 alarms per 100 images;
+    titles and axes name the boxes' classes (:func:`found_objects`)."""
     from eval.plots import plot_operating_curves
 
     by_test: dict[str, dict[str, list]] = {}
+    rows: dict[str, list[Mapping[str, Any]]] = {}
     for r in (r for r in results if r.get(OPERATING) is not None):
         recall = recall_at_rates(*r[OPERATING], OPERATING_RATES)
         by_test.setdefault(r["test_set"], {}).setdefault(r["mixture"], []).append(recall)
-    return [
-        plot_operating_curves({m: np.stack(c) for m, c in curves.items()}, OPERATING_RATES,
-                              folder / f"operating_{_slug(test)}.png", ALARM_BUDGET,
-                              f"{test}: fire found against false alarms")
-        for test, curves in by_test.items()
-    ]  # fmt: skip
+        rows.setdefault(r["test_set"], []).append(r)
+    paths = []
+    for test, curves in by_test.items():
+        objects = found_objects(rows[test])
+        labels = (f"false alarms per 100 images without {objects}", f"{objects} boxes found at IoU 0.5 (%)")
+        paths.append(plot_operating_curves({m: np.stack(c) for m, c in curves.items()}, OPERATING_RATES,
+                                           folder / f"operating_{_slug(test)}.png", ALARM_BUDGET,
+                                           f"{test}: {objects} found against false alarms", labels))  # fmt: skip
+    return paths
 
 
 def image_operating_figures(

@@ -203,14 +203,24 @@ def test_rows_with_their_operating_data_draw_the_recall_against_false_alarms(tmp
     assert (out / "figures" / "operating_common.png").is_file()
     assert "Fire found against false alarms" in page and "figures/operating_common.png" in page
     assert "fewer than 50 fire images has no AP" in page
-    two = write_study_report(tmp_path / "two", rows, np.random.default_rng(0), positives="images with fire or smoke",
+    rows_two = [{**r, "classes": ["fire", "smoke"]} for r in rows]
+    two = write_study_report(tmp_path / "two", rows_two, np.random.default_rng(0), positives="images with fire or smoke",
                              min_positives=20).read_text()  # fmt: skip
     assert "<h2>Images with fire or smoke found against false alarms</h2>" in two
+    assert (tmp_path / "two" / "figures" / "operating_common.png").is_file()
     assert "the share of images with fire or smoke with a detection on a box of the detection" in two
     assert "fewer than 20 images with fire or smoke has no AP" in two and "fire images" not in two
     plain = tmp_path / "plain"
     write_study_report(plain, [{k: v for k, v in r.items() if k != OPERATING} for r in rows], np.random.default_rng(0))
     assert not (plain / "figures" / "operating_common.png").exists()
+
+
+def test_the_box_level_operating_curves_name_the_classes_their_boxes_pool() -> None:
+    from eval.report import found_objects
+
+    assert found_objects([]) == "fire" and found_objects([{"AP50": 0.5}]) == "fire"  # a fire-only study
+    two = [{"classes": ["fire", "smoke"]}, {"classes": ["fire", "smoke"]}, {"AP50": 0.1}]
+    assert found_objects(two) == "fire or smoke"  # first seen order, each once
 
 
 def test_a_set_without_fire_shows_no_ap50_in_the_error_breakdown() -> None:
