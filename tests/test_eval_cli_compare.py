@@ -50,6 +50,29 @@ def test_compare_gives_the_paired_delta(work, capsys):
     assert any(line.startswith("B - A  AP +0.0 points, 95% CI [+0.0, +0.0], p = 1.000") for line in lines)
 
 
+def test_compare_gives_each_class_its_ap50_and_paired_delta_on_a_set_of_two_classes(work, capsys):
+    """The test set boxes fire and smoke; B finds every fire as A does but misses the one smoke box: the fire
+    difference is 0, the smoke one is B - A of smoke's AP50, and the text names both."""
+    from detector_factories import IMAGES
+
+    good = oracle_model(work["root"] / "good3.onnx")
+    missed = [(g, [cx + 30.0 * (c == 1), cy, w, h], c, p) for g, (cx, cy, w, h), c, p in rows_for()]  # smoke moved off
+    assert sum(1 for img in IMAGES for cls, _ in img.boxes if cls == "smoke") == 1
+    no_smoke = oracle_model(work["root"] / "no-smoke.onnx", rows=missed)
+    data = ["--data", str(work["test"]), "--samples", "100", "--format", "yolov5"]
+    assert main(["compare", str(good), str(no_smoke), *data, "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["classes"] == ["fire", "smoke"]
+    assert doc["A"]["AP50 fire"] == doc["B"]["AP50 fire"] == pytest.approx(1.0) and doc["B"]["AP50 smoke"] == 0.0
+    assert doc["delta"]["AP50 fire"]["value"] == 0.0 == doc["delta"]["AP50 fire"]["high"]
+    assert doc["delta"]["AP50 smoke"]["value"] == pytest.approx(-1.0)
+    assert doc["delta"]["AP50"]["value"] == pytest.approx(-0.5)  # the mean over the two classes
+    assert main(["compare", str(good), str(no_smoke), *data]) == 0
+    text = capsys.readouterr().out
+    assert f"B      {no_smoke}  AP " in text and "(fire 1.000, smoke 0.000)" in text
+    assert "B - A  AP50 smoke -100.0 points" in text and "B - A  AP50 fire +0.0 points" in text
+
+
 def test_compare_names_the_models_both_sides_or_one_side_list_twice(tmp_path):
     from eval.cli.compare import same_content, same_content_lines
 

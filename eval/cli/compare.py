@@ -1,5 +1,6 @@
 """``fuzzyfire compare``: two detectors (or two sides of several runs each) scored on the same test images, and
-the paired bootstrap of their difference: AP, recall at a false-alarm budget, image recall, slice by slice.
+the paired bootstrap of their difference: AP (and each class's AP50 on a set of several classes), recall at a
+false-alarm budget, image recall, slice by slice.
 ``cmd_compare`` returns an exit code."""
 
 from __future__ import annotations
@@ -46,12 +47,26 @@ def _models(text: str) -> list[Path]:
     return paths
 
 
-def _side(models: list[Path], results: list) -> dict:  # results: list[eval.score.ScoreResult]
-    """One side of the compare document: its models' AP and AP50 averaged (the bootstrap's point), and each run."""
-    runs = [{"model": str(m), **{k: r.metrics.summary[k] for k in ("AP", "AP50")}} for m, r in zip(models, results)]
+def _side(models: list[Path], results: list, classes: list[str]) -> dict:  # results: list[eval.score.ScoreResult]
+    """One side of the compare document: its models' AP and AP50 averaged (the bootstrap's point), and each run;
+    with several ``classes`` also each class's AP50 (``"AP50 smoke"``, :func:`eval.tables.class_metric`)."""
+    from eval.tables import class_metric
+
+    keys = ("AP", "AP50", *(class_metric("AP50", c) for c in classes))
+    runs = [{"model": str(m), "AP": r.metrics.summary["AP"], "AP50": r.metrics.summary["AP50"],
+             **{class_metric("AP50", c): r.metrics.per_class[c]["AP50"] for c in classes}}
+            for m, r in zip(models, results)]  # fmt: skip
     mean = {k: None if any(run[k] is None for run in runs) else sum(run[k] for run in runs) / len(runs)
-            for k in ("AP", "AP50")}  # fmt: skip
+            for k in keys}  # fmt: skip
     return {"model": ",".join(str(m) for m in models), **mean, "runs": runs}
+
+
+def scored_classes(result) -> list[str]:  # result: eval.score.ScoreResult
+    """The classes a test set was scored on, in the order of its match table (category ids), when there are
+    several (each gets its own AP50 and paired difference); none for a one-class set."""
+    cat_ids = list(result.evaluation.params.catIds)
+    names = {c.id: c.name for c in result.dataset.categories}
+    return [names[i] for i in cat_ids] if len(cat_ids) > 1 else []
 
 
 def same_content(model_a: list[Path], model_b: list[Path]) -> list[dict]:
@@ -96,6 +111,7 @@ def cmd_compare(args: argparse.Namespace) -> int:
     from eval.onnx_model import ModelError
     from eval.score import ScoreError, score_operating
     from eval.stats import MatchTable, paired_bootstrap
+    from eval.tables import class_metric
     from ground.detect.cocoeval import ClassMatchError
 
     cfg = command_config(args, _compare_config(), ALIASES, {"--data": args.data})
@@ -120,10 +136,16 @@ def cmd_compare(args: argparse.Namespace) -> int:
         return 2
     labelled = test.dataset.image_labelled  # no boxes: image recall only
     deltas = {} if labelled else paired_bootstrap(tables[0], tables[1], np.random.default_rng(cfg.seed), cfg.samples)
+    classes = [] if labelled else scored_classes(results[0][0])
+    for k, name in enumerate(classes):  # each class alone, on the same resampled images as AP's
+        one = [[t.of_class(k) for t in side] for side in tables]
+        alone = paired_bootstrap(*one, np.random.default_rng(cfg.seed), cfg.samples)
+        deltas[class_metric("AP50", name)] = alone["AP50"]
     doc = {
-        "A": _side(args.model_a, results[0]),
-        "B": _side(args.model_b, results[1]),
+        "A": _side(args.model_a, results[0], classes),
+        "B": _side(args.model_b, results[1], classes),
         "images": results[0][0].metrics.images,
+        "classes": classes,
         "delta": {k: d.to_dict() for k, d in deltas.items()},
         "samples": cfg.samples,
         "seed": cfg.seed,
@@ -168,11 +190,12 @@ def _print_compare(doc: dict, deltas: dict, cfg: CompareConfig, labelled: bool, 
     for side in ("A", "B"):
         runs = doc[side]["runs"]
         for run in runs if len(runs) > 1 else []:
-            print(f"{side}      {run['model']}  AP {fmt(run['AP'])}  AP50 {fmt(run['AP50'])}{_at_budget(run)}"
-                  f"{_image_recall(run, labelled)}")  # fmt: skip
+            print(f"{side}      {run['model']}  AP {fmt(run['AP'])}  AP50 {fmt(run['AP50'])}"
+                  f"{_class_ap50(run, doc['classes'])}{_at_budget(run)}{_image_recall(run, labelled)}")  # fmt: skip
         name = doc[side]["model"] if len(runs) == 1 else f"mean of {len(runs)} runs"
         print(
-            f"{side}      {name}  AP {fmt(doc[side]['AP'])}  AP50 {fmt(doc[side]['AP50'])}{_at_budget(runs[0] if len(runs) == 1 else doc[side])}"
+            f"{side}      {name}  AP {fmt(doc[side]['AP'])}  AP50 {fmt(doc[side]['AP50'])}"
+            f"{_class_ap50(doc[side], doc['classes'])}{_at_budget(runs[0] if len(runs) == 1 else doc[side])}"
             f"{_image_recall(doc[side], labelled)}"
         )
     if "negatives" in doc:
@@ -288,6 +311,15 @@ def _slice_cell(r: dict | None) -> str:
     return f"{text:<19}"
 
 
+def _class_ap50(side: dict, classes: list[str]) -> str:
+    """``" (fire 0.125, smoke 0.601)"``: each class's AP50 of a compare side's run (or mean) on a set of several
+    classes; else empty."""
+    from eval.tables import class_metric
+
+    cells = [f"{c} {fmt(side[class_metric('AP50', c)])}" for c in classes]
+    return f" ({', '.join(cells)})" if cells else ""
+
+
 def _image_recall(side: dict, labelled: bool) -> str:
     """``"  image recall 0.500 at 0.25"`` of a compare side's run (or mean) on an image-labelled set; else empty."""
     return f"  image recall {side[IMAGE_RECALL_AT_CONF]:.3f} at {ALARM_CONF:g}" if labelled else ""
@@ -385,6 +417,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--json",
         action="store_true",
-        help='print {"A": {"model", "AP", "AP50", "runs"}, "B", "images", "delta": {"AP": ...}, ...}',
+        help='print {"A": {"model", "AP", "AP50", "runs"}, "B", "images", "classes", "delta": {"AP": ...}, ...} '
+        '(a set of several classes: also "AP50 <class>" per side, run and delta)',
     )
     add_settings(p, _compare_config, ALIASES, cmd_compare, flag="--config")
