@@ -71,6 +71,10 @@ def test_compare_gives_each_class_its_ap50_and_paired_delta_on_a_set_of_two_clas
     text = capsys.readouterr().out
     assert f"B      {no_smoke}  AP " in text and "(fire 1.000, smoke 0.000)" in text
     assert "B - A  AP50 smoke -100.0 points" in text and "B - A  AP50 fire +0.0 points" in text
+    no_smoke_set = write_test_set(work["root"] / "no-smoke-set", tuple(i for i in IMAGES if i.name != "wide"))
+    assert main(["compare", str(good), str(no_smoke), "--data", str(no_smoke_set), "--samples", "50", "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)  # smoke is a class of the set, but none of its images holds smoke
+    assert "AP50 smoke" not in doc["delta"] and doc["A"]["AP50 smoke"] is None and "AP50 fire" in doc["delta"]
 
 
 def test_compare_names_the_models_both_sides_or_one_side_list_twice(tmp_path):

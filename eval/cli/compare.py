@@ -138,6 +138,8 @@ def cmd_compare(args: argparse.Namespace) -> int:
     deltas = {} if labelled else paired_bootstrap(tables[0], tables[1], np.random.default_rng(cfg.seed), cfg.samples)
     classes = [] if labelled else scored_classes(results[0][0])
     for k, name in enumerate(classes):  # each class alone, on the same resampled images as AP's
+        if not results[0][0].metrics.per_class[name]["boxes"]:
+            continue  # a class the test set never boxes has no AP (its AP50 reads '-')
         one = [[t.of_class(k) for t in side] for side in tables]
         alone = paired_bootstrap(*one, np.random.default_rng(cfg.seed), cfg.samples)
         deltas[class_metric("AP50", name)] = alone["AP50"]
