@@ -16,7 +16,7 @@ from eval.draw import draw_boxes
 from eval.errors import ALARMS
 from eval.imagelevel import IMAGE_LABELLED, IMAGE_RECALL, IMAGELEVEL, image_operating_curve
 from eval.operating import ALARM_BUDGET, OPERATING, RECALL_AT_ALARMS, Alarms, curve_at_rates, recall_at_rates
-from eval.slices import FIRE_IMAGES, MIN_FIRE_IMAGES
+from eval.slices import FIRE_IMAGES, MIN_FIRE_IMAGES, objects_name
 from eval.tables import (
     CLASS_METRICS,
     METRIC_LABELS,
@@ -454,11 +454,10 @@ OPERATING_RATES = np.linspace(0.0, 100.0, 401)  # alarms per 100 images at which
 
 
 def found_objects(results: Sequence[Mapping[str, Any]]) -> str:
-    """What the boxes of the sets ``results`` score are called: ``fire``, or their rows' ``classes`` joined, e.g.
-    ``fire or smoke`` in a study of two classes (:func:`fuzzyfire.aggregate.per_class_ap` gives a row its
-    classes)."""
-    names = dict.fromkeys(name for r in results for name in r.get("classes", ()))
-    return " or ".join(names) if len(names) > 1 else "fire"
+    """What the boxes of the sets ``results`` score are called (:func:`eval.slices.objects_name` of their rows'
+    ``classes``, which :func:`fuzzyfire.aggregate.per_class_ap` gives a set of several): ``fire``, or e.g. ``fire or
+    smoke`` in a study of two classes."""
+    return objects_name(list(dict.fromkeys(name for r in results for name in r.get("classes", ()))))
 
 
 def operating_figures(results: Sequence[Mapping[str, Any]], folder: Path) -> list[Path]:
@@ -469,14 +468,12 @@ def operating_figures(results: Sequence[Mapping[str, Any]], folder: Path) -> lis
     from eval.plots import plot_operating_curves
 
     by_test: dict[str, dict[str, list]] = {}
-    rows: dict[str, list[Mapping[str, Any]]] = {}
     for r in (r for r in results if r.get(OPERATING) is not None):
         recall = recall_at_rates(*r[OPERATING], OPERATING_RATES)
         by_test.setdefault(r["test_set"], {}).setdefault(r["mixture"], []).append(recall)
-        rows.setdefault(r["test_set"], []).append(r)
     paths = []
     for test, curves in by_test.items():
-        objects = found_objects(rows[test])
+        objects = found_objects([r for r in results if r["test_set"] == test])
         labels = (f"false alarms per 100 images without {objects}", f"{objects} boxes found at IoU 0.5 (%)")
         paths.append(plot_operating_curves({m: np.stack(c) for m, c in curves.items()}, OPERATING_RATES,
                                            folder / f"operating_{_slug(test)}.png", ALARM_BUDGET,

@@ -40,10 +40,15 @@ METRICS = ("AP50", "AP25", "image_recall")
 FIRE_IMAGES = "fire images"  # what a slice's positive images are called in a fire-only study (positives_name)
 
 
+def objects_name(classes: Sequence[str]) -> str:
+    """What the objects of a study of ``classes`` are called: ``fire`` (one class), or ``fire or smoke``."""
+    return "fire" if len(classes) < 2 else " or ".join(classes)
+
+
 def positives_name(classes: Sequence[str]) -> str:
     """What a slice's ``fire_images`` count is called in a study of ``classes``: ``fire images``, or ``images with
-    fire or smoke`` (an image holding any studied class)."""
-    return FIRE_IMAGES if len(classes) < 2 else f"images with {' or '.join(classes)}"
+    fire or smoke`` (an image holding any studied class, :func:`objects_name`)."""
+    return FIRE_IMAGES if len(classes) < 2 else f"images with {objects_name(classes)}"
 
 
 @dataclass(frozen=True)

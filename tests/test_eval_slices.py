@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from eval.imagelevel import image_hits
-from eval.slices import Side, compare_slices, holm, make_slices, positives_name
+from eval.slices import Side, compare_slices, holm, make_slices, objects_name, positives_name
 from eval.stats import MatchTable
 from ground.data.dataset import DatasetBuilder
 from ground.detect.cocoeval import LOOSE_IOU, run_cocoeval
@@ -96,3 +96,4 @@ def test_a_restricted_table_gives_the_ap_of_its_images(tmp_path: Path) -> None:
 def test_a_slice_counts_the_images_of_every_studied_class_and_says_so() -> None:
     assert positives_name(["fire"]) == "fire images"
     assert positives_name(["fire", "smoke"]) == "images with fire or smoke"
+    assert objects_name(["fire"]) == "fire" and objects_name(["fire", "smoke"]) == "fire or smoke"
