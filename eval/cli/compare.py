@@ -61,14 +61,6 @@ def _side(models: list[Path], results: list, classes: list[str]) -> dict:  # res
     return {"model": ",".join(str(m) for m in models), **mean, "runs": runs}
 
 
-def scored_classes(result) -> list[str]:  # result: eval.score.ScoreResult
-    """The classes a test set was scored on, in the order of its match table (category ids), when there are
-    several (each gets its own AP50 and paired difference); none for a one-class set."""
-    cat_ids = list(result.evaluation.params.catIds)
-    names = {c.id: c.name for c in result.dataset.categories}
-    return [names[i] for i in cat_ids] if len(cat_ids) > 1 else []
-
-
 def same_content(model_a: list[Path], model_b: list[Path]) -> list[dict]:
     """The models that are one file's content more than once among both sides: per sha256 of the file contents
     (in first-listed order), ``{"sha256", "A": [paths], "B": [paths]}``; only those listed twice or more."""
@@ -136,9 +128,10 @@ def cmd_compare(args: argparse.Namespace) -> int:
         return 2
     labelled = test.dataset.image_labelled  # no boxes: image recall only
     deltas = {} if labelled else paired_bootstrap(tables[0], tables[1], np.random.default_rng(cfg.seed), cfg.samples)
-    classes = [] if labelled else scored_classes(results[0][0])
+    per_class = results[0][0].metrics.per_class  # the scored classes, in the order of the match tables
+    classes = list(per_class) if not labelled and len(per_class) > 1 else []
     for k, name in enumerate(classes):  # each class alone, on the same resampled images as AP's
-        if not results[0][0].metrics.per_class[name]["boxes"]:
+        if not per_class[name]["boxes"]:
             continue  # a class the test set never boxes has no AP (its AP50 reads '-')
         one = [[t.of_class(k) for t in side] for side in tables]
         alone = paired_bootstrap(*one, np.random.default_rng(cfg.seed), cfg.samples)
