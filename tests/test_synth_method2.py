@@ -300,3 +300,47 @@ def test_a_pool_that_boxes_smoke_keeps_its_frames_smoke_boxes_last_and_unaudited
     assert report["smoke"]["min_iou"] == 1.0 and report["frame_boxes"] == sum(
         len(m["frame_boxes"]) + len(m["frame_smoke_boxes"]) for m in per_image
     )
+
+
+def _hazy_frames(root: Path, n: int = 2) -> Path:
+    """A COCO dataset of ``n`` 128 x 96 textured frames, each with a white haze blob boxed as smoke (20, 10, 80,
+    60) and a fire box beside it; returns its folder."""
+    from PIL import Image
+
+    from ground.data.dataset import DatasetBuilder
+    from ground.data.writer import write_dataset
+
+    src = root / "src"
+    src.mkdir(parents=True)
+    builder = DatasetBuilder(src, ["fire", "smoke"])
+    yy, xx = np.mgrid[0:96, 0:128]
+    v, u = np.mgrid[0:60, 0:80]
+    alpha = 0.6 * np.exp(-(((u - 40) / 20.0) ** 2 + ((v - 30) / 15.0) ** 2))[..., None]
+    for k in range(n):
+        scene = np.stack([60 + 40 * np.sin(xx / (7.0 + k)), 90 + 50 * np.cos(yy / 5.0), 30 + 0 * xx], -1)
+        scene[10:70, 20:100] = scene[10:70, 20:100] * (1 - alpha) + 235 * alpha
+        Image.fromarray(scene.astype(np.uint8)).save(src / f"f{k}.png")
+        image = builder.add_image(f"f{k}.png", 128, 96, source="real:cams")
+        builder.add_box(image, "smoke", (20, 10, 80, 60))
+        builder.add_box(image, "fire", (104, 60, 20, 30))
+    write_dataset(builder.build(), root / "frames", ("coco",), "copy")
+    return root / "frames"
+
+
+def test_relit_frames_keep_their_smoke_boxes_and_change_only_their_smoke(tmp_path, library):
+    from dataclasses import replace
+
+    frames = _hazy_frames(tmp_path)
+    base = replace(CFG, n=4, scenes=0, labelled_frames=(frames,), width=128, height=96, images_per_view=1,
+                   smoke_class=True, negatives=1.0)  # fmt: skip
+    relit = replace(base, smoke=replace(base.smoke, relight=1.0))
+    for name, cfg in (("plain", base), ("relit", relit), ("again", relit)):
+        generate(cfg, library, tmp_path / name)
+    read = {n: json.loads((tmp_path / n / "annotations.json").read_text()) for n in ("plain", "relit")}
+    assert read["plain"]["annotations"] == read["relit"]["annotations"]  # the frames' own boxes, kept
+    per_image = json.loads((tmp_path / "relit" / "manifest.json").read_text())["args"]["per_image"]
+    assert sum(r is not None for m in per_image for r in m.get("relit", [])) >= 2
+    assert "relit" not in json.loads((tmp_path / "plain" / "manifest.json").read_text())["args"]["per_image"][0]
+    assert dataset_files(tmp_path / "relit") == dataset_files(tmp_path / "again")
+    plain, changed = dataset_files(tmp_path / "plain"), dataset_files(tmp_path / "relit")
+    assert any(plain[k] != changed[k] for k in plain if k.endswith((".png", ".jpg")))

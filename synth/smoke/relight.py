@@ -1,0 +1,102 @@
+"""A labelled frame's own smoke re-lit in place (``smoke.relight``): the same smoke, where its annotator saw and
+boxed it, in a new colour and density, so its boxes stay the frame's own.
+
+Each smoke box is read as :mod:`synth.smoke.matte` reads it (Koschmieder's law, ``I = J (1 - a) + A a``: opacity
+``a``, smoke colour ``A``, windowed and kept off the fire). What is behind the smoke is recovered as
+``J = (I - A a) / max(1 - a, CLEAR_FLOOR)`` (clipped to 0..1: where the smoke is nearly opaque ``J`` is poorly known,
+but it then weighs little), and the box is recomposed as ``I' = J (1 - a') + A' a'`` with ``a' = min(k a,
+MAX_OPACITY)``: density ``k`` from :data:`DENSITY`, and a new colour ``A'``, a grey of ``A``'s own luma times a
+ratio from :data:`COLOURS` (white steam, grey, dark grey: the smoke stays lit as its frame lit it, dark in a dark
+frame), tinted by up to :data:`TINT` per channel (white only where the haze is
+:data:`DENSE`). The window keeps every change soft: no rectangle shows.
+
+A re-lit box must still be seen: its pixels of opacity ``a'`` at least :data:`SEEN_OPACITY` must differ from ``J``
+by a median ΔE of :data:`synth.compose.visibility.SMOKE_DELTA_E` or more (the threshold the plumes are boxed at),
+else the box is left as it was. A box that cannot be matted (black soot, too little haze) is left as it was.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ground.image.imageio import unit_to_u8
+from synth.compose.light import REC601
+from synth.compose.visibility import SMOKE_DELTA_E, delta_e
+from synth.smoke.matte import haze
+
+CLEAR_FLOOR = 0.25  # 1 - a is at least this when what is behind the smoke is recovered
+MAX_OPACITY = 0.97  # a re-lit smoke's opacity stays below this
+DENSITY = (0.8, 1.3)  # the opacity's factor k [lo, hi]
+COLOURS: dict[str, tuple[float, float]] = {"white": (0.95, 1.1), "grey": (0.6, 0.85), "dark": (0.4, 0.6)}
+# the new colour's luma over the old colour's luma, [lo, hi] per colour (each colour equally likely); darker reads
+# as a dark ellipse where haze fills the box (looked at on fire-smoke-608's fog-filled frames)
+DENSE = 0.5  # a box whose mean opacity is above this is re-lit white only: a dense haze filling its box, darkened,
+# shows the window's ellipse
+TINT = 0.03  # the new colour's channels differ from its grey by up to this share each
+SEEN_OPACITY = 0.25  # the pixels whose contrast decides whether a re-lit box is seen
+
+
+def relight_box(
+    rgb: NDArray[np.uint8],
+    box: tuple[int, int, int, int],
+    fires: Sequence[tuple[int, int, int, int]],
+    rng: np.random.Generator,
+) -> tuple[NDArray[np.uint8], dict] | None:
+    """The (h, w, 3) uint8 RGB crop of integer ``box`` (x, y, w, h px) of the (H, W, 3) uint8 RGB image with its
+    smoke re-lit (module docstring), and a record of the colour drawn; None when the box cannot be matted or its
+    re-lit smoke would not be seen. ``fires``: the image's fire boxes (x, y, w, h px), untouched. Draws the
+    colour, ratio, tint and density from ``rng`` whenever the box is matted."""
+    got = haze(rgb, box, fires)
+    if got is None:
+        return None
+    colour = list(COLOURS)[int(rng.integers(len(COLOURS)))] if got.mean <= DENSE else "white"
+    ratio = float(rng.uniform(*COLOURS[colour]))
+    tint = rng.uniform(-TINT, TINT, 3).astype(np.float32)
+    density = float(rng.uniform(*DENSITY))
+    x, y, w, h = box
+    crop = rgb[y : y + h, x : x + w]
+    image = crop.astype(np.float32) / 255.0
+    a = got.opacity[..., None]
+    behind = np.clip((image - got.airlight * a) / np.maximum(1.0 - a, CLEAR_FLOOR), 0.0, 1.0)
+    grey = float(got.airlight @ REC601) * ratio
+    new_colour = np.clip(grey * (1.0 + tint), 0.0, 1.0).astype(np.float32)
+    new_a = np.minimum(density * a, MAX_OPACITY)
+    relit = unit_to_u8(behind * (1.0 - new_a) + new_colour * new_a)
+    seen = new_a[..., 0] >= SEEN_OPACITY
+    if not seen.any() or float(np.median(delta_e(relit, unit_to_u8(behind))[seen])) < SMOKE_DELTA_E:
+        return None
+    record = {"colour": colour, "ratio": round(ratio, 3), "density": round(density, 3)}
+    return relit, record
+
+
+def relight_frame(
+    rgb: NDArray[np.uint8],
+    smoke_boxes: Sequence[Sequence[float]],
+    fire_boxes: Sequence[Sequence[float]],
+    rng: np.random.Generator,
+) -> tuple[NDArray[np.uint8], list[dict | None]]:
+    """A copy of the (H, W, 3) uint8 RGB frame with each of its ``smoke_boxes`` (x, y, w, h px, its labels) re-lit
+    in turn (:func:`relight_box`; ``fire_boxes`` x, y, w, h px left untouched), and per box its record or None where
+    it was left as it was. The boxes stay the frame's labels."""
+    out = rgb.copy()
+    height, width = rgb.shape[:2]
+    fires = [_pixels(b, width, height) for b in fire_boxes]
+    records: list[dict | None] = []
+    for b in smoke_boxes:
+        box = _pixels(b, width, height)
+        got = relight_box(out, box, fires, rng) if box[2] >= 3 and box[3] >= 3 else None
+        if got is not None:
+            x, y, w, h = box
+            out[y : y + h, x : x + w] = got[0]
+        records.append(None if got is None else got[1])
+    return out, records
+
+
+def _pixels(box: Sequence[float], width: int, height: int) -> tuple[int, int, int, int]:
+    """Box (x, y, w, h) px rounded to whole pixels and clipped to a ``width`` x ``height`` image."""
+    x0, y0 = max(int(round(box[0])), 0), max(int(round(box[1])), 0)
+    x1, y1 = min(int(round(box[0] + box[2])), width), min(int(round(box[1] + box[3])), height)
+    return x0, y0, max(x1 - x0, 0), max(y1 - y0, 0)
