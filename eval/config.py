@@ -119,6 +119,8 @@ class CompareConfig(ScoringConfig):
     # (with --negatives, or a test set's own images without fire)
     negatives_holdout: float = 0.0  # --negatives: only the photos held out by content at this share (0..1), those
     # a pool with background_holdout SHARE never composited on; 0 = every image
+    paired_seeds: bool = False  # run i of each side was trained with seed i: each resample also draws the seeds, as
+    # the study's comparisons do (two levels, eval.stats.seed_picks; at least 3 runs on each side, as many on both)
 
     def __post_init__(self) -> None:
         if self.alarm_budget <= 0 or self.samples < 1:

@@ -23,7 +23,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from eval.stats import PairedDelta, class_matches, paired_delta, resample_weights
+from eval.stats import PairedDelta, class_matches, paired_delta, resample_weights, resampled, seed_picks
 from ground.data.dataset import Dataset
 from ground.detect.cocoeval import run_cocoeval
 
@@ -157,24 +157,31 @@ def paired_recall_bootstrap(
     num_samples: int = 1000,
     budget: float = ALARM_BUDGET,
     level: float = 0.95,
+    seeds: bool = False,
 ) -> PairedDelta:
     """Paired bootstrap of the recall difference ``b - a`` at ``budget`` alarms per 100 images: each resample
     draws the images with fire and, independently, the images without fire, and reads every model at its own
     threshold on the drawn images (the threshold is part of what is resampled). Each side may be several runs
-    (e.g. one per seed), averaged per resample; all must be scored on the same images."""
+    (e.g. one per seed), averaged per resample; all must be scored on the same images. ``seeds``: each resample
+    also draws the seeds (:func:`eval.stats.seed_picks`: run i of each side is seed i); the image draws are the
+    same as without."""
     if not a or not b:
         raise ValueError("paired bootstrap needs at least one run on each side")
     runs = [*a, *b]
     if any(len(f.image_boxes) != len(runs[0][0].image_boxes) or al.images != runs[0][1].images for f, al in runs):
         raise ValueError("paired bootstrap needs every run scored on the same images")
 
-    def mean_recall(side, wf=None, wn=None) -> float:
-        return float(np.mean([f.recall(al.threshold(budget, wn), wf) for f, al in side]))
+    def mean_recall(side, wf=None, wn=None, pick=None) -> float:
+        chosen = side if pick is None else [side[i] for i in pick]
+        return float(np.mean([f.recall(al.threshold(budget, wn), wf) for f, al in chosen]))
 
     fire = resample_weights(len(runs[0][0].image_boxes), num_samples, rng)
     free = resample_weights(runs[0][1].images, num_samples, rng)
-    samples = np.array([mean_recall(b, wf, wn) - mean_recall(a, wf, wn) for wf, wn in zip(fire, free)])
-    return paired_delta(mean_recall(b) - mean_recall(a), samples, level)
+    picks = seed_picks(len(a), len(b), num_samples, rng, seeds)
+    samples = np.array([mean_recall(b, wf, wn, None if picks is None else picks[s])
+                        - mean_recall(a, wf, wn, None if picks is None else picks[s])
+                        for s, (wf, wn) in enumerate(zip(fire, free))])  # fmt: skip
+    return paired_delta(mean_recall(b) - mean_recall(a), samples, level, resampled(picks))
 
 
 def recall_at_rates(found: FoundScores, alarms: Alarms, rates: NDArray[np.float64]) -> NDArray[np.float64]:

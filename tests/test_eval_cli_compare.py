@@ -117,6 +117,26 @@ def test_compare_averages_several_runs_per_side(work, capsys):
     assert f"B      {shifted}  AP " in text and "B      mean of 2 runs  AP " in text
 
 
+def test_compare_with_paired_seeds_resamples_the_seeds_too(work, capsys):
+    good = oracle_model(work["root"] / "good2.onnx")
+    shifted = oracle_model(work["root"] / "shift2.onnx", rows=rows_for(shift=3.0, duplicates=True))
+    data = ["--data", str(work["test"]), "--samples", "300", "--format", "yolov5"]
+    sides = [f"{good},{good},{good}", f"{good},{shifted},{good}"]  # seed 1 of B misses; seeds 0 and 2 do not
+    assert main(["compare", *sides, *data, "--json"]) == 0
+    images = json.loads(capsys.readouterr().out)["delta"]["AP"]
+    assert main(["compare", *sides, *data, "--json", "--paired-seeds"]) == 0
+    seeds = json.loads(capsys.readouterr().out)["delta"]["AP"]
+    assert images["resampled"] == "images" and seeds["resampled"] == "images and seeds"
+    assert seeds["value"] == pytest.approx(images["value"]) and images["value"] < 0
+    # images only, B's mean always holds its one missing run: below 0; with the seeds, (2/3)^3 of the resamples
+    # draw no seed 1 at all, so the interval reaches 0: another training may not miss
+    assert images["high"] < 0 and seeds["high"] == pytest.approx(0.0) and seeds["low"] <= images["low"]
+    assert main(["compare", *sides, *data, "--paired-seeds"]) == 0
+    assert "(300 paired resamples of 6 images and 3 seeds)" in capsys.readouterr().out
+    assert main(["compare", f"{good},{good}", f"{good},{shifted}", *data, "--paired-seeds"]) == 2
+    assert "--paired-seeds needs as many runs on each side, at least 3" in capsys.readouterr().err
+
+
 def test_compare_reads_both_models_at_the_alarm_budget_of_a_set_without_fire(work, tmp_path, capsys):
     import numpy as np
     from PIL import Image

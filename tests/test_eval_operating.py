@@ -155,6 +155,11 @@ def test_the_paired_bootstrap_brackets_the_difference_and_is_deterministic() -> 
     assert again.to_dict() == d.to_dict() and np.array_equal(again.interval.samples, d.interval.samples)
     same = paired_recall_bootstrap([weak, strong], [weak, strong], np.random.default_rng(0), 50)
     assert same.interval.point == 0 and same.interval.low == same.interval.high == 0 and same.p_value == 1.0
+    three = paired_recall_bootstrap([weak] * 3, [weak, strong, weak], np.random.default_rng(0), 300, seeds=True)
+    fixed = paired_recall_bootstrap([weak] * 3, [weak, strong, weak], np.random.default_rng(0), 300)
+    assert three.resampled == "images and seeds" and fixed.resampled == "images"
+    assert three.interval.point == pytest.approx(fixed.interval.point) and fixed.interval.low > 0
+    assert three.interval.low == 0  # (2/3)^3 of the resamples draw no strong seed: another training may not gain
     with pytest.raises(ValueError, match="same images"):
         paired_recall_bootstrap([weak], [(strong[0], _alarms([0.1], 10))], np.random.default_rng(0), 10)
     with pytest.raises(ValueError, match="at least one run"):

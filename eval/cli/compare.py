@@ -30,6 +30,8 @@ ALIASES: tuple[Alias, ...] = (
     Alias("--negatives-holdout", ("negatives_holdout",), "--negatives: only the photos held out by content at this "
           "share, those a pool with background_holdout SHARE never composited on (0: every image)",
           {"type": float, "metavar": "SHARE"}),
+    Alias("--paired-seeds", ("paired_seeds",), "run i of each side was trained with seed i: the intervals resample "
+          "the seeds too, as the study's do (at least 3 runs on each side)", {"action": "store_true"}),
 )  # fmt: skip
 
 
@@ -102,7 +104,7 @@ def cmd_compare(args: argparse.Namespace) -> int:
     from eval.imagelevel import paired_image_recall
     from eval.onnx_model import ModelError
     from eval.score import ScoreError, score_operating
-    from eval.stats import MatchTable, paired_bootstrap
+    from eval.stats import MIN_SEEDS_RESAMPLED, MatchTable, paired_bootstrap
     from eval.tables import class_metric
     from ground.detect.cocoeval import ClassMatchError
 
@@ -114,6 +116,11 @@ def cmd_compare(args: argparse.Namespace) -> int:
         raise ValueError("--attributes and --forest go with --slices")
     if args.attributes is not None and not args.attributes.is_file():
         raise FileNotFoundError(f"--attributes: {args.attributes}: no such file")
+    runs = (len(args.model_a), len(args.model_b))
+    if cfg.paired_seeds and (runs[0] != runs[1] or runs[0] < MIN_SEEDS_RESAMPLED):
+        raise ValueError(f"--paired-seeds needs as many runs on each side, at least {MIN_SEEDS_RESAMPLED} "
+                         f"(run i of each trained with seed i); got {runs[0]} and {runs[1]}")  # fmt: skip
+    seeds = cfg.paired_seeds
     try:
         test = load_test_set(args.data, cfg.data)
         results = [[score_model(m, cfg, test.dataset, test.problems) for m in side] for side in sides]
@@ -127,14 +134,14 @@ def cmd_compare(args: argparse.Namespace) -> int:
         print("error: the models could not all be scored on the same images", file=sys.stderr)
         return 2
     labelled = test.dataset.image_labelled  # no boxes: image recall only
-    deltas = {} if labelled else paired_bootstrap(tables[0], tables[1], np.random.default_rng(cfg.seed), cfg.samples)
+    deltas = {} if labelled else paired_bootstrap(*tables, np.random.default_rng(cfg.seed), cfg.samples, seeds=seeds)
     per_class = results[0][0].metrics.per_class  # the scored classes, in the order of the match tables
     classes = list(per_class) if not labelled and len(per_class) > 1 else []
     for k, name in enumerate(classes):  # each class alone, on the same resampled images as AP's
         if not per_class[name]["boxes"]:
             continue  # a class the test set never boxes has no AP (its AP50 reads '-')
         one = [[t.of_class(k) for t in side] for side in tables]
-        alone = paired_bootstrap(*one, np.random.default_rng(cfg.seed), cfg.samples)
+        alone = paired_bootstrap(*one, np.random.default_rng(cfg.seed), cfg.samples, seeds=seeds)
         deltas[class_metric("AP50", name)] = alone["AP50"]
     doc = {
         "A": _side(args.model_a, results[0], classes),
@@ -161,7 +168,7 @@ def cmd_compare(args: argparse.Namespace) -> int:
         doc["own_negatives"] = test.dataset.num_negatives()
     levels = _image_levels(results, points, own)
     deltas[IMAGE_RECALL] = paired_image_recall(levels[0], levels[1], np.random.default_rng(cfg.seed), cfg.samples,
-                                               cfg.alarm_budget)  # fmt: skip
+                                               cfg.alarm_budget, seeds=seeds)  # fmt: skip
     doc["delta"][IMAGE_RECALL] = deltas[IMAGE_RECALL].to_dict()
     for key, side_levels in zip(("A", "B"), levels):  # each run's image recall at ALARM_CONF, and each side's mean
         for run, (hits, _) in zip(doc[key]["runs"], side_levels):
@@ -211,6 +218,8 @@ def _print_compare(doc: dict, deltas: dict, cfg: CompareConfig, labelled: bool, 
             if key != "AP" and key != "AP50" and "negatives" in doc
             else ""
         )
+        if d.resampled != "images":
+            images += f" and {len(doc['A']['runs'])} seeds"
         print(
             f"B - A  {name} {100 * iv.point:+.1f} points, 95% CI [{100 * iv.low:+.1f}, {100 * iv.high:+.1f}], "
             f"p = {d.p_value:.3f} ({cfg.samples} paired resamples of {images})"
@@ -352,7 +361,7 @@ def _add_operating(
             run.update({RECALL_AT_ALARMS: point.recall, "threshold": point.threshold})
         doc[key][RECALL_AT_ALARMS] = float(np.mean([run[RECALL_AT_ALARMS] for run in doc[key]["runs"]]))
     delta = paired_recall_bootstrap(
-        points[0], points[1], np.random.default_rng(cfg.seed), cfg.samples, cfg.alarm_budget
+        points[0], points[1], np.random.default_rng(cfg.seed), cfg.samples, cfg.alarm_budget, seeds=cfg.paired_seeds
     )
     doc["delta"][RECALL_AT_ALARMS] = delta.to_dict()
     return delta
