@@ -1,6 +1,6 @@
 """Re-lit own smoke: the frame changes only inside the smoke's box and off its fires, softly (no side of the box
-shows), recomposing with the smoke's own colour and density gives the frame back, what cannot be matted or would
-not be seen is left as it was, and the same rng gives the same frame."""
+shows), recomposing with the smoke's own colour and density gives the frame back, what cannot be matted, would
+not be seen or does not fade before the box's sides is left as it was, and the same rng gives the same frame."""
 
 from __future__ import annotations
 
@@ -66,6 +66,20 @@ def test_smoke_too_faint_to_see_after_relighting_is_left_as_it_was(monkeypatch) 
     monkeypatch.setattr(R, "DENSITY", (0.05, 0.05))  # a' = 0.05 a: no pixel reaches SEEN_OPACITY
     out, records = R.relight_frame(image, [BOX], [], np.random.default_rng(0))
     assert records == [None] and np.array_equal(out, image)
+
+
+def test_haze_that_does_not_fade_before_the_boxs_sides_is_left_as_it_was() -> None:
+    image = _scene()
+    x, y, w, h = BOX
+    fog = image.copy()
+    fog[y : y + h, x : x + w] = (0.3 * fog[y : y + h, x : x + w] + 0.7 * 235).astype(np.uint8)  # haze to the sides
+    assert R.fades_out(image, BOX, R.haze(image, BOX).airlight)
+    assert not R.fades_out(fog, BOX, R.haze(fog, BOX).airlight)  # the window would cut an ellipse out of it
+    out, records = R.relight_frame(fog, [BOX], [], np.random.default_rng(0))
+    assert records == [None] and np.array_equal(out, fog)
+    bars = fog.copy()
+    bars[:, :50] = 0  # black bars on the box's side are neither haze nor what it hides: still a haze to the sides
+    assert not R.fades_out(bars, BOX, R.haze(bars, BOX).airlight)
 
 
 def test_dark_soot_and_a_clear_box_are_left_as_they_were() -> None:

@@ -12,7 +12,10 @@ frame), tinted by up to :data:`TINT` per channel (white only where the haze is
 
 A re-lit box must still be seen: its pixels of opacity ``a'`` at least :data:`SEEN_OPACITY` must differ from ``J``
 by a median ΔE of :data:`synth.compose.visibility.SMOKE_DELTA_E` or more (the threshold the plumes are boxed at),
-else the box is left as it was. A box that cannot be matted (black soot, too little haze) is left as it was.
+else the box is left as it was. A box that cannot be matted (black soot, too little haze) is left as it was, and so is a box whose haze does not
+fade before its sides (its rim at least :data:`EDGE` as hazy as its core): there the window would cut the change
+off inside the haze, an ellipse of grey or white, as on a fog that fills the frame, or on the sky around black
+smoke, which the dark channel prior reads as haze (He et al. name the limit); both seen on fire-smoke-608.
 """
 
 from __future__ import annotations
@@ -25,7 +28,8 @@ from numpy.typing import NDArray
 from ground.image.imageio import unit_to_u8
 from synth.compose.light import REC601
 from synth.compose.visibility import SMOKE_DELTA_E, delta_e
-from synth.smoke.matte import haze
+from synth.compose.ramps import window
+from synth.smoke.matte import PATCH, WINDOW_INNER, dark_channel, haze
 
 CLEAR_FLOOR = 0.25  # 1 - a is at least this when what is behind the smoke is recovered
 MAX_OPACITY = 0.97  # a re-lit smoke's opacity stays below this
@@ -37,6 +41,8 @@ DENSE = 0.5  # a box whose mean opacity is above this is re-lit white only: a de
 # shows the window's ellipse
 TINT = 0.03  # the new colour's channels differ from its grey by up to this share each
 SEEN_OPACITY = 0.25  # the pixels whose contrast decides whether a re-lit box is seen
+EDGE = 0.7  # a box is re-lit only when its haze on its rim is under this share of its haze in its core
+BLACK = 0.12  # luma (0..1) below which a pixel is not counted in that comparison
 
 
 def relight_box(
@@ -50,7 +56,7 @@ def relight_box(
     re-lit smoke would not be seen. ``fires``: the image's fire boxes (x, y, w, h px), untouched. Draws the
     colour, ratio, tint and density from ``rng`` whenever the box is matted."""
     got = haze(rgb, box, fires)
-    if got is None:
+    if got is None or not fades_out(rgb, box, got.airlight):
         return None
     colour = list(COLOURS)[int(rng.integers(len(COLOURS)))] if got.mean <= DENSE else "white"
     ratio = float(rng.uniform(*COLOURS[colour]))
@@ -70,6 +76,20 @@ def relight_box(
         return None
     record = {"colour": colour, "ratio": round(ratio, 3), "density": round(density, 3)}
     return relit, record
+
+
+def fades_out(rgb: NDArray[np.uint8], box: tuple[int, int, int, int], airlight: NDArray[np.float32]) -> bool:
+    """Whether the haze of integer ``box`` (x, y, w, h px) of the (H, W, 3) uint8 RGB image fades before the box's
+    sides: the mean dark channel over the smoke's colour ``airlight`` (3,) 0..1 (:mod:`synth.smoke.matte`, before its
+    window) where the window has fallen below half (the box's rim and corners) is under :data:`EDGE` of its mean
+    where the window is whole (the core); pixels darker than :data:`BLACK` (a frame's black bars) not counted."""
+    x, y, w, h = box
+    crop = rgb[y : y + h, x : x + w].astype(np.float32) / 255.0
+    raw = dark_channel(crop / np.maximum(airlight, 0.05), max(int(PATCH * min(w, h)) | 1, 3))
+    lit = crop @ REC601 >= BLACK  # a frame's black bars are neither haze nor what it hides
+    shape = window(h, w, WINDOW_INNER)
+    core, rim = (shape >= 1.0) & lit, (shape < 0.5) & lit
+    return bool(core.any() and rim.any()) and float(raw[rim].mean()) < EDGE * float(raw[core].mean())
 
 
 def relight_frame(
