@@ -27,8 +27,8 @@ from numpy.typing import NDArray
 
 from ground.image.imageio import unit_to_u8
 from synth.compose.light import REC601
-from synth.compose.visibility import SMOKE_DELTA_E, delta_e
 from synth.compose.ramps import window
+from synth.compose.visibility import SMOKE_DELTA_E, delta_e
 from synth.smoke.matte import PATCH, WINDOW_INNER, dark_channel, haze
 
 CLEAR_FLOOR = 0.25  # 1 - a is at least this when what is behind the smoke is recovered
