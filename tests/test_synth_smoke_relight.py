@@ -5,7 +5,6 @@ not be seen or does not fade before the box's sides is left as it was, and the s
 from __future__ import annotations
 
 import numpy as np
-import pytest
 
 from synth.smoke import relight as R
 from synth.smoke.matte import Haze
@@ -27,33 +26,44 @@ def _scene(smoke_rgb=(235, 235, 235), density: float = 0.6) -> np.ndarray:
     return np.clip(scene, 0, 255).astype(np.uint8)
 
 
-def test_a_relit_frame_changes_only_inside_the_smoke_box_and_keeps_its_sides() -> None:
+def test_a_relit_frame_changes_only_within_the_boxs_reach_and_keeps_its_closed_sides() -> None:
     image = _scene()
     out, records = R.relight_frame(image, [BOX], [], np.random.default_rng(1))
-    x, y, w, h = BOX
+    (x, y, w, h), _ = R.reach(BOX, 200, 160)
+    assert (x, y, w, h) == (15, 10, 150, 120)  # a quarter of the box's size on each side, within the frame
     inside = np.zeros(image.shape[:2], bool)
     inside[y : y + h, x : x + w] = True
     assert records[0] is not None and records[0]["colour"] in R.COLOURS
-    assert np.array_equal(out[~inside], image[~inside])  # nothing outside the box
+    assert np.array_equal(out[~inside], image[~inside])  # nothing beyond the reach
     crop, orig = out[y : y + h, x : x + w].astype(int), image[y : y + h, x : x + w].astype(int)
     assert np.abs(crop - orig).max() > 20  # the smoke did change ...
     edge = np.concatenate([(crop - orig)[0], (crop - orig)[-1], (crop - orig)[:, 0], (crop - orig)[:, -1]])
-    assert np.abs(edge).max() <= 1  # ... but not on the box's sides: no rectangle shows
-    assert not np.array_equal(out, image) and image is not out
+    assert np.abs(edge).max() <= 1  # ... but not on the reach's sides: no rectangle shows
+    assert image is not out
+
+
+def test_the_reach_stays_in_the_frame_and_its_window_is_open_on_the_frames_sides() -> None:
+    (x, y, w, h), shape = R.reach((0, 40, 100, 80), 200, 160)
+    assert (x, y, w, h) == (0, 20, 125, 120) and shape.shape == (120, 125)
+    assert shape[60, 0] == 1.0 and shape[60, -1] == 0.0 and shape[0, 60] == 0.0  # open on the left only
+    whole, full = R.reach((0, 0, 200, 160), 200, 160)
+    assert whole == (0, 0, 200, 160) and (full == 1.0).all()  # a box filling its frame: re-lit whole
 
 
 def test_recomposing_with_the_smokes_own_colour_and_density_gives_the_frame_back(monkeypatch) -> None:
     image = _scene()
-    got = R.haze(image, BOX)
-    grey = float(got.airlight @ R.REC601)
+    region, shape = R.reach(BOX, 200, 160)
+    own = R.haze(image, BOX)
+    grey = np.full(3, float(own.airlight @ R.REC601), np.float32)
+    got = R.haze(image, region, shape=shape, airlight=grey)
     monkeypatch.setattr(R, "DENSITY", (1.0, 1.0))
     monkeypatch.setattr(R, "TINT", 0.0)
-    x, y, w, h = BOX
-    crop = image[y : y + h, x : x + w].astype(np.float32) / 255.0
-    monkeypatch.setattr(R, "haze", lambda *a: Haze(got.opacity, np.full(3, grey, np.float32), got.mean))
     monkeypatch.setattr(R, "COLOURS", {"white": (1.0, 1.0)})
-    relit, record = R.relight_box(image, BOX, [], np.random.default_rng(0))
-    assert record["density"] == 1.0 and record["ratio"] == 1.0
+    monkeypatch.setattr(R, "haze", lambda *a, **k: Haze(got.opacity, grey, got.mean))
+    where, relit, record = R.relight_box(image, BOX, [], np.random.default_rng(0))
+    assert where == region and record["density"] == 1.0 and record["ratio"] == 1.0
+    x, y, w, h = region
+    crop = image[y : y + h, x : x + w].astype(np.float32) / 255.0
     a = got.opacity[..., None]
     behind = (crop - grey * a) / np.maximum(1.0 - a, R.CLEAR_FLOOR)
     thin = (got.opacity < 1.0 - R.CLEAR_FLOOR) & (behind >= 0).all(-1) & (behind <= 1).all(-1)  # recovered exactly
@@ -68,18 +78,22 @@ def test_smoke_too_faint_to_see_after_relighting_is_left_as_it_was(monkeypatch) 
     assert records == [None] and np.array_equal(out, image)
 
 
-def test_haze_that_does_not_fade_before_the_boxs_sides_is_left_as_it_was() -> None:
+def test_haze_that_does_not_fade_before_the_reachs_closed_sides_is_left_as_it_was() -> None:
     image = _scene()
-    x, y, w, h = BOX
+    region, shape = R.reach(BOX, 200, 160)
+    x, y, w, h = region
     fog = image.copy()
     fog[y : y + h, x : x + w] = (0.3 * fog[y : y + h, x : x + w] + 0.7 * 235).astype(np.uint8)  # haze to the sides
-    assert R.fades_out(image, BOX, R.haze(image, BOX).airlight)
-    assert not R.fades_out(fog, BOX, R.haze(fog, BOX).airlight)  # the window would cut an ellipse out of it
+    assert R.fades_out(image, region, R.haze(image, BOX).airlight, shape)
+    assert not R.fades_out(fog, region, R.haze(fog, BOX).airlight, shape)  # the window would cut an ellipse out
     out, records = R.relight_frame(fog, [BOX], [], np.random.default_rng(0))
     assert records == [None] and np.array_equal(out, fog)
     bars = fog.copy()
-    bars[:, :50] = 0  # black bars on the box's side are neither haze nor what it hides: still a haze to the sides
-    assert not R.fades_out(bars, BOX, R.haze(bars, BOX).airlight)
+    bars[:, :20] = 0  # black bars are neither haze nor what it hides: still a haze to the sides
+    assert not R.fades_out(bars, region, R.haze(bars, BOX).airlight, shape)
+    frame = (0, 0, 200, 160)
+    whole, open_window = R.reach(frame, 200, 160)
+    assert R.fades_out(fog, whole, R.haze(fog, BOX).airlight, open_window)  # no closed side: nothing to cut
 
 
 def test_dark_soot_and_a_clear_box_are_left_as_they_were() -> None:
@@ -96,12 +110,3 @@ def test_the_fire_inside_the_smoke_is_untouched_and_the_same_rng_gives_the_same_
     assert np.array_equal(a, b) and rec_a == rec_b
     fx, fy, fw, fh = fire
     assert np.array_equal(a[fy : fy + fh, fx : fx + fw], image[fy : fy + fh, fx : fx + fw])
-
-
-@pytest.mark.parametrize("opacity", [0.3, 0.9])
-def test_dense_haze_is_relit_white_only(opacity: float, monkeypatch) -> None:
-    image = _scene()
-    got = R.haze(image, BOX)
-    monkeypatch.setattr(R, "haze", lambda *a: Haze(got.opacity, got.airlight, opacity))
-    colours = {R.relight_box(image, BOX, [], np.random.default_rng(s))[1]["colour"] for s in range(12)}
-    assert colours == {"white"} if opacity > R.DENSE else len(colours) > 1

@@ -59,18 +59,25 @@ class Haze:
 
 
 def haze(
-    rgb: NDArray[np.uint8], box: tuple[int, int, int, int], fires: Sequence[tuple[int, int, int, int]] = ()
+    rgb: NDArray[np.uint8],
+    box: tuple[int, int, int, int],
+    fires: Sequence[tuple[int, int, int, int]] = (),
+    *,
+    shape: NDArray[np.float32] | None = None,
+    airlight: NDArray[np.float32] | None = None,
 ) -> Haze | None:
     """The :class:`Haze` of integer box (x, y, w, h) of the (H, W, 3) uint8 RGB image, or None when the box cannot
     be matted (dark smoke, or too little of it): module docstring. ``fires``: the image's fire boxes (x, y, w, h
-    px), opacity 0 inside them."""
+    px), opacity 0 inside them. ``shape`` (h, w): the window (default the elliptical one); ``airlight`` (3,) 0..1:
+    the smoke's colour when it is known (default: estimated from the box)."""
     x, y, w, h = box
     crop = rgb[y : y + h, x : x + w]
     image = crop.astype(np.float32) / 255.0
     patch = max(int(PATCH * min(w, h)) | 1, 3)
-    raw_dark = dark_channel(image, patch)
-    top = raw_dark >= np.quantile(raw_dark, 1.0 - CORE_SHARE)
-    airlight = image[top].mean(axis=0)
+    if airlight is None:
+        raw_dark = dark_channel(image, patch)
+        top = raw_dark >= np.quantile(raw_dark, 1.0 - CORE_SHARE)
+        airlight = image[top].mean(axis=0)
     if float(airlight @ REC601) < MIN_LUMA:
         return None
     dark = KEEP_HAZE * dark_channel(image / np.maximum(airlight, 0.05)[None, None, :], patch)
@@ -82,7 +89,7 @@ def haze(
         clear[max(fy - y, 0) : max(fy + fh - y, 0), max(fx - x, 0) : max(fx + fw - x, 0)] = 1.0
     soft = np.clip(2.0 * cv2.GaussianBlur(clear, (0, 0), patch / 2.0), 0.0, 1.0)
     clear = np.maximum(clear, soft)  # the fire, and softly beyond it
-    shape = window(h, w, WINDOW_INNER)
+    shape = window(h, w, WINDOW_INNER) if shape is None else shape
     alpha = (np.clip(alpha, 0.0, 1.0) * shape * (1.0 - clear)).astype(np.float32)
     mean = float((alpha * shape).sum() / max(float(shape.sum()), 1e-6))
     if mean < MIN_OPACITY:
