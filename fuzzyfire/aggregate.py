@@ -390,7 +390,8 @@ def first_screen(
     lines = [line for line in (fs.unlearned_line(rows, cfg.train.epochs),) if line]
     lines.append(compared_line(cfg, data, specs, own))
     baseline = next((c["baseline"] for c in compared if not c["baseline"].endswith(" copies")), cfg.report.baseline)
-    added = "flames and smoke" if cfg.synth.method2.smoke.plumes else "flames"
+    m2 = cfg.synth.method2
+    added = fs.pool_words(m2.lays_flames, m2.smoke.plumes) if m2 is not None else "flames"
     lines += fs.headline_lines(rows, compared, lambda test: headline_metric(rows, test), baseline, added)
     lines.append(fs.how_sure_line(rows, compared, cfg.train.epochs))
     lines += [line for line in (fs.silent_line(rows),) if line]

@@ -183,6 +183,12 @@ def headline_lines(
     return lines
 
 
+def pool_words(flames: bool, smoke: bool) -> str:
+    """What a pool pastes, as the answer names it: ``flames``, ``flames and smoke``, ``smoke``, or ``images`` for a
+    pool that lays neither."""
+    return " and ".join(word for word, laid in (("flames", flames), ("smoke", smoke)) if laid) or "images"
+
+
 def added_text(real: int, synth: int, added: str = "flames") -> str:
     """What a mixture adds to the baseline, ``real`` and ``synth`` images more (or fewer, negative), its pool
     pasting ``added``: ``200 synthetic images (flames and more images together) against none``, ``200 more real

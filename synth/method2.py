@@ -96,6 +96,13 @@ class Method2Config(MethodConfig):
     def brings_places(self) -> bool:  # own_frames: the experiment adds the mixture's images as labelled frames
         return bool(self.environments or self.backgrounds or self.labelled_frames or self.own_frames > 0)
 
+    @property
+    def lays_flames(self) -> bool:
+        """Whether an image of the pool may get a flame: ``negatives`` below 1, or ``photo_negatives`` below 1 with
+        ``backgrounds`` photos to lay them on."""
+        on_photos = self.photo_negatives is not None and self.photo_negatives < 1.0 and bool(self.backgrounds)
+        return self.negatives < 1.0 or on_photos
+
 
 def plan_flames(
     cfg: Method2Config,

@@ -124,3 +124,17 @@ def test_runs_that_detect_nothing_are_named() -> None:
     assert fs.silent_line(rows) == ("1 run detects nothing at confidence 0.25 on any test set (R200_S0 seed 0): its "
                                     "false alarms are shown as not measured (–), not as 0.")  # fmt: skip
     assert fs.silent_line([{**r, "silent": False} for r in rows]) is None
+
+
+def test_the_answer_names_what_the_pool_pastes() -> None:
+    from synth.method2 import Method2Config
+    from synth.smoke.library import SmokeConfig
+
+    plumes = SmokeConfig(alone=1.0)
+    shipped = Method2Config(own_frames=1.0, photo_negatives=1.0, smoke=plumes)
+    no_flames = Method2Config(own_frames=1.0, negatives=1.0, smoke=plumes)  # plumes without flames
+    photos_only = Method2Config(backgrounds=(Path("photos"),), negatives=1.0, photo_negatives=0.5)
+    assert fs.pool_words(shipped.lays_flames, shipped.smoke.plumes) == "flames and smoke"
+    assert fs.pool_words(no_flames.lays_flames, no_flames.smoke.plumes) == "smoke"
+    assert photos_only.lays_flames and not Method2Config(own_frames=1.0, negatives=1.0).lays_flames
+    assert fs.pool_words(True, False) == "flames" and fs.pool_words(False, False) == "images"
