@@ -36,7 +36,6 @@ from synth.places import render
 from synth.places.views import ViewCache
 from synth.smoke.library import SmokeConfig, split_library
 from synth.smoke.placement import Plume, plan_plumes
-from synth.smoke.relight import relight_frame
 from synth.staging import boxes_from_masks
 
 SITE_MAX_HEIGHT = 0.6  # tallest flame on a photo or panorama site, fraction of the image height
@@ -287,7 +286,6 @@ def make_image(cfg: Method2Config, i: int, library: Sequence[SpriteSequence], vi
     None when smoke is not a class). A flame nobody could see is erased, not left unboxed
     (:func:`visible_composite`); a kept flame's mask and box are its seen part."""
     background, depth, view_meta = views.image_background(i, cfg.images_per_view)
-    background, relit = relit_frame(cfg, i, background, view_meta)
     flame_library, plume_library = split_library(library)
     rng = np.random.default_rng([cfg.seed, 2, i])
     avoid = kept_clear(view_meta) if view_meta.get("site") else None
@@ -308,8 +306,6 @@ def make_image(cfg: Method2Config, i: int, library: Sequence[SpriteSequence], vi
     if plumes:
         meta["plumes"] = [q.record() for q in shown.plumes]
         meta["plumes_erased"] = len(plumes) - len(shown.plumes)
-    if relit is not None:
-        meta["relit"] = relit
     if meter is not None:
         meta["exposure_gain"] = round(meter.gain([p for p, _ in shown.flames]), 4)
     boxes += view_meta.get("frame_boxes", [])  # a labelled frame's own fires, after the flames (no mask: audit)
@@ -320,21 +316,6 @@ def make_image(cfg: Method2Config, i: int, library: Sequence[SpriteSequence], vi
     smoke, record["smoke_boxes"], _ = boxes_from_masks(parts, cfg.min_box_px)
     record["smoke_boxes"] += view_meta.get("frame_smoke_boxes", [])  # a frame's own smoke, last (no mask: audit)
     return shown.image, kept, record, smoke
-
-
-def relit_frame(
-    cfg: Method2Config, i: int, background: NDArray[np.uint8], view_meta: dict
-) -> tuple[NDArray[np.uint8], list[dict | None] | None]:
-    """Image ``i``'s (H, W, 3) uint8 ``background`` with its labelled smoke re-lit (:mod:`synth.smoke.relight`) when
-    it is a labelled frame with smoke boxes and ``default_rng([seed, 2, i, 4])`` draws it (``smoke.relight``), and
-    the per-box records (None: not re-lit)."""
-    boxes = view_meta.get("frame_smoke_boxes")
-    if not cfg.smoke.relight or not boxes:
-        return background, None
-    rng = np.random.default_rng([cfg.seed, 2, i, 4])
-    if rng.random() >= cfg.smoke.relight:
-        return background, None
-    return relight_frame(background, boxes, view_meta.get("frame_boxes", []), rng)
 
 
 def flame_record(p: Placement, name: str, seen) -> dict:

@@ -26,8 +26,6 @@ class SmokeConfig:
     alone: float = 0.0  # probability that an image gets a plume without flames (smouldering, or far away), 0..1
     sky: float = 0.5  # share of the plumes without flames that rise into the view's sky from its horizon, when it
     # has sky (a plume over a ridge; a flame in the sky is not plausible, smoke is), 0..1
-    relight: float = 0.0  # share of the images on a labelled frame whose own labelled smoke is re-lit in place: a
-    # new colour and density, its boxes kept (synth.smoke.relight), 0..1
     height_m: tuple[float, float] = (1.0, 8.0)  # height of a plume standing on the ground, metres [lo, hi]
     source: Literal["simulated", "cutouts"] = "simulated"  # simulated plumes | cutouts: the mixture's own labelled
     # smoke matted into sprites (fuzzyfire experiment only: fuzzyfire.cutout_pools)
@@ -36,7 +34,7 @@ class SmokeConfig:
     seed: int = 0  # plume library seed
 
     def __post_init__(self) -> None:
-        for name, share in (("above", self.above), ("alone", self.alone), ("sky", self.sky), ("relight", self.relight)):
+        for name, share in (("above", self.above), ("alone", self.alone), ("sky", self.sky)):
             if not 0.0 <= share <= 1.0:
                 raise ValueError(f"smoke.{name} must be in 0..1, got {share}")
         if self.source not in SMOKE_SOURCES:

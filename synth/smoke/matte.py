@@ -20,7 +20,6 @@ labelled box is drawn loosely around smoke; no straight side may show).
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
 
 import cv2
 import numpy as np
@@ -47,67 +46,35 @@ def dark_channel(image: NDArray[np.float32], patch: int) -> NDArray[np.float32]:
     return cv2.erode(image.min(axis=-1), np.ones((patch, patch), np.uint8))
 
 
-@dataclass(frozen=True)
-class Haze:
-    """The smoke of a labelled box as Koschmieder's law models it (module docstring): ``opacity`` (h, w) float32
-    ``1 - t`` in [0, 1], already windowed and 0 on the fire; ``airlight`` (3,) float32 RGB ``A`` in 0..1; ``mean``
-    the mean opacity inside the window."""
-
-    opacity: NDArray[np.float32]
-    airlight: NDArray[np.float32]
-    mean: float
-
-
-def haze(
-    rgb: NDArray[np.uint8],
-    box: tuple[int, int, int, int],
-    fires: Sequence[tuple[int, int, int, int]] = (),
-    *,
-    shape: NDArray[np.float32] | None = None,
-    airlight: NDArray[np.float32] | None = None,
-) -> Haze | None:
-    """The :class:`Haze` of integer box (x, y, w, h) of the (H, W, 3) uint8 RGB image, or None when the box cannot
-    be matted (dark smoke, or too little of it): module docstring. ``fires``: the image's fire boxes (x, y, w, h
-    px), opacity 0 inside them. ``shape`` (h, w): the window (default the elliptical one); ``airlight`` (3,) 0..1:
-    the smoke's colour when it is known (default: estimated from the box)."""
+def matte(
+    rgb: NDArray[np.uint8], box: tuple[int, int, int, int], fires: Sequence[tuple[int, int, int, int]] = ()
+) -> tuple[NDArray[np.uint8], float] | None:
+    """The (h, w, 4) uint8 straight-alpha RGBA smoke sprite of integer box (x, y, w, h) of the (H, W, 3) uint8 RGB
+    image and its mean opacity inside the window, or None when the box cannot be matted (dark smoke, or too
+    little of it): module docstring. ``fires``: the image's fire boxes (x, y, w, h px), opacity 0 inside them."""
     x, y, w, h = box
     crop = rgb[y : y + h, x : x + w]
     image = crop.astype(np.float32) / 255.0
     patch = max(int(PATCH * min(w, h)) | 1, 3)
-    if airlight is None:
-        raw_dark = dark_channel(image, patch)
-        top = raw_dark >= np.quantile(raw_dark, 1.0 - CORE_SHARE)
-        airlight = image[top].mean(axis=0)
+    raw_dark = dark_channel(image, patch)
+    top = raw_dark >= np.quantile(raw_dark, 1.0 - CORE_SHARE)
+    airlight = image[top].mean(axis=0)
     if float(airlight @ REC601) < MIN_LUMA:
         return None
-    dark = KEEP_HAZE * dark_channel(image / np.maximum(airlight, 0.05)[None, None, :], patch)
+    haze = KEEP_HAZE * dark_channel(image / np.maximum(airlight, 0.05)[None, None, :], patch)
     guide = cv2.cvtColor(crop, cv2.COLOR_RGB2GRAY).astype(np.float32) / 255.0
-    alpha = cv2.ximgproc.guidedFilter(guide, np.clip(dark, 0.0, 1.0).astype(np.float32), 2 * patch, 1e-3)
+    alpha = cv2.ximgproc.guidedFilter(guide, np.clip(haze, 0.0, 1.0).astype(np.float32), 2 * patch, 1e-3)
     warm = image[..., 0] - image[..., 2] > WARM  # a flame's white core passes the fire rule, and so would white smoke
     clear = (fire_mask(crop) & warm).astype(np.float32)
     for fx, fy, fw, fh in fires:
         clear[max(fy - y, 0) : max(fy + fh - y, 0), max(fx - x, 0) : max(fx + fw - x, 0)] = 1.0
     soft = np.clip(2.0 * cv2.GaussianBlur(clear, (0, 0), patch / 2.0), 0.0, 1.0)
     clear = np.maximum(clear, soft)  # the fire, and softly beyond it
-    shape = window(h, w, WINDOW_INNER) if shape is None else shape
-    alpha = (np.clip(alpha, 0.0, 1.0) * shape * (1.0 - clear)).astype(np.float32)
-    mean = float((alpha * shape).sum() / max(float(shape.sum()), 1e-6))
-    if mean < MIN_OPACITY:
+    shape = window(h, w, WINDOW_INNER)
+    alpha = np.clip(alpha, 0.0, 1.0) * shape * (1.0 - clear)
+    opacity = float((alpha * shape).sum() / max(float(shape.sum()), 1e-6))
+    if opacity < MIN_OPACITY:
         return None
-    return Haze(alpha, airlight.astype(np.float32), mean)
-
-
-def matte(
-    rgb: NDArray[np.uint8], box: tuple[int, int, int, int], fires: Sequence[tuple[int, int, int, int]] = ()
-) -> tuple[NDArray[np.uint8], float] | None:
-    """The (h, w, 4) uint8 straight-alpha RGBA smoke sprite of integer box (x, y, w, h) of the (H, W, 3) uint8 RGB
-    image and its mean opacity inside the window, or None when the box cannot be matted (:func:`haze`). ``fires``:
-    the image's fire boxes (x, y, w, h px), opacity 0 inside them."""
-    got = haze(rgb, box, fires)
-    if got is None:
-        return None
-    x, y, w, h = box
-    image = rgb[y : y + h, x : x + w].astype(np.float32) / 255.0
-    own = smoothstep(got.opacity, *OWN_TEXTURE)[..., None]
-    colour = own * image + (1.0 - own) * got.airlight[None, None, :]
-    return np.dstack([unit_to_u8(colour), unit_to_u8(got.opacity)]), got.mean
+    own = smoothstep(alpha, *OWN_TEXTURE)[..., None]
+    colour = own * image + (1.0 - own) * airlight[None, None, :]
+    return np.dstack([unit_to_u8(colour), unit_to_u8(alpha)]), opacity
