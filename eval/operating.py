@@ -178,9 +178,10 @@ def paired_recall_bootstrap(
     fire = resample_weights(len(runs[0][0].image_boxes), num_samples, rng)
     free = resample_weights(runs[0][1].images, num_samples, rng)
     picks = seed_picks(len(a), len(b), num_samples, rng, seeds)
-    samples = np.array([mean_recall(b, wf, wn, None if picks is None else picks[s])
-                        - mean_recall(a, wf, wn, None if picks is None else picks[s])
-                        for s, (wf, wn) in enumerate(zip(fire, free))])  # fmt: skip
+    samples = np.empty(num_samples)
+    for s, (wf, wn) in enumerate(zip(fire, free)):
+        pick = None if picks is None else picks[s]
+        samples[s] = mean_recall(b, wf, wn, pick) - mean_recall(a, wf, wn, pick)
     return paired_delta(mean_recall(b) - mean_recall(a), samples, level, resampled(picks))
 
 
