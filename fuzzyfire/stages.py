@@ -205,6 +205,7 @@ def synth_stage(root: Path, cfg: MethodConfig, base: Path, cutouts: Stage | None
     config = {k: v for k, v in to_dict(cfg).items() if k not in cfg.place_keys()}
     files = content_identity(cfg)
     flames = {"cutouts": cutouts.hash} if cutouts is not None else {}
+    flames |= _plume_rules(cfg)
     frames = "-frames" if cfg.places().labelled_frames else ""
     stage = cached_stage(
         root,
@@ -218,6 +219,15 @@ def synth_stage(root: Path, cfg: MethodConfig, base: Path, cutouts: Stage | None
         ),
     )
     return stage, DataRef(stage.folder, {"kind": method, "hash": stage.hash}, "coco")
+
+
+def _plume_rules(cfg: MethodConfig) -> dict[str, int]:
+    """``{"plume_rules": version}`` for a pool that lays plumes (:data:`synth.smoke.placement.RULES_VERSION`), else
+    nothing: a change of where plumes go rebuilds those pools only."""
+    from synth.smoke.placement import RULES_VERSION
+
+    smoke = getattr(cfg, "smoke", None)
+    return {"plume_rules": RULES_VERSION} if smoke is not None and smoke.plumes else {}
 
 
 def content_identity(cfg: MethodConfig) -> dict[str, Any]:

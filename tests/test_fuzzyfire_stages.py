@@ -62,6 +62,7 @@ def test_synth_stage_resolves_environments_by_content_and_every_key_counts(tmp_p
     from fuzzyfire.stages import synth_stage
     from synth.flames.library import FlameLibraryConfig
     from synth.method2 import Method2Config
+    from synth.smoke.placement import RULES_VERSION
 
     flames = FlameLibraryConfig(sequences=1, frames=60, keep_every=30)
     cfg = Method2Config(n=2, width=64, height=48, scenes=1, images_per_view=2, flames=flames)
@@ -69,8 +70,12 @@ def test_synth_stage_resolves_environments_by_content_and_every_key_counts(tmp_p
     identity = json.loads((stage.folder / "stage.json").read_text())["identity"]
     assert "environments" not in identity["config"]  # no files: nothing to fingerprint
     assert identity["config"]["flame_height_m"] == [0.3, 2.5]  # every key, at its default too
+    assert "plume_rules" not in identity["config"]  # no plumes: a change of where plumes go keeps this pool
     taller, _ = synth_stage(tmp_path / "data", replace(cfg, flame_height_m=(0.9, 3.0)), tmp_path)
     assert taller.hash != stage.hash
+    plumes = replace(cfg, n=1, smoke=replace(cfg.smoke, alone=1.0, sequences=1, frames=1))
+    smoky, _ = synth_stage(tmp_path / "data", plumes, tmp_path)
+    assert json.loads((smoky.folder / "stage.json").read_text())["identity"]["config"]["plume_rules"] == RULES_VERSION
     write_textured_room(tmp_path / "scenes" / "den.glb")
     files = replace(cfg, scenes=0, environments=(Path("scenes"),))
     stage, _ = synth_stage(tmp_path / "data", files, tmp_path)

@@ -67,3 +67,24 @@ def test_plumes_are_lit_by_their_scene_and_placed_reproducibly() -> None:
     ]
     assert plan_plumes(SmokeConfig(), *args[1:], np.random.default_rng(5)) == []  # no plumes asked: none
     assert smoke_placement(sprite, rect).width == 60
+
+
+def test_no_plume_is_laid_over_a_frames_labelled_smoke() -> None:
+    scene = np.zeros((120, 160, 3), np.uint8)
+    scene[:50] = (120, 170, 230)
+    scene[50:] = np.random.default_rng(1).integers(0, 255, (70, 160, 3))
+    depth = np.zeros((120, 160), np.float32)
+    depth[60:] = 8.0
+    haze = [[0, 0, 90, 120]]  # an annotator's smoke box over the left of the frame
+    flame = _flame(20, 40, 20, 60)  # a flame inside it: its plume would be too
+    cfg, laid, free = SmokeConfig(above=1.0, alone=1.0), 0, 0
+    for seed in range(12):
+        rng, again = np.random.default_rng(seed), np.random.default_rng(seed)
+        for q in plan_plumes(cfg, PLUMES, [flame], scene, depth, 150.0, rng, haze):
+            p = q.placement
+            assert q.where != "above" and p.x >= 90  # clear of the box: right of it
+            laid += 1
+        free += len(plan_plumes(cfg, PLUMES, [flame], scene, depth, 150.0, again))
+    assert laid >= 6 and free >= laid + 12  # lone plumes still found a spot; without the box every flame got one
+    covered = [[0, 0, 160, 120]]  # smoke over the whole frame: no room for a plume
+    assert plan_plumes(cfg, PLUMES, [flame], scene, depth, 150.0, np.random.default_rng(0), covered) == []

@@ -7,6 +7,10 @@
   the view has sky (:func:`ground.image.sky.sky_mask`, at least :data:`MIN_SKY` of the image) a share ``smoke.sky``
   of them rise into it from the sky's lower edge at a random column (a plume over a ridge or a roof), 15-45 % of
   the image wide; the others stand on a ground pixel (depth > 0), ``smoke.height_m`` high at that depth.
+- **Never over labelled smoke**: on a labelled frame no plume's box overlaps the frame's own smoke boxes
+  (``avoid``). A pasted plume is boxed where a viewer sees it, a frame's smoke where its annotator drew it (often a
+  haze across half the frame): a plume inside that box would label one smoke twice, in two ways. A plume above a
+  flame that would overlap one is not laid; a lone plume's spot is drawn again, up to :data:`TRIES` times.
 - **Colour**: white steam (weight 0.35, grey level 0.85-1.0), grey smoke (0.4, 0.45-0.75) or black soot (0.25,
   0.08-0.3) for a simulated plume (:data:`FAMILIES`); a matted plume keeps its own colour. Either is **lit by the
   scene**: multiplied by ``clip(0.35 + 1.3 L, 0.35, 1)``, ``L`` the mean luma (0..1) of the background under it, and
@@ -26,6 +30,7 @@ from numpy.typing import NDArray
 
 from ground.image.imageio import unit_to_u8
 from ground.image.sky import sky_mask
+from ground.data.boxes import xywh_overlaps_any
 from synth.compose.composite import Placement
 from synth.compose.light import REC601
 from synth.flames.sprites import Sprite, SpriteSequence, mask_span
@@ -38,6 +43,10 @@ FAMILIES: tuple[tuple[str, float, tuple[float, float]], ...] = (
     ("black", 0.25, (0.08, 0.3)),
 )
 MIN_SKY = 0.05  # share of the image that must be sky for a plume to rise into it
+TRIES = 10  # draws of a lone plume's spot clear of a frame's labelled smoke
+#: Version of the placement rules beyond SmokeConfig's keys, in the identity of every cached pool that lays plumes
+#: (fuzzyfire.stages.synth_stage): 2 = no plume over a labelled frame's smoke.
+RULES_VERSION = 2
 
 
 @dataclass(frozen=True)
@@ -98,13 +107,14 @@ def plan_plumes(
     depth: NDArray[np.float32],
     fy: float,
     rng: np.random.Generator,
+    avoid: Sequence[Sequence[int]] = (),
 ) -> list[Plume]:
     """The plumes of one image (module docstring): one above each of ``flames`` drawn at ``cfg.above``, then one
     alone at ``cfg.alone``; ``background`` (H, W, 3) uint8 the scene as exposed, ``depth`` (H, W) metres (0 off the
-    ground), ``fy`` the focal length in pixels. None without ``plumes``."""
+    ground), ``fy`` the focal length in pixels, ``avoid`` a labelled frame's smoke boxes [x, y, w, h] px that no
+    plume's box may overlap. None without ``plumes``."""
     if not plumes or not cfg.plumes:
         return []
-    height, width = background.shape[:2]
     out = []
     for f in flames:
         if rng.random() >= cfg.above:
@@ -119,25 +129,46 @@ def plan_plumes(
         h = max(int(w * sprite.size[1] / sprite.size[0]), 8)
         base = fy0 + (fy1 - fy0) / 3.0
         rect = [int((fx0 + fx1) / 2 - w / 2), int(base - h), w, h]
-        out.append(_plume(sprite, rect, simulated, background, name, "above", rng))
+        if not (len(avoid) and xywh_overlaps_any(rect, avoid)):
+            out.append(_plume(sprite, rect, simulated, background, name, "above", rng))
     if rng.random() < cfg.alone:
         sprite, name, simulated = _draw_sprite(plumes, rng)
-        aspect = sprite.size[1] / sprite.size[0]
-        sky = sky_mask(background)
-        if sky.mean() >= MIN_SKY and rng.random() < cfg.sky:
-            cols = np.flatnonzero(sky.any(axis=0))
+        spot = _lone_spot(cfg, sprite.size[1] / sprite.size[0], background, depth, fy, avoid, rng)
+        if spot is not None:
+            out.append(_plume(sprite, spot[0], simulated, background, name, spot[1], rng))
+    return out
+
+
+def _lone_spot(
+    cfg: SmokeConfig,
+    aspect: float,
+    background: NDArray[np.uint8],
+    depth: NDArray[np.float32],
+    fy: float,
+    avoid: Sequence[Sequence[int]],
+    rng: np.random.Generator,
+) -> tuple[list[int], str] | None:
+    """(rect [x, y, w, h] px, where: sky or ground) of a lone plume ``aspect`` (height / width) high, clear of
+    ``avoid`` (drawn again up to :data:`TRIES` times), or None (no ground, or no clear spot)."""
+    height, width = background.shape[:2]
+    sky = sky_mask(background)
+    if sky.mean() >= MIN_SKY and rng.random() < cfg.sky:
+        cols = np.flatnonzero(sky.any(axis=0))
+        for _ in range(TRIES):
             col = int(cols[rng.integers(len(cols))])
             edge = int(np.flatnonzero(sky[:, col])[-1])  # the sky's lower edge in that column
             w = max(int(width * rng.uniform(0.15, 0.45)), 8)
             h = max(int(w * aspect), 8)
-            out.append(
-                _plume(sprite, [col - w // 2, edge + h // 20 - h, w, h], simulated, background, name, "sky", rng)
-            )
-        else:
-            ground = np.flatnonzero(depth > 0)
-            if len(ground):
-                row, col = divmod(int(ground[rng.integers(len(ground))]), width)
-                h = int(np.clip(fy * rng.uniform(*cfg.height_m) / float(depth[row, col]), 24, 0.8 * height))
-                w = max(int(h / aspect), 8)
-                out.append(_plume(sprite, [col - w // 2, row - h, w, h], simulated, background, name, "ground", rng))
-    return out
+            rect = [col - w // 2, edge + h // 20 - h, w, h]
+            if not (len(avoid) and xywh_overlaps_any(rect, avoid)):
+                return rect, "sky"
+        return None
+    ground = np.flatnonzero(depth > 0)
+    for _ in range(TRIES if len(ground) else 0):
+        row, col = divmod(int(ground[rng.integers(len(ground))]), width)
+        h = int(np.clip(fy * rng.uniform(*cfg.height_m) / float(depth[row, col]), 24, 0.8 * height))
+        w = max(int(h / aspect), 8)
+        rect = [col - w // 2, row - h, w, h]
+        if not (len(avoid) and xywh_overlaps_any(rect, avoid)):
+            return rect, "ground"
+    return None
