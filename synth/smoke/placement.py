@@ -28,9 +28,9 @@ from dataclasses import dataclass, replace
 import numpy as np
 from numpy.typing import NDArray
 
+from ground.data.boxes import xywh_overlaps_any
 from ground.image.imageio import unit_to_u8
 from ground.image.sky import sky_mask
-from ground.data.boxes import xywh_overlaps_any
 from synth.compose.composite import Placement
 from synth.compose.light import REC601
 from synth.flames.sprites import Sprite, SpriteSequence, mask_span
