@@ -239,7 +239,9 @@ def comparison_pairs(cfg: ExperimentConfig, rows: Sequence[dict]) -> list[tuple[
 
 def comparisons(cfg: ExperimentConfig, rows: Sequence[dict]) -> list[dict]:
     """Paired image-level bootstrap of every pair of :func:`comparison_pairs`, per test set with boxes and metric
-    (seeds averaged per resample): AP and AP50 (not on a set with too few fire images: their rows' AP is None),
+    (seeds averaged per resample; with the same seeds on both sides, at least
+    :data:`eval.stats.MIN_SEEDS_RESAMPLED`, the seeds resampled too; each row names the seeds of each side:
+    ``baseline_seeds``, ``mixture_seeds``): AP and AP50 (not on a set with too few fire images: their rows' AP is None),
     box recall at the alarm budget, and image recall (:func:`eval.imagelevel.paired_image_recall`); sets without
     boxes have no AP to compare (an image-labelled set: image recall only)."""
     from eval.imagelevel import paired_image_recall
@@ -278,7 +280,8 @@ def comparisons(cfg: ExperimentConfig, rows: Sequence[dict]) -> list[dict]:
                                                                           seeds=paired)["AP50"]  # fmt: skip
             pa, pb = [r.get(OPERATING) for r in a], [r.get(OPERATING) for r in b]
             if None not in pa + pb:  # every run on both sides scored on the sets without fire
-                deltas[RECALL_AT_ALARMS] = paired_recall_bootstrap(pa, pb, at_budget, cfg.report.bootstrap)  # type: ignore[arg-type]
+                deltas[RECALL_AT_ALARMS] = paired_recall_bootstrap(pa, pb, at_budget, cfg.report.bootstrap,  # type: ignore[arg-type]
+                                                                   seeds=paired)  # fmt: skip
             for key, rng in ((IMAGELEVEL, frames), *((class_metric(IMAGELEVEL, c), by_class_images) for c in classes)):
                 ia, ib = [r.get(key) for r in a], [r.get(key) for r in b]
                 if None not in ia + ib:
@@ -287,7 +290,8 @@ def comparisons(cfg: ExperimentConfig, rows: Sequence[dict]) -> list[dict]:
                                                          seeds=paired)  # fmt: skip
             for metric, d in deltas.items():
                 out.append({"test_set": test, "mixture": name, "baseline": base_label, "metric": metric,
-                            "delta": d.to_dict(), "seeds": seed_deltas(a, b, metric)})  # fmt: skip
+                            "delta": d.to_dict(), "seeds": seed_deltas(a, b, metric),
+                            "baseline_seeds": [r["seed"] for r in a], "mixture_seeds": [r["seed"] for r in b]})  # fmt: skip
     return out
 
 

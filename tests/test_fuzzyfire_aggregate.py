@@ -187,6 +187,11 @@ def test_the_recall_at_the_alarm_budget_is_compared_when_every_run_has_it(
         ("rare", "R6_S6", "R12_S0", RECALL_AT_ALARMS), ("rare", "R6_S6", "R12_S0", "image_recall")]  # fmt: skip
     assert out[0]["delta"]["value"] == 0.5  # one alarm of 20 images allowed at 10 per 100: 2 of 2 found vs 1 of 2
     assert out[1]["delta"]["value"] == 0.5  # and 2 of 2 fire images detected against 1 of 2
+    assert {c["delta"]["resampled"] for c in out} == {"images"}  # one seed a side
+    seeded = [{**r, "seed": seed} for seed in range(3) for r in rows]  # three seeds a side, the same on both
+    three = comparisons(toy_config(mixtures=["R12_S0", "R6_S6"]), seeded)
+    assert {c["delta"]["resampled"] for c in three} == {"images and seeds"}  # recall at the budget too
+    assert all(c["baseline_seeds"] == c["mixture_seeds"] == [0, 1, 2] for c in three)
     for row in rows:  # a run scored on no set without fire has none
         row.pop("operating", None)
     assert all(c["metric"] != RECALL_AT_ALARMS for c in comparisons(toy_config(mixtures=["R12_S0", "R6_S6"]), rows))
@@ -288,6 +293,7 @@ def test_a_two_class_set_gives_per_class_columns_and_comparisons(tmp_path: Path)
     assert out["AP50 fire"]["delta"]["value"] == 0.0 and out["AP50 smoke"]["delta"]["value"] == 1.0
     assert out["AP50"]["delta"]["value"] == 0.5  # the mean over the two classes
     assert out["AP50 smoke"]["seeds"] == [{"seed": 0, "delta": 1.0}]
+    assert out["AP50"]["baseline_seeds"] == out["AP50"]["mixture_seeds"] == [0]  # each side's seeds, named
 
 
 def test_each_class_gets_its_false_alarms_and_image_recall(tmp_path: Path) -> None:

@@ -57,6 +57,19 @@ def test_with_a_control_the_flames_share_comes_first() -> None:
     assert "not read: a run in it did not converge" in flagged
 
 
+def test_a_comparison_over_other_seeds_on_each_side_says_so() -> None:
+    c = {**_cmp("R200_S200", "R200_S0", 0.024, -0.026, 0.091, [0.01]), "baseline_seeds": [0], "mixture_seeds": [0, 1]}
+    ctrl = {**_cmp("R200_S200", "R200_S200 copies", -0.027, -0.06, 0.004, [-0.048, -0.006]),
+            "baseline_seeds": [0, 1], "mixture_seeds": [0, 1]}  # fmt: skip
+    (line,) = fs.headline_lines(_rows(), [c, ctrl], lambda test: "AP50", "R200_S0")
+    unequal = "(R200_S200 over seeds 0, 1; R200_S0 over seed 0: each side averaged over its own seeds)"
+    assert f"the mixture reads +2.4 [-2.6, +9.1] {unequal};" in line
+    assert line.count("over its own seeds") == 1  # the control's two sides hold the same seeds: nothing said
+    (alone,) = fs.headline_lines(_rows(), [c], lambda test: "AP50", "R200_S0")
+    assert f"AP50 +2.4 [-2.6, +9.1] points {unequal}" in alone
+    assert fs.sides_text(_cmp("B", "A", 0.01, -0.01, 0.03, [0.01]), "A") == ""  # rows that do not say: nothing
+
+
 def test_each_class_of_a_two_class_set_gets_its_delta_on_the_first_screen() -> None:
     c = _cmp("R200_S200", "R200_S0", 0.03, 0.01, 0.05, [0.02, 0.03, 0.04])
     fire = {**_cmp("R200_S200", "R200_S0", 0.004, -0.02, 0.029, [0.0] * 3), "metric": "AP50 fire"}
