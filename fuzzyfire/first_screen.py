@@ -134,7 +134,9 @@ def sides_text(row: Mapping[str, Any], baseline: str) -> str:
     def over(seeds) -> str:
         return f"seed{'s' if len(seeds) > 1 else ''} {', '.join(str(s) for s in seeds)}"
 
-    return f" ({row['mixture']} over {over(mine)}; {baseline} over {over(theirs)}: each side averaged over its own seeds)"
+    return (
+        f" ({row['mixture']} over {over(mine)}; {baseline} over {over(theirs)}: each side averaged over its own seeds)"
+    )
 
 
 def verdict(row: Mapping[str, Any], unlearned: bool) -> str:
