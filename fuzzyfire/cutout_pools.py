@@ -121,6 +121,10 @@ def cutout_stage(root: Path, subset: Dataset, classes: Sequence[str] = ("fire",)
         "min_cover": settings[0].min_cover,
         "mask": mask_identity(settings[0]),
     }
+    if "smoke" in classes:  # a rule of the smoke mattes beyond mask_identity's: cut-outs of fire alone keep theirs
+        from synth.smoke.matte import CENTRE_HAZE
+
+        identity["centre_haze"] = CENTRE_HAZE
 
     def cut(out: Path) -> int:
         return write_cutouts(itertools.chain.from_iterable(cutouts(subset, s) for s in settings), out)

@@ -185,6 +185,20 @@ def test_a_subset_without_cutouts_or_a_grid_without_fire_is_refused_in_one_line(
         cutout_pools(cfg, ["R6_S6"], None, Datasets(cfg.classes), tmp_path, tmp_path)
 
 
+def test_smoke_cutouts_carry_the_matte_rule_and_fire_cutouts_keep_their_identity(tmp_path: Path) -> None:
+    import json
+
+    from synth.smoke.matte import CENTRE_HAZE
+
+    identity = {}
+    for cls in ("fire", "smoke"):
+        with pytest.raises(ValueError, match=f"{cls} cut-outs: the 4 real images of a mixture give none"):
+            cutout_stage(tmp_path / cls, tiny_pool(tmp_path / f"tiny-{cls}", 4, "real:tiny", cls), (cls,))
+        (stage,) = (tmp_path / cls).glob("cutouts-*/stage.json")
+        identity[cls] = json.loads(stage.read_text())["identity"]
+    assert "centre_haze" not in identity["fire"] and identity["smoke"]["centre_haze"] == CENTRE_HAZE
+
+
 def test_own_frames_composite_on_the_mixtures_own_training_images_only(tmp_path: Path) -> None:
     """``own_frames``: each (subset, seed) pool composites simulated flames on that subset's images, which keep
     their fire boxes; R0 mixtures keep the shared pool, which is the pool of the config without the key."""

@@ -1,5 +1,6 @@
 """Smoke mattes: the soft opacity of made smoke is recovered from the image alone, no side of the box shows, the
-background behind the smoke is not carried along, and what cannot be matted (dark soot, no smoke, flames) is not."""
+background behind the smoke is not carried along, and what cannot be matted (dark soot, no smoke, the sky around
+dark smoke, flames) is not."""
 
 from __future__ import annotations
 
@@ -52,6 +53,21 @@ def test_dark_soot_and_a_box_without_smoke_are_not_matted() -> None:
     assert matte(_scene(smoke_rgb=(20, 20, 20))[0], BOX) is None  # the dark channel prior needs light smoke
     flat = np.full((160, 200, 3), (30, 80, 40), np.uint8)
     assert matte(flat, BOX) is None  # nothing hazy: mean opacity below MIN_OPACITY
+
+
+def test_the_sky_around_dark_smoke_is_not_matted_as_smoke(monkeypatch) -> None:
+    import synth.smoke.matte as m
+
+    x, y, w, h = BOX
+    v, u = np.mgrid[0:h, 0:w]
+    soot = 0.9 * np.exp(-(((u - w / 2) / (w / 4)) ** 2 + ((v - h / 2) / (h / 4)) ** 2))[..., None]
+    sky = np.full((160, 200, 3), (200, 212, 236), np.float64)
+    sky[y : y + h, x : x + w] = sky[y : y + h, x : x + w] * (1 - soot) + 70 * soot  # dark grey smoke on a bright sky
+    image = sky.astype(np.uint8)
+    assert matte(image, BOX) is None  # the prior's haze is the sky around it, with a hole where the smoke is
+    monkeypatch.setattr(m, "CENTRE_HAZE", 0.0)
+    assert matte(image, BOX) is not None  # without the rule, the sky would be pasted as smoke
+    assert m.centred(np.ones((9, 9), np.float32))  # a fog as dense at the sides as at the centre is smoke
 
 
 def test_a_fire_inside_the_smoke_is_kept_out_of_the_matte() -> None:

@@ -8,7 +8,11 @@ patch some channel is near black, so ``1 - t = w * min over the patch and channe
 guided filter on the image (He, Sun & Tang 2013). ``A`` is the mean of the box's pixels of highest dark channel (the
 top :data:`CORE_SHARE`), as He et al. estimate the airlight. The prior needs light smoke: a box whose ``A`` has a
 luma below :data:`MIN_LUMA` (black soot, which darkens what is behind it like a shadow) or whose smoke covers less
-than :data:`MIN_OPACITY` on average is not matted. Warm fire-coloured pixels and the image's fire boxes get opacity 0,
+than :data:`MIN_OPACITY` on average is not matted. Nor is a box whose haze lies around its centre rather than in it
+(mean haze inside half the way from the box's centre to its edge below :data:`CENTRE_HAZE` of the mean beyond): the
+prior reads a bright background as haze (He et al. name the sky as its limit), and around dark grey smoke against
+the sky or a hazy landscape its "smoke" is that background, with a hole where the smoke is. An annotator centres a
+box on the smoke; a fog that fills the box is as dense at its centre as at its sides. Warm fire-coloured pixels and the image's fire boxes get opacity 0,
 softly and a little beyond them (a flame inside a plume is no smoke, and would be pasted unlabelled).
 
 The sprite shows no rectangle and no halo of its source frame: where it is opaque its RGB is the image's (the
@@ -38,6 +42,7 @@ MIN_OPACITY = 0.15  # mean opacity inside the window a matted box needs
 OWN_TEXTURE = (0.45, 0.85)  # opacity over which the sprite's RGB goes from A to the image's own pixels
 WARM = 0.15  # a fire-coloured pixel (synth.flames.firepixels.fire_mask) kept out of a matte is also this much redder
 # than blue (R - B, 0..1): white smoke passes the fire rule's bright-core test
+CENTRE_HAZE = 0.85  # least ratio of the haze at a box's centre to the haze near its sides (module docstring)
 WINDOW_INNER = 0.55  # the elliptical window is 1 inside this share of the way from the box's centre to its edge
 
 
@@ -46,12 +51,24 @@ def dark_channel(image: NDArray[np.float32], patch: int) -> NDArray[np.float32]:
     return cv2.erode(image.min(axis=-1), np.ones((patch, patch), np.uint8))
 
 
+def centred(haze: NDArray[np.float32]) -> bool:
+    """Whether the (h, w) ``haze`` of a box is at least :data:`CENTRE_HAZE` as dense inside half the way from the
+    box's centre to its edge (an ellipse) as between there and the edge."""
+    h, w = haze.shape
+    v, u = np.linspace(-1.0, 1.0, h), np.linspace(-1.0, 1.0, w)
+    r = np.hypot(u[None, :], v[:, None])
+    centre, sides = haze[r < 0.5], haze[(r >= 0.5) & (r < 1.0)]
+    if not centre.size or not sides.size:
+        return True
+    return float(centre.mean()) >= CENTRE_HAZE * float(sides.mean())
+
+
 def matte(
     rgb: NDArray[np.uint8], box: tuple[int, int, int, int], fires: Sequence[tuple[int, int, int, int]] = ()
 ) -> tuple[NDArray[np.uint8], float] | None:
     """The (h, w, 4) uint8 straight-alpha RGBA smoke sprite of integer box (x, y, w, h) of the (H, W, 3) uint8 RGB
-    image and its mean opacity inside the window, or None when the box cannot be matted (dark smoke, or too
-    little of it): module docstring. ``fires``: the image's fire boxes (x, y, w, h px), opacity 0 inside them."""
+    image and its mean opacity inside the window, or None when the box cannot be matted (dark smoke, too little of
+    it, or haze around the box's centre rather than in it): module docstring. ``fires``: the image's fire boxes (x, y, w, h px), opacity 0 inside them."""
     x, y, w, h = box
     crop = rgb[y : y + h, x : x + w]
     image = crop.astype(np.float32) / 255.0
@@ -62,6 +79,8 @@ def matte(
     if float(airlight @ REC601) < MIN_LUMA:
         return None
     haze = KEEP_HAZE * dark_channel(image / np.maximum(airlight, 0.05)[None, None, :], patch)
+    if not centred(haze):
+        return None
     guide = cv2.cvtColor(crop, cv2.COLOR_RGB2GRAY).astype(np.float32) / 255.0
     alpha = cv2.ximgproc.guidedFilter(guide, np.clip(haze, 0.0, 1.0).astype(np.float32), 2 * patch, 1e-3)
     warm = image[..., 0] - image[..., 2] > WARM  # a flame's white core passes the fire rule, and so would white smoke
