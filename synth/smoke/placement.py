@@ -129,7 +129,7 @@ def plan_plumes(
         h = max(int(w * sprite.size[1] / sprite.size[0]), 8)
         base = fy0 + (fy1 - fy0) / 3.0
         rect = [int((fx0 + fx1) / 2 - w / 2), int(base - h), w, h]
-        if not (len(avoid) and xywh_overlaps_any(rect, avoid)):
+        if not xywh_overlaps_any(rect, avoid):
             out.append(_plume(sprite, rect, simulated, background, name, "above", rng))
     if rng.random() < cfg.alone:
         sprite, name, simulated = _draw_sprite(plumes, rng)
@@ -160,7 +160,7 @@ def _lone_spot(
             w = max(int(width * rng.uniform(0.15, 0.45)), 8)
             h = max(int(w * aspect), 8)
             rect = [col - w // 2, edge + h // 20 - h, w, h]
-            if not (len(avoid) and xywh_overlaps_any(rect, avoid)):
+            if not xywh_overlaps_any(rect, avoid):
                 return rect, "sky"
         return None
     ground = np.flatnonzero(depth > 0)
@@ -169,6 +169,6 @@ def _lone_spot(
         h = int(np.clip(fy * rng.uniform(*cfg.height_m) / float(depth[row, col]), 24, 0.8 * height))
         w = max(int(h / aspect), 8)
         rect = [col - w // 2, row - h, w, h]
-        if not (len(avoid) and xywh_overlaps_any(rect, avoid)):
+        if not xywh_overlaps_any(rect, avoid):
             return rect, "ground"
     return None
