@@ -224,10 +224,10 @@ def synth_stage(root: Path, cfg: MethodConfig, base: Path, cutouts: Stage | None
 def _plume_rules(cfg: MethodConfig) -> dict[str, int]:
     """``{"plume_rules": version}`` for a pool that lays plumes (:data:`synth.smoke.placement.RULES_VERSION`), else
     nothing: a change of where plumes go rebuilds those pools only."""
+    from synth.method2 import Method2Config
     from synth.smoke.placement import RULES_VERSION
 
-    smoke = getattr(cfg, "smoke", None)
-    return {"plume_rules": RULES_VERSION} if smoke is not None and smoke.plumes else {}
+    return {"plume_rules": RULES_VERSION} if isinstance(cfg, Method2Config) and cfg.smoke.plumes else {}
 
 
 def content_identity(cfg: MethodConfig) -> dict[str, Any]:
