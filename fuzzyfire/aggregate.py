@@ -268,7 +268,8 @@ def comparisons(cfg: ExperimentConfig, rows: Sequence[dict]) -> list[dict]:
             a, b = _by_seed(runs.get((table, base), [])), _by_seed(runs.get(("table2", name), []))
             if not a or not b:
                 continue
-            paired = [r["seed"] for r in a] == [r["seed"] for r in b]  # the same seeds: resample them too
+            seeds_a, seeds_b = [r["seed"] for r in a], [r["seed"] for r in b]
+            paired = seeds_a == seeds_b  # the same seeds: resample them too
             classes = a[0].get("classes", ())
             deltas = {}
             if not a[0].get(IMAGE_LABELLED) and all(r.get("fire_images", enough) >= enough for r in a + b):
@@ -291,7 +292,7 @@ def comparisons(cfg: ExperimentConfig, rows: Sequence[dict]) -> list[dict]:
             for metric, d in deltas.items():
                 out.append({"test_set": test, "mixture": name, "baseline": base_label, "metric": metric,
                             "delta": d.to_dict(), "seeds": seed_deltas(a, b, metric),
-                            "baseline_seeds": [r["seed"] for r in a], "mixture_seeds": [r["seed"] for r in b]})  # fmt: skip
+                            "baseline_seeds": seeds_a, "mixture_seeds": seeds_b})  # fmt: skip
     return out
 
 

@@ -123,7 +123,7 @@ def seeds_text(row: Mapping[str, Any]) -> str:
     return f"seeds agree {agree} of {len(deltas)} ({', '.join(f'{100 * d:+.1f}' for d in deltas)})"
 
 
-def sides_text(row: Mapping[str, Any], baseline: str) -> str:
+def sides_text(row: Mapping[str, Any]) -> str:
     """`` (R200_S200 over seeds 0, 1; R200_S0 over seed 0: each side averaged over its own seeds)`` when the two
     sides of a comparison were trained over other seeds (its interval then resamples the test images only); ""
     when they hold the same seeds (or the row does not say)."""
@@ -135,7 +135,8 @@ def sides_text(row: Mapping[str, Any], baseline: str) -> str:
         return f"seed{'s' if len(seeds) > 1 else ''} {', '.join(str(s) for s in seeds)}"
 
     return (
-        f" ({row['mixture']} over {over(mine)}; {baseline} over {over(theirs)}: each side averaged over its own seeds)"
+        f" ({row['mixture']} over {over(mine)}; {row['baseline']} over {over(theirs)}: each side averaged over its own "
+        "seeds)"
     )
 
 
@@ -181,9 +182,9 @@ def headline_lines(
                 f"On {c['test_set']}, the {added} of {c['mixture']} add {metric_name(c['metric'])} "
                 f"{delta_text(control['delta'])} points beyond copies of the same real images with nothing pasted "
                 f"(the control; "
-                f"{seeds_text(control) or 'one seed'}){sides_text(control, control['baseline'])}: "
+                f"{seeds_text(control) or 'one seed'}){sides_text(control)}: "
                 f"{verdict(control, bad_control)}. Against {baseline} the "
-                f"mixture reads {delta_text(c['delta'])}{sides_text(c, baseline or '')}; the copies alone (more images and steps) about "
+                f"mixture reads {delta_text(c['delta'])}{sides_text(c)}; the copies alone (more images and steps) about "
                 f"{100 * copies:+.1f}.{per_class_text(comparisons, control, ' beyond the control')}"
             )
             continue
@@ -192,7 +193,7 @@ def headline_lines(
         lines.append(
             f"On {c['test_set']}, {added_text(mix.real - base.real, mix.synth - base.synth, added)} "
             f"({c['mixture']} vs {baseline}): {metric_name(c['metric'])} {delta_text(c['delta'])} points"
-            f"{sides_text(c, baseline or '')}"
+            f"{sides_text(c)}"
             f"{'; ' + sure if sure else ''}: {verdict(c, bad)}."
             + per_class_text(comparisons, c)
             + (f" No control was trained, so the share of the {added} is unknown: grid.control=true trains copies with "

@@ -67,7 +67,7 @@ def test_a_comparison_over_other_seeds_on_each_side_says_so() -> None:
     assert line.count("over its own seeds") == 1  # the control's two sides hold the same seeds: nothing said
     (alone,) = fs.headline_lines(_rows(), [c], lambda test: "AP50", "R200_S0")
     assert f"AP50 +2.4 [-2.6, +9.1] points {unequal}" in alone
-    assert fs.sides_text(_cmp("B", "A", 0.01, -0.01, 0.03, [0.01]), "A") == ""  # rows that do not say: nothing
+    assert fs.sides_text(_cmp("B", "A", 0.01, -0.01, 0.03, [0.01])) == ""  # rows that do not say: nothing
 
 
 def test_each_class_of_a_two_class_set_gets_its_delta_on_the_first_screen() -> None:

@@ -12,8 +12,8 @@ than :data:`MIN_OPACITY` on average is not matted. Nor is a box whose haze lies 
 (mean haze inside half the way from the box's centre to its edge below :data:`CENTRE_HAZE` of the mean beyond): the
 prior reads a bright background as haze (He et al. name the sky as its limit), and around dark grey smoke against
 the sky or a hazy landscape its "smoke" is that background, with a hole where the smoke is. An annotator centres a
-box on the smoke; a fog that fills the box is as dense at its centre as at its sides. Warm fire-coloured pixels and the image's fire boxes get opacity 0,
-softly and a little beyond them (a flame inside a plume is no smoke, and would be pasted unlabelled).
+box on the smoke; a fog that fills the box is as dense at its centre as at its sides. Warm fire-coloured pixels and
+the image's fire boxes get opacity 0, softly and a little beyond them (a flame inside a plume is no smoke, and would be pasted unlabelled).
 
 The sprite shows no rectangle and no halo of its source frame: where it is opaque its RGB is the image's (the
 smoke's own texture), where it is thin it is ``A`` (never the background behind it), and its opacity is multiplied
@@ -68,7 +68,8 @@ def matte(
 ) -> tuple[NDArray[np.uint8], float] | None:
     """The (h, w, 4) uint8 straight-alpha RGBA smoke sprite of integer box (x, y, w, h) of the (H, W, 3) uint8 RGB
     image and its mean opacity inside the window, or None when the box cannot be matted (dark smoke, too little of
-    it, or haze around the box's centre rather than in it): module docstring. ``fires``: the image's fire boxes (x, y, w, h px), opacity 0 inside them."""
+    it, or haze around the box's centre rather than in it): module docstring. ``fires``: the image's fire boxes (x,
+    y, w, h px), opacity 0 inside them."""
     x, y, w, h = box
     crop = rgb[y : y + h, x : x + w]
     image = crop.astype(np.float32) / 255.0
