@@ -7,6 +7,7 @@ curation, leakage). Built from the study's numbers and its data's own records (`
 from __future__ import annotations
 
 import json
+from collections import Counter
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
@@ -69,8 +70,10 @@ def pool_sentence(manifest: Path, flames: str, size: int | None = None) -> str:
             f"{counts['places'] + counts['places_plain']} rendered places ({counts['places_plain']} without flames)"
         )
     drawn = f"; a mixture draws {size} of its {len(meta)}" if size is not None and size < len(meta) else ""
-    plumes = [p["where"] for m in meta for p in m.get("plumes", ())]
-    smoke = f"; {len(plumes)} plumes of smoke ({plumes.count('above')} above flames)" if plumes else ""
+    plumes = [p for m in meta for p in m.get("plumes", ())]
+    above = sum(p["where"] == "above" for p in plumes)
+    colours = ", ".join(f"{n} {c}" for c, n in Counter(p["colour"] for p in plumes).most_common())
+    smoke = f"; {len(plumes)} plumes of smoke ({above} above flames; {colours})" if plumes else ""
     return f"{len(meta)} images: {', '.join(parts) or 'none'}; {flames_n} {kind}{smoke}{drawn}"
 
 

@@ -91,10 +91,15 @@ def test_a_pool_is_said_in_plain_words(tmp_path: Path) -> None:
     said = fs.pool_sentence(tmp_path / "manifest.json", "cutouts")
     assert said == ("200 images: 87 of the real training frames with pasted flames, 113 fire-free photos as they are "
                     "(negatives); 174 cut-out flames (from the real training images)")  # fmt: skip
-    per_image[0] = {**per_image[0], "plumes": [{"where": "above"}, {"where": "sky"}]}
+    plumes = [
+        {"where": "above", "colour": "own"},
+        {"where": "sky", "colour": "black"},
+        {"where": "sky", "colour": "own"},
+    ]
+    per_image[0] = {**per_image[0], "plumes": plumes}
     (tmp_path / "manifest.json").write_text(json.dumps({"args": {"per_image": per_image}}))
     assert fs.pool_sentence(tmp_path / "manifest.json", "cutouts").endswith(
-        "images); 2 plumes of smoke (1 above flames)"
+        "images); 3 plumes of smoke (1 above flames; 2 own, 1 black)"
     )
 
 

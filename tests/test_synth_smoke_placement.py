@@ -6,9 +6,9 @@ from __future__ import annotations
 import numpy as np
 
 from synth.compose.composite import Placement
-from synth.flames.sprites import Sprite
+from synth.flames.sprites import Sprite, SpriteSequence
 from synth.smoke.library import SmokeConfig
-from synth.smoke.placement import lit, plan_plumes, smoke_placement
+from synth.smoke.placement import lit, own_luma, plan_plumes, smoke_placement
 from synth.smoke.plume import plume_library
 
 PLUMES = plume_library(2, seed=0, frames=2)
@@ -88,3 +88,37 @@ def test_no_plume_is_laid_over_a_frames_labelled_smoke() -> None:
     assert laid >= 6 and free >= laid + 12  # lone plumes still found a spot; without the box every flame got one
     covered = [[0, 0, 160, 120]]  # smoke over the whole frame: no room for a plume
     assert plan_plumes(cfg, PLUMES, [flame], scene, depth, 150.0, np.random.default_rng(0), covered) == []
+
+
+def _matte_library() -> list[SpriteSequence]:
+    """One light-grey matted plume (luma 0.7, textured), as synth.smoke.matte makes them."""
+    rgb = np.clip(np.random.default_rng(2).normal(178, 20, (40, 30, 3)), 0, 255).astype(np.uint8)
+    over = np.dstack([rgb, np.full((40, 30), 200, np.uint8)])
+    sprite = Sprite(over, np.zeros((40, 30, 3), np.uint8), np.zeros((40, 30), bool), smoke=True)
+    return [SpriteSequence("smoke-000", (sprite,), {"kind": "smoke"})]
+
+
+def _relative_spread(sprite: Sprite) -> float:
+    rgb = sprite.over[..., :3].astype(float)
+    return float(rgb.std() / rgb.mean())
+
+
+def test_recoloured_mattes_take_a_family_and_keep_their_texture() -> None:
+    own = _matte_library()
+    scene, depth = np.full((120, 160, 3), 255, np.uint8), np.full((120, 160), 6.0, np.float32)  # lit fully
+    kept = plan_plumes(SmokeConfig(alone=1.0), own, [], scene, depth, 150.0, np.random.default_rng(3))
+    assert [q.colour for q in kept] == ["own"]
+    seen: dict[str, list[float]] = {}
+    for seed in range(40):
+        for q in plan_plumes(SmokeConfig(alone=1.0, recolour=1.0), own, [], scene, depth, 150.0,
+                             np.random.default_rng(seed)):  # fmt: skip
+            seen.setdefault(q.colour, []).append(own_luma(q.placement.sprite))
+            if q.colour != "white":  # darker: the texture scaled, not flattened (white may clip)
+                assert abs(_relative_spread(q.placement.sprite) / _relative_spread(own[0].sprites[0]) - 1) < 0.25
+    assert set(seen) == {"white", "grey", "black"}
+    assert max(seen["black"]) < 0.35 < min(seen["grey"]) and max(seen["grey"]) < 0.8 < min(seen["white"])
+    half = [q.colour for s in range(40) for q in plan_plumes(SmokeConfig(alone=1.0, recolour=0.5), own, [], scene,
+            depth, 150.0, np.random.default_rng(s))]  # fmt: skip
+    assert 8 <= half.count("own") <= 32  # about half keep their own colour
+    a, b = (plan_plumes(SmokeConfig(alone=1.0), own, [], scene, depth, 150.0, np.random.default_rng(3)) for _ in "ab")
+    assert np.array_equal(a[0].placement.sprite.over, b[0].placement.sprite.over)
