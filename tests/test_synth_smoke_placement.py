@@ -109,16 +109,16 @@ def test_recoloured_mattes_take_a_family_and_keep_their_texture() -> None:
     kept = plan_plumes(SmokeConfig(alone=1.0), own, [], scene, depth, 150.0, np.random.default_rng(3))
     assert [q.colour for q in kept] == ["own"]
     seen: dict[str, list[float]] = {}
+    every, half_of = (SmokeConfig(alone=1.0, recolour=share) for share in (1.0, 0.5))
     for seed in range(40):
-        for q in plan_plumes(SmokeConfig(alone=1.0, recolour=1.0), own, [], scene, depth, 150.0,
-                             np.random.default_rng(seed)):  # fmt: skip
+        for q in plan_plumes(every, own, [], scene, depth, 150.0, np.random.default_rng(seed)):
             seen.setdefault(q.colour, []).append(own_luma(q.placement.sprite))
             if q.colour != "white":  # darker: the texture scaled, not flattened (white may clip)
                 assert abs(_relative_spread(q.placement.sprite) / _relative_spread(own[0].sprites[0]) - 1) < 0.25
     assert set(seen) == {"white", "grey", "black"}
     assert max(seen["black"]) < 0.35 < min(seen["grey"]) and max(seen["grey"]) < 0.8 < min(seen["white"])
-    half = [q.colour for s in range(40) for q in plan_plumes(SmokeConfig(alone=1.0, recolour=0.5), own, [], scene,
-            depth, 150.0, np.random.default_rng(s))]  # fmt: skip
+    half = [q.colour for s in range(40) for q in plan_plumes(half_of, own, [], scene, depth, 150.0,
+            np.random.default_rng(s))]  # fmt: skip
     assert 8 <= half.count("own") <= 32  # about half keep their own colour
     a, b = (plan_plumes(SmokeConfig(alone=1.0), own, [], scene, depth, 150.0, np.random.default_rng(3)) for _ in "ab")
     assert np.array_equal(a[0].placement.sprite.over, b[0].placement.sprite.over)

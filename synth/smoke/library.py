@@ -33,7 +33,8 @@ class SmokeConfig:
     frames: int = 8  # frames per simulated sequence, >= 1
     seed: int = 0  # plume library seed
     recolour: float = 0.0  # share of matted plumes (source cutouts) drawn a colour as a simulated plume is (white,
-    # grey or black; synth.smoke.placement.FAMILIES), their own texture kept; the others keep their own colour, 0..1
+    # grey or black; synth.smoke.placement.FAMILIES), their own texture kept; the others keep their own colour (a
+    # simulated plume always draws one, so an R0 mixture's simulated plumes ignore it), 0..1
 
     def __post_init__(self) -> None:
         for name, share in (
