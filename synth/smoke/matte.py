@@ -13,7 +13,8 @@ than :data:`MIN_OPACITY` on average is not matted. Nor is a box whose haze lies 
 prior reads a bright background as haze (He et al. name the sky as its limit), and around dark grey smoke against
 the sky or a hazy landscape its "smoke" is that background, with a hole where the smoke is. An annotator centres a
 box on the smoke; a fog that fills the box is as dense at its centre as at its sides. Warm fire-coloured pixels and
-the image's fire boxes get opacity 0, softly and a little beyond them (a flame inside a plume is no smoke, and would be pasted unlabelled).
+the image's fire boxes get opacity 0, softly and a little beyond them (a flame inside a plume is no smoke, and would
+be pasted unlabelled).
 
 The sprite shows no rectangle and no halo of its source frame: where it is opaque its RGB is the image's (the
 smoke's own texture), where it is thin it is ``A`` (never the background behind it), and its opacity is multiplied
