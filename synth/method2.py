@@ -298,8 +298,8 @@ def make_image(cfg: Method2Config, i: int, library: Sequence[SpriteSequence], vi
     if cfg.smoke.plumes and plume_library:
         fy = float(render.intrinsics(yfov, cfg.width, cfg.height)[1, 1])
         smoke_rng = np.random.default_rng([cfg.seed, 2, i, 3])
-        own_smoke = view_meta.get("frame_smoke_boxes", [])  # a labelled frame's smoke: no plume over it
-        plumes = plan_plumes(cfg.smoke, plume_library, [p for p, _ in planned], scene, depth, fy, smoke_rng, own_smoke)
+        labelled = [*view_meta.get("frame_boxes", []), *view_meta.get("frame_smoke_boxes", [])]  # no plume over them
+        plumes = plan_plumes(cfg.smoke, plume_library, [p for p, _ in planned], scene, depth, fy, smoke_rng, labelled)
     shown = visible_composite(scene, planned, effects, cfg.min_box_px, meter, plumes, cfg.smoke_class)
     kept, boxes, index = boxes_from_masks([v.part for v in shown.seen], cfg.min_box_px)
     flames = [flame_record(shown.flames[k][0], shown.flames[k][1], shown.seen[k]) for k in index]

@@ -198,16 +198,16 @@ def write_tiny_kits(root: Path) -> Path:
     return root
 
 
-def write_frames(root: Path, n: int = 3, width: int = 128, height: int = 96) -> Path:
-    """A COCO dataset of ``n`` random ``width`` x ``height`` frames, frame k with k + 1 fire boxes and one smoke
-    box; returns its folder."""
+def write_frames(root: Path, n: int = 3, width: int = 128, height: int = 96, fire: tuple[int, int] = (20, 30)) -> Path:
+    """A COCO dataset of ``n`` random ``width`` x ``height`` frames, frame k with k + 1 fire boxes ``fire`` (w, h)
+    px at (4 + 30 j, 50) and one smoke box (2, 2, 30, 20); returns its folder."""
     src = root / "src"
     builder = DatasetBuilder(src, ["fire", "smoke"])
     for k in range(n):
         write_image(src / f"f{k}.png", width, height, seed=k)
         image = builder.add_image(f"f{k}.png", width, height, source="real:cams")
         for j in range(k + 1):
-            builder.add_box(image, "fire", (4 + 30 * j, 50, 20, 30))
+            builder.add_box(image, "fire", (4 + 30 * j, 50, *fire))
         builder.add_box(image, "smoke", (2, 2, 30, 20))
     write_dataset(builder.build(), root / "frames", ("coco",), "copy")
     return root / "frames"

@@ -146,6 +146,33 @@ def test_labelled_frames_keep_their_fire_boxes_and_flames_stand_beside_them(tmp_
     assert dataset_files(tmp_path / "a") == dataset_files(tmp_path / "b")
 
 
+def test_no_plume_is_laid_over_a_labelled_frames_fire_or_smoke(tmp_path, library):
+    """On labelled frames a lone plume's box overlaps none of the frame's own boxes, fire or smoke
+    (synth.smoke.placement): a plume over a labelled fire would hide the fire its box still claims."""
+    from dataclasses import replace
+
+    from factories import write_frames
+
+    from ground.data.boxes import xywh_overlaps_any
+    from synth.smoke.library import SmokeConfig, smoke_library
+
+    frames = write_frames(tmp_path, n=2, fire=(60, 40))  # fires over most of the ground
+    cfg = replace(CFG, n=8, scenes=0, labelled_frames=(frames,), width=128, height=96, images_per_view=1,
+                  negatives=1.0, smoke_class=True, smoke=SmokeConfig(alone=1.0, sequences=2, frames=2))  # fmt: skip
+    generate(cfg, library + smoke_library(cfg.smoke), tmp_path / "a")
+    coco = json.loads((tmp_path / "a" / "annotations.json").read_text())
+    smoke_id = next(c["id"] for c in coco["categories"] if c["name"] == "smoke")
+    per_image = json.loads((tmp_path / "a" / "manifest.json").read_text())["args"]["per_image"]
+    laid = 0
+    for img, meta in zip(coco["images"], per_image):
+        smoke = [a["bbox"] for a in coco["annotations"] if a["image_id"] == img["id"] and a["category_id"] == smoke_id]
+        plumes = smoke[: len(smoke) - len(meta["frame_smoke_boxes"])]  # the frame's own smoke boxes come last
+        assert len(plumes) <= len(meta.get("plumes", []))
+        assert not any(xywh_overlaps_any(b, meta["frame_boxes"] + meta["frame_smoke_boxes"]) for b in plumes)
+        laid += len(plumes)
+    assert laid >= 2  # the rule left room for plumes
+
+
 def test_photo_negatives_leave_every_fire_free_photo_without_flames_and_the_rest_as_before(tmp_path, library):
     """``photo_negatives`` 1: every image on a backgrounds photo has no flame and no box; the renders keep flames
     (``negatives`` 0); unset, the same pool has flames on photos too; a labelled frame keeps ``negatives``."""

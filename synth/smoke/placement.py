@@ -7,10 +7,11 @@
   the view has sky (:func:`ground.image.sky.sky_mask`, at least :data:`MIN_SKY` of the image) a share ``smoke.sky``
   of them rise into it from the sky's lower edge at a random column (a plume over a ridge or a roof), 15-45 % of
   the image wide; the others stand on a ground pixel (depth > 0), ``smoke.height_m`` high at that depth.
-- **Never over labelled smoke**: on a labelled frame no plume's box overlaps the frame's own smoke boxes
+- **Never over a labelled object**: on a labelled frame no plume's box overlaps the frame's own smoke or fire boxes
   (``avoid``). A pasted plume is boxed where a viewer sees it, a frame's smoke where its annotator drew it (often a
-  haze across half the frame): a plume inside that box would label one smoke twice, in two ways. A plume above a
-  flame that would overlap one is not laid; a lone plume's spot is drawn again, up to :data:`TRIES` times.
+  haze across half the frame): a plume inside that box would label one smoke twice, in two ways; a plume over a
+  labelled fire would hide the fire its box still claims. A plume above a flame that would overlap one is not laid;
+  a lone plume's spot is drawn again, up to :data:`TRIES` times.
 - **Colour**: white steam (weight 0.35, grey level 0.85-1.0), grey smoke (0.4, 0.45-0.75) or black soot (0.25,
   0.08-0.3) for a simulated plume (:data:`FAMILIES`); a matted plume keeps its own colour, or, at ``smoke.recolour``,
   is drawn one the same way, its RGB scaled by that level over its own luma (its texture kept: the mattes are all
@@ -45,10 +46,10 @@ FAMILIES: tuple[tuple[str, float, tuple[float, float]], ...] = (
     ("black", 0.25, (0.08, 0.3)),
 )
 MIN_SKY = 0.05  # share of the image that must be sky for a plume to rise into it
-TRIES = 10  # draws of a lone plume's spot clear of a frame's labelled smoke
+TRIES = 10  # draws of a lone plume's spot clear of a frame's labelled boxes
 #: Version of the placement rules beyond SmokeConfig's keys, in the identity of every cached pool that lays plumes
-#: (fuzzyfire.stages.synth_stage): 2 = no plume over a labelled frame's smoke.
-RULES_VERSION = 2
+#: (fuzzyfire.stages.synth_stage): 2 = no plume over a labelled frame's smoke; 3 = nor over its fire.
+RULES_VERSION = 3
 
 
 @dataclass(frozen=True)
@@ -132,8 +133,8 @@ def plan_plumes(
 ) -> list[Plume]:
     """The plumes of one image (module docstring): one above each of ``flames`` drawn at ``cfg.above``, then one
     alone at ``cfg.alone``; ``background`` (H, W, 3) uint8 the scene as exposed, ``depth`` (H, W) metres (0 off the
-    ground), ``fy`` the focal length in pixels, ``avoid`` a labelled frame's smoke boxes [x, y, w, h] px that no
-    plume's box may overlap. None without ``plumes``."""
+    ground), ``fy`` the focal length in pixels, ``avoid`` a labelled frame's fire and smoke boxes [x, y, w, h] px
+    that no plume's box may overlap. None without ``plumes``."""
     if not plumes or not cfg.plumes:
         return []
     out = []
