@@ -172,25 +172,44 @@ def _lone_spot(
 ) -> tuple[list[int], str] | None:
     """(rect [x, y, w, h] px, where: sky or ground) of a lone plume ``aspect`` (height / width) high, clear of
     ``avoid`` (drawn again up to :data:`TRIES` times), or None (no ground, or no clear spot)."""
-    height, width = background.shape[:2]
     sky = sky_mask(background)
-    if sky.mean() >= MIN_SKY and rng.random() < cfg.sky:
-        cols = np.flatnonzero(sky.any(axis=0))
-        for _ in range(TRIES):
-            col = int(cols[rng.integers(len(cols))])
-            edge = int(np.flatnonzero(sky[:, col])[-1])  # the sky's lower edge in that column
-            w = max(int(width * rng.uniform(0.15, 0.45)), 8)
-            h = max(int(w * aspect), 8)
-            rect = [col - w // 2, edge + h // 20 - h, w, h]
-            if not xywh_overlaps_any(rect, avoid):
-                return rect, "sky"
-        return None
     ground = np.flatnonzero(depth > 0)
-    for _ in range(TRIES if len(ground) else 0):
-        row, col = divmod(int(ground[rng.integers(len(ground))]), width)
-        h = int(np.clip(fy * rng.uniform(*cfg.height_m) / float(depth[row, col]), 24, 0.8 * height))
-        w = max(int(h / aspect), 8)
-        rect = [col - w // 2, row - h, w, h]
+    if sky.mean() >= MIN_SKY and rng.random() < cfg.sky:
+        where, draw = "sky", lambda: _sky_rect(sky, aspect, rng)
+    elif len(ground):
+        where, draw = "ground", lambda: _ground_rect(ground, depth, fy, cfg.height_m, aspect, rng)
+    else:
+        return None
+    for _ in range(TRIES):
+        rect = draw()
         if not xywh_overlaps_any(rect, avoid):
-            return rect, "ground"
+            return rect, where
     return None
+
+
+def _sky_rect(sky: NDArray[np.bool_], aspect: float, rng: np.random.Generator) -> list[int]:
+    """A plume's rect [x, y, w, h] px rising into ``sky`` (H, W) bool from its lower edge at a random column, 15-45 %
+    of the image wide, ``aspect`` (height / width) high."""
+    cols = np.flatnonzero(sky.any(axis=0))
+    col = int(cols[rng.integers(len(cols))])
+    edge = int(np.flatnonzero(sky[:, col])[-1])  # the sky's lower edge in that column
+    w = max(int(sky.shape[1] * rng.uniform(0.15, 0.45)), 8)
+    h = max(int(w * aspect), 8)
+    return [col - w // 2, edge + h // 20 - h, w, h]
+
+
+def _ground_rect(
+    ground: NDArray[np.intp],
+    depth: NDArray[np.float32],
+    fy: float,
+    height_m: tuple[float, float],
+    aspect: float,
+    rng: np.random.Generator,
+) -> list[int]:
+    """A plume's rect [x, y, w, h] px standing on a random pixel of ``ground`` (flat indices into ``depth`` (H, W)
+    metres), ``height_m`` [lo, hi] metres high at its depth (``fy`` px focal length), 24 px to 0.8 of the image."""
+    height, width = depth.shape
+    row, col = divmod(int(ground[rng.integers(len(ground))]), width)
+    h = int(np.clip(fy * rng.uniform(*height_m) / float(depth[row, col]), 24, 0.8 * height))
+    w = max(int(h / aspect), 8)
+    return [col - w // 2, row - h, w, h]
