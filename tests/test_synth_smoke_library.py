@@ -26,7 +26,6 @@ def test_simulated_plumes_or_own_smoke_and_none_without_plumes(library) -> None:
     [
         ({"above": 1.5}, "smoke.above must be in 0..1"),
         ({"sky": -0.1}, "smoke.sky must be in 0..1"),
-        ({"recolour": 2.0}, "smoke.recolour must be in 0..1"),
         ({"source": "fluid"}, "unknown smoke.source 'fluid'"),
         ({"sequences": 0}, "smoke.sequences and frames must be >= 1"),
         ({"height_m": (5.0, 1.0)}, r"smoke.height_m must be \[lo, hi\]"),

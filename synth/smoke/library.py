@@ -32,17 +32,9 @@ class SmokeConfig:
     sequences: int = 12  # simulated plume sequences, >= 1
     frames: int = 8  # frames per simulated sequence, >= 1
     seed: int = 0  # plume library seed
-    recolour: float = 0.0  # share of matted plumes (source cutouts) drawn a colour as a simulated plume is (white,
-    # grey or black; synth.smoke.placement.FAMILIES), their own texture kept; the others keep their own colour (a
-    # simulated plume always draws one, so an R0 mixture's simulated plumes ignore it), 0..1
 
     def __post_init__(self) -> None:
-        for name, share in (
-            ("above", self.above),
-            ("alone", self.alone),
-            ("sky", self.sky),
-            ("recolour", self.recolour),
-        ):
+        for name, share in (("above", self.above), ("alone", self.alone), ("sky", self.sky)):
             if not 0.0 <= share <= 1.0:
                 raise ValueError(f"smoke.{name} must be in 0..1, got {share}")
         if self.source not in SMOKE_SOURCES:

@@ -13,9 +13,7 @@
   labelled fire would hide the fire its box still claims. A plume above a flame that would overlap one is not laid;
   a lone plume's spot is drawn again, up to :data:`TRIES` times.
 - **Colour**: white steam (weight 0.35, grey level 0.85-1.0), grey smoke (0.4, 0.45-0.75) or black soot (0.25,
-  0.08-0.3) for a simulated plume (:data:`FAMILIES`); a matted plume keeps its own colour, or, at ``smoke.recolour``,
-  is drawn one the same way, its RGB scaled by that level over its own luma (its texture kept: the mattes are all
-  light smoke, :data:`synth.smoke.matte.MIN_LUMA`). Either is **lit by the
+  0.08-0.3) for a simulated plume (:data:`FAMILIES`); a matted plume keeps its own colour. Either is **lit by the
   scene**: multiplied by ``clip(0.35 + 1.3 L, 0.35, 1)``, ``L`` the mean luma (0..1) of the background under it, and
   tinted a fifth of the way towards that background's mean colour (dark in a dark frame, warm under warm light).
 
@@ -97,27 +95,8 @@ def _draw_sprite(plumes: Sequence[SpriteSequence], rng: np.random.Generator) -> 
     return seq.sprites[frame], f"{seq.name}/{frame}", seq.meta.get("generator") == "plume"
 
 
-def own_luma(sprite: Sprite) -> float:
-    """The mean luma (0..1) of ``sprite``'s RGB weighted by its opacity."""
-    alpha = sprite.over[..., 3].astype(np.float64)
-    luma = sprite.over[..., :3].astype(np.float64) / 255.0 @ REC601
-    return float((luma * alpha).sum() / max(float(alpha.sum()), 1e-6))
-
-
-def _colour(simulated: bool, sprite: Sprite, recolour: float, rng: np.random.Generator) -> tuple[str, float | None]:
-    """(family name or ``own``, the factor on the sprite's RGB or None): module docstring."""
-    if simulated:
-        return _draw_colour(rng)
-    if recolour > 0 and rng.random() < recolour:  # no draw at 0: a pool without recolouring keeps its bytes
-        name, level = _draw_colour(rng)
-        return name, level / max(own_luma(sprite), 0.05)
-    return "own", None
-
-
-def _plume(
-    sprite: Sprite, rect: list[int], simulated: bool, background, name: str, where: str, cfg: SmokeConfig, rng
-) -> Plume:
-    colour, grey = _colour(simulated, sprite, cfg.recolour, rng)
+def _plume(sprite: Sprite, rect: list[int], simulated: bool, background, name: str, where: str, rng) -> Plume:
+    colour, grey = _draw_colour(rng) if simulated else ("own", None)
     return Plume(smoke_placement(lit(sprite, grey, background, rect), rect), name, where, colour)
 
 
@@ -152,12 +131,12 @@ def plan_plumes(
         base = fy0 + (fy1 - fy0) / 3.0
         rect = [int((fx0 + fx1) / 2 - w / 2), int(base - h), w, h]
         if not xywh_overlaps_any(rect, avoid):
-            out.append(_plume(sprite, rect, simulated, background, name, "above", cfg, rng))
+            out.append(_plume(sprite, rect, simulated, background, name, "above", rng))
     if rng.random() < cfg.alone:
         sprite, name, simulated = _draw_sprite(plumes, rng)
         spot = _lone_spot(cfg, sprite.size[1] / sprite.size[0], background, depth, fy, avoid, rng)
         if spot is not None:
-            out.append(_plume(sprite, spot[0], simulated, background, name, spot[1], cfg, rng))
+            out.append(_plume(sprite, spot[0], simulated, background, name, spot[1], rng))
     return out
 
 
