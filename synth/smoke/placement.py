@@ -152,10 +152,9 @@ def _lone_spot(
     """(rect [x, y, w, h] px, where: sky or ground) of a lone plume ``aspect`` (height / width) high, clear of
     ``avoid`` (drawn again up to :data:`TRIES` times), or None (no ground, or no clear spot)."""
     sky = sky_mask(background)
-    ground = np.flatnonzero(depth > 0)
     if sky.mean() >= MIN_SKY and rng.random() < cfg.sky:
         where, draw = "sky", lambda: _sky_rect(sky, aspect, rng)
-    elif len(ground):
+    elif len(ground := np.flatnonzero(depth > 0)):
         where, draw = "ground", lambda: _ground_rect(ground, depth, fy, cfg.height_m, aspect, rng)
     else:
         return None
