@@ -29,6 +29,8 @@ def test_simulated_plumes_or_own_smoke_and_none_without_plumes(library) -> None:
         ({"source": "fluid"}, "unknown smoke.source 'fluid'"),
         ({"sequences": 0}, "smoke.sequences and frames must be >= 1"),
         ({"height_m": (5.0, 1.0)}, r"smoke.height_m must be \[lo, hi\]"),
+        ({"density": (3.0, 1.0)}, r"smoke.density must be \[lo, hi\]"),
+        ({"density": (0.0, 1.0)}, r"smoke.density must be .* with lo >= 0.1"),
     ],
 )
 def test_bad_smoke_settings_are_refused(kwargs: dict, message: str) -> None:

@@ -27,6 +27,8 @@ class SmokeConfig:
     sky: float = 0.5  # share of the plumes without flames that rise into the view's sky from its horizon, when it
     # has sky (a plume over a ridge; a flame in the sky is not plausible, smoke is), 0..1
     height_m: tuple[float, float] = (1.0, 8.0)  # height of a plume standing on the ground, metres [lo, hi]
+    density: tuple[float, float] = (1.0, 1.0)  # gain on a plume's optical depth, drawn per plume [lo, hi]: its
+    # transmission t becomes t ** gain (Beer-Lambert: gain x the smoke's density); 1 = as matted or simulated
     source: Literal["simulated", "cutouts"] = "simulated"  # simulated plumes | cutouts: the mixture's own labelled
     # smoke matted into sprites (fuzzyfire experiment only: fuzzyfire.cutout_pools)
     sequences: int = 12  # simulated plume sequences, >= 1
@@ -42,6 +44,7 @@ class SmokeConfig:
         if self.sequences < 1 or self.frames < 1:
             raise ValueError(f"smoke.sequences and frames must be >= 1, got {self.sequences}, {self.frames}")
         check_range("smoke.height_m", self.height_m, 0.1)
+        check_range("smoke.density", self.density, 0.1)
 
     @property
     def plumes(self) -> bool:
