@@ -58,9 +58,11 @@ def pool_sentence(manifest: Path, flames: str, size: int | None = None) -> str:
         counts[where if m.get("flames") else f"{where}_plain"] += 1
     flames_n = sum(len(m.get("flames", ())) for m in meta)
     parts = []
-    if counts["frames"] or counts["frames_plain"]:
+    if counts["frames"]:
         parts.append(f"{counts['frames']} of the real training frames with pasted flames"
                      + (f" and {counts['frames_plain']} left without" if counts["frames_plain"] else ""))  # fmt: skip
+    elif counts["frames_plain"]:
+        parts.append(f"{counts['frames_plain']} real training frames")
     if counts["photos"]:
         parts.append(f"{counts['photos']} fire-free photos with pasted flames")
     if counts["photos_plain"]:
@@ -70,11 +72,23 @@ def pool_sentence(manifest: Path, flames: str, size: int | None = None) -> str:
             f"{counts['places'] + counts['places_plain']} rendered places ({counts['places_plain']} without flames)"
         )
     drawn = f"; a mixture draws {size} of its {len(meta)}" if size is not None and size < len(meta) else ""
-    plumes = [p for m in meta for p in m.get("plumes", ())]
-    above = sum(p["where"] == "above" for p in plumes)
+    smoke = plume_words([p for m in meta for p in m.get("plumes", ())])
+    laid = f"{flames_n} {kind}" if flames_n else "no pasted flames"
+    if smoke and not flames_n:  # a pool of plumes: they lead
+        return f"{len(meta)} images: {smoke}, on {', '.join(parts) or 'none'}; {laid}{drawn}"
+    return f"{len(meta)} images: {', '.join(parts) or 'none'}; {laid}{'; ' + smoke if smoke else ''}{drawn}"
+
+
+def plume_words(plumes: Sequence[Mapping[str, Any]]) -> str:
+    """``206 plumes of smoke (160 on the ground, 46 in the sky; 206 own)`` from a pool's plume records (where each
+    was laid, its colour); "" without plumes."""
+    if not plumes:
+        return ""
+    names = {"above": "above flames", "ground": "on the ground", "sky": "in the sky"}
+    where = Counter(p["where"] for p in plumes)
+    places = ", ".join(f"{where[k]} {v}" for k, v in names.items() if where[k])
     colours = ", ".join(f"{n} {c}" for c, n in Counter(p["colour"] for p in plumes).most_common())
-    smoke = f"; {len(plumes)} plumes of smoke ({above} above flames; {colours})" if plumes else ""
-    return f"{len(meta)} images: {', '.join(parts) or 'none'}; {flames_n} {kind}{smoke}{drawn}"
+    return f"{len(plumes)} plumes of smoke ({places}; {colours})"
 
 
 def curation_sentence(folder: Path) -> str | None:

@@ -99,8 +99,13 @@ def test_a_pool_is_said_in_plain_words(tmp_path: Path) -> None:
     per_image[0] = {**per_image[0], "plumes": plumes}
     (tmp_path / "manifest.json").write_text(json.dumps({"args": {"per_image": per_image}}))
     assert fs.pool_sentence(tmp_path / "manifest.json", "cutouts").endswith(
-        "images); 3 plumes of smoke (1 above flames; 2 own, 1 black)"
+        "images); 3 plumes of smoke (1 above flames, 2 in the sky; 2 own, 1 black)"
     )
+    lone = [{"photo": "a.jpg", "frame_boxes": [], "flames": [], "plumes": [{"where": "ground", "colour": "own"}]}] * 3
+    (tmp_path / "manifest.json").write_text(json.dumps({"args": {"per_image": [*lone, {**lone[0], "plumes": []}]}}))
+    assert fs.pool_sentence(tmp_path / "manifest.json", "cutouts") == (
+        "4 images: 3 plumes of smoke (3 on the ground; 3 own), on 4 real training frames; no pasted flames"
+    )  # a pool of plumes leads with them, and counts no flames
 
 
 def test_classes_curation_and_alarm_resolution_are_said(tmp_path: Path) -> None:
