@@ -1,7 +1,8 @@
 """The smoke a Method 2 pool lays: its settings (:class:`SmokeConfig`) and the plume sequences it draws from
 (:func:`smoke_library`): simulated plumes (:mod:`synth.smoke.plume`) or, with ``source: cutouts``, the mattes of a
-mixture's own labelled smoke (:mod:`synth.smoke.matte`, cut by ``fuzzyfire experiment``: :mod:`fuzzyfire.cutout_pools`).
-A run's library holds flames and plumes together; :func:`split_library` parts them by each sequence's kind."""
+mixture's own labelled smoke (:mod:`synth.smoke.matte`, cut by ``fuzzyfire experiment``: :mod:`fuzzyfire.cutout_pools`),
+with ``shape: plume`` each in the outline of a simulated plume (:func:`plume_shaped`). A run's library holds flames
+and plumes together; :func:`split_library` parts them by each sequence's kind."""
 
 from __future__ import annotations
 
