@@ -8,7 +8,7 @@ import numpy as np
 from synth.compose.composite import Placement
 from synth.flames.sprites import Sprite, SpriteSequence
 from synth.smoke.library import SmokeConfig
-from synth.smoke.placement import lit, plan_plumes, smoke_placement, thickened
+from synth.smoke.placement import lit, plan_plumes, smoke_placement
 from synth.smoke.plume import plume_library
 
 PLUMES = plume_library(2, seed=0, frames=2)
@@ -105,31 +105,3 @@ def test_a_matted_plume_keeps_its_own_colour_only_lit_by_its_scene() -> None:
     p = kept.placement
     assert kept.colour == "own"
     assert np.array_equal(p.sprite.over, lit(own[0].sprites[0], None, scene, [p.x, p.y, p.width, p.height]).over)
-
-
-def test_a_denser_plume_keeps_its_place_and_colour_and_thickens_by_beer_lambert() -> None:
-    sprite = PLUMES[0].sprites[0]
-    assert thickened(sprite, 1.0) is sprite
-    thick = thickened(sprite, 2.0)
-    t, t2 = (1.0 - s.over[..., 3].astype(np.float64) / 255.0 for s in (sprite, thick))
-    assert np.abs(t2 - t**2).max() <= 0.5 / 255 + 1e-9  # transmission squared, up to uint8 rounding
-    assert np.array_equal(thick.over[..., :3], sprite.over[..., :3])  # colour kept
-    assert np.all(thick.over[..., 3] >= sprite.over[..., 3]) and np.array_equal(
-        thick.over[..., 3] == 0, sprite.over[..., 3] == 0
-    )  # denser where there is smoke, still none where there is none: no edge appears
-    scene, depth = np.full((80, 80, 3), 90, np.uint8), np.full((80, 80), 4.0, np.float32)
-    args = (PLUMES, [_flame(30, 20, 10, 40)], scene, depth, 100.0)
-    plain, fixed = (
-        plan_plumes(SmokeConfig(above=1.0, alone=1.0, density=d), *args, np.random.default_rng(3))
-        for d in ((1.0, 1.0), (2.0, 2.0))
-    )
-    assert [q.placement.x for q in fixed] == [q.placement.x for q in plain] and len(plain) == 2  # same draws
-    for a, b in zip(plain, fixed):
-        assert b.density == 2.0 and b.record()["density"] == 2.0 and a.record()["density"] == 1.0
-        assert b.placement.sprite.over[..., 3].sum() > a.placement.sprite.over[..., 3].sum()
-    drawn = [
-        q.density
-        for seed in range(8)
-        for q in plan_plumes(SmokeConfig(alone=1.0, density=(1.0, 3.0)), *args, np.random.default_rng(seed))
-    ]
-    assert drawn and all(1.0 <= g <= 3.0 for g in drawn) and len(set(drawn)) == len(drawn)  # drawn per plume

@@ -1,28 +1,20 @@
 """The smoke a Method 2 pool lays: its settings (:class:`SmokeConfig`) and the plume sequences it draws from
 (:func:`smoke_library`): simulated plumes (:mod:`synth.smoke.plume`) or, with ``source: cutouts``, the mattes of a
-mixture's own labelled smoke (:mod:`synth.smoke.matte`, cut by ``fuzzyfire experiment``: :mod:`fuzzyfire.cutout_pools`),
-with ``shape: plume`` each in the outline of a simulated plume (:func:`plume_shaped`). A run's library holds flames
-and plumes together; :func:`split_library` parts them by each sequence's kind."""
+mixture's own labelled smoke (:mod:`synth.smoke.matte`, cut by ``fuzzyfire experiment``: :mod:`fuzzyfire.cutout_pools`).
+A run's library holds flames and plumes together; :func:`split_library` parts them by each sequence's kind."""
 
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from typing import Literal
 
-import cv2
-import numpy as np
-
-from ground.image.imageio import unit_to_u8
-from synth.flames.sprites import Sprite, SpriteSequence, is_smoke
+from synth.flames.sprites import SpriteSequence, is_smoke
 from synth.schema import check_range
 from synth.smoke.plume import plume_library
 
 #: Where a pool's plumes come from (``SmokeConfig.source``).
 SMOKE_SOURCES: tuple[str, ...] = ("simulated", "cutouts")
-#: The outline of an own smoke sprite (``SmokeConfig.shape``): as matted (the matte's soft elliptical window), or a
-#: simulated plume's.
-SMOKE_SHAPES: tuple[str, ...] = ("matte", "plume")
 
 
 @dataclass(frozen=True)
@@ -35,13 +27,9 @@ class SmokeConfig:
     sky: float = 0.5  # share of the plumes without flames that rise into the view's sky from its horizon, when it
     # has sky (a plume over a ridge; a flame in the sky is not plausible, smoke is), 0..1
     height_m: tuple[float, float] = (1.0, 8.0)  # height of a plume standing on the ground, metres [lo, hi]
-    density: tuple[float, float] = (1.0, 1.0)  # gain on a plume's optical depth, drawn per plume [lo, hi]: its
-    # transmission t becomes t ** gain (Beer-Lambert: gain x the smoke's density); 1 = as matted or simulated
     source: Literal["simulated", "cutouts"] = "simulated"  # simulated plumes | cutouts: the mixture's own labelled
     # smoke matted into sprites (fuzzyfire experiment only: fuzzyfire.cutout_pools)
-    shape: Literal["matte", "plume"] = "matte"  # outline of an own smoke sprite (source cutouts): matte = as matted
-    # (a soft ellipse); plume = its opacity times a simulated plume's, peak 1 (its texture and colour, a plume's shape)
-    sequences: int = 12  # simulated plume sequences (with shape plume: the shapes), >= 1
+    sequences: int = 12  # simulated plume sequences, >= 1
     frames: int = 8  # frames per simulated sequence, >= 1
     seed: int = 0  # plume library seed
 
@@ -51,14 +39,9 @@ class SmokeConfig:
                 raise ValueError(f"smoke.{name} must be in 0..1, got {share}")
         if self.source not in SMOKE_SOURCES:
             raise ValueError(f"unknown smoke.source {self.source!r}; choose one of {', '.join(SMOKE_SOURCES)}")
-        if self.shape not in SMOKE_SHAPES:
-            raise ValueError(f"unknown smoke.shape {self.shape!r}; choose one of {', '.join(SMOKE_SHAPES)}")
-        if self.shape == "plume" and self.source != "cutouts":
-            raise ValueError("smoke.shape plume shapes own smoke: it needs smoke.source cutouts")
         if self.sequences < 1 or self.frames < 1:
             raise ValueError(f"smoke.sequences and frames must be >= 1, got {self.sequences}, {self.frames}")
         check_range("smoke.height_m", self.height_m, 0.1)
-        check_range("smoke.density", self.density, 0.1)
 
     @property
     def plumes(self) -> bool:
@@ -69,7 +52,7 @@ class SmokeConfig:
 def smoke_library(cfg: SmokeConfig, cutouts: Sequence[SpriteSequence] = ()) -> list[SpriteSequence]:
     """The plume sequences of ``cfg``: none without plumes; ``source`` simulated: :func:`synth.smoke.plume.plume_library`;
     cutouts: the smoke sequences among ``cutouts`` (a cut-out folder read by :func:`synth.flames.sprites.load_library`;
-    ValueError when it holds none), with ``shape`` plume each in a simulated plume's shape (:func:`plume_shaped`)."""
+    ValueError when it holds none)."""
     if not cfg.plumes:
         return []
     if cfg.source == "simulated":
@@ -80,30 +63,7 @@ def smoke_library(cfg: SmokeConfig, cutouts: Sequence[SpriteSequence] = ()) -> l
             "smoke.source cutouts: no smoke cut-outs given (fuzzyfire experiment mattes them from each mixture's "
             "labelled smoke; elsewhere use smoke.source simulated)"
         )
-    if cfg.shape == "plume":
-        shapes = [sp for seq in plume_library(cfg.sequences, cfg.seed, cfg.frames) for sp in seq.sprites]
-        return plume_shaped(smoke, shapes, np.random.default_rng([cfg.seed, 9]))
     return smoke
-
-
-def plume_shaped(
-    mattes: Sequence[SpriteSequence], shapes: Sequence[Sprite], rng: np.random.Generator
-) -> list[SpriteSequence]:
-    """``mattes`` with each frame's opacity multiplied by the opacity of one of ``shapes`` (drawn from ``rng`` per
-    frame, in order), scaled to peak 1 and resized to the frame: the smoke keeps its own texture and colour and takes
-    a plume's outline (source at the bottom centre, spreading and thinning upwards) instead of the matte's ellipse.
-    Names and metadata kept (``shape: plume`` added)."""
-    out = []
-    for seq in mattes:
-        sprites = []
-        for sp in seq.sprites:
-            a = shapes[int(rng.integers(len(shapes)))].over[..., 3].astype(np.float32)
-            w, h = sp.size
-            shape = cv2.resize(a / max(float(a.max()), 1.0), (w, h), interpolation=cv2.INTER_LINEAR)
-            alpha = sp.over[..., 3].astype(np.float32) / 255.0 * np.clip(shape, 0.0, 1.0)
-            sprites.append(replace(sp, over=np.dstack([sp.over[..., :3], unit_to_u8(alpha)])))
-        out.append(SpriteSequence(seq.name, tuple(sprites), {**seq.meta, "shape": "plume"}))
-    return out
 
 
 def split_library(library: Sequence[SpriteSequence]) -> tuple[list[SpriteSequence], list[SpriteSequence]]:

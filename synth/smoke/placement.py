@@ -16,8 +16,6 @@
   0.08-0.3) for a simulated plume (:data:`FAMILIES`); a matted plume keeps its own colour. Either is **lit by the
   scene**: multiplied by ``clip(0.35 + 1.3 L, 0.35, 1)``, ``L`` the mean luma (0..1) of the background under it, and
   tinted a fifth of the way towards that background's mean colour (dark in a dark frame, warm under warm light).
-- **Density**: a gain drawn per plume from ``smoke.density`` multiplies its optical depth (:func:`thickened`);
-  1 (the default) lays the plume as matted or simulated.
 
 Every draw comes from the rng the caller gives (Method 2: its own ``default_rng([seed, 2, i, 3])``, so turning
 smoke on keeps every flame's draws).
@@ -61,10 +59,9 @@ class Plume:
     name: str
     where: str
     colour: str
-    density: float = 1.0
 
     def record(self) -> dict:
-        return {"plume": self.name, "where": self.where, "colour": self.colour, "density": round(self.density, 3)}
+        return {"plume": self.name, "where": self.where, "colour": self.colour}
 
 
 def lit(sprite: Sprite, grey: float | None, background: NDArray[np.uint8], rect: Sequence[int]) -> Sprite:
@@ -79,16 +76,6 @@ def lit(sprite: Sprite, grey: float | None, background: NDArray[np.uint8], rect:
     rgb = sprite.over[..., :3].astype(np.float32) / 255.0 * (grey if grey is not None else 1.0)
     over = np.dstack([unit_to_u8(np.clip(rgb * light * tint, 0.0, 1.0)), sprite.over[..., 3]])
     return replace(sprite, over=over)
-
-
-def thickened(sprite: Sprite, gain: float) -> Sprite:
-    """``sprite`` with its smoke ``gain`` times as dense: each pixel's transmission ``t = 1 - alpha`` becomes
-    ``t ** gain`` (Beer-Lambert: transmission falls exponentially with density); colour kept, the sprite itself
-    when ``gain`` is 1."""
-    if gain == 1.0:
-        return sprite
-    alpha = 1.0 - (1.0 - sprite.over[..., 3].astype(np.float32) / 255.0) ** gain
-    return replace(sprite, over=np.dstack([sprite.over[..., :3], unit_to_u8(alpha)]))
 
 
 def smoke_placement(sprite: Sprite, rect: Sequence[int]) -> Placement:
@@ -108,12 +95,9 @@ def _draw_sprite(plumes: Sequence[SpriteSequence], rng: np.random.Generator) -> 
     return seq.sprites[frame], f"{seq.name}/{frame}", seq.meta.get("generator") == "plume"
 
 
-def _plume(cfg: SmokeConfig, sprite: Sprite, rect: list[int], simulated: bool, background, name, where, rng) -> Plume:
+def _plume(sprite: Sprite, rect: list[int], simulated: bool, background, name: str, where: str, rng) -> Plume:
     colour, grey = _draw_colour(rng) if simulated else ("own", None)
-    lo, hi = cfg.density
-    gain = float(rng.uniform(lo, hi)) if lo < hi else lo  # no draw for a fixed gain: the other draws stay
-    sprite = thickened(lit(sprite, grey, background, rect), gain)
-    return Plume(smoke_placement(sprite, rect), name, where, colour, gain)
+    return Plume(smoke_placement(lit(sprite, grey, background, rect), rect), name, where, colour)
 
 
 def plan_plumes(
@@ -147,12 +131,12 @@ def plan_plumes(
         base = fy0 + (fy1 - fy0) / 3.0
         rect = [int((fx0 + fx1) / 2 - w / 2), int(base - h), w, h]
         if not xywh_overlaps_any(rect, avoid):
-            out.append(_plume(cfg, sprite, rect, simulated, background, name, "above", rng))
+            out.append(_plume(sprite, rect, simulated, background, name, "above", rng))
     if rng.random() < cfg.alone:
         sprite, name, simulated = _draw_sprite(plumes, rng)
         spot = _lone_spot(cfg, sprite.size[1] / sprite.size[0], background, depth, fy, avoid, rng)
         if spot is not None:
-            out.append(_plume(cfg, sprite, spot[0], simulated, background, name, spot[1], rng))
+            out.append(_plume(sprite, spot[0], simulated, background, name, spot[1], rng))
     return out
 
 
