@@ -16,6 +16,7 @@ leaked images dropped, and refused when it holds a pool's background photo, :mod
 from __future__ import annotations
 
 import functools
+import json
 import shutil
 from collections import Counter
 from collections.abc import Callable, Mapping, Sequence
@@ -394,6 +395,26 @@ def check_data(cfg: ExperimentConfig, data: Prepared, datasets: Datasets, photos
     check_leakage(photos, {t.name: datasets.get(t.data) for t in every} if photos else {})
 
 
+def check_real_count(cfg: ExperimentConfig, data: Prepared, datasets: Datasets, grid: Sequence[GridEntry]) -> None:
+    """Fail before any pool is built when a mixture of ``grid`` asks for more real images than the real set's
+    training split holds, saying what curation dropped and how to ask for fewer."""
+    train = datasets.get(data.real.with_split(cfg.real.train_split))
+    want = max((parse_mixture(e.mixture) for e in grid), key=lambda m: m.real, default=None)
+    if want is None or want.real <= len(train.images):
+        return
+    doc = Path(data.real.path) / "curation.json"
+    counts = json.loads(doc.read_text(encoding="utf-8")).get("counts", {}) if doc.is_file() else {}
+    dropped = counts.get("removed_near", 0)
+    why = (f" (curation dropped {dropped} near-duplicate images: a video's frames are near duplicates; "
+           "real.curate.dedup.threshold keeps more of them)" if dropped else "")  # fmt: skip
+    fewer = max(len(train.images) // 50 * 50, 1)
+    raise ExperimentConfigError(
+        f"real: {want.name} asks for {want.real} real training images but {data.real.path} holds "
+        f"{len(train.images)} in its {cfg.real.train_split!r} split{why}; ask for fewer, e.g. "
+        f"--set 'grid.mixtures=[R{fewer}_S0,R{fewer}_S{fewer}]', or give more labelled images"
+    )
+
+
 def studied_classes(cfg: ExperimentConfig, data: Prepared, datasets: Datasets) -> tuple[ExperimentConfig, Datasets]:
     """``cfg`` with its classes resolved (``classes: null`` = the classes the real data boxes, less
     ``real.drop_classes`` and ``real.negative_classes``: :func:`ground.data.load.data_classes`) and ``datasets`` prepared with them; says which
@@ -459,6 +480,7 @@ def run_experiment(cfg: ExperimentConfig, base: Path, out: Path, executor=None) 
     from_data = cfg.classes is None
     cfg, datasets = studied_classes(cfg, data, Datasets(cfg.classes or ()))
     check_data(cfg, data, datasets, pool_photos(cfg.synth, needed_methods(grid), base))
+    check_real_count(cfg, data, datasets, grid)
     data = replace(data, leaks=check_test_leaks(cfg, data, datasets, base))
     write_leaks(out / LEAKS_FILE, data.leaks, cfg.leakage.threshold, cfg.leakage.action)
     data = replace(data, pools=prepare_pools(cfg, base, out, shared_methods(cfg, grid)))

@@ -373,3 +373,24 @@ def test_pools_box_smoke_exactly_when_smoke_is_a_studied_class() -> None:
     told = replace(fire, synth=replace(fire.synth, method2=replace(fire.synth.method2, smoke_class=True)))
     with pytest.raises(ExperimentConfigError, match="synth.method2.smoke_class is true but smoke is not a studied"):
         experiment.pools_box_classes(told)
+
+
+def test_too_few_real_training_images_fail_before_any_pool_is_built(tmp_path: Path) -> None:
+    from dataclasses import replace
+
+    from factories_train import painted_dataset
+
+    from fuzzyfire.experiment_config import RealConfig
+    from ground.data.writer import write_dataset
+
+    ds = painted_dataset(tmp_path / "src", 8, seed=0)
+    images = tuple(replace(img, split=("train", "train", "train", "train", "valid", "test")[min(img.id, 6) - 1])
+                   for img in ds.images)  # fmt: skip
+    write_dataset(replace(ds, images=images), tmp_path / "real", ("coco",))
+    cfg = replace(
+        toy_config(mixtures=["R6_S0", "R6_S6"], table1=[]), real=RealConfig(path=tmp_path / "real"), rare=None
+    )
+    with pytest.raises(ValueError, match=r"R6_S0 asks for 6 real training images but .* holds 4 in its 'train' split"):
+        run_experiment(cfg, tmp_path, tmp_path / "out", LocalExecutor())
+    assert not (tmp_path / "out" / "data").exists() or not any((tmp_path / "out" / "data").glob("method2-*"))
+    assert not (tmp_path / "out" / "runs").exists()
