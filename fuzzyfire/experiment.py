@@ -405,7 +405,7 @@ def check_real_count(cfg: ExperimentConfig, data: Prepared, datasets: Datasets, 
     doc = Path(data.real.path) / "curation.json"
     counts = json.loads(doc.read_text(encoding="utf-8")).get("counts", {}) if doc.is_file() else {}
     dropped = counts.get("removed_near", 0)
-    why = (f" (curation dropped {dropped} near-duplicate images: a video's frames are near duplicates; "
+    why = (f" (curation dropped {dropped} near-duplicate images: a video's frames are near duplicates; a lower "
            "real.curate.dedup.threshold keeps more of them)" if dropped else "")  # fmt: skip
     fewer = max(len(train.images) // 50 * 50, 1)
     raise ExperimentConfigError(
