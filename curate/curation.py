@@ -9,6 +9,7 @@ The schema dataclasses below are built from YAML by :mod:`ground.config.loader` 
 
 from __future__ import annotations
 
+import json
 from collections import Counter
 from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
@@ -31,6 +32,13 @@ from ground.data.writer import write_dataset
 from ground.run.cluster import Cluster, open_cluster
 
 CURATION_FILE = "curation.json"  # what the curation did, beside the curated dataset
+
+
+def read_curation(folder: Path) -> dict[str, Any] | None:
+    """The :data:`CURATION_FILE` record beside a curated dataset ``folder`` (``counts``: images read, kept,
+    removed_exact, removed_near, unreadable; ``splits``: images per split); None for a folder not curated."""
+    path = Path(folder) / CURATION_FILE
+    return json.loads(path.read_text(encoding="utf-8")) if path.is_file() else None
 
 
 @dataclass(frozen=True)

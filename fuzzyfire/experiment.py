@@ -16,7 +16,6 @@ leaked images dropped, and refused when it holds a pool's background photo, :mod
 from __future__ import annotations
 
 import functools
-import json
 import shutil
 from collections import Counter
 from collections.abc import Callable, Mapping, Sequence
@@ -24,6 +23,7 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
+from curate.curation import read_curation
 from curate.mix import mixture_dir, parse_mixture, write_mixture
 from eval.errors import ALARMS
 from eval.imagelevel import IMAGE_LABELLED
@@ -402,9 +402,7 @@ def check_real_count(cfg: ExperimentConfig, data: Prepared, datasets: Datasets, 
     want = max((parse_mixture(e.mixture) for e in grid), key=lambda m: m.real, default=None)
     if want is None or want.real <= len(train.images):
         return
-    doc = Path(data.real.path) / "curation.json"
-    counts = json.loads(doc.read_text(encoding="utf-8")).get("counts", {}) if doc.is_file() else {}
-    dropped = counts.get("removed_near", 0)
+    dropped = (read_curation(data.real.path) or {}).get("counts", {}).get("removed_near", 0)
     why = (f" (curation dropped {dropped} near-duplicate images: a video's frames are near duplicates; a lower "
            "real.curate.dedup.threshold keeps more of them)" if dropped else "")  # fmt: skip
     fewer = max(len(train.images) // 50 * 50, 1)

@@ -12,6 +12,7 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
+from curate.curation import read_curation
 from curate.mix import parse_mixture
 from eval.operating import ALARM_BUDGET
 from eval.tables import METRIC_LABELS
@@ -94,10 +95,9 @@ def plume_words(plumes: Sequence[Mapping[str, Any]]) -> str:
 def curation_sentence(folder: Path) -> str | None:
     """What curation made of the real images (``folder/curation.json``): read, duplicates dropped, split sizes;
     None for a folder that was not curated."""
-    path = Path(folder) / "curation.json"
-    if not path.is_file():
+    doc = read_curation(folder)
+    if doc is None:
         return None
-    doc = json.loads(path.read_text(encoding="utf-8"))
     c = doc.get("counts", {})
     splits = " / ".join(f"{k} {v:,}" for k, v in doc.get("splits", {}).items())
     return (f"curation read {c.get('images', 0):,} images, dropped {c.get('removed_exact', 0):,} exact and "

@@ -2,12 +2,21 @@
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import pytest
 from curate_helpers import write_scene_dataset
 
-from curate.curation import CurateConfig, DedupConfig, RankConfig, SplitConfig, curate
+from curate.curation import (
+    CURATION_FILE,
+    CurateConfig,
+    DedupConfig,
+    RankConfig,
+    SplitConfig,
+    curate,
+    read_curation,
+)
 from curate.embed import OnnxEmbedder
 from curate.sources import SourceConfig
 from curate.split import near_groups
@@ -54,6 +63,13 @@ def test_pipeline_removes_duplicates_and_splits_without_leakage(sources: Path, e
     rows = [index[img.file_name] for img in ds.images]
     for group in near_groups(result.run.scan.vectors[rows], 0.6, crops=result.run.scan.crops[rows]):
         assert len({ds.images[i].split for i in group}) == 1
+
+
+def test_a_curation_record_is_read_back_and_none_beside_an_uncurated_folder(tmp_path: Path) -> None:
+    doc = {"counts": {"images": 10, "removed_near": 3}, "splits": {"train": 5, "valid": 1, "test": 1}}
+    (tmp_path / CURATION_FILE).write_text(json.dumps(doc), encoding="utf-8")
+    assert read_curation(tmp_path) == doc
+    assert read_curation(tmp_path / "elsewhere") is None
 
 
 def test_top_n_protect_and_determinism(sources: Path, embedder: OnnxEmbedder) -> None:
